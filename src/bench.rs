@@ -1,0 +1,1 @@
+//! The peer-benchmark workloads (to be written).

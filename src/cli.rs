@@ -1,0 +1,52 @@
+//! The command line: clap definitions, validation into options, and dispatch.
+//!
+//! The contract (DESIGN.md) is:
+//! ```text
+//! springlab                          (until the lesson app exists: the rope demo)
+//! springlab scenes
+//! springlab run <scene|file.toml> [--method M] [--dt S] [--steps N | --time T]
+//!               [--set key=value ...] [--json] [--csv FILE]
+//! ```
+
+mod run;
+mod scenes;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// springlab: mass-spring systems, their integrators, and where each one fails.
+#[derive(Debug, Parser)]
+#[command(name = "springlab", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do; without one, runs the rope demo.
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run a scene headless and print a summary (or JSON).
+    Run(run::RunArgs),
+    /// List the built-in scenes with their parameters.
+    Scenes,
+}
+
+/// Parses the process arguments and runs the command; prints errors and returns the exit code.
+#[must_use]
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Some(Command::Run(args)) => run::run(&args),
+        Some(Command::Scenes) => scenes::list(),
+        None => run::demo(),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("springlab: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,254 @@
+//! `springlab run`: a headless run with a summary, JSON or CSV.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use clap::Args;
+
+use crate::physics::Method;
+use crate::scene::{self, Scene};
+use crate::simulation::{RunReport, Simulation};
+
+/// Options of `springlab run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// A built-in scene (see `springlab scenes`) or a scene file (.toml).
+    pub scene: String,
+    /// Integration method, or one per body separated by commas (for `ropes`).
+    #[arg(long, short)]
+    pub method: Option<String>,
+    /// Time step in seconds (default: the scene's).
+    #[arg(long)]
+    pub dt: Option<f64>,
+    /// Number of steps.
+    #[arg(long, conflicts_with = "time")]
+    pub steps: Option<u64>,
+    /// Simulated time in seconds (rounded to whole steps).
+    #[arg(long)]
+    pub time: Option<f64>,
+    /// Set a scene parameter, for example `--set stiffness=500` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Print the result as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Write a time series of energies and positions to this CSV file.
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// Write a CSV row every this many steps.
+    #[arg(long, value_name = "K", default_value_t = 1)]
+    pub csv_every: u64,
+}
+
+/// Applies `--method` to the scene: one name for all bodies, or one per body.
+///
+/// # Errors
+/// An unknown name, or a list whose length is not the number of bodies.
+pub fn apply_methods(scene: &mut Scene, text: &str) -> anyhow::Result<()> {
+    let names: Vec<&str> = text.split(',').map(str::trim).collect();
+    let methods = names
+        .iter()
+        .map(|n| n.parse::<Method>())
+        .collect::<Result<Vec<_>, _>>()?;
+    match methods.as_slice() {
+        [one] => scene.set_method(*one),
+        many if many.len() == scene.bodies.len() => {
+            for (body, m) in scene.bodies.iter_mut().zip(many) {
+                body.method = *m;
+            }
+        }
+        many => bail!(
+            "--method lists {} methods but scene `{}` has {} bodies; give one method or one per body",
+            many.len(),
+            scene.name,
+            scene.bodies.len()
+        ),
+    }
+    Ok(())
+}
+
+/// Number of steps for `--steps` or `--time` (default: the scene's duration).
+///
+/// # Errors
+/// A duration that is not positive and finite.
+pub fn step_count(
+    steps: Option<u64>,
+    time: Option<f64>,
+    default_time: f64,
+    dt: f64,
+) -> anyhow::Result<u64> {
+    if let Some(n) = steps {
+        return Ok(n);
+    }
+    let t = time.unwrap_or(default_time);
+    if !(t.is_finite() && t >= 0.0) {
+        bail!("--time {t}: expected a duration in seconds >= 0");
+    }
+    Ok((t / dt).round() as u64)
+}
+
+/// Validates a time step given on the command line.
+///
+/// # Errors
+/// `dt <= 0`, NaN or infinite.
+pub fn check_dt(dt: f64) -> anyhow::Result<f64> {
+    if dt > 0.0 && dt.is_finite() {
+        Ok(dt)
+    } else {
+        bail!("--dt {dt}: expected a time step in seconds > 0")
+    }
+}
+
+/// `springlab run`.
+///
+/// # Errors
+/// Bad scene, parameters or options; an unwritable CSV file.
+pub fn run(args: &RunArgs) -> anyhow::Result<()> {
+    let mut scene = scene::load(&args.scene, &args.sets)?;
+    if let Some(m) = &args.method {
+        apply_methods(&mut scene, m)?;
+    }
+    let dt = check_dt(args.dt.unwrap_or(scene.dt))?;
+    let steps = step_count(args.steps, args.time, scene.duration, dt)?;
+    if args.csv_every == 0 {
+        bail!("--csv-every 0: expected a number of steps >= 1");
+    }
+    let mut sim = Simulation::new(scene);
+    sim.set_dt(dt);
+
+    let mut csv = match &args.csv {
+        Some(path) => {
+            let file = File::create(path)
+                .with_context(|| format!("cannot write CSV file {}", path.display()))?;
+            let mut w = BufWriter::new(file);
+            write_csv_header(&mut w, &sim)?;
+            write_csv_row(&mut w, &sim)?;
+            Some((w, path))
+        }
+        None => None,
+    };
+    let start = Instant::now();
+    let mut csv_error = None;
+    sim.run(steps, |s| {
+        if let Some((w, _)) = csv.as_mut()
+            && csv_error.is_none()
+            && (s.steps % args.csv_every == 0 || s.diverged.is_some())
+            && let Err(e) = write_csv_row(w, s)
+        {
+            csv_error = Some(e);
+        }
+    });
+    let wall = start.elapsed().as_secs_f64();
+    if let Some((mut w, path)) = csv {
+        if let Some(e) = csv_error {
+            return Err(e).with_context(|| format!("cannot write CSV file {}", path.display()));
+        }
+        w.flush()
+            .with_context(|| format!("cannot write CSV file {}", path.display()))?;
+    }
+    let report = sim.report(wall);
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        serde_json::to_writer(&mut out, &report)?;
+        writeln!(out)?;
+    } else {
+        print_summary(&mut out, &report)?;
+    }
+    Ok(())
+}
+
+fn write_csv_header(w: &mut impl Write, sim: &Simulation) -> std::io::Result<()> {
+    write!(w, "step,time,kinetic,gravity,elastic,total")?;
+    for i in 0..sim.scene.particle_count() {
+        write!(w, ",x{i},y{i},z{i}")?;
+    }
+    writeln!(w)
+}
+
+fn write_csv_row(w: &mut impl Write, sim: &Simulation) -> std::io::Result<()> {
+    let e = sim.energy();
+    write!(
+        w,
+        "{},{},{},{},{},{}",
+        sim.steps,
+        sim.time(),
+        e.kinetic,
+        e.gravity,
+        e.elastic,
+        e.total
+    )?;
+    for p in sim.positions() {
+        write!(w, ",{},{},{}", p.x, p.y, p.z)?;
+    }
+    writeln!(w)
+}
+
+/// The human-readable summary.
+///
+/// # Errors
+/// Only when `out` cannot be written.
+pub fn print_summary(out: &mut impl Write, r: &RunReport) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "scene {} · method {} · dt {} s · {} steps · t = {} s",
+        r.scene, r.method, r.dt, r.steps, r.time
+    )?;
+    let rate = if r.wall_seconds > 0.0 {
+        r.steps as f64 / r.wall_seconds
+    } else {
+        f64::INFINITY
+    };
+    writeln!(
+        out,
+        "{} particles · {} springs · {} force evaluations · {:.3} ms wall ({:.3e} steps/s)",
+        r.particles,
+        r.springs,
+        r.force_evals,
+        r.wall_seconds * 1e3,
+        rate
+    )?;
+    let e = &r.energy;
+    writeln!(
+        out,
+        "energy: kinetic {:.6e} J · gravity {:.6e} J · elastic {:.6e} J · total {:.6e} J",
+        e.kinetic, e.gravity, e.elastic, e.total
+    )?;
+    match &r.diverged {
+        None => writeln!(out, "stable: no divergence"),
+        Some(d) => writeln!(
+            out,
+            "DIVERGED at step {} (t = {} s): {}; max speed {:.4e} m/s",
+            d.step, d.time, d.reason, d.max_speed
+        ),
+    }
+}
+
+/// The default action until the lesson app exists: the GAMES101 ropes for 10 s, summarised.
+///
+/// # Errors
+/// Only when standard output cannot be written.
+pub fn demo() -> anyhow::Result<()> {
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "springlab — the GAMES101 ropes, semi-implicit Euler beside Verlet, for 10 s:\n"
+    )?;
+    for method in ["semi-implicit-euler", "verlet", "explicit-euler"] {
+        let mut scene = scene::load("rope", &[])?;
+        apply_methods(&mut scene, method)?;
+        let steps = step_count(None, None, scene.duration, scene.dt)?;
+        let mut sim = Simulation::new(scene);
+        let start = Instant::now();
+        sim.run(steps, |_| {});
+        print_summary(&mut out, &sim.report(start.elapsed().as_secs_f64()))?;
+        writeln!(out)?;
+    }
+    writeln!(
+        out,
+        "Try `springlab scenes` and `springlab run oscillator --method rk4 --json`."
+    )?;
+    Ok(())
+}

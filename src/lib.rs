@@ -1,0 +1,20 @@
+//! springlab: a teaching tool for mass-spring particle systems.
+//!
+//! The library holds the physics ([`physics`]), the scenes of the courses ([`scene`]) and the
+//! headless simulation driver ([`simulation`]); the binary `springlab` is a thin command line
+//! over them. See `ARCHITECTURE.md` for the module map.
+
+// Index loops `for i in 0..n` read like the formulas they implement (x_i, v_i, a_i) and keep the
+// lesson code close to the papers; clippy's iterator preference is waived for that reason.
+#![allow(clippy::needless_range_loop)]
+
+pub mod bench;
+pub mod cli;
+pub mod physics;
+
+pub use physics::{Energy, Method, MethodParams, Model, Spring, SpringKind, State, Workspace};
+pub mod scene;
+pub mod simulation;
+
+pub use scene::{Scene, SceneError};
+pub use simulation::{RunReport, Simulation};

@@ -1,0 +1,1 @@
+//! Colliders and collision response (to be written).

@@ -1,0 +1,182 @@
+//! The model of a mass-spring system and its one derivative function.
+//!
+//! # Theory
+//!
+//! Newton's second law turns the forces on each particle into its acceleration:
+//!
+//! ```text
+//! f_i = m_i g  -  c v_i  +  Σ_springs f_spring→i
+//! a_i = f_i / m_i              (a_i = 0 for a pinned particle: 1/m_i = 0)
+//! ```
+//! where
+//! - `m_i`: mass (kg), `g`: gravitational acceleration (m/s²)
+//! - `c`: viscous drag coefficient (N·s/m), `v_i`: velocity (m/s)
+//! - `f_spring→i`: spring and damper force (N), see [`super::springs`]
+//!
+//! Every explicit integrator calls [`accelerations`] and nothing else to learn about the physics,
+//! so the cost of a method is its number of calls ("force evaluations").
+
+use glam::DVec3;
+
+use super::springs::Spring;
+
+/// The physics of one system: masses, springs, gravity and drag. It does not change during a step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Model {
+    /// Mass of each particle (kg). Used for gravity, energy and collisions.
+    pub mass: Vec<f64>,
+    /// Inverse mass of each particle (1/kg); zero pins the particle in place.
+    pub inv_mass: Vec<f64>,
+    /// The springs, in the order the force loop visits them.
+    pub springs: Vec<Spring>,
+    /// Gravitational acceleration (m/s²).
+    pub gravity: DVec3,
+    /// Viscous drag coefficient `c` in `f = -c v` (N·s/m).
+    pub drag: f64,
+    /// Spring indices grouped by colour: no two springs of one colour share a particle, so
+    /// constraint projection within a colour is order-independent (red-black Gauss–Seidel on a
+    /// chain). Built by [`Model::new`].
+    projection_order: Vec<u32>,
+    /// `projection_order[colour_starts[c]..colour_starts[c + 1]]` are the springs of colour `c`.
+    colour_starts: Vec<usize>,
+}
+
+impl Model {
+    /// A model with the given masses (kg), pinned flags, springs, gravity (m/s²) and drag (N·s/m).
+    ///
+    /// # Panics
+    /// If `mass` and `pinned` differ in length or a spring refers to a particle out of range.
+    #[must_use]
+    pub fn new(
+        mass: Vec<f64>,
+        pinned: &[bool],
+        springs: Vec<Spring>,
+        gravity: DVec3,
+        drag: f64,
+    ) -> Model {
+        assert_eq!(mass.len(), pinned.len(), "one pinned flag per mass");
+        let n = mass.len();
+        for s in &springs {
+            assert!(
+                (s.a as usize) < n && (s.b as usize) < n,
+                "spring end out of range"
+            );
+        }
+        let inv_mass = mass
+            .iter()
+            .zip(pinned)
+            .map(|(&m, &p)| if p { 0.0 } else { 1.0 / m })
+            .collect();
+        let (projection_order, colour_starts) = colour_springs(n, &springs);
+        Model {
+            mass,
+            inv_mass,
+            springs,
+            gravity,
+            drag,
+            projection_order,
+            colour_starts,
+        }
+    }
+
+    /// Number of particles.
+    #[must_use]
+    pub fn particle_count(&self) -> usize {
+        self.mass.len()
+    }
+
+    /// True when particle `i` is pinned (infinite mass).
+    #[must_use]
+    pub fn is_pinned(&self, i: usize) -> bool {
+        self.inv_mass[i] == 0.0
+    }
+
+    /// Pins particle `i` (sets its inverse mass to zero). Set its velocity to zero as well.
+    pub fn pin(&mut self, i: usize) {
+        self.inv_mass[i] = 0.0;
+    }
+
+    /// Frees particle `i` again (inverse mass `1/m`).
+    pub fn unpin(&mut self, i: usize) {
+        self.inv_mass[i] = 1.0 / self.mass[i];
+    }
+
+    /// The springs grouped by colour (see [`Model::new`]): an iterator of slices of spring indices.
+    pub fn spring_colours(&self) -> impl Iterator<Item = &[u32]> {
+        self.colour_starts
+            .windows(2)
+            .map(|w| &self.projection_order[w[0]..w[1]])
+    }
+}
+
+/// Greedy edge colouring in spring order: each spring takes the smallest colour not yet used at
+/// either end. A chain `(0,1), (1,2), ...` gets colours 0, 1, 0, 1, ... (red-black).
+fn colour_springs(particles: usize, springs: &[Spring]) -> (Vec<u32>, Vec<usize>) {
+    // used[p] = bit set of the colours already taken at particle p (first 64 colours);
+    // a lattice needs at most twice its neighbour count, far below 64.
+    let mut used = vec![0u64; particles];
+    let mut colour_of = Vec::with_capacity(springs.len());
+    let mut colours = 0usize;
+    for s in springs {
+        let (a, b) = (s.a as usize, s.b as usize);
+        let taken = used[a] | used[b];
+        let colour = (!taken).trailing_zeros().min(63) as usize;
+        used[a] |= 1 << colour;
+        used[b] |= 1 << colour;
+        colours = colours.max(colour + 1);
+        colour_of.push(colour);
+    }
+    let mut starts = vec![0usize; colours + 1];
+    for &c in &colour_of {
+        starts[c + 1] += 1;
+    }
+    for c in 0..colours {
+        starts[c + 1] += starts[c];
+    }
+    let mut fill = starts.clone();
+    let mut order = vec![0u32; springs.len()];
+    for (i, &c) in colour_of.iter().enumerate() {
+        order[fill[c]] = i as u32;
+        fill[c] += 1;
+    }
+    (order, starts)
+}
+
+/// Net force on every particle (N): gravity, drag and springs. Pure and allocation-free.
+///
+/// ```text
+/// f_i = m_i g - c v_i + Σ_springs f_spring→i
+/// ```
+/// Pinned particles get their force too (it is ignored when divided by their infinite mass).
+///
+/// # Panics
+/// If `x`, `v` or `f` is shorter than the model's particle count.
+pub fn forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
+    let n = model.particle_count();
+    let (v, f) = (&v[..n], &mut f[..n]);
+    // External forces: weight m g and viscous drag -c v.
+    for ((f_i, &m_i), &v_i) in f.iter_mut().zip(&model.mass).zip(v) {
+        *f_i = m_i * model.gravity - model.drag * v_i;
+    }
+    // Internal forces: each spring pushes its ends with equal and opposite forces.
+    for s in &model.springs {
+        let f_a = s.force_on_a(x, v);
+        f[s.a as usize] += f_a;
+        f[s.b as usize] -= f_a;
+    }
+}
+
+/// Acceleration of every particle (m/s²): `a_i = f_i / m_i`, zero for pinned particles.
+///
+/// This is the one derivative function every explicit integrator calls. Pure and
+/// allocation-free: it writes into `a`, which is overwritten.
+///
+/// # Panics
+/// If `x`, `v` or `a` is shorter than the model's particle count.
+pub fn accelerations(model: &Model, x: &[DVec3], v: &[DVec3], a: &mut [DVec3]) {
+    forces(model, x, v, a);
+    for (a_i, &w_i) in a.iter_mut().zip(&model.inv_mass) {
+        // a = f / m, with w = 1/m (zero for a pinned particle).
+        *a_i *= w_i;
+    }
+}

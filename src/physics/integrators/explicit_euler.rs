@@ -1,0 +1,34 @@
+//! Explicit (forward) Euler.
+//!
+//! ```text
+//! x_{n+1} = x_n + dt v_n
+//! v_{n+1} = v_n + dt a(x_n, v_n)
+//! ```
+//! where `x` is position (m), `v` velocity (m/s), `a` acceleration (m/s²) and `dt` the step (s).
+//!
+//! Both updates use only the old state. Global error O(dt): first order.
+//!
+//! **Stability on the harmonic oscillator** `x'' = -ω² x`: the amplification factor is
+//! `1 + i dt ω`, of modulus `√(1 + dt² ω²) > 1`, so the energy grows by `1 + dt² ω²` every step
+//! for any `dt` — explicit Euler is unstable undamped. With damping it is stable only while
+//! `dt λ` stays inside the unit circle around -1.
+//!
+//! Reference: E. Hairer, S. P. Nørsett, G. Wanner, *Solving Ordinary Differential Equations I*,
+//! 2nd ed., Springer 1993, §I.7 and §II.1; GAMES101 assignment 8 (2020), §1.2.
+
+use crate::physics::forces::{Model, accelerations};
+use crate::physics::integrators::Workspace;
+use crate::physics::particles::State;
+
+pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
+    let a = &mut work.a;
+    accelerations(model, &state.x, &state.v, a);
+    for ((x, v), a) in state.x.iter_mut().zip(state.v.iter_mut()).zip(a.iter()) {
+        // Position first, with the OLD velocity: x_{n+1} = x_n + dt v_n.
+        *x += dt * *v;
+        // Then v_{n+1} = v_n + dt a_n.
+        *v += dt * *a;
+    }
+    state.history_valid = false;
+    1
+}

@@ -1,0 +1,53 @@
+//! Predictor–corrector: what the NYCU Computer Animation course called "implicit Euler".
+//!
+//! ```text
+//! x̃       = x_n + dt v_n                 predict with explicit Euler
+//! ṽ       = v_n + dt a(x_n, v_n)
+//! x_{n+1} = x_n + dt ṽ                   step from the OLD state
+//! v_{n+1} = v_n + dt a(x̃, ṽ)             with the slope at the prediction
+//! ```
+//! where `x` is position (m), `v` velocity (m/s), `a` acceleration (m/s²), `dt` the step (s).
+//!
+//! It looks like backward Euler (`v_{n+1} = v_n + dt a(x_{n+1}, v_{n+1})`) with the unknown end
+//! state replaced by a guess, but no equation is solved: it is an explicit method. Two force
+//! evaluations; global error O(dt): first order (`R(z) = 1 + z + z²` matches `e^z` only to `z`).
+//!
+//! **Stability**: on `y' = λ y` the amplification is `R(z) = 1 + z + z²`, `z = dt λ`.
+//! - On a pure decay (real `z < 0`, a stiff damper) it is stable only for `-1 ≤ z ≤ 0`: HALF of
+//!   explicit Euler's range `[-2, 0]`. This is why the course's "implicit" method failed first on
+//!   the cloth (dt 0.0006 against explicit Euler's 0.001, SEEDS.md §4).
+//! - On the undamped oscillator (`z = i dt ω`) `|R|² = 1 - (dt ω)² + (dt ω)⁴`: stable, and losing
+//!   energy, while **dt·ω ≤ 1**; growing beyond (measured by the tests).
+//!
+//! A real implicit Euler is [`super::implicit_euler`].
+//!
+//! Reference: E. Hairer, S. P. Nørsett, G. Wanner, *Solving Ordinary Differential Equations I*,
+//! 2nd ed., Springer 1993, §III.1 (predictor–corrector methods); NYCU Computer Animation HW1
+//! (2021–2024), `integrator.cpp`.
+
+use crate::physics::forces::{Model, accelerations};
+use crate::physics::integrators::Workspace;
+use crate::physics::particles::State;
+
+pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
+    let Workspace {
+        a,
+        x_stage,
+        v_stage,
+        ..
+    } = work;
+    accelerations(model, &state.x, &state.v, a);
+    // Predictor: one explicit Euler step.
+    for i in 0..state.x.len() {
+        x_stage[i] = state.x[i] + dt * state.v[i];
+        v_stage[i] = state.v[i] + dt * a[i];
+    }
+    // Corrector: the slope at the predicted state, applied from the old state.
+    accelerations(model, x_stage, v_stage, a);
+    for i in 0..state.x.len() {
+        state.x[i] += dt * v_stage[i];
+        state.v[i] += dt * a[i];
+    }
+    state.history_valid = false;
+    2
+}

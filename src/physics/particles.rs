@@ -1,0 +1,68 @@
+//! The state of a particle system, stored as a struct of arrays.
+//!
+//! Positions and velocities live in separate contiguous `Vec<DVec3>`s so that the loops over
+//! particles read memory in order. Masses are not part of the state: they belong to the
+//! [`Model`](super::Model), which does not change while a simulation runs.
+
+use glam::DVec3;
+
+/// Positions and velocities of every particle (struct of arrays).
+#[derive(Clone, Debug, PartialEq)]
+pub struct State {
+    /// Positions (m).
+    pub x: Vec<DVec3>,
+    /// Velocities (m/s).
+    pub v: Vec<DVec3>,
+    /// Positions one step ago (m), used by position Verlet. Valid only while
+    /// [`State::history_valid`] is true.
+    pub x_prev: Vec<DVec3>,
+    /// True when `x_prev` holds the positions one step of the current `dt` ago. Every method
+    /// other than Verlet clears it; Verlet rebuilds `x_prev` from `x` and `v` when it is false.
+    pub history_valid: bool,
+}
+
+impl State {
+    /// A state at positions `x` with velocities `v`.
+    ///
+    /// # Panics
+    /// If `x` and `v` differ in length.
+    #[must_use]
+    pub fn new(x: Vec<DVec3>, v: Vec<DVec3>) -> State {
+        assert_eq!(x.len(), v.len(), "one velocity per position");
+        let x_prev = x.clone();
+        State {
+            x,
+            v,
+            x_prev,
+            history_valid: false,
+        }
+    }
+
+    /// A state at positions `x`, at rest.
+    #[must_use]
+    pub fn at_rest(x: Vec<DVec3>) -> State {
+        let v = vec![DVec3::ZERO; x.len()];
+        State::new(x, v)
+    }
+
+    /// Number of particles.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// True when there are no particles.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    /// The mean of all positions (m).
+    #[must_use]
+    pub fn centroid(&self) -> DVec3 {
+        if self.x.is_empty() {
+            return DVec3::ZERO;
+        }
+        self.x.iter().copied().sum::<DVec3>() / self.x.len() as f64
+    }
+}

@@ -1,0 +1,242 @@
+//! Scenes: what one simulation needs, the built-in catalogue, and scene files.
+//!
+//! A [`Scene`] is one or more [`Body`]s, each a model, its state and the method that advances it,
+//! plus the scene's default time step and duration. Most scenes have one body; `ropes` has two
+//! so that two methods run side by side. Built-in scenes are functions of a typed, range-checked
+//! [`Params`] list; the same parameters can be set with `--set key=value` or in a scene file.
+
+pub mod builder;
+pub mod file;
+pub mod lattice;
+pub mod params;
+pub mod rope;
+
+use std::path::Path;
+
+use crate::physics::{Method, MethodParams, Model, State};
+pub use params::{ParamError, ParamSpec, Params, Range, Value};
+
+/// One simulated body: a model, its state and the method that advances it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Body {
+    /// Name shown in output (for example "verlet rope").
+    pub label: String,
+    /// Masses, springs, gravity, drag.
+    pub model: Model,
+    /// Positions and velocities.
+    pub state: State,
+    /// The integration method.
+    pub method: Method,
+    /// Settings of the method.
+    pub params: MethodParams,
+}
+
+/// Everything one simulation needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// Scene name (the built-in name or the file name).
+    pub name: String,
+    /// The bodies, simulated independently.
+    pub bodies: Vec<Body>,
+    /// Default time step (s).
+    pub dt: f64,
+    /// Default simulated duration (s).
+    pub duration: f64,
+}
+
+impl Scene {
+    /// Total number of particles over all bodies.
+    #[must_use]
+    pub fn particle_count(&self) -> usize {
+        self.bodies.iter().map(|b| b.model.particle_count()).sum()
+    }
+
+    /// Total number of springs over all bodies.
+    #[must_use]
+    pub fn spring_count(&self) -> usize {
+        self.bodies.iter().map(|b| b.model.springs.len()).sum()
+    }
+
+    /// Sets every body's method.
+    pub fn set_method(&mut self, method: Method) {
+        for b in &mut self.bodies {
+            b.method = method;
+        }
+    }
+
+    /// The methods of the bodies joined by `,` (for example `semi-implicit-euler,verlet`).
+    #[must_use]
+    pub fn method_label(&self) -> String {
+        let names: Vec<&str> = self.bodies.iter().map(|b| b.method.name()).collect();
+        names.join(",")
+    }
+}
+
+/// Anything a user can get wrong when choosing or describing a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// Not a built-in scene and not a file.
+    #[error(
+        "unknown scene `{name}`; built-in scenes: {known} (or give a path to a .toml scene file)"
+    )]
+    UnknownScene {
+        /// The name given.
+        name: String,
+        /// Comma-separated built-in names.
+        known: String,
+    },
+    /// A bad parameter.
+    #[error(transparent)]
+    Param(#[from] ParamError),
+    /// A problem at a place in a scene file.
+    #[error("{path}:{line}:{column}: {message}")]
+    File {
+        /// The file.
+        path: String,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+    /// The file cannot be read.
+    #[error("cannot read scene file {path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A combination of values that cannot make a scene.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// A built-in scene: its name, a one-line description, its parameters and its builder.
+pub struct SceneDef {
+    /// The name used on the command line.
+    pub name: &'static str,
+    /// One line for `springlab scenes`.
+    pub summary: &'static str,
+    /// The parameter declarations with the course defaults.
+    pub params: fn() -> Vec<ParamSpec>,
+    /// Builds the scene from parameter values.
+    pub build: fn(&Params) -> Result<Scene, SceneError>,
+}
+
+impl SceneDef {
+    /// The default parameters.
+    #[must_use]
+    pub fn default_params(&self) -> Params {
+        Params::new(self.name, (self.params)())
+    }
+}
+
+/// The built-in scenes.
+pub const BUILTIN: &[SceneDef] = &[
+    SceneDef {
+        name: "oscillator",
+        summary: "one spring, one free particle, no gravity: x(t) = 1 + 0.1 cos(10 t) exactly",
+        params: rope::oscillator_params,
+        build: rope::oscillator,
+    },
+    SceneDef {
+        name: "rope",
+        summary: "GAMES101 rope in SI units: 3 nodes of 1 kg, k = 100 N/m, node 0 pinned, dt = 1/64 s",
+        params: rope::rope_params,
+        build: rope::rope_scene,
+    },
+    SceneDef {
+        name: "ropes",
+        summary: "GAMES101's two ropes side by side: semi-implicit Euler and Verlet at once",
+        params: rope::ropes_params,
+        build: rope::ropes_scene,
+    },
+];
+
+/// The built-in scene called `name`.
+#[must_use]
+pub fn builtin(name: &str) -> Option<&'static SceneDef> {
+    BUILTIN.iter().find(|d| d.name == name)
+}
+
+/// Builds the built-in scene `name` with `--set` assignments applied in order.
+///
+/// # Errors
+/// Unknown scene, unknown key, bad value, or values that make no scene.
+pub fn build_builtin(name: &str, sets: &[String]) -> Result<Scene, SceneError> {
+    let def = builtin(name).ok_or_else(|| SceneError::UnknownScene {
+        name: name.to_string(),
+        known: BUILTIN
+            .iter()
+            .map(|d| d.name)
+            .collect::<Vec<_>>()
+            .join(", "),
+    })?;
+    let mut params = def.default_params();
+    for s in sets {
+        params.set_text(s)?;
+    }
+    (def.build)(&params)
+}
+
+/// Loads a built-in scene by name or a scene file by path (anything ending in `.toml` or that
+/// exists as a file), with `--set` assignments applied on top.
+///
+/// # Errors
+/// As [`build_builtin`] and [`file::load`].
+pub fn load(name_or_path: &str, sets: &[String]) -> Result<Scene, SceneError> {
+    let path = Path::new(name_or_path);
+    if builtin(name_or_path).is_none() && (name_or_path.ends_with(".toml") || path.is_file()) {
+        return file::load(path, sets);
+    }
+    build_builtin(name_or_path, sets)
+}
+
+/// The parameters every scene has for its methods, with the scene's Verlet damping and
+/// projection passes as defaults.
+#[must_use]
+pub fn method_param_specs(verlet_damping: f64, iterations: i64) -> Vec<ParamSpec> {
+    let d = MethodParams::default();
+    vec![
+        ParamSpec::number(
+            "verlet_damping",
+            "",
+            verlet_damping,
+            Range::From(0.0, 1.0),
+            "Verlet damping factor γ in x + (1 - γ)(x - x_prev)",
+        ),
+        ParamSpec::integer(
+            "iterations",
+            iterations,
+            Range::Between(0.0, 1000.0),
+            "Verlet projection passes per step (0 = none); XPBD passes per substep",
+        ),
+        ParamSpec::integer(
+            "substeps",
+            i64::from(d.substeps),
+            Range::Between(1.0, 10_000.0),
+            "XPBD substeps per step",
+        ),
+        ParamSpec::number(
+            "cg_tolerance",
+            "",
+            d.cg_tolerance,
+            Range::Above(0.0),
+            "implicit Euler: CG relative residual",
+        ),
+    ]
+}
+
+/// The method settings from a scene's parameters (see [`method_param_specs`]).
+#[must_use]
+pub fn method_params(params: &Params) -> MethodParams {
+    MethodParams {
+        verlet_damping: params.number("verlet_damping"),
+        iterations: params.integer("iterations") as u32,
+        substeps: params.integer("substeps") as u32,
+        cg_tolerance: params.number("cg_tolerance"),
+        ..MethodParams::default()
+    }
+}

@@ -1,0 +1,1 @@
+//! Lattice builders: the jelly cube and the cloth (to be written).
