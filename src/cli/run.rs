@@ -21,13 +21,13 @@ pub struct RunArgs {
     #[arg(long, short)]
     pub method: Option<String>,
     /// Time step in seconds (default: the scene's).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub dt: Option<f64>,
     /// Number of steps.
     #[arg(long, conflicts_with = "time")]
     pub steps: Option<u64>,
     /// Simulated time in seconds (rounded to whole steps).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub time: Option<f64>,
     /// Set a scene parameter, for example `--set stiffness=500` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]

@@ -91,7 +91,12 @@ pub fn oscillator(params: &Params) -> Result<Scene, SceneError> {
 
 fn rope_specs(separation: bool) -> Vec<ParamSpec> {
     let mut p = vec![
-        ParamSpec::integer("nodes", 3, Range::AtLeast(2.0), "number of nodes"),
+        ParamSpec::integer(
+            "nodes",
+            3,
+            Range::Between(2.0, 1_000_000.0),
+            "number of nodes",
+        ),
         ParamSpec::number("mass", "kg", 1.0, Range::Above(0.0), "mass of each node"),
         ParamSpec::number(
             "stiffness",

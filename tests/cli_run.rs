@@ -1,0 +1,225 @@
+//! `springlab run` and `springlab scenes` through the real binary.
+
+use std::process::{Command, Output};
+
+fn springlab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_springlab"))
+        .args(args)
+        .output()
+        .expect("run springlab")
+}
+
+fn json(args: &[&str]) -> serde_json::Value {
+    let out = springlab(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+fn stderr_of_failure(args: &[&str]) -> String {
+    let out = springlab(args);
+    assert!(!out.status.success(), "expected failure for {args:?}");
+    assert!(out.stdout.is_empty(), "nothing on stdout for {args:?}");
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn oscillator_rk4_json_follows_the_contract() {
+    let v = json(&[
+        "run",
+        "oscillator",
+        "--method",
+        "rk4",
+        "--dt",
+        "0.01",
+        "--time",
+        "10",
+        "--json",
+    ]);
+    assert_eq!(v["scene"], "oscillator");
+    assert_eq!(v["method"], "rk4");
+    assert_eq!(v["dt"], 0.01);
+    assert_eq!(v["steps"], 1000);
+    assert_eq!(v["time"], 10.0);
+    assert_eq!(v["particles"], 2);
+    assert_eq!(v["springs"], 1);
+    assert_eq!(v["force_evals"], 4000);
+    assert!(v["diverged"].is_null());
+    assert!(v["wall_seconds"].as_f64().expect("wall") >= 0.0);
+    let x = v["positions"][1][0].as_f64().expect("x1");
+    // RK4's own error at dt·ω = 0.1 over 10 s is 4.8e-6 m (see tests/integrators.rs).
+    assert!((x - (1.0 + 0.1 * 100f64.cos())).abs() < 5e-6, "x = {x}");
+    let e = &v["energy"];
+    let sum = e["kinetic"].as_f64().unwrap()
+        + e["gravity"].as_f64().unwrap()
+        + e["elastic"].as_f64().unwrap();
+    assert!((sum - e["total"].as_f64().unwrap()).abs() < 1e-15);
+    // Energy ½ k A² = 0.5 J, which RK4 loses only slowly.
+    assert!((e["total"].as_f64().unwrap() - 0.5).abs() < 1e-4);
+    assert_eq!(v["velocities"].as_array().unwrap().len(), 2);
+}
+
+#[test]
+fn two_runs_print_identical_json_but_for_the_wall_time() {
+    let args = [
+        "run", "ropes", "--set", "nodes=16", "--time", "20", "--json",
+    ];
+    let mut a = json(&args);
+    let mut b = json(&args);
+    a["wall_seconds"] = 0.into();
+    b["wall_seconds"] = 0.into();
+    assert_eq!(a, b);
+    assert_eq!(a["method"], "semi-implicit-euler,verlet");
+    assert_eq!(a["particles"], 32);
+}
+
+#[test]
+fn explicit_euler_rope_reports_divergence_with_exit_code_zero() {
+    let v = json(&[
+        "run",
+        "rope",
+        "--method",
+        "explicit-euler",
+        "--steps",
+        "10000",
+        "--json",
+    ]);
+    let d = &v["diverged"];
+    let step = d["step"].as_u64().expect("diverged.step");
+    assert!(step < 10_000);
+    assert_eq!(v["steps"].as_u64(), Some(step));
+    assert!(d["max_speed"].as_f64().unwrap() > 1000.0);
+    assert!((d["time"].as_f64().unwrap() - step as f64 / 64.0).abs() < 1e-12);
+    assert!(d["reason"].as_str().unwrap().contains("1000 m/s"));
+}
+
+#[test]
+fn csv_has_a_header_and_one_row_per_recorded_step() {
+    let dir = std::env::temp_dir().join(format!("springlab-csv-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("osc.csv");
+    let out = springlab(&[
+        "run",
+        "oscillator",
+        "--steps",
+        "100",
+        "--csv",
+        path.to_str().unwrap(),
+        "--csv-every",
+        "10",
+    ]);
+    assert!(out.status.success());
+    let text = std::fs::read_to_string(&path).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(
+        lines[0],
+        "step,time,kinetic,gravity,elastic,total,x0,y0,z0,x1,y1,z1"
+    );
+    assert_eq!(lines.len(), 1 + 11, "header, step 0 and every 10th step");
+    let last: Vec<f64> = lines[11].split(',').map(|c| c.parse().unwrap()).collect();
+    assert_eq!(last[0], 100.0);
+    assert!((last[1] - 1.0).abs() < 1e-12);
+    // total = kinetic + gravity + elastic on every row
+    assert!((last[2] + last[3] + last[4] - last[5]).abs() < 1e-12);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_input_gets_a_clear_message() {
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["run", "nosuch"],
+            "unknown scene `nosuch`; built-in scenes: oscillator, rope, ropes",
+        ),
+        (
+            &["run", "rope", "--dt", "0"],
+            "--dt 0: expected a time step in seconds > 0",
+        ),
+        (
+            &["run", "rope", "--dt", "-1"],
+            "--dt -1: expected a time step in seconds > 0",
+        ),
+        (
+            &["run", "rope", "--time", "-3"],
+            "--time -3: expected a duration in seconds >= 0",
+        ),
+        (
+            &["run", "rope", "--method", "euler"],
+            "unknown method `euler`; expected one of: explicit-euler, semi-implicit-euler",
+        ),
+        (
+            &["run", "ropes", "--method", "rk4,verlet,midpoint"],
+            "--method lists 3 methods but scene `ropes` has 2 bodies",
+        ),
+        (
+            &["run", "rope", "--set", "colour=red"],
+            "unknown parameter `colour` for scene `rope`; known parameters: nodes, mass",
+        ),
+        (
+            &["run", "rope", "--set", "nodes=1"],
+            "`nodes` = 1 is out of range: allowed 2 ..= 1000000",
+        ),
+        (
+            &["run", "rope", "--set", "mass=-1"],
+            "`mass` = -1 is out of range: allowed > 0 (kg)",
+        ),
+        (
+            &["run", "rope", "--set", "mass=heavy"],
+            "`mass` = heavy: expected a number > 0",
+        ),
+        (
+            &["run", "rope", "--set", "pinned=[0, 3]"],
+            "`pinned` = 3 is out of range: allowed 0 ..= 2 (the scene has 3 particles)",
+        ),
+        (
+            &["run", "rope", "--set", "start=[1,2]"],
+            "`start` = [1,2]: expected a vector [x, y, z]",
+        ),
+        (
+            &["run", "rope", "--set", "nodes"],
+            "`nodes`: expected key=value",
+        ),
+        (
+            &["run", "rope", "--set", "verlet_damping=1"],
+            "`verlet_damping` = 1 is out of range: allowed 0 ..< 1",
+        ),
+        (
+            &["run", "rope", "--csv", "/nonexistent-dir/x.csv"],
+            "cannot write CSV file /nonexistent-dir/x.csv",
+        ),
+        (
+            &[
+                "run",
+                "rope",
+                "--set",
+                "start=[0,0,0]",
+                "--set",
+                "end=[0,0,0]",
+            ],
+            "`start` and `end` must differ",
+        ),
+    ];
+    for (args, message) in cases {
+        let err = stderr_of_failure(args);
+        assert!(err.starts_with("springlab: "), "{args:?}: {err}");
+        assert!(
+            err.contains(message),
+            "{args:?}: expected `{message}`, got `{err}`"
+        );
+    }
+}
+
+#[test]
+fn scenes_lists_every_builtin_with_parameters() {
+    let out = springlab(&["scenes"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for name in ["oscillator", "rope", "ropes"] {
+        assert!(text.lines().any(|l| l.starts_with(name)), "{name} missing");
+    }
+    assert!(text.contains("stiffness"));
+    assert!(text.contains("N/m"));
+}

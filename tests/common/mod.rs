@@ -1,0 +1,44 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use springlab::physics::Method;
+use springlab::scene;
+use springlab::simulation::Simulation;
+
+/// A small deterministic pseudo-random generator (xorshift64*), so tests need no dependency.
+pub struct Rng(pub u64);
+
+impl Rng {
+    /// A float in [lo, hi).
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        let bits = self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11;
+        lo + (hi - lo) * (bits as f64 / (1u64 << 53) as f64)
+    }
+}
+
+/// The oscillator scene (ω = 10 rad/s) with `method`, `amplitude` and extra `--set`s.
+pub fn oscillator(method: Method, sets: &[&str]) -> Simulation {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let mut scene = scene::load("oscillator", &sets).expect("built-in oscillator");
+    scene.set_method(method);
+    Simulation::new(scene)
+}
+
+/// Position x of the oscillator's moving particle.
+pub fn oscillator_x(sim: &Simulation) -> f64 {
+    sim.scene.bodies[0].state.x[1].x
+}
+
+/// Least-squares slope of log(error) against log(dt).
+pub fn fitted_order(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    let (lx, ly): (Vec<f64>, Vec<f64>) = points.iter().map(|&(dt, e)| (dt.ln(), e.ln())).unzip();
+    let mx = lx.iter().sum::<f64>() / n;
+    let my = ly.iter().sum::<f64>() / n;
+    let sxy: f64 = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = lx.iter().map(|x| (x - mx) * (x - mx)).sum();
+    sxy / sxx
+}

@@ -1,0 +1,197 @@
+//! The integrators against exact solutions: convergence orders and stability limits on the
+//! harmonic oscillator `x(t) = 1 + A cos(ω t)`, ω = √(k/m) = 10 rad/s.
+
+mod common;
+
+use common::{fitted_order, oscillator, oscillator_x};
+use springlab::physics::Method;
+
+const OMEGA: f64 = 10.0;
+
+/// |x_sim(1 s) - x_exact(1 s)| for time step `dt`.
+fn error_at_one_second(method: Method, dt: f64) -> f64 {
+    let mut sim = oscillator(method, &["verlet_damping=0", "iterations=0"]);
+    sim.set_dt(dt);
+    let steps = (1.0 / dt).round() as u64;
+    sim.run(steps, |_| {});
+    assert!(sim.diverged.is_none(), "{method} diverged at dt {dt}");
+    let exact = 1.0 + 0.1 * (OMEGA * 1.0).cos();
+    (oscillator_x(&sim) - exact).abs()
+}
+
+fn measured_order(method: Method) -> f64 {
+    // dt·ω = 0.05 down to 0.00625: small enough that every method is in its asymptotic regime.
+    let dt0 = 0.005;
+    let points: Vec<(f64, f64)> = (0..4)
+        .map(|i| {
+            let dt = dt0 / f64::from(1 << i);
+            (dt, error_at_one_second(method, dt))
+        })
+        .collect();
+    let order = fitted_order(&points);
+    eprintln!("{method}: errors {points:?} -> order {order:.3}");
+    order
+}
+
+#[test]
+fn convergence_orders_match_theory() {
+    let expected = [
+        (Method::ExplicitEuler, 1.0),
+        (Method::SemiImplicitEuler, 1.0),
+        (Method::ImplicitEuler, 1.0),
+        (Method::PredictorCorrector, 1.0),
+        (Method::Midpoint, 2.0),
+        (Method::Verlet, 2.0),
+        (Method::Rk4, 4.0),
+    ];
+    for (method, order) in expected {
+        let measured = measured_order(method);
+        assert!(
+            (measured - order).abs() <= 0.15,
+            "{method}: measured order {measured:.3}, expected {order} ± 0.15"
+        );
+    }
+}
+
+/// Initial stretch (m): small, so that a growth of 10⁵ still leaves the spring in its linear
+/// range (|x - L0| < L0; beyond, the particle would pass through the pin).
+const AMPLITUDE: f64 = 1e-6;
+
+/// Runs the undamped oscillator at `dt·ω = z` for `steps` steps and returns the largest
+/// |x - L0| seen divided by the initial amplitude, stopping once it passes 10⁵.
+fn amplitude_growth(method: Method, z: f64, steps: u64) -> f64 {
+    let mut sim = oscillator(
+        method,
+        &["amplitude=1e-6", "verlet_damping=0", "iterations=0"],
+    );
+    sim.set_dt(z / OMEGA);
+    let mut max = 0.0f64;
+    for _ in 0..steps {
+        sim.step();
+        max = max.max((oscillator_x(&sim) - 1.0).abs() / AMPLITUDE);
+        if max > 1e5 || sim.diverged.is_some() {
+            return f64::INFINITY;
+        }
+    }
+    max
+}
+
+#[test]
+fn semi_implicit_euler_and_verlet_are_stable_below_two_and_grow_above() {
+    for method in [Method::SemiImplicitEuler, Method::Verlet] {
+        // Below the limit the orbit is an ellipse: bounded by 1/√(1 - (z/2)²) ≈ 7.1 at z = 1.98.
+        let stable = amplitude_growth(method, 1.98, 5_000);
+        assert!(stable < 10.0, "{method} at dt·ω = 1.98 grew by {stable}");
+        // Above it one eigenvalue has modulus ≈ 1.33: growth by orders of magnitude.
+        let growing = amplitude_growth(method, 2.02, 5_000);
+        assert!(
+            growing.is_infinite(),
+            "{method} at dt·ω = 2.02 grew only by {growing}"
+        );
+    }
+}
+
+#[test]
+fn rk4_is_stable_below_two_root_two_and_grows_above() {
+    let stable = amplitude_growth(Method::Rk4, 2.80, 5_000);
+    assert!(stable <= 1.0 + 1e-9, "RK4 at dt·ω = 2.80 grew by {stable}");
+    let growing = amplitude_growth(Method::Rk4, 2.86, 5_000);
+    assert!(
+        growing.is_infinite(),
+        "RK4 at dt·ω = 2.86 grew only by {growing}"
+    );
+}
+
+#[test]
+fn explicit_euler_energy_grows_at_every_dt() {
+    for z in [1e-3, 1e-2, 0.1, 0.5, 1.0] {
+        let mut sim = oscillator(Method::ExplicitEuler, &["amplitude=1e-6"]);
+        sim.set_dt(z / OMEGA);
+        let mut last = sim.energy().total;
+        // 20 steps grow the amplitude at most 2^10 times: still linear.
+        for _ in 0..20 {
+            sim.step();
+            let e = sim.energy().total;
+            // Exact factor per step: |1 + i dt ω|² = 1 + (dt ω)².
+            assert!(e > last, "explicit Euler energy did not grow at dt·ω = {z}");
+            let ratio = e / last;
+            assert!(
+                (ratio - (1.0 + z * z)).abs() < 1e-6 * (1.0 + z * z),
+                "ratio {ratio} at z {z}"
+            );
+            last = e;
+        }
+    }
+}
+
+#[test]
+fn implicit_euler_is_stable_at_dt_omega_100_and_loses_energy() {
+    let mut sim = oscillator(Method::ImplicitEuler, &[]);
+    sim.set_dt(100.0 / OMEGA);
+    let mut last = sim.energy().total;
+    for _ in 0..1_000 {
+        sim.step();
+        let e = sim.energy().total;
+        assert!(e <= last, "implicit Euler energy rose from {last} to {e}");
+        last = e;
+    }
+    assert!(sim.diverged.is_none());
+    // Exact factor per step on the amplitude: 1/|1 - i dt ω| = 1/√(1 + 10⁴).
+    assert!(
+        last < 1e-12,
+        "energy after 1000 steps at dt·ω = 100: {last}"
+    );
+}
+
+/// Largest dt·ω in [lo, hi] at which `method` does not grow over 2000 steps (bisection).
+fn measured_limit(method: Method, mut lo: f64, mut hi: f64) -> f64 {
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if amplitude_growth(method, mid, 2_000) <= 1.0 + 1e-9 {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+#[test]
+fn predictor_corrector_limit_is_dt_omega_one() {
+    // |R(i z)|² = 1 - z² + z⁴ for R = 1 + z + z²: stable (and lossy) exactly while z ≤ 1.
+    let limit = measured_limit(Method::PredictorCorrector, 0.5, 1.5);
+    assert!(
+        (limit - 1.0).abs() < 0.01,
+        "predictor–corrector limit dt·ω = {limit}"
+    );
+    // And on a pure decay x' = -λ x it is stable only for dt·λ ≤ 1, half of explicit Euler's 2:
+    // covered by the amplification factor 1 + z + z², z = -dt λ, evaluated here for the record.
+    let r = |z: f64| 1.0 + z + z * z;
+    assert!(r(-1.0).abs() <= 1.0 && r(-1.01).abs() > 1.0);
+}
+
+#[test]
+fn rk4_matches_its_amplification_factor_on_the_oscillator() {
+    // `springlab run oscillator --method rk4 --dt 0.01 --time 10`: x_n - 1 = Re(A R(iθ)^n),
+    // R(z) = 1 + z + z²/2 + z³/6 + z⁴/24, θ = dt ω = 0.1, n = 1000.
+    let mut sim = oscillator(Method::Rk4, &[]);
+    sim.run(1000, |_| {});
+    assert_eq!(sim.force_evals, 4000);
+    let (theta, mut re, mut im) = (0.1f64, 0.1f64, 0.0f64);
+    let (r_re, r_im) = (
+        1.0 - theta.powi(2) / 2.0 + theta.powi(4) / 24.0,
+        theta - theta.powi(3) / 6.0,
+    );
+    for _ in 0..1000 {
+        (re, im) = (re * r_re - im * r_im, re * r_im + im * r_re);
+    }
+    let x = oscillator_x(&sim);
+    assert!(
+        (x - (1.0 + re)).abs() < 1e-12,
+        "RK4 x = {x}, theory {}",
+        1.0 + re
+    );
+    // Its distance from the exact solution is RK4's own phase error, 4.8e-6 m at this dt.
+    let exact = 1.0 + 0.1 * 100f64.cos();
+    assert!((x - exact).abs() < 5e-6, "RK4 error {}", (x - exact).abs());
+}

@@ -1,0 +1,234 @@
+//! Conservation laws and invariants of the force model and the integrators.
+
+mod common;
+
+use common::Rng;
+use glam::DVec3;
+use springlab::physics::{
+    Method, MethodParams, Model, Spring, SpringKind, State, Workspace, forces,
+};
+use springlab::scene::builder::{Builder, RopeSpec, rope};
+use springlab::scene::{self};
+use springlab::simulation::Simulation;
+
+/// A random system of `n` particles and `m` springs (some of zero rest length), no gravity.
+fn random_system(rng: &mut Rng, n: usize, m: usize) -> (Model, State) {
+    let x: Vec<DVec3> = (0..n)
+        .map(|_| {
+            DVec3::new(
+                rng.range(-2.0, 2.0),
+                rng.range(-2.0, 2.0),
+                rng.range(-2.0, 2.0),
+            )
+        })
+        .collect();
+    let v: Vec<DVec3> = (0..n)
+        .map(|_| {
+            DVec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            )
+        })
+        .collect();
+    let springs = (0..m)
+        .map(|i| {
+            let a = (rng.range(0.0, n as f64) as u32).min(n as u32 - 1);
+            let b = (a + 1 + rng.range(0.0, (n - 1) as f64) as u32) % n as u32;
+            Spring {
+                a,
+                b,
+                rest_length: if i % 7 == 0 { 0.0 } else { rng.range(0.1, 3.0) },
+                stiffness: rng.range(1.0, 1000.0),
+                damping: rng.range(0.0, 10.0),
+                kind: SpringKind::Struct,
+            }
+        })
+        .collect();
+    let mass = (0..n).map(|_| rng.range(0.5, 2.0)).collect();
+    let model = Model::new(mass, &vec![false; n], springs, DVec3::ZERO, 0.0);
+    (model, State::new(x, v))
+}
+
+#[test]
+fn internal_forces_sum_to_zero() {
+    let mut rng = Rng(0x5eed_1234_abcd_0001);
+    for trial in 0..20 {
+        let (model, state) = random_system(&mut rng, 30, 80);
+        let mut f = vec![DVec3::ZERO; 30];
+        forces(&model, &state.x, &state.v, &mut f);
+        let total: DVec3 = f.iter().copied().sum();
+        let scale: f64 = f.iter().map(|f| f.length()).sum();
+        assert!(
+            total.length() <= 1e-12 * scale,
+            "trial {trial}: net internal force {total}"
+        );
+        // Newton's third law also for the moments: Σ x × f = 0 for central forces.
+        let torque: DVec3 = state.x.iter().zip(&f).map(|(x, f)| x.cross(*f)).sum();
+        let torque_scale: f64 = state
+            .x
+            .iter()
+            .zip(&f)
+            .map(|(x, f)| x.length() * f.length())
+            .sum();
+        assert!(
+            torque.length() <= 1e-12 * torque_scale,
+            "trial {trial}: net torque {torque}"
+        );
+    }
+}
+
+#[test]
+fn a_zero_length_spring_gives_no_nan() {
+    let p = DVec3::new(0.5, 0.5, 0.5);
+    let springs = vec![Spring {
+        a: 0,
+        b: 1,
+        rest_length: 0.0,
+        stiffness: 100.0,
+        damping: 1.0,
+        kind: SpringKind::Struct,
+    }];
+    let model = Model::new(
+        vec![1.0, 1.0],
+        &[false, false],
+        springs,
+        DVec3::new(0.0, -9.8, 0.0),
+        0.0,
+    );
+    for method in Method::ALL {
+        let mut state = State::new(vec![p, p], vec![DVec3::X, DVec3::ZERO]);
+        let mut work = Workspace::new();
+        for _ in 0..10 {
+            method.step(
+                &model,
+                &mut state,
+                0.01,
+                &MethodParams::default(),
+                &mut work,
+            );
+        }
+        assert!(
+            state.x.iter().chain(&state.v).all(|v| v.is_finite()),
+            "{method} produced NaN"
+        );
+    }
+}
+
+#[test]
+fn pinned_particles_never_move_under_any_method() {
+    for method in Method::ALL {
+        let sets = vec![
+            "nodes=8".to_string(),
+            "pinned=[0, 7]".to_string(),
+            "damping=0.5".to_string(),
+        ];
+        let mut scene = scene::load("rope", &sets).expect("rope");
+        // Give the free nodes a kick so every method has something to do.
+        for v in scene.bodies[0].state.v.iter_mut().skip(1).take(6) {
+            *v = DVec3::new(0.3, 1.0, -0.2);
+        }
+        scene.set_method(method);
+        let before = scene.bodies[0].state.x.clone();
+        let mut sim = Simulation::new(scene);
+        sim.set_dt(0.002);
+        sim.run(500, |_| {});
+        let after = &sim.scene.bodies[0].state;
+        assert_eq!(after.x[0], before[0], "{method} moved pinned node 0");
+        assert_eq!(after.x[7], before[7], "{method} moved pinned node 7");
+        assert_eq!(after.v[0], DVec3::ZERO);
+        assert_ne!(after.x[3], before[3], "{method} did not move a free node");
+    }
+}
+
+#[test]
+fn rope_constructor_spaces_nodes_evenly_with_springs_between_neighbours() {
+    let start = DVec3::new(1.0, 2.0, -0.5);
+    let end = DVec3::new(-3.0, 0.5, 2.5);
+    let spec = RopeSpec {
+        start,
+        end,
+        nodes: 11,
+        node_mass: 0.25,
+        stiffness: 40.0,
+        damping: 0.1,
+        pinned: vec![0, 10],
+    };
+    let mut b = Builder::new();
+    b.particle(DVec3::splat(9.0), 1.0); // an earlier particle: the rope must index after it
+    let first = rope(&mut b, &spec);
+    assert_eq!(first, 1);
+    let (model, state) = b.build(DVec3::ZERO, 0.0);
+    let x = &state.x[1..];
+    assert_eq!(x.len(), 11);
+    assert_eq!(x[0], start);
+    assert!((x[10] - end).length() < 1e-15);
+    let spacing = (end - start).length() / 10.0;
+    for i in 0..10 {
+        assert!(
+            ((x[i + 1] - x[i]).length() - spacing).abs() < 1e-12,
+            "gap {i}"
+        );
+        // Evenly spaced along the straight line from start to end.
+        let expected = start + (end - start) * (i as f64 / 10.0);
+        assert!((x[i] - expected).length() < 1e-14);
+    }
+    assert_eq!(model.springs.len(), 10);
+    for (i, s) in model.springs.iter().enumerate() {
+        assert_eq!((s.a, s.b), (1 + i as u32, 2 + i as u32));
+        assert!((s.rest_length - spacing).abs() < 1e-12);
+        assert_eq!((s.stiffness, s.damping), (40.0, 0.1));
+    }
+    assert!(model.is_pinned(1) && model.is_pinned(11) && !model.is_pinned(2));
+    assert_eq!(model.mass[5], 0.25);
+}
+
+#[test]
+fn explicit_euler_diverges_on_the_rope_while_semi_implicit_and_verlet_stay_bounded() {
+    let run = |method: Method, steps: u64| {
+        let mut scene = scene::load("rope", &[]).expect("rope");
+        scene.set_method(method);
+        let mut sim = Simulation::new(scene);
+        let mut max_speed = 0.0f64;
+        sim.run(steps, |s| {
+            for v in s.velocities() {
+                max_speed = max_speed.max(v.length());
+            }
+        });
+        (sim, max_speed)
+    };
+    let (euler, _) = run(Method::ExplicitEuler, 10_000);
+    let d = euler
+        .diverged
+        .as_ref()
+        .expect("explicit Euler must diverge on the rope");
+    assert!(
+        d.step > 10 && d.step < 10_000,
+        "diverged at step {}",
+        d.step
+    );
+    assert!((d.time - d.step as f64 / 64.0).abs() < 1e-12);
+    assert!(d.max_speed > 1000.0);
+    for method in [Method::SemiImplicitEuler, Method::Verlet] {
+        let (sim, max_speed) = run(method, 10_000);
+        assert!(sim.diverged.is_none(), "{method} diverged");
+        assert_eq!(sim.steps, 10_000);
+        // Free fall of a 4 m rope from rest cannot exceed √(2 g h) ≈ 12.5 m/s at its tip
+        // (h ≤ 8 m); energy conservation bounds the speed of a bounded method.
+        assert!(max_speed < 20.0, "{method}: max speed {max_speed} m/s");
+    }
+}
+
+#[test]
+fn the_same_run_twice_is_bit_identical() {
+    let run = || {
+        let mut scene = scene::load("ropes", &["nodes=12".to_string()]).expect("ropes");
+        scene.bodies[0].method = Method::ImplicitEuler;
+        let mut sim = Simulation::new(scene);
+        sim.run(3_000, |_| {});
+        let mut report = sim.report(0.0);
+        report.wall_seconds = 0.0;
+        serde_json::to_string(&report).expect("json")
+    };
+    assert_eq!(run(), run());
+}
