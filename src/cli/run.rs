@@ -152,7 +152,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let report = sim.report(wall);
     let mut out = std::io::stdout().lock();
     if args.json {
-        serde_json::to_writer(&mut out, &report)?;
+        serde_json::to_writer(&mut out, &report).map_err(std::io::Error::from)?;
         writeln!(out)?;
     } else {
         print_summary(&mut out, &report)?;
