@@ -4,6 +4,7 @@ use std::io::{IsTerminal, Write};
 
 use anyhow::bail;
 use clap::Args;
+use serde::Serialize;
 
 use crate::bench::{self, BenchResult, Workload};
 
@@ -20,6 +21,12 @@ pub struct BenchArgs {
     #[arg(long, value_name = "R", default_value_t = 3,
           value_parser = clap::value_parser!(u32).range(1..))]
     pub repeats: u32,
+}
+
+/// The JSON document of `springlab bench --json` (DESIGN.md), fields in declaration order.
+#[derive(Serialize)]
+struct Report<'a> {
+    workloads: &'a [BenchResult],
 }
 
 /// The workloads named on the command line, or all of them.
@@ -61,7 +68,12 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     let mut out = std::io::stdout().lock();
     if args.json {
-        serde_json::to_writer(&mut out, &serde_json::json!({ "workloads": results }))?;
+        serde_json::to_writer(
+            &mut out,
+            &Report {
+                workloads: &results,
+            },
+        )?;
         writeln!(out)?;
     } else {
         print_table(&mut out, &results)?;
