@@ -1,1 +1,693 @@
-//! The peer-benchmark workloads (to be written).
+//! The peer-benchmark workloads: six fixed mass-spring runs shared with the C++/Eigen, Taichi,
+//! Warp and NumPy peers (`WORKLOADS.md`), stepped with the library's own integrators.
+//!
+//! | workload | particles | springs | method | dt (s) | steps N |
+//! |---|---|---|---|---|---|
+//! | `jelly-se`    | 1 000  | 12 876 | semi-implicit Euler | 1e-4   | 10 000 |
+//! | `jelly-rk4`   | 1 000  | 12 876 | RK4                 | 1e-4   | 10 000 |
+//! | `cloth64-se`  | 4 096  | 23 938 | semi-implicit Euler | 5e-5   | 4 000 |
+//! | `cloth128-se` | 16 384 | 97 026 | semi-implicit Euler | 2.5e-5 | 5 000 |
+//! | `rope-se`     | 64     | 63     | semi-implicit Euler | 1e-4   | 10 000 |
+//! | `rope-verlet` | 64     | 63 constraints | position Verlet, 20 projection passes | 1e-3 | 10 000 |
+//!
+//! # Theory
+//!
+//! Every spring workload uses the force model of [`crate::physics::springs`] with the same
+//! stiffness `k` (N/m) and damping `k_d` (N·s/m) for every spring, gravity
+//! `g = (0, -9.8, 0)` m/s² and no drag. After each step a *benchmark contact rule* (not one of the
+//! course colliders) projects the particles:
+//!
+//! ```text
+//! ground (jelly):  if y < 0 { y = 0; if v_y < 0 { v_y = -e v_y } }
+//! sphere (cloth):  dd = x - c; if |dd| < R { n = dd/|dd|; x = c + R n;
+//!                                           v_n = v·n; if v_n < 0 { v -= v_n n } }
+//! ```
+//! where `e = 0.8` is the restitution, `c = (0.5, 0.6, 0.5)` m the sphere's centre and
+//! `R = 0.35` m its radius. RK4 applies the contact once, after the full step.
+//!
+//! `rope-verlet` has no spring forces: its 63 springs have `k = k_d = 0` and serve only as
+//! distance constraints, projected 20 times per step in red-black Gauss–Seidel order (the
+//! library's greedy colouring of a chain). It starts with `x_prev = x` (the rope at rest), not
+//! with the library's Taylor start-up.
+//!
+//! After N steps each peer prints a checksum: the centroid (plain mean of the positions, m) and
+//! the total energy (J)
+//!
+//! ```text
+//! E = Σ_i ½ m |v_i|² + Σ_i m 9.8 y_i + Σ_springs ½ k (L - L0)²
+//! ```
+//! (no spring term for `rope-verlet`, whose velocity is `v = (x - x_prev) / dt`).
+//!
+//! The set-up is reproduced bit for bit: [`setup_bytes`] serialises it in the canonical layout
+//! whose SHA-256 `WORKLOADS.md` lists.
+
+use std::fmt;
+use std::str::FromStr;
+use std::time::Instant;
+
+use glam::DVec3;
+use serde::Serialize;
+
+use crate::physics::{Method, MethodParams, Model, SpringKind, State, Workspace};
+use crate::scene::builder::Builder;
+
+/// Gravitational acceleration of every workload (m/s²).
+pub const GRAVITY: DVec3 = DVec3::new(0.0, -9.8, 0.0);
+
+/// Relative tolerance on every checksum value for an f64 implementation (`WORKLOADS.md`).
+pub const REL_TOL: f64 = 1e-8;
+
+/// Absolute floor of the checksum comparison (m or J), for reference values that are exactly
+/// zero (the rope's `cz`).
+pub const ABS_FLOOR: f64 = 1e-12;
+
+/// One of the six peer-benchmark workloads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Workload {
+    /// 10×10×10 jelly cube dropped on the ground, semi-implicit Euler.
+    JellySe,
+    /// The same cube, classic RK4.
+    JellyRk4,
+    /// 64×64 cloth falling on a sphere, semi-implicit Euler.
+    Cloth64Se,
+    /// 128×128 cloth falling on a sphere, semi-implicit Euler.
+    Cloth128Se,
+    /// 64-node rope pinned at one end, stiff springs, semi-implicit Euler.
+    RopeSe,
+    /// 64-node rope of distance constraints, position Verlet with projection.
+    RopeVerlet,
+}
+
+impl Workload {
+    /// All workloads, in the order of `WORKLOADS.md`.
+    pub const ALL: [Workload; 6] = [
+        Workload::JellySe,
+        Workload::JellyRk4,
+        Workload::Cloth64Se,
+        Workload::Cloth128Se,
+        Workload::RopeSe,
+        Workload::RopeVerlet,
+    ];
+
+    /// The name on the command line and in the peers' output, for example `jelly-se`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Workload::JellySe => "jelly-se",
+            Workload::JellyRk4 => "jelly-rk4",
+            Workload::Cloth64Se => "cloth64-se",
+            Workload::Cloth128Se => "cloth128-se",
+            Workload::RopeSe => "rope-se",
+            Workload::RopeVerlet => "rope-verlet",
+        }
+    }
+
+    /// The integration method.
+    #[must_use]
+    pub fn method(self) -> Method {
+        match self {
+            Workload::JellyRk4 => Method::Rk4,
+            Workload::RopeVerlet => Method::Verlet,
+            _ => Method::SemiImplicitEuler,
+        }
+    }
+
+    /// The time step (s).
+    #[must_use]
+    pub fn dt(self) -> f64 {
+        match self {
+            Workload::JellySe | Workload::JellyRk4 | Workload::RopeSe => 1e-4,
+            Workload::Cloth64Se => 5e-5,
+            Workload::Cloth128Se => 2.5e-5,
+            Workload::RopeVerlet => 1e-3,
+        }
+    }
+
+    /// The number of steps N after which the checksum is defined.
+    #[must_use]
+    pub fn steps(self) -> u64 {
+        match self {
+            Workload::Cloth64Se => 4_000,
+            Workload::Cloth128Se => 5_000,
+            _ => 10_000,
+        }
+    }
+
+    /// The method settings: Verlet damping 0.00005 and 20 projection passes (used by
+    /// `rope-verlet` only).
+    #[must_use]
+    pub fn params(self) -> MethodParams {
+        MethodParams {
+            verlet_damping: 0.00005,
+            iterations: 20,
+            ..MethodParams::default()
+        }
+    }
+
+    /// The reference checksum after [`Workload::steps`] steps (C++ f64 reference, `WORKLOADS.md`).
+    #[must_use]
+    pub fn reference(self) -> Checksum {
+        match self {
+            Workload::JellySe => REFERENCE_JELLY_SE,
+            Workload::JellyRk4 => REFERENCE_JELLY_RK4,
+            Workload::Cloth64Se => REFERENCE_CLOTH64_SE,
+            Workload::Cloth128Se => REFERENCE_CLOTH128_SE,
+            Workload::RopeSe => REFERENCE_ROPE_SE,
+            Workload::RopeVerlet => REFERENCE_ROPE_VERLET,
+        }
+    }
+
+    /// The contact rule applied after each step.
+    fn contact(self) -> Contact {
+        match self {
+            Workload::JellySe | Workload::JellyRk4 => Contact::Ground { restitution: 0.8 },
+            Workload::Cloth64Se | Workload::Cloth128Se => Contact::Sphere {
+                centre: DVec3::new(0.5, 0.6, 0.5),
+                radius: 0.35,
+            },
+            Workload::RopeSe | Workload::RopeVerlet => Contact::None,
+        }
+    }
+}
+
+impl fmt::Display for Workload {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl Serialize for Workload {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.name())
+    }
+}
+
+/// A workload name that is not one of [`Workload::ALL`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown workload `{0}`; expected one of: {names}", names = workload_names())]
+pub struct UnknownWorkload(pub String);
+
+/// The names of all workloads, comma separated.
+#[must_use]
+pub fn workload_names() -> String {
+    Workload::ALL.map(Workload::name).join(", ")
+}
+
+impl FromStr for Workload {
+    type Err = UnknownWorkload;
+
+    fn from_str(s: &str) -> Result<Workload, UnknownWorkload> {
+        Workload::ALL
+            .into_iter()
+            .find(|w| w.name() == s)
+            .ok_or_else(|| UnknownWorkload(s.to_string()))
+    }
+}
+
+/// The result every peer prints after N steps.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Checksum {
+    /// Mean position `(cx, cy, cz)` (m).
+    pub centroid: [f64; 3],
+    /// Total energy `E` (J), see the module documentation.
+    pub energy: f64,
+}
+
+impl Checksum {
+    /// True when every value is within `rel_tol` of `reference`, relative to the reference
+    /// value, with an absolute floor of [`ABS_FLOOR`]:
+    /// `|a - b| <= max(rel_tol |b|, ABS_FLOOR)` for `cx`, `cy`, `cz` and `E`.
+    ///
+    /// A NaN value never agrees.
+    #[must_use]
+    pub fn agrees(&self, reference: &Checksum, rel_tol: f64) -> bool {
+        let close = |a: f64, b: f64| (a - b).abs() <= (rel_tol * b.abs()).max(ABS_FLOOR);
+        self.centroid
+            .iter()
+            .zip(&reference.centroid)
+            .all(|(&a, &b)| close(a, b))
+            && close(self.energy, reference.energy)
+    }
+
+    /// The largest relative deviation from `reference` over the four values (each relative to
+    /// `max(|reference value|, ABS_FLOOR)`).
+    #[must_use]
+    pub fn max_relative_deviation(&self, reference: &Checksum) -> f64 {
+        let rel = |a: f64, b: f64| (a - b).abs() / b.abs().max(ABS_FLOOR);
+        self.centroid
+            .iter()
+            .zip(&reference.centroid)
+            .map(|(&a, &b)| rel(a, b))
+            .fold(rel(self.energy, reference.energy), f64::max)
+    }
+}
+
+/// `jelly-se` after 10 000 steps.
+pub const REFERENCE_JELLY_SE: Checksum = Checksum {
+    centroid: [0.45, 0.623460865208, 0.45],
+    energy: 6477.4512462,
+};
+/// `jelly-rk4` after 10 000 steps.
+pub const REFERENCE_JELLY_RK4: Checksum = Checksum {
+    centroid: [0.45, 0.624484756424, 0.45],
+    energy: 6484.05709526,
+};
+/// `cloth64-se` after 4 000 steps.
+pub const REFERENCE_CLOTH64_SE: Checksum = Checksum {
+    centroid: [0.5, 0.885055977476, 0.443992378974],
+    energy: 9.72445584777,
+};
+/// `cloth128-se` after 5 000 steps.
+pub const REFERENCE_CLOTH128_SE: Checksum = Checksum {
+    centroid: [0.5, 0.92952267214, 0.487972098877],
+    energy: 9.79459382544,
+};
+/// `rope-se` after 10 000 steps.
+pub const REFERENCE_ROPE_SE: Checksum = Checksum {
+    centroid: [-0.454248073641, 0.971656712835, 0.0],
+    energy: 9.78089681978,
+};
+/// `rope-verlet` after 10 000 steps.
+pub const REFERENCE_ROPE_VERLET: Checksum = Checksum {
+    centroid: [-0.327208156111, 0.62841742562, 0.0],
+    energy: 6.60831200289,
+};
+
+// ---------------------------------------------------------------------------------------------
+// Set-up
+// ---------------------------------------------------------------------------------------------
+
+/// A lattice offset `(dx, dy, dz)` in lattice units.
+type Offset3 = (i64, i64, i64);
+
+/// Lattice offsets of the jelly cube's springs, by kind, in canonical order.
+const JELLY_OFFSETS: [(SpringKind, &[Offset3]); 3] = [
+    (SpringKind::Struct, &[(1, 0, 0), (0, 1, 0), (0, 0, 1)]),
+    (
+        SpringKind::Shear,
+        &[
+            (1, 1, 0),
+            (1, -1, 0),
+            (1, 0, 1),
+            (1, 0, -1),
+            (0, 1, 1),
+            (0, 1, -1),
+            (1, 1, 1),
+            (1, 1, -1),
+            (1, -1, 1),
+            (1, -1, -1),
+        ],
+    ),
+    (SpringKind::Bend, &[(2, 0, 0), (0, 2, 0), (0, 0, 2)]),
+];
+
+/// Lattice offsets `(dr, dc)` (row, column) of the cloth's springs, by kind, in canonical order.
+const CLOTH_OFFSETS: [(SpringKind, &[(i64, i64)]); 3] = [
+    (SpringKind::Struct, &[(0, 1), (1, 0)]),
+    (SpringKind::Shear, &[(1, 1), (1, -1)]),
+    (SpringKind::Bend, &[(0, 2), (2, 0)]),
+];
+
+/// The 10×10×10 jelly cube: particle `p = ix + 10 iy + 100 iz` at `(ix h, 1 + iy h, iz h)`,
+/// `h = 0.1` m, 1 kg each, `k = 2000` N/m, `k_d = 10` N·s/m, nothing pinned.
+fn jelly(b: &mut Builder) {
+    const SIDE: i64 = 10;
+    let h = 0.1;
+    let (stiffness, damping, mass) = (2000.0, 10.0, 1.0);
+    for iz in 0..SIDE {
+        for iy in 0..SIDE {
+            for ix in 0..SIDE {
+                let x = DVec3::new(ix as f64 * h, 1.0 + iy as f64 * h, iz as f64 * h);
+                b.particle(x, mass);
+            }
+        }
+    }
+    let inside = |i: i64| (0..SIDE).contains(&i);
+    for (kind, offsets) in JELLY_OFFSETS {
+        for p in 0..SIDE * SIDE * SIDE {
+            let (ix, iy, iz) = (p % SIDE, (p / SIDE) % SIDE, p / (SIDE * SIDE));
+            for &(dx, dy, dz) in offsets {
+                let (qx, qy, qz) = (ix + dx, iy + dy, iz + dz);
+                if inside(qx) && inside(qy) && inside(qz) {
+                    let q = qx + SIDE * qy + SIDE * SIDE * qz;
+                    // Rest length = initial distance sqrt(d.x² + d.y² + d.z²), as glam computes it.
+                    b.spring(p as u32, q as u32, stiffness, damping, kind);
+                }
+            }
+        }
+    }
+}
+
+/// The `n`×`n` cloth: particle `p = r n + c` at `(c h, 1, r h)`, `h = 1/(n-1)` m,
+/// `1/n²` kg each, `k = 5000` N/m, `k_d = 0.02` N·s/m, particles `0` and `n - 1` pinned.
+fn cloth(b: &mut Builder, n: i64) {
+    let h = 1.0 / (n - 1) as f64;
+    let mass = 1.0 / (n * n) as f64;
+    let (stiffness, damping) = (5000.0, 0.02);
+    for r in 0..n {
+        for c in 0..n {
+            b.particle(DVec3::new(c as f64 * h, 1.0, r as f64 * h), mass);
+        }
+    }
+    b.pinned[0] = true;
+    b.pinned[(n - 1) as usize] = true;
+    let inside = |i: i64| (0..n).contains(&i);
+    for (kind, offsets) in CLOTH_OFFSETS {
+        for p in 0..n * n {
+            let (r, c) = (p / n, p % n);
+            for &(dr, dc) in offsets {
+                let (qr, qc) = (r + dr, c + dc);
+                if inside(qr) && inside(qc) {
+                    b.spring(p as u32, (qr * n + qc) as u32, stiffness, damping, kind);
+                }
+            }
+        }
+    }
+}
+
+/// The 64-node rope: node `i` at `(i h, 1, 0)`, `h = 1/63` m, `1/64` kg each, node 0 pinned,
+/// springs `(i, i + 1)` of stiffness `k` (N/m) and damping `k_d` (N·s/m).
+fn rope(b: &mut Builder, stiffness: f64, damping: f64) {
+    const NODES: u32 = 64;
+    let h = 1.0 / f64::from(NODES - 1);
+    let mass = 1.0 / f64::from(NODES);
+    for i in 0..NODES {
+        b.particle(DVec3::new(f64::from(i) * h, 1.0, 0.0), mass);
+    }
+    b.pinned[0] = true;
+    for i in 0..NODES - 1 {
+        b.spring(i, i + 1, stiffness, damping, SpringKind::Struct);
+    }
+}
+
+/// The model and initial state of `workload`, bit for bit as `WORKLOADS.md` defines them.
+///
+/// For `rope-verlet` the springs have zero stiffness and damping (pure distance constraints)
+/// and the state's history is valid with `x_prev = x`, so Verlet starts from rest.
+#[must_use]
+pub fn setup(workload: Workload) -> (Model, State) {
+    let mut b = Builder::new();
+    match workload {
+        Workload::JellySe | Workload::JellyRk4 => jelly(&mut b),
+        Workload::Cloth64Se => cloth(&mut b, 64),
+        Workload::Cloth128Se => cloth(&mut b, 128),
+        Workload::RopeSe => rope(&mut b, 50_000.0, 1.0),
+        Workload::RopeVerlet => rope(&mut b, 0.0, 0.0),
+    }
+    let (model, mut state) = b.build(GRAVITY, 0.0);
+    if workload == Workload::RopeVerlet {
+        // x_prev = x: the rope starts at rest (WORKLOADS.md), not with the Taylor start-up.
+        state.x_prev.clone_from(&state.x);
+        state.history_valid = true;
+    }
+    (model, state)
+}
+
+/// The canonical set-up bytes of `workload`: all initial positions as little-endian f64
+/// `(x, y, z)` per particle, then per spring `u32 i, u32 j, f64 rest_length` (little-endian),
+/// in canonical order. Their SHA-256 is listed in `WORKLOADS.md`.
+#[must_use]
+pub fn setup_bytes(workload: Workload) -> Vec<u8> {
+    let (model, state) = setup(workload);
+    let mut bytes = Vec::with_capacity(state.len() * 24 + model.springs.len() * 16);
+    for p in &state.x {
+        for c in p.to_array() {
+            bytes.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for s in &model.springs {
+        bytes.extend_from_slice(&s.a.to_le_bytes());
+        bytes.extend_from_slice(&s.b.to_le_bytes());
+        bytes.extend_from_slice(&s.rest_length.to_le_bytes());
+    }
+    bytes
+}
+
+// ---------------------------------------------------------------------------------------------
+// Contact rules (benchmark definitions, not the course colliders)
+// ---------------------------------------------------------------------------------------------
+
+/// The contact projection a workload applies after each step.
+#[derive(Clone, Copy, Debug)]
+enum Contact {
+    None,
+    /// The plane `y = 0`, restitution `e` (dimensionless), no friction.
+    Ground {
+        restitution: f64,
+    },
+    /// A fixed sphere (m), inelastic and frictionless.
+    Sphere {
+        centre: DVec3,
+        radius: f64,
+    },
+}
+
+impl Contact {
+    fn apply(self, state: &mut State) {
+        match self {
+            Contact::None => {}
+            Contact::Ground { restitution } => ground(state, restitution),
+            Contact::Sphere { centre, radius } => sphere(state, centre, radius),
+        }
+    }
+}
+
+/// `if y < 0 { y = 0; if v_y < 0 { v_y = -e v_y } }` for every particle.
+fn ground(state: &mut State, restitution: f64) {
+    for (x, v) in state.x.iter_mut().zip(state.v.iter_mut()) {
+        if x.y < 0.0 {
+            x.y = 0.0;
+            if v.y < 0.0 {
+                // Bounce: v_y = -e v_y, the normal velocity reversed and scaled by e.
+                v.y *= -restitution;
+            }
+        }
+    }
+}
+
+/// Pushes every particle inside the sphere out to its surface and removes the inward normal
+/// velocity.
+fn sphere(state: &mut State, centre: DVec3, radius: f64) {
+    for (x, v) in state.x.iter_mut().zip(state.v.iter_mut()) {
+        let dd = *x - centre;
+        let dist = dd.length();
+        if dist < radius {
+            // Outward normal n = dd / |dd| (divided, as the peers do).
+            let nn = dd / dist;
+            *x = centre + radius * nn;
+            let vn = v.dot(nn);
+            if vn < 0.0 {
+                *v -= vn * nn;
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Running
+// ---------------------------------------------------------------------------------------------
+
+/// A workload in motion: its model, state, method scratch space and step count.
+#[derive(Clone, Debug)]
+pub struct Run {
+    /// Which workload.
+    pub workload: Workload,
+    /// Masses, springs, gravity.
+    pub model: Model,
+    /// Positions and velocities (and `x_prev` for Verlet).
+    pub state: State,
+    /// Steps taken since the set-up.
+    pub steps: u64,
+    /// Force evaluations taken since the set-up (4 per step for RK4).
+    pub force_evals: u64,
+    method: Method,
+    dt: f64,
+    params: MethodParams,
+    contact: Contact,
+    work: Workspace,
+}
+
+impl Run {
+    /// `workload` at its initial state ([`setup`]).
+    #[must_use]
+    pub fn new(workload: Workload) -> Run {
+        let (model, state) = setup(workload);
+        Run::from_setup(workload, model, state)
+    }
+
+    /// `workload` starting from a given model and state (for example clones of one [`setup`]).
+    #[must_use]
+    pub fn from_setup(workload: Workload, model: Model, state: State) -> Run {
+        Run {
+            workload,
+            model,
+            state,
+            steps: 0,
+            force_evals: 0,
+            method: workload.method(),
+            dt: workload.dt(),
+            params: workload.params(),
+            contact: workload.contact(),
+            work: Workspace::new(),
+        }
+    }
+
+    /// One step of the library's integrator followed by the workload's contact projection.
+    #[inline]
+    pub fn step(&mut self) {
+        self.force_evals += self.method.step(
+            &self.model,
+            &mut self.state,
+            self.dt,
+            &self.params,
+            &mut self.work,
+        );
+        self.contact.apply(&mut self.state);
+        self.steps += 1;
+    }
+
+    /// `n` steps.
+    pub fn advance(&mut self, n: u64) {
+        for _ in 0..n {
+            self.step();
+        }
+    }
+
+    /// The centroid and energy of the current state (see the module documentation).
+    #[must_use]
+    pub fn checksum(&self) -> Checksum {
+        checksum(self.workload, &self.model, &self.state)
+    }
+}
+
+/// The checksum of `state`: centroid (plain mean of positions, m) and total energy (J).
+///
+/// For `rope-verlet` the velocity is `(x - x_prev) / dt` and the spring term is omitted.
+#[must_use]
+pub fn checksum(workload: Workload, model: &Model, state: &State) -> Checksum {
+    let n = state.len() as f64;
+    let mut sum = DVec3::ZERO;
+    for &x in &state.x {
+        sum += x;
+    }
+    let centroid = sum / n;
+    let verlet = workload == Workload::RopeVerlet;
+    let dt = workload.dt();
+    let (mut kinetic, mut gravity, mut elastic) = (0.0, 0.0, 0.0);
+    for i in 0..state.len() {
+        let m = model.mass[i];
+        let v = if verlet {
+            (state.x[i] - state.x_prev[i]) / dt
+        } else {
+            state.v[i]
+        };
+        kinetic += 0.5 * m * v.dot(v);
+        gravity += m * 9.8 * state.x[i].y;
+    }
+    if !verlet {
+        for s in &model.springs {
+            let d = state.x[s.b as usize] - state.x[s.a as usize];
+            let stretch = d.length() - s.rest_length;
+            elastic += 0.5 * s.stiffness * stretch * stretch;
+        }
+    }
+    Checksum {
+        centroid: centroid.to_array(),
+        energy: kinetic + gravity + elastic,
+    }
+}
+
+/// What `springlab bench` reports for one workload.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchResult {
+    /// The workload.
+    pub workload: Workload,
+    /// The integration method.
+    pub method: Method,
+    /// Number of particles.
+    pub particles: usize,
+    /// Number of springs (for `rope-verlet`: distance constraints).
+    pub springs: usize,
+    /// Steps per run (N).
+    pub steps: u64,
+    /// Time step (s).
+    pub dt: f64,
+    /// Runs of N steps timed; the median is reported.
+    pub repeats: u32,
+    /// Median wall time of one run of N steps (s).
+    pub wall_seconds: f64,
+    /// `steps / wall_seconds` (1/s).
+    pub steps_per_second: f64,
+    /// `springs · steps / wall_seconds` (1/s).
+    pub spring_steps_per_second: f64,
+    /// Force evaluations per step (4 for RK4).
+    pub force_evals_per_step: u64,
+    /// Centroid after N steps (m).
+    pub centroid: [f64; 3],
+    /// Energy after N steps (J).
+    pub energy: f64,
+    /// True when the checksum agrees with the reference to [`REL_TOL`].
+    pub checksum_ok: bool,
+    /// Largest relative deviation of the checksum from the reference.
+    pub max_relative_deviation: f64,
+    /// True when every repeat ended in bit-identical checksums.
+    pub deterministic: bool,
+    /// The reference checksum.
+    pub reference: Checksum,
+}
+
+/// Times `workload`: `repeats` runs of N steps, each from a fresh copy of the set-up (set-up
+/// and copying are not timed), and reports the median. `progress(i)` is called before run `i`
+/// (0-based).
+///
+/// # Panics
+/// If `repeats` is zero.
+pub fn measure(workload: Workload, repeats: u32, mut progress: impl FnMut(u32)) -> BenchResult {
+    assert!(repeats > 0, "at least one run");
+    let (model, state) = setup(workload);
+    let steps = workload.steps();
+    let mut run = Run::from_setup(workload, model.clone(), state.clone());
+    let mut walls = Vec::with_capacity(repeats as usize);
+    let mut checksums = Vec::with_capacity(repeats as usize);
+    for i in 0..repeats {
+        progress(i);
+        // A fresh state; the workspace is scratch only and is kept (already sized).
+        run.state.clone_from(&state);
+        run.steps = 0;
+        run.force_evals = 0;
+        let start = Instant::now();
+        run.advance(steps);
+        walls.push(start.elapsed().as_secs_f64());
+        checksums.push(run.checksum());
+    }
+    walls.sort_by(f64::total_cmp);
+    let wall = if walls.len() % 2 == 1 {
+        walls[walls.len() / 2]
+    } else {
+        0.5 * (walls[walls.len() / 2 - 1] + walls[walls.len() / 2])
+    };
+    let first = checksums[0];
+    let bits = |c: &Checksum| (c.centroid.map(f64::to_bits), c.energy.to_bits());
+    let deterministic = checksums.iter().all(|c| bits(c) == bits(&first));
+    let reference = workload.reference();
+    let springs = model.springs.len();
+    BenchResult {
+        workload,
+        method: workload.method(),
+        particles: model.particle_count(),
+        springs,
+        steps,
+        dt: workload.dt(),
+        repeats,
+        wall_seconds: wall,
+        steps_per_second: steps as f64 / wall,
+        spring_steps_per_second: springs as f64 * steps as f64 / wall,
+        force_evals_per_step: run.force_evals / steps.max(1),
+        centroid: first.centroid,
+        energy: first.energy,
+        checksum_ok: deterministic && first.agrees(&reference, REL_TOL),
+        max_relative_deviation: first.max_relative_deviation(&reference),
+        deterministic,
+        reference,
+    }
+}

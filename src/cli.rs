@@ -6,8 +6,10 @@
 //! springlab scenes
 //! springlab run <scene|file.toml> [--method M] [--dt S] [--steps N | --time T]
 //!               [--set key=value ...] [--json] [--csv FILE]
+//! springlab bench [workload ...] [--json] [--repeats R]
 //! ```
 
+mod bench;
 mod run;
 mod scenes;
 
@@ -31,6 +33,8 @@ pub enum Command {
     Run(run::RunArgs),
     /// List the built-in scenes with their parameters.
     Scenes,
+    /// Time the peer-benchmark workloads and check their checksums.
+    Bench(bench::BenchArgs),
 }
 
 /// Parses the process arguments and runs the command; prints errors and returns the exit code.
@@ -40,6 +44,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::Scenes) => scenes::list(),
+        Some(Command::Bench(args)) => bench::run(&args),
         None => run::demo(),
     };
     match result {

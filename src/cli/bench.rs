@@ -1,0 +1,147 @@
+//! `springlab bench`: the peer-benchmark workloads (`WORKLOADS.md`), timed, with checksums.
+
+use std::io::{IsTerminal, Write};
+
+use anyhow::bail;
+use clap::Args;
+use serde::Serialize;
+
+use crate::bench::{self, BenchResult, Workload};
+
+/// Options of `springlab bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Workloads to run (default: all): jelly-se, jelly-rk4, cloth64-se, cloth128-se, rope-se,
+    /// rope-verlet.
+    pub workloads: Vec<String>,
+    /// Print the results as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Timed runs of N steps per workload; the median is reported.
+    #[arg(long, value_name = "R", default_value_t = 3,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    pub repeats: u32,
+}
+
+/// The JSON document of `springlab bench --json` (DESIGN.md), fields in declaration order.
+#[derive(Serialize)]
+struct Report<'a> {
+    workloads: &'a [BenchResult],
+}
+
+/// The workloads named on the command line, or all of them.
+///
+/// # Errors
+/// An unknown name (the message lists the known ones).
+pub fn selected(names: &[String]) -> anyhow::Result<Vec<Workload>> {
+    if names.is_empty() {
+        return Ok(Workload::ALL.to_vec());
+    }
+    Ok(names
+        .iter()
+        .map(|n| n.parse::<Workload>())
+        .collect::<Result<Vec<_>, _>>()?)
+}
+
+/// `springlab bench`.
+///
+/// # Errors
+/// An unknown workload; unwritable standard output; a checksum that disagrees with the
+/// reference (after the results are printed).
+pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
+    let workloads = selected(&args.workloads)?;
+    let progress = std::io::stderr().is_terminal();
+    let mut results = Vec::with_capacity(workloads.len());
+    for w in workloads {
+        let result = bench::measure(w, args.repeats, |i| {
+            if progress {
+                eprintln!(
+                    "{w}: run {}/{} ({} steps of {} s)",
+                    i + 1,
+                    args.repeats,
+                    w.steps(),
+                    w.dt()
+                );
+            }
+        });
+        results.push(result);
+    }
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        serde_json::to_writer(
+            &mut out,
+            &Report {
+                workloads: &results,
+            },
+        )?;
+        writeln!(out)?;
+    } else {
+        print_table(&mut out, &results)?;
+    }
+    out.flush()?;
+    let bad: Vec<&str> = results
+        .iter()
+        .filter(|r| !r.checksum_ok)
+        .map(|r| r.workload.name())
+        .collect();
+    if !bad.is_empty() {
+        bail!(
+            "checksum disagrees with the reference (relative tolerance {:e}) for: {}",
+            bench::REL_TOL,
+            bad.join(", ")
+        );
+    }
+    Ok(())
+}
+
+/// The human-readable table.
+///
+/// # Errors
+/// Only when `out` cannot be written.
+pub fn print_table(out: &mut impl Write, results: &[BenchResult]) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "{:<12} {:<20} {:>9} {:>9} {:>7} {:>11} {:>15}  {:<44} {:>17}  checksum",
+        "workload",
+        "method",
+        "particles",
+        "springs",
+        "steps",
+        "steps/s",
+        "springs·steps/s",
+        "centroid (m)",
+        "energy (J)"
+    )?;
+    for r in results {
+        let [cx, cy, cz] = r.centroid;
+        let centroid = format!("({cx:.12}, {cy:.12}, {cz:.12})");
+        let ok = if r.checksum_ok {
+            format!("ok ({:.1e})", r.max_relative_deviation)
+        } else if !r.deterministic {
+            "MISMATCH (not deterministic)".to_string()
+        } else {
+            format!("MISMATCH ({:.1e})", r.max_relative_deviation)
+        };
+        writeln!(
+            out,
+            "{:<12} {:<20} {:>9} {:>9} {:>7} {:>11.0} {:>15.3e}  {:<44} {:>17.10}  {}",
+            r.workload.name(),
+            r.method.name(),
+            r.particles,
+            r.springs,
+            r.steps,
+            r.steps_per_second,
+            r.spring_steps_per_second,
+            centroid,
+            r.energy,
+            ok
+        )?;
+    }
+    let repeats = results.first().map_or(0, |r| r.repeats);
+    writeln!(
+        out,
+        "median of {repeats} run(s) of N steps each; checksum: centroid and energy after N steps \
+         vs the C++ f64 reference (relative tolerance {:e}; in brackets the largest deviation)",
+        bench::REL_TOL
+    )
+}
