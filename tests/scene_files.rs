@@ -129,7 +129,10 @@ fn fewer_than_two_nodes_in_params() {
         3,
         9,
     );
-    assert_has(&m, &["`nodes` = 1", "out of range", "allowed 2 ..= 1000000"]);
+    assert_has(
+        &m,
+        &["`nodes` = 1", "out of range", "allowed 2 ..= 1000000"],
+    );
 }
 
 #[test]
@@ -322,7 +325,10 @@ fn string_where_a_parameter_number_is_expected() {
         3,
         9,
     );
-    assert_has(&m, &["`nodes` = \"16\"", "expected a whole number 2 ..= 1000000"]);
+    assert_has(
+        &m,
+        &["`nodes` = \"16\"", "expected a whole number 2 ..= 1000000"],
+    );
     let m = file_error(
         "type.toml",
         "scene = \"rope\"\n[params]\nstart = [0, 2]\n",
