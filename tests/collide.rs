@@ -32,6 +32,16 @@ fn step(method: Method, model: &Model, state: &mut State, dt: f64, work: &mut Wo
     after_step(model, state, dt);
 }
 
+/// `steps` steps of semi-implicit Euler at dt = 1 ms with the collision hook, calling `each`
+/// after every step.
+fn run(model: &Model, state: &mut State, steps: usize, mut each: impl FnMut(&State)) {
+    let mut work = Workspace::new();
+    for _ in 0..steps {
+        step(Method::SemiImplicitEuler, model, state, 1e-3, &mut work);
+        each(state);
+    }
+}
+
 /// Frictionless contact with restitution `e`.
 fn frictionless(e: f64) -> ContactParams {
     ContactParams {
@@ -330,20 +340,12 @@ fn sliding_particle_slows_down_and_stops_where_coulomb_says() {
         vec![Collider::plane(DVec3::ZERO, DVec3::Y)],
         ContactParams::course_2021(),
     );
-    let mut work = Workspace::new();
     let mut speed = v0;
-    for _ in 0..2000 {
-        step(
-            Method::SemiImplicitEuler,
-            &model,
-            &mut state,
-            1e-3,
-            &mut work,
-        );
+    run(&model, &mut state, 2000, |state| {
         let s = state.v[0].length();
         assert!(s <= speed + 1e-12, "friction sped it up: {speed} -> {s}");
         speed = s;
-    }
+    });
     let expected = v0 * v0 / (2.0 * mu * g);
     assert!(speed < 1e-6, "still moving at {speed} m/s");
     assert!(
@@ -374,16 +376,7 @@ fn tilted_plane_holds_a_particle_only_when_friction_exceeds_the_slope() {
             vec![Collider::course_2021_tilted_plane()],
             params,
         );
-        let mut work = Workspace::new();
-        for _ in 0..1000 {
-            step(
-                Method::SemiImplicitEuler,
-                &model,
-                &mut state,
-                1e-3,
-                &mut work,
-            );
-        }
+        run(&model, &mut state, 1000, |_| {});
         let slid = state.x[0].length();
         assert!(
             (slid - expected).abs() < 0.01 * expected.max(0.1),
@@ -404,23 +397,15 @@ fn particle_over_the_hole_falls_into_the_bowl_and_stays_there() {
         Collider::course_2023_terrain(),
         ContactParams::course_2023(),
     );
-    let mut work = Workspace::new();
     let mut fell_in = false;
-    for _ in 0..10_000 {
-        step(
-            Method::SemiImplicitEuler,
-            &model,
-            &mut state,
-            1e-3,
-            &mut work,
-        );
+    run(&model, &mut state, 10_000, |state| {
         let x = state.x[0];
         fell_in |= x.y < 0.0;
         if fell_in {
             assert!((x - center).length() <= 9.0 + 1e-9, "left the bowl: {x}");
             assert!(x.y <= 0.0, "above the rim: {x}");
         }
-    }
+    });
     // It comes to rest where static friction can hold it: the bowl's slope at angle θ from the
     // bottom is tan θ, so within θ ≤ atan k_f of the bottom (1.77 m sideways for k_f = 0.2).
     assert!(fell_in);
@@ -442,17 +427,9 @@ fn particle_over_the_floor_rests_on_it() {
         Collider::course_2023_terrain(),
         ContactParams::course_2023(),
     );
-    let mut work = Workspace::new();
-    for _ in 0..4000 {
-        step(
-            Method::SemiImplicitEuler,
-            &model,
-            &mut state,
-            1e-3,
-            &mut work,
-        );
+    run(&model, &mut state, 4000, |state| {
         assert!(state.x[0].y >= 0.0);
-    }
+    });
     let (x, v) = (state.x[0], state.v[0]);
     assert!(x.y < 0.01 && v.length() < 1e-6, "not resting: {x}, {v}");
     assert!((x.x - 12.0).abs() < 1e-9 && (x.z - 1.0).abs() < 1e-9);
@@ -556,17 +533,9 @@ fn falling_sphere_rests_on_the_ground() {
     );
     let mut state = State::new(Vec::new(), Vec::new())
         .with_spheres(vec![DynamicSphere::new(DVec3::new(0.0, 2.0, 0.0), 0.5)]);
-    let mut work = Workspace::new();
-    for _ in 0..5000 {
-        step(
-            Method::SemiImplicitEuler,
-            &model,
-            &mut state,
-            1e-3,
-            &mut work,
-        );
+    run(&model, &mut state, 5000, |state| {
         assert!(state.spheres[0].center.y >= 0.5);
-    }
+    });
     assert!((state.spheres[0].center.y - 0.5).abs() < 0.01);
 }
 
