@@ -4,7 +4,7 @@
 use glam::DVec3;
 use serde::Serialize;
 
-use crate::physics::{Divergence, Energy, Method, State, Workspace, diverge, energy};
+use crate::physics::{Divergence, Energy, Method, State, Workspace, collide, diverge, energy};
 use crate::scene::Scene;
 
 /// A scene in motion.
@@ -79,6 +79,8 @@ impl Simulation {
             self.force_evals +=
                 body.method
                     .step(&body.model, &mut body.state, self.dt, &body.params, work);
+            // Colliders and dynamic spheres (returns at once when the body has neither).
+            collide::after_step(&body.model, &mut body.state, self.dt);
         }
         self.steps += 1;
         let time = self.time();

@@ -8,6 +8,11 @@
 //! where `m_i` is in kg, `v_i` in m/s, `x_i` in m, `g` in m/s², `k` in N/m; energies in J.
 //! Without damping, drag and collisions the total is conserved by the exact motion, so its drift
 //! measures an integrator's error.
+//!
+//! Dynamic spheres (see [`super::collide::DynamicSphere`]) are bodies of the system too: their
+//! `½ m_s |v_s|²` is added to the kinetic and their `-m_s g · c_s` to the gravitational energy
+//! (`c_s`: centre, m). A kinematic sphere is driven from outside with infinite mass; it has no
+//! energy of its own and is left out.
 
 use serde::Serialize;
 
@@ -48,6 +53,10 @@ pub fn energy(model: &Model, state: &State) -> Energy {
     for ((&m, x), v) in model.mass.iter().zip(&state.x).zip(&state.v) {
         kinetic += 0.5 * m * v.length_squared();
         gravity -= m * model.gravity.dot(*x);
+    }
+    for s in state.spheres.iter().filter(|s| !s.kinematic) {
+        kinetic += 0.5 * s.mass * s.velocity.length_squared();
+        gravity -= s.mass * model.gravity.dot(s.center);
     }
     let elastic: f64 = model.springs.iter().map(|s| s.energy(&state.x)).sum();
     Energy {

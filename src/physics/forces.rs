@@ -5,22 +5,26 @@
 //! Newton's second law turns the forces on each particle into its acceleration:
 //!
 //! ```text
-//! f_i = m_i g  -  c v_i  +  Σ_springs f_spring→i
+//! f_i = m_i g  -  c v_i  +  Σ_springs f_spring→i  +  f_contact,i
 //! a_i = f_i / m_i              (a_i = 0 for a pinned particle: 1/m_i = 0)
 //! ```
 //! where
 //! - `m_i`: mass (kg), `g`: gravitational acceleration (m/s²)
 //! - `c`: viscous drag coefficient (N·s/m), `v_i`: velocity (m/s)
 //! - `f_spring→i`: spring and damper force (N), see [`super::springs`]
+//! - `f_contact,i`: normal force and friction of the colliders the particle touches (N), added
+//!   last because it depends on the sum of the others; see [`super::collide`]
 //!
 //! Every explicit integrator calls [`accelerations`] and nothing else to learn about the physics,
 //! so the cost of a method is its number of calls ("force evaluations").
 
 use glam::DVec3;
 
+use super::collide::{Collider, ContactParams, contact_forces};
 use super::springs::Spring;
 
-/// The physics of one system: masses, springs, gravity and drag. It does not change during a step.
+/// The physics of one system: masses, springs, gravity, drag and static colliders. It does not
+/// change during a step.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Model {
     /// Mass of each particle (kg). Used for gravity, energy and collisions.
@@ -33,6 +37,10 @@ pub struct Model {
     pub gravity: DVec3,
     /// Viscous drag coefficient `c` in `f = -c v` (N·s/m).
     pub drag: f64,
+    /// Static obstacles (empty: no contact code runs). Set with [`Model::with_colliders`].
+    pub colliders: Vec<Collider>,
+    /// Restitution, friction and contact band of the colliders and dynamic spheres.
+    pub contact: ContactParams,
     /// Spring indices grouped by colour: no two springs of one colour share a particle, so
     /// constraint projection within a colour is order-independent (red-black Gauss–Seidel on a
     /// chain). Built by [`Model::new`].
@@ -74,9 +82,19 @@ impl Model {
             springs,
             gravity,
             drag,
+            colliders: Vec::new(),
+            contact: ContactParams::default(),
             projection_order,
             colour_starts,
         }
+    }
+
+    /// The same model with `colliders` (normals normalised) and contact coefficients `contact`.
+    #[must_use]
+    pub fn with_colliders(mut self, colliders: Vec<Collider>, contact: ContactParams) -> Model {
+        self.colliders = colliders.into_iter().map(Collider::normalized).collect();
+        self.contact = contact;
+        self
     }
 
     /// Number of particles.
@@ -91,7 +109,8 @@ impl Model {
         self.inv_mass[i] == 0.0
     }
 
-    /// Pins particle `i` (sets its inverse mass to zero). Set its velocity to zero as well.
+    /// Pins particle `i` (sets its inverse mass to zero). Set its velocity to zero as well, or
+    /// use [`super::particles::pin_particle`], which does both.
     pub fn pin(&mut self, i: usize) {
         self.inv_mass[i] = 0.0;
     }
@@ -142,12 +161,13 @@ fn colour_springs(particles: usize, springs: &[Spring]) -> (Vec<u32>, Vec<usize>
     (order, starts)
 }
 
-/// Net force on every particle (N): gravity, drag and springs. Pure and allocation-free.
+/// Net force on every particle (N): gravity, drag, springs and contact. Pure and allocation-free.
 ///
 /// ```text
-/// f_i = m_i g - c v_i + Σ_springs f_spring→i
+/// f_i = m_i g - c v_i + Σ_springs f_spring→i + f_contact,i
 /// ```
-/// Pinned particles get their force too (it is ignored when divided by their infinite mass).
+/// Pinned particles get their force too (it is ignored when divided by their infinite mass),
+/// except the contact force, which they never need.
 ///
 /// # Panics
 /// If `x`, `v` or `f` is shorter than the model's particle count.
@@ -163,6 +183,10 @@ pub fn forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
         let f_a = s.force_on_a(x, v);
         f[s.a as usize] += f_a;
         f[s.b as usize] -= f_a;
+    }
+    // Contact: it cancels what pushes into a surface, so it comes after everything else.
+    if !model.colliders.is_empty() {
+        contact_forces(model, x, v, f);
     }
 }
 

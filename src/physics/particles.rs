@@ -2,9 +2,13 @@
 //!
 //! Positions and velocities live in separate contiguous `Vec<DVec3>`s so that the loops over
 //! particles read memory in order. Masses are not part of the state: they belong to the
-//! [`Model`](super::Model), which does not change while a simulation runs.
+//! [`Model`], which does not change while a simulation runs. Dynamic spheres
+//! (cloth scenes) move, so they are part of the state too.
 
 use glam::DVec3;
+
+use super::collide::DynamicSphere;
+use super::forces::Model;
 
 /// Positions and velocities of every particle (struct of arrays).
 #[derive(Clone, Debug, PartialEq)]
@@ -19,6 +23,9 @@ pub struct State {
     /// True when `x_prev` holds the positions one step of the current `dt` ago. Every method
     /// other than Verlet clears it; Verlet rebuilds `x_prev` from `x` and `v` when it is false.
     pub history_valid: bool,
+    /// Moving spheres that collide with the particles and each other (empty in most scenes);
+    /// see [`super::collide::step_spheres`].
+    pub spheres: Vec<DynamicSphere>,
 }
 
 impl State {
@@ -35,7 +42,15 @@ impl State {
             v,
             x_prev,
             history_valid: false,
+            spheres: Vec::new(),
         }
+    }
+
+    /// The same state with the dynamic spheres `spheres`.
+    #[must_use]
+    pub fn with_spheres(mut self, spheres: Vec<DynamicSphere>) -> State {
+        self.spheres = spheres;
+        self
     }
 
     /// A state at positions `x`, at rest.
@@ -65,4 +80,17 @@ impl State {
         }
         self.x.iter().copied().sum::<DVec3>() / self.x.len() as f64
     }
+}
+
+/// Pins particle `i` of `model` and stops it: inverse mass 0, velocity 0, and no Verlet
+/// displacement (`x_prev = x`), so that it stays exactly where it is under every method.
+/// Returns `false` (and changes nothing) when `i` is out of range.
+pub fn pin_particle(model: &mut Model, state: &mut State, i: usize) -> bool {
+    if i >= model.particle_count() || i >= state.len() {
+        return false;
+    }
+    model.pin(i);
+    state.v[i] = DVec3::ZERO;
+    state.x_prev[i] = state.x[i];
+    true
 }
