@@ -25,6 +25,7 @@ pub mod forces;
 pub mod integrators;
 pub mod particles;
 pub mod springs;
+pub mod stencil;
 
 pub use diverge::Divergence;
 pub use energy::{Energy, energy};

@@ -232,3 +232,57 @@ fn the_same_run_twice_is_bit_identical() {
     };
     assert_eq!(run(), run());
 }
+
+#[test]
+fn the_stencil_form_gives_the_spring_list_forces() {
+    use springlab::bench::{Workload, setup};
+    let mut rng = Rng(0x57e9_c11a_0000_0042);
+    for workload in [Workload::JellySe, Workload::Cloth64Se] {
+        let (model, mut state) = setup(workload);
+        assert!(
+            model.uses_stencil(),
+            "{} should use the stencil",
+            workload.name()
+        );
+        let list = model.clone().without_stencil();
+        // A deformed, moving lattice, with one pair of particles on top of each other.
+        for (x, v) in state.x.iter_mut().zip(state.v.iter_mut()) {
+            *x += DVec3::new(
+                rng.range(-0.02, 0.02),
+                rng.range(-0.02, 0.02),
+                rng.range(-0.02, 0.02),
+            );
+            *v = DVec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            );
+        }
+        state.x[1] = state.x[0];
+        let n = state.len();
+        let (mut fast, mut slow) = (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
+        forces(&model, &state.x, &state.v, &mut fast);
+        forces(&list, &state.x, &state.v, &mut slow);
+        let scale = slow.iter().map(|f| f.length()).fold(0.0, f64::max);
+        for (i, (a, b)) in fast.iter().zip(&slow).enumerate() {
+            assert!(a.is_finite(), "{}: NaN at {i}", workload.name());
+            assert!(
+                (*a - *b).length() <= 1e-12 * scale,
+                "{}: particle {i}: {a} vs {b}",
+                workload.name()
+            );
+        }
+    }
+}
+
+#[test]
+fn a_rope_or_random_springs_use_the_spring_list() {
+    let mut rng = Rng(7);
+    let (model, _) = random_system(&mut rng, 300, 400);
+    assert!(!model.uses_stencil(), "random springs are not a lattice");
+    let scene = scene::load("rope", &["nodes=64".to_string()]).expect("rope");
+    assert!(
+        !scene.bodies[0].model.uses_stencil(),
+        "63 springs: the list is as fast"
+    );
+}

@@ -22,6 +22,7 @@ use glam::DVec3;
 
 use super::collide::{Collider, ContactParams, contact_forces};
 use super::springs::Spring;
+use super::stencil::Stencil;
 
 /// The physics of one system: masses, springs, gravity, drag and static colliders. It does not
 /// change during a step.
@@ -41,6 +42,9 @@ pub struct Model {
     pub colliders: Vec<Collider>,
     /// Restitution, friction and contact band of the colliders and dynamic spheres.
     pub contact: ContactParams,
+    /// The same springs grouped by lattice offset, for the fast force loop; `None` when the
+    /// springs are not a lattice (see [`Stencil::detect`]). Kept in step by [`Model::rebuild`].
+    stencil: Option<Stencil>,
     /// Spring indices grouped by colour: no two springs of one colour share a particle, so
     /// constraint projection within a colour is order-independent (red-black Gauss–Seidel on a
     /// chain). Built by [`Model::new`].
@@ -76,7 +80,9 @@ impl Model {
             .map(|(&m, &p)| if p { 0.0 } else { 1.0 / m })
             .collect();
         let (projection_order, colour_starts) = colour_springs(n, &springs);
+        let stencil = Stencil::detect(n, &springs);
         Model {
+            stencil,
             mass,
             inv_mass,
             springs,
@@ -87,6 +93,40 @@ impl Model {
             projection_order,
             colour_starts,
         }
+    }
+
+    /// Recomputes what is derived from the springs (the colouring and the stencil form). Call it
+    /// after changing `springs` directly.
+    pub fn rebuild(&mut self) {
+        let (order, starts) = colour_springs(self.particle_count(), &self.springs);
+        self.projection_order = order;
+        self.colour_starts = starts;
+        self.stencil = Stencil::detect(self.particle_count(), &self.springs);
+    }
+
+    /// Sets the stiffness (N/m) and damping (N·s/m) of every spring.
+    pub fn set_spring_coefficients(&mut self, stiffness: f64, damping: f64) {
+        for s in &mut self.springs {
+            s.stiffness = stiffness;
+            s.damping = damping;
+        }
+        if let Some(stencil) = &mut self.stencil {
+            stencil.set_coefficients(stiffness, damping);
+        }
+    }
+
+    /// True when the force loop uses the lattice stencil instead of the spring list.
+    #[must_use]
+    pub fn uses_stencil(&self) -> bool {
+        self.stencil.is_some()
+    }
+
+    /// The same model without the stencil form: forces from the spring list only (for tests
+    /// and for comparing the two loops).
+    #[must_use]
+    pub fn without_stencil(mut self) -> Model {
+        self.stencil = None;
+        self
     }
 
     /// The same model with `colliders` (normals normalised) and contact coefficients `contact`.
@@ -179,10 +219,15 @@ pub fn forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
         *f_i = m_i * model.gravity - model.drag * v_i;
     }
     // Internal forces: each spring pushes its ends with equal and opposite forces.
-    for s in &model.springs {
-        let f_a = s.force_on_a(x, v);
-        f[s.a as usize] += f_a;
-        f[s.b as usize] -= f_a;
+    if let Some(stencil) = &model.stencil {
+        // The same sum, grouped by lattice offset for speed (see `stencil`).
+        stencil.add_forces(x, v, f);
+    } else {
+        for s in &model.springs {
+            let f_a = s.force_on_a(x, v);
+            f[s.a as usize] += f_a;
+            f[s.b as usize] -= f_a;
+        }
     }
     // Contact: it cancels what pushes into a surface, so it comes after everything else.
     if !model.colliders.is_empty() {
