@@ -333,7 +333,8 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
         }
         if let Some(goal) = &st.goal {
             let g = goal.get_ref();
-            if !(g.time > 0.0 && g.time.is_finite()) || !(g.speed > 0.0) {
+            let valid = g.time > 0.0 && g.time.is_finite() && g.speed > 0.0;
+            if !valid {
                 let (l, c) = at(goal.span().start);
                 return Err(err(
                     l,
