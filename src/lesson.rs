@@ -49,6 +49,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("02-hooke.md", include_str!("../lessons/02-hooke.md")),
     ("03-euler.md", include_str!("../lessons/03-euler.md")),
     ("04-verlet.md", include_str!("../lessons/04-verlet.md")),
+    ("05-jelly.md", include_str!("../lessons/05-jelly.md")),
+    ("06-cloth.md", include_str!("../lessons/06-cloth.md")),
 ];
 
 /// A plot the lesson screen can show beside the scene.
