@@ -7,11 +7,14 @@
 //! springlab run <scene|file.toml> [--method M] [--dt S] [--steps N | --time T]
 //!               [--set key=value ...] [--json] [--csv FILE]
 //! springlab bench [workload ...] [--json] [--repeats R]
+//! springlab study stability <scene|file.toml> [--methods a,b] [--horizon T] [--set key=value ...]
+//!               [--json]
 //! ```
 
 mod bench;
 mod run;
 mod scenes;
+mod study;
 
 use std::process::ExitCode;
 
@@ -35,6 +38,12 @@ pub enum Command {
     Scenes,
     /// Time the peer-benchmark workloads and check their checksums.
     Bench(bench::BenchArgs),
+    /// Studies: which method, which dt (stability; convergence and work-precision to come).
+    Study {
+        /// The study to run.
+        #[command(subcommand)]
+        command: study::StudyCommand,
+    },
 }
 
 /// Parses the process arguments and runs the command; prints errors and returns the exit code.
@@ -45,6 +54,7 @@ pub fn main() -> ExitCode {
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::Scenes) => scenes::list(),
         Some(Command::Bench(args)) => bench::run(&args),
+        Some(Command::Study { command }) => study::run(&command),
         None => run::demo(),
     };
     match result {
