@@ -15,6 +15,7 @@ mod bench;
 mod run;
 mod scenes;
 mod study;
+mod study_chart;
 
 use std::process::ExitCode;
 

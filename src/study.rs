@@ -8,10 +8,13 @@
 //! - [`modes`]: the stiffest mode `ω_max` of a scene, which turns a time step into the
 //!   dimensionless `dt·ω_max` that the stability limits are stated in.
 //!
-//! (Convergence order and work-precision studies are to come; they will sit beside these.)
+//! - [`convergence`](mod@convergence): the error of each method at a fixed time for `dt, dt/2, …`,
+//!   its fitted order, and the cost (force evaluations, wall time) of each accuracy — the data of
+//!   both `study convergence` and `study work-precision`.
 //!
 //! Every study is deterministic: the same scene and options give the same numbers, run to run.
 
+pub mod convergence;
 pub mod modes;
 pub mod stability;
 
@@ -35,6 +38,15 @@ pub enum StudyError {
     /// `--methods` named no method.
     #[error("--methods: expected a comma-separated list of methods, for example rk4,verlet")]
     NoMethods,
+    /// A time step that is not positive and finite.
+    #[error("--dt {0}: expected a time step in seconds > 0")]
+    TimeStep(f64),
+    /// A measuring time that is not a positive, finite duration.
+    #[error("--time {0}: expected a duration in seconds > 0")]
+    Time(f64),
+    /// Too few time steps to fit an order.
+    #[error("--levels {0}: expected at least 2 time steps to fit an order")]
+    Levels(u32),
     /// A horizon that is not a positive, finite duration.
     #[error("--horizon {0}: expected a duration in seconds > 0")]
     Horizon(f64),
