@@ -7,9 +7,12 @@
 //! springlab run <scene|file.toml> [--method M] [--dt S] [--steps N | --time T]
 //!               [--set key=value ...] [--json] [--csv FILE]
 //! springlab bench [workload ...] [--json] [--repeats R]
+//! springlab homework new <DIR> --assignment rope|jelly|cloth
+//! springlab grade <DIR> [--json F] [--gradescope F] [--time-limit-ms MS] [--seed S]
 //! ```
 
 mod bench;
+mod grade;
 mod run;
 mod scenes;
 
@@ -35,6 +38,10 @@ pub enum Command {
     Scenes,
     /// Time the peer-benchmark workloads and check their checksums.
     Bench(bench::BenchArgs),
+    /// Write a homework crate for students (`homework new DIR --assignment rope|jelly|cloth`).
+    Homework(grade::HomeworkArgs),
+    /// Build and grade a homework crate; print the rubric, write JSON or Gradescope results.
+    Grade(grade::GradeArgs),
 }
 
 /// Parses the process arguments and runs the command; prints errors and returns the exit code.
@@ -45,6 +52,8 @@ pub fn main() -> ExitCode {
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::Scenes) => scenes::list(),
         Some(Command::Bench(args)) => bench::run(&args),
+        Some(Command::Homework(args)) => grade::homework(&args),
+        Some(Command::Grade(args)) => grade::grade(&args),
         None => run::demo(),
     };
     match result {

@@ -10,6 +10,7 @@
 
 pub mod bench;
 pub mod cli;
+pub mod grade;
 pub mod physics;
 
 pub use physics::{Energy, Method, MethodParams, Model, Spring, SpringKind, State, Workspace};
