@@ -7,7 +7,7 @@
 //! | semi-implicit Euler | 5 | Hooke's law 1, net rope forces 1, one step 2, 200 steps of the course rope 1 |
 //! | explicit Euler | 5 | one step 3, measured order 1 on the oscillator 2 |
 //! | Verlet | 10 | free fall 3, projection with a pinned end 3, projection of two free ends 2, course rope 2 |
-//! | damping | 5 | one step with γ = 0.1 3, 100 steps of the course rope with γ = 0.00005 2 |
+//! | damping | 5 | one step with γ = 0.1 3, 100 steps of the dropped course rope with γ = 0.00005 2 |
 //!
 //! Hooke's law has no item of its own in the course's rubric; it is graded with semi-implicit
 //! Euler, the Euler method the course asks students to hand in (explicit Euler is handed in
@@ -157,7 +157,7 @@ pub(crate) fn rubric<H: RopeHomework>() -> Rubric<H> {
                         run: damping_one_step::<H>,
                     },
                     CheckSpec {
-                        name: "100 steps of the course rope with γ = 0.00005",
+                        name: "100 steps of the course rope, dropped, with γ = 0.00005",
                         points: 2.0,
                         run: damping_course_rope::<H>,
                     },
@@ -869,9 +869,11 @@ fn damping_one_step<H: RopeHomework>(hw: &H, ctx: &Ctx) -> CheckResult {
 }
 
 fn damping_course_rope<H: RopeHomework>(hw: &H, _: &Ctx) -> CheckResult {
-    let (start, physics) = course_rope(3);
+    // Nothing pinned, so that only the damping is graded here, not the pinning.
+    let start = Reference.rope(COURSE_START, COURSE_END, 3, 1.0, 100.0, &[]);
+    let physics = physics_of(&start, COURSE_GRAVITY);
     let input = "100 Verlet steps with the course's γ = 0.00005, dt = 1/64 s, of the course rope \
-                 (3 nodes from (0, 200) to (-400, 200), node 0 pinned, gravity (0, -1))";
+                 dropped (3 nodes from (0, 200) to (-400, 200), none pinned, gravity (0, -1))";
     let mut got = start.clone();
     run_rope(&mut got, 100, input, |r| {
         hw.verlet(r, COURSE_DT, COURSE_DAMPING, &physics);
