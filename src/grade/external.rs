@@ -177,30 +177,27 @@ fn tail(text: &str, n: usize) -> String {
     lines[lines.len().saturating_sub(n)..].join("\n")
 }
 
-/// The compiler's error messages in cargo's stderr (lines from `error` to the next blank line),
-/// or its tail when none is recognised.
+/// The compiler's error messages in cargo's stderr: everything from the first line starting with
+/// `error`, without cargo's progress lines, at most 80 lines; or the tail when there is none.
 fn compiler_errors(stderr: &str) -> String {
-    let mut out = Vec::new();
-    let mut inside = false;
-    for line in stderr.lines() {
-        if line.starts_with("error") {
-            inside = true;
-        }
-        if inside {
-            out.push(line);
-            if line.trim().is_empty() {
-                inside = false;
-            }
-        }
-        if out.len() > 60 {
-            break;
-        }
-    }
-    if out.is_empty() {
-        tail(stderr, 30)
-    } else {
-        out.join("\n")
-    }
+    let Some(start) = stderr.lines().position(|l| l.starts_with("error")) else {
+        return tail(stderr, 30);
+    };
+    let progress = [
+        "Compiling ",
+        "Checking ",
+        "Building ",
+        "Finished ",
+        "Downloaded ",
+        "Locking ",
+    ];
+    stderr
+        .lines()
+        .skip(start)
+        .filter(|l| !progress.iter().any(|p| l.trim_start().starts_with(p)))
+        .take(80)
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// The test executable named in cargo's JSON messages.

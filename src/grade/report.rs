@@ -265,6 +265,19 @@ impl Report {
                 item.status.label()
             );
         }
+        // Nothing ran (the build failed, the run crashed): one reason for every item.
+        let first_reason = self.items.first().and_then(|i| i.reason.as_ref());
+        if self
+            .items
+            .iter()
+            .all(|i| i.status == ItemStatus::NotRun && i.reason.as_ref() == first_reason)
+        {
+            if let Some(reason) = first_reason {
+                let _ = writeln!(out);
+                let _ = writeln!(out, "nothing was graded: {reason}");
+            }
+            return out;
+        }
         let lost: Vec<&ItemReport> = self
             .items
             .iter()
