@@ -1,6 +1,9 @@
 //! Typical student mistakes, planted in otherwise correct homework (the reference with one
 //! method changed): each loses points in exactly the item it belongs to, and the report says why.
 
+// Index loops read like the formulas of the planted mistakes (x_i, v_i, a_i).
+#![allow(clippy::needless_range_loop)]
+
 use springlab::grade::{
     Body, Bowl, ClothHomework, ContactCoefficients, DVec3, ItemStatus, JellyHomework, Options,
     Particle, Physics, Plane, Reference, Report, Rope, RopeHomework, Spring, SpringSetup, State,

@@ -162,7 +162,7 @@ pub(crate) fn first_mismatch(got: &[DVec3], want: &[DVec3], rel: f64, scale: f64
 pub(crate) fn diagnose(got: DVec3, want: DVec3) -> Option<String> {
     let (g, w) = (got.length(), want.length());
     if g == 0.0 && w > 0.0 {
-        return Some("it is zero: is the TODO implemented?".to_string());
+        return Some("it is zero (is the TODO implemented?)".to_string());
     }
     if w > 0.0 && g > 0.0 {
         let cos = got.dot(want) / (g * w);

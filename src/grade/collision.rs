@@ -71,10 +71,10 @@ impl Surface {
                     b.center + d * (b.radius - phi)
                 }
             };
-            if let Some(c) = collider.contact(x) {
-                if (c.phi - phi).abs() < 1e-9 {
-                    return Some((x, c.normal));
-                }
+            if let Some(c) = collider.contact(x)
+                && (c.phi - phi).abs() < 1e-9
+            {
+                return Some((x, c.normal));
             }
         }
         None
