@@ -134,9 +134,9 @@ impl JellyHomework for FromReadme {
         let jxv = jx.mul_vec(&v);
         let b: Vec<f64> = (0..size).map(|i| dt * (a[i] + dt * jxv[i])).collect();
         let dv = unflatten(&big_a.solve(&b).expect("solvable"));
-        for i in 0..s.x.len() {
-            s.v[i] += dv[i];
-            s.x[i] += dt * s.v[i];
+        for ((x, v), dv) in s.x.iter_mut().zip(s.v.iter_mut()).zip(dv) {
+            *v += dv;
+            *x += dt * *v;
         }
     }
 
