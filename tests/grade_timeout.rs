@@ -77,6 +77,11 @@ fn an_endless_loop_times_out_and_scores_zero_for_its_item_only() {
             assert_eq!(item.score, 0.0);
             let reason = item.reason.as_deref().unwrap_or_default();
             assert!(reason.contains("did not finish within 200 ms"), "{reason}");
+            let case = &item.checks[0].feedback.as_ref().expect("feedback").input;
+            assert!(
+                case.starts_with("one step of dt = 0.01 s"),
+                "the case is reported: {case}"
+            );
         } else {
             assert_eq!(item.status, ItemStatus::Full, "{}", item.label());
         }

@@ -20,7 +20,7 @@ use glam::DVec3;
 use super::assignments::{SpringSetup, State};
 use super::reference::model_of;
 use super::report::Feedback;
-use super::runner::{CheckResult, Failure};
+use super::runner::{CheckResult, Failure, set_case};
 use super::system::Physics;
 use crate::physics::{Model, SpringKind};
 use crate::scene::builder::Builder;
@@ -230,6 +230,7 @@ pub(crate) fn check_hooke(
             num((xb - xa).length())
         );
         let want = reference(xa, xb, zero, zero, k, rest);
+        set_case(&input);
         let got = student(xa, xb, zero, zero, k, rest);
         finite1("f_a", &input, got)?;
         if !close(got, want, REL, k * rest) {
@@ -279,6 +280,7 @@ pub(crate) fn check_damper(
             num(kd)
         );
         let want = reference(xa, xb, va, vb, kd, 0.0);
+        set_case(&input);
         let got = student(xa, xb, va, vb, kd, 0.0);
         finite1("f_a", &input, got)?;
         let scale = kd * ((va - vb).length() + 1.0);
@@ -556,6 +558,7 @@ pub(crate) fn step_checked(
     input: &str,
 ) -> CheckResult {
     let n = state.x.len();
+    set_case(input);
     step(state, dt, physics);
     if state.x.len() != n || state.v.len() != n {
         return Err(wrong(

@@ -27,7 +27,7 @@ use super::checks::{
 };
 use super::reference::Reference;
 use super::report::NotGraded;
-use super::runner::{CheckResult, CheckSpec, Ctx, ItemSpec, Rubric};
+use super::runner::{CheckResult, CheckSpec, Ctx, ItemSpec, Rubric, set_case};
 use super::shared::{EXPLICIT, MIDPOINT, RK4, shared_items};
 use super::system::Physics;
 use crate::physics::SpringKind;
@@ -128,10 +128,11 @@ pub(crate) fn rubric<H: ClothHomework>() -> Rubric<H> {
 
 fn check_kind<H: ClothHomework>(hw: &H, kind: SpringKind, hint: &str) -> CheckResult {
     for n in [25, 4] {
-        let got = hw.springs(n);
         let want = Reference.springs(n);
         let label = |i: usize| format!("({},{})", i / n, i % n);
         let input = format!("springs({n}): particle (row r, column c) has index r n + c");
+        set_case(&input);
+        let got = hw.springs(n);
         check_setup(kind, &input, &got, &want, n * n, &label, hint)?;
     }
     Ok(())
@@ -176,6 +177,7 @@ fn check_accelerations<H: ClothHomework>(
         describe_springs(x, v, springs),
         w.iter().map(|w| num(*w)).collect::<Vec<_>>()
     );
+    set_case(&input);
     let got = hw.spring_accelerations(x, v, w, springs);
     let want = Reference.spring_accelerations(x, v, w, springs);
     let mut own = vec![DVec3::ZERO; x.len()];
@@ -297,6 +299,7 @@ impl SphereCase {
         hw: &H,
     ) -> Result<([Body; 2], [Body; 2]), super::runner::Failure> {
         let (mut s, mut p) = (self.sphere, self.particle);
+        set_case(&self.describe());
         hw.sphere_collision(&mut s, self.radius, &mut p, self.restitution);
         finite(
             "(sphere x, v, particle x, v)",

@@ -21,7 +21,7 @@ use glam::DVec3;
 
 use super::assignments::{Bowl, ContactCoefficients, Particle, Plane};
 use super::checks::{REL, Rng, close, finite, num, vec3, wrong};
-use super::runner::CheckResult;
+use super::runner::{CheckResult, set_case};
 use crate::physics::collide::Collider;
 
 /// An obstacle of the jelly assignment.
@@ -136,6 +136,7 @@ fn compare(
         num(c.friction)
     );
     let mut got = start;
+    set_case(&input);
     student(surface, &mut got);
     finite("(x, v, force)", &input, &[got.x, got.v, got.force])?;
     let mut want = start;

@@ -29,7 +29,7 @@ use super::checks::{
 use super::collision::{Surface, check_bounce, check_contact_force, check_penetration};
 use super::reference::Reference;
 use super::report::NotGraded;
-use super::runner::{CheckResult, CheckSpec, Ctx, ItemSpec, Rubric};
+use super::runner::{CheckResult, CheckSpec, Ctx, ItemSpec, Rubric, set_case};
 use super::shared::{EXPLICIT, MIDPOINT, RK4, shared_items};
 use super::system::Physics;
 use crate::physics::SpringKind;
@@ -157,7 +157,6 @@ const LATTICES: [[usize; 3]; 2] = [[10, 10, 10], [3, 4, 5]];
 
 fn check_kind<H: JellyHomework>(hw: &H, kind: SpringKind, hint: &str) -> CheckResult {
     for counts in LATTICES {
-        let got = hw.springs(counts);
         let want = Reference.springs(counts);
         let particles = counts.iter().product();
         let label = |i: usize| {
@@ -172,6 +171,8 @@ fn check_kind<H: JellyHomework>(hw: &H, kind: SpringKind, hint: &str) -> CheckRe
             "springs([{}, {}, {}]): particle (ix, iy, iz) has index ix + nx (iy + ny iz)",
             counts[0], counts[1], counts[2]
         );
+        set_case(&input);
+        let got = hw.springs(counts);
         check_setup(kind, &input, &got, &want, particles, &label, hint)?;
     }
     Ok(())
@@ -231,6 +232,7 @@ fn check_internal<H: JellyHomework>(
     springs: &[Spring],
 ) -> CheckResult {
     let input = format!("internal_forces of {}", describe_springs(x, v, springs));
+    set_case(&input);
     let got = hw.internal_forces(x, v, springs);
     let want = Reference.internal_forces(x, v, springs);
     let own = own_internal(hw, x, v, springs);

@@ -24,7 +24,7 @@ use super::checks::{
     vec3, wrong,
 };
 use super::reference::{Reference, model_of};
-use super::runner::{CheckResult, CheckSpec, Ctx, ItemSpec, Rubric};
+use super::runner::{CheckResult, CheckSpec, Ctx, ItemSpec, Rubric, set_case};
 use super::system::Physics;
 
 /// The course rope: `(0, 200) → (-400, 200)` px, node mass 1, k = 100, node 0 pinned.
@@ -249,8 +249,9 @@ fn rope_cases(ctx: &Ctx) -> Vec<RopeCase> {
 
 /// The student's rope for `case`, with the node count checked.
 fn built<H: RopeHomework>(hw: &H, case: &RopeCase) -> Result<Rope, super::runner::Failure> {
-    let rope = case.build(hw);
     let input = case.describe();
+    set_case(&input);
+    let rope = case.build(hw);
     if rope.masses.len() != case.nodes {
         return Err(wrong(
             input,
@@ -445,6 +446,7 @@ fn rope_forces<H: RopeHomework>(hw: &H, ctx: &Ctx) -> CheckResult {
     for _ in 0..3 {
         let rope = random_rope(&mut rng, 6);
         let input = describe_rope(&rope);
+        set_case(&input);
         let got = hw.spring_forces(&rope);
         let want = Reference.spring_forces(&rope);
         // The student's own Hooke forces, accumulated correctly: a wrong spring_force is charged
@@ -577,6 +579,7 @@ fn run_rope(
     mut step: impl FnMut(&mut Rope),
 ) -> CheckResult {
     let n = rope.masses.len();
+    set_case(input);
     for _ in 0..steps {
         step(rope);
         if rope.masses.len() != n {

@@ -22,7 +22,7 @@
 use std::any::Any;
 use std::cell::{Cell, RefCell};
 use std::panic::{self, AssertUnwindSafe};
-use std::sync::{Arc, Once, mpsc};
+use std::sync::{Arc, Mutex, Once, mpsc};
 use std::thread;
 use std::time::{Duration, Instant};
 
@@ -110,6 +110,28 @@ thread_local! {
     static GRADING: Cell<bool> = const { Cell::new(false) };
     /// The last panic's "message at file:line:col" on this thread.
     static LAST_PANIC: RefCell<Option<String>> = const { RefCell::new(None) };
+    /// The case a check is running on this thread, shared with the runner so that a panic or a
+    /// timeout can report it.
+    static CASE: RefCell<Option<Arc<Mutex<String>>>> = const { RefCell::new(None) };
+}
+
+/// Records the case about to be handed to the student's code, so that a panic (or a timeout)
+/// can say which input caused it.
+pub(crate) fn set_case(input: &str) {
+    CASE.with(|c| {
+        if let Some(shared) = c.borrow().as_ref()
+            && let Ok(mut text) = shared.lock()
+        {
+            text.clear();
+            text.push_str(input);
+        }
+    });
+}
+
+/// The case last recorded by a check's thread (empty when none, or when its lock is poisoned or
+/// busy).
+fn recorded_case(shared: &Mutex<String>) -> String {
+    shared.try_lock().map(|t| t.clone()).unwrap_or_default()
 }
 
 static HOOK: Once = Once::new();
@@ -146,8 +168,10 @@ fn payload_text(payload: &dyn Any) -> String {
 /// How one isolated run ended.
 enum Verdict {
     Done(CheckResult),
-    Panicked(String),
-    TimedOut,
+    /// The panic's message and the case it happened on.
+    Panicked(String, String),
+    /// No answer within the limit, on the case last recorded.
+    TimedOut(String),
     NoThread(String),
 }
 
@@ -159,11 +183,14 @@ fn run_isolated<H: Send + Sync + 'static>(
 ) -> Verdict {
     install_quiet_hook();
     let (tx, rx) = mpsc::channel();
+    let case = Arc::new(Mutex::new(String::new()));
+    let case_in_thread = Arc::clone(&case);
     let hw = Arc::clone(hw);
     let spawned = thread::Builder::new()
         .name("springlab-grade-check".to_string())
         .spawn(move || {
             GRADING.with(|g| g.set(true));
+            CASE.with(|c| *c.borrow_mut() = Some(case_in_thread));
             let result = panic::catch_unwind(AssertUnwindSafe(|| check(&hw, &ctx)));
             let message = match result {
                 Ok(r) => Ok(r),
@@ -179,11 +206,12 @@ fn run_isolated<H: Send + Sync + 'static>(
     }
     match rx.recv_timeout(limit) {
         Ok(Ok(result)) => Verdict::Done(result),
-        Ok(Err(message)) => Verdict::Panicked(message),
-        Err(mpsc::RecvTimeoutError::Timeout) => Verdict::TimedOut,
-        Err(mpsc::RecvTimeoutError::Disconnected) => {
-            Verdict::Panicked("the check's thread ended without an answer".to_string())
-        }
+        Ok(Err(message)) => Verdict::Panicked(message, recorded_case(&case)),
+        Err(mpsc::RecvTimeoutError::Timeout) => Verdict::TimedOut(recorded_case(&case)),
+        Err(mpsc::RecvTimeoutError::Disconnected) => Verdict::Panicked(
+            "the check's thread ended without an answer".to_string(),
+            String::new(),
+        ),
     }
 }
 
@@ -235,7 +263,7 @@ fn grade_item<H: Send + Sync + 'static>(
                 ));
                 (CheckOutcome::Failed, Some(f))
             }
-            Verdict::Panicked(message) => {
+            Verdict::Panicked(message, case) => {
                 fatal = Some((
                     ItemStatus::Panicked,
                     format!("\"{}\" panicked: {message}; the item scores 0", check.name),
@@ -243,14 +271,16 @@ fn grade_item<H: Send + Sync + 'static>(
                 (
                     CheckOutcome::Failed,
                     Some(Feedback {
-                        hint: "run `cargo test` with RUST_BACKTRACE=1 after calling the function \
-                               from a test of your own; a panic is never worth points"
+                        input: case,
+                        expected: "an answer".to_string(),
+                        got: "a panic".to_string(),
+                        hint: "call the function with this input from a test of your own and run \
+                               it with RUST_BACKTRACE=1; a panic is never worth points"
                             .to_string(),
-                        ..Feedback::default()
                     }),
                 )
             }
-            Verdict::TimedOut => {
+            Verdict::TimedOut(case) => {
                 fatal = Some((
                     ItemStatus::TimedOut,
                     format!(
@@ -262,10 +292,12 @@ fn grade_item<H: Send + Sync + 'static>(
                 (
                     CheckOutcome::Failed,
                     Some(Feedback {
+                        input: case,
+                        expected: format!("an answer within {} ms", limit.as_millis()),
+                        got: "no answer".to_string(),
                         hint: "look for a loop whose condition never changes, or one far longer \
                                than the system (every check takes milliseconds)"
                             .to_string(),
-                        ..Feedback::default()
                     }),
                 )
             }
