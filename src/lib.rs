@@ -11,6 +11,7 @@
 pub mod bench;
 pub mod cli;
 pub mod lesson;
+pub mod grade;
 pub mod physics;
 
 pub use physics::{Energy, Method, MethodParams, Model, Spring, SpringKind, State, Workspace};
