@@ -16,6 +16,7 @@ pub mod physics;
 pub use physics::{Energy, Method, MethodParams, Model, Spring, SpringKind, State, Workspace};
 pub mod scene;
 pub mod simulation;
+pub mod tui;
 
 pub use scene::{Scene, SceneError};
 pub use simulation::{RunReport, Simulation};
