@@ -343,6 +343,7 @@ impl App {
     /// Only when the terminal cannot be read or written.
     pub fn run(&mut self, terminal: &mut DefaultTerminal) -> anyhow::Result<()> {
         let mut last_tick = Instant::now();
+        let mut next_frame = Instant::now();
         let mut fps_window = (Instant::now(), 0u32);
         let mut dirty = true;
         while !self.quit {
@@ -351,12 +352,24 @@ impl App {
                 fps_window.1 += 1;
                 dirty = false;
             }
-            let frame_start = Instant::now();
             let animating = self.is_animating();
             if animating {
-                let timeout = FRAME.saturating_sub(frame_start.elapsed());
-                if event::poll(timeout)? {
+                // Frames on a fixed schedule; a late frame starts the schedule again from now.
+                let now = Instant::now();
+                next_frame = if next_frame + FRAME < now {
+                    now + FRAME
+                } else {
+                    next_frame + FRAME
+                };
+                while !self.quit {
+                    let timeout = next_frame.saturating_duration_since(Instant::now());
+                    if timeout.is_zero() || !event::poll(timeout)? {
+                        break;
+                    }
                     dirty |= self.handle_pending_events()?;
+                    if !self.is_animating() {
+                        break;
+                    }
                 }
             } else {
                 // Nothing moves: block until the user does something (no CPU while paused).
@@ -382,6 +395,7 @@ impl App {
                 }
             } else {
                 fps_window = (now, 0);
+                next_frame = now;
                 self.fps = None;
             }
         }

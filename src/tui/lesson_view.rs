@@ -344,7 +344,7 @@ impl LessonRun {
     /// ```
     /// over free particles `i` (pinned ones have `1/m = 0`). Exact for one spring with a pinned
     /// end (`ω = √(k/m)`); `2√(k/m)` for a long chain, the value of its fastest mode. Damping,
-    /// gravity and collisions are left out. `None` without springs.
+    /// gravity and collisions are left out. `None` when no spring moves a free particle.
     #[must_use]
     pub fn omega_max(&self) -> Option<f64> {
         let mut max = 0.0f64;
@@ -363,7 +363,7 @@ impl LessonRun {
                 max = max.max(r * inv);
             }
         }
-        any.then(|| max.sqrt())
+        (any && max > 0.0).then(|| max.sqrt())
     }
 
     /// The stiffness (N/m) when every spring has the same, else `None`.

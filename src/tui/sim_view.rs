@@ -301,6 +301,9 @@ fn spring_color(body: usize, kind: SpringKind) -> Color {
 /// Scenes with more particles draw springs only (points would hide the lattice).
 const MAX_POINTS: usize = 400;
 
+/// Scenes with at most this many particles mark each one with a dot a cell wide.
+const MAX_MARKED: usize = 64;
+
 /// Draws the scene of `run` into `area` (with its border); returns the canvas's inner area.
 pub fn render(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) -> Rect {
     let sim = run.sim();
@@ -373,6 +376,8 @@ pub fn render(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) -> Re
             }
             let many = sim.scene.particle_count() > MAX_POINTS && filter != SpringFilter::None;
             let mut pinned = Vec::new();
+            let mut free = Vec::new();
+            let marked = sim.scene.particle_count() <= MAX_MARKED;
             for (b, body) in sim.scene.bodies.iter().enumerate() {
                 let coords: Vec<(f64, f64)> = body
                     .state
@@ -390,10 +395,15 @@ pub fn render(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) -> Re
                     let held = drag.is_some_and(|(db, di)| db == b && di == i);
                     if body.model.is_pinned(i) && !held {
                         pinned.push(*c);
+                    } else if marked && !held {
+                        free.push(*c);
                     }
                 }
             }
             ctx.layer();
+            for (x, y) in free {
+                ctx.print(x, y, Span::styled("•", theme.fg(Color::White)));
+            }
             for (x, y) in pinned {
                 ctx.print(x, y, Span::styled("■", theme.fg(Color::Yellow)));
             }

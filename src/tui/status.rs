@@ -2,7 +2,7 @@
 //!
 //! ```text
 //!  rk4 · dt 0.010 s · dt·ω 0.100 · k 100 N/m · k_d 0 N·s/m
-//!  ‖ paused · t = 0.00 s · step 0 · 0/4096 steps/frame · real time ×— · — steps/s · — fps
+//!  ‖ paused · t = 0.00 s · step 0 · 0/4096 steps/frame · ×— real time · — steps/s · — fps
 //! ```
 //! `ω` is the upper bound of [`LessonRun::omega_max`]: exact for one spring, `2√(k/m)` for a
 //! chain. Times are simulated times; the real-time factor, steps per second and frames per
@@ -96,11 +96,14 @@ pub fn render(run: &LessonRun, fps: Option<f64>, theme: Theme, area: Rect, buf: 
                 run.max_steps_per_frame()
             )),
             sep(),
-            Span::raw(format!("real time ×{}", dash(run.real_time_factor()))),
+            Span::raw(format!("×{} real time", dash(run.real_time_factor()))),
             sep(),
             Span::raw(format!("{} steps/s", dash(run.steps_per_second()))),
             sep(),
-            Span::raw(format!("{} fps", dash(fps))),
+            Span::raw(format!(
+                "{} fps",
+                fps.map_or_else(|| "—".to_string(), |f| format!("{f:.0}"))
+            )),
         ]
     };
     buf.set_line(area.x, area.y, &Line::from(first), area.width);
