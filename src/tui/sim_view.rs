@@ -401,6 +401,24 @@ pub fn render(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) -> Re
                 }
             }
             ctx.layer();
+            // Marks only where they stay apart: neighbouring marks would hide the springs.
+            let cell = |(x, y): (f64, f64)| {
+                (
+                    ((x - x_bounds[0]) / (x_bounds[1] - x_bounds[0]) * f64::from(inner.width))
+                        .floor() as i64,
+                    ((y_bounds[1] - y) / (y_bounds[1] - y_bounds[0]) * f64::from(inner.height))
+                        .floor() as i64,
+                )
+            };
+            let cells: Vec<(i64, i64)> = free.iter().map(|&p| cell(p)).collect();
+            let crowded = cells.iter().enumerate().any(|(i, a)| {
+                cells[i + 1..]
+                    .iter()
+                    .any(|b| (a.0 - b.0).abs() <= 1 && (a.1 - b.1).abs() <= 1)
+            });
+            if crowded {
+                free.clear();
+            }
             for (x, y) in free {
                 ctx.print(x, y, Span::styled("•", theme.fg(Color::White)));
             }
