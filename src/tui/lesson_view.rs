@@ -198,6 +198,14 @@ impl LessonRun {
         Ok(run)
     }
 
+    /// Replaces the step's scene with `scene` (a scene built in code, for tests and tools), paused
+    /// at its start; `r` returns to this scene's initial state.
+    pub fn set_scene(&mut self, scene: crate::scene::Scene) {
+        self.sim = Simulation::new(scene);
+        self.filter = SpringFilter::All;
+        self.start_step();
+    }
+
     /// Everything that follows from a freshly built scene.
     fn start_step(&mut self) {
         self.initial = self.sim.states().cloned().collect();

@@ -478,7 +478,7 @@ fn circle(center: DVec3, normal: DVec3, radius: f64, segments: usize) -> Vec<DVe
         .collect()
 }
 
-/// A square grid of `lines` lines each way, of half-size `half` (m), on the plane through
+/// A square grid of 5 lines each way, of half-size `half` (m), on the plane through
 /// `origin` with unit `normal`; segments for which `skip(midpoint)` is true are left out.
 fn plane_grid(
     ctx: &mut Context,
@@ -490,7 +490,7 @@ fn plane_grid(
     skip: &dyn Fn(DVec3) -> bool,
 ) {
     let (u, w) = normal.any_orthonormal_pair();
-    let lines = 8;
+    let lines = 4;
     let pieces = 32;
     for (a, b) in [(u, w), (w, u)] {
         for i in 0..=lines {
