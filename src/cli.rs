@@ -2,7 +2,9 @@
 //!
 //! The contract (DESIGN.md) is:
 //! ```text
-//! springlab                          (until the lesson app exists: the rope demo)
+//! springlab [--lessons DIR]          the lesson menu (terminal app)
+//! springlab lesson <N|slug>          one lesson
+//! springlab lessons                  list the lessons
 //! springlab scenes
 //! springlab run <scene|file.toml> [--method M] [--dt S] [--steps N | --time T]
 //!               [--set key=value ...] [--json] [--csv FILE]
@@ -15,11 +17,13 @@
 
 mod bench;
 mod grade;
+mod lessons;
 mod run;
 mod scenes;
 mod study;
 mod study_chart;
 
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -28,14 +32,25 @@ use clap::{Parser, Subcommand};
 #[derive(Debug, Parser)]
 #[command(name = "springlab", version, about, long_about = None)]
 pub struct Cli {
-    /// What to do; without one, runs the rope demo.
+    /// What to do; without one, opens the lesson menu.
     #[command(subcommand)]
     pub command: Option<Command>,
+    /// Load the lessons (*.md) from this directory instead of the built-in ones.
+    #[arg(long, global = true, value_name = "DIR")]
+    pub lessons: Option<PathBuf>,
 }
 
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Open one lesson in the terminal app.
+    Lesson {
+        /// The lesson's number or short name (see `springlab lessons`).
+        #[arg(value_name = "N|SLUG")]
+        which: String,
+    },
+    /// List the lessons (and the errors of lesson files that do not load).
+    Lessons,
     /// Run a scene headless and print a summary (or JSON).
     Run(run::RunArgs),
     /// List the built-in scenes with their parameters.
@@ -58,14 +73,17 @@ pub enum Command {
 #[must_use]
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    let dir = cli.lessons.as_deref();
     let result = match cli.command {
+        Some(Command::Lesson { which }) => lessons::open(dir, &which),
+        Some(Command::Lessons) => lessons::list(dir),
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::Scenes) => scenes::list(),
         Some(Command::Bench(args)) => bench::run(&args),
         Some(Command::Study { command }) => study::run(&command),
         Some(Command::Homework(args)) => grade::homework(&args),
         Some(Command::Grade(args)) => grade::grade(&args),
-        None => run::demo(),
+        None => lessons::menu(dir),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -30,7 +30,8 @@
 //! ```
 //!
 //! A goal is one of
-//! - `settle`: every particle slower than `speed` (m/s, default 0.05) before `time` (s);
+//! - `settle`: every particle slower than `speed` (m/s, default 0.05) from a moment before `time`
+//!   (s) on, for at least half a second;
 //! - `diverge`: the run blows up (NaN or |v| > 1000 m/s) before `time` (s);
 //! - `survive`: the run reaches `time` (s) without diverging.
 //!
@@ -52,7 +53,10 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("04-verlet.md", include_str!("../lessons/04-verlet.md")),
     ("05-jelly.md", include_str!("../lessons/05-jelly.md")),
     ("06-cloth.md", include_str!("../lessons/06-cloth.md")),
-    ("07-speed-accuracy.md", include_str!("../lessons/07-speed-accuracy.md")),
+    (
+        "07-speed-accuracy.md",
+        include_str!("../lessons/07-speed-accuracy.md"),
+    ),
 ];
 
 /// A plot the lesson screen can show beside the scene.
@@ -107,15 +111,44 @@ pub enum GoalKind {
     Survive,
 }
 
+/// How long the speed must stay below the threshold for `settle` to count (s): a single slow
+/// instant is only a turning point.
+pub const SETTLE_HOLD: f64 = 0.5;
+
+/// What a goal remembers between checks.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GoalProgress {
+    /// Since when every particle has been slower than the settle speed (s).
+    calm_since: Option<f64>,
+}
+
 impl Goal {
     /// Whether a run at simulated time `time` (s) with largest speed `max_speed` (m/s), diverged
     /// or not, has met the goal: `Some(true)` met, `Some(false)` failed for good, `None` not yet.
-    #[must_use]
-    pub fn check(&self, time: f64, max_speed: f64, diverged: bool) -> Option<bool> {
+    /// Call it as the run advances with the same `progress` (a fresh one for a fresh run).
+    ///
+    /// `settle` is met when the speed stays below `speed` for [`SETTLE_HOLD`] seconds from a
+    /// moment before the deadline.
+    pub fn check(
+        &self,
+        progress: &mut GoalProgress,
+        time: f64,
+        max_speed: f64,
+        diverged: bool,
+    ) -> Option<bool> {
         match self.kind {
             GoalKind::Settle if diverged => Some(false),
-            GoalKind::Settle if max_speed < self.speed && time > 0.0 => Some(time <= self.time),
-            GoalKind::Settle if time > self.time => Some(false),
+            GoalKind::Settle => {
+                if max_speed < self.speed && time > 0.0 {
+                    let since = *progress.calm_since.get_or_insert(time);
+                    if time - since >= SETTLE_HOLD {
+                        return Some(since <= self.time);
+                    }
+                } else {
+                    progress.calm_since = None;
+                }
+                (time > self.time + SETTLE_HOLD).then_some(false)
+            }
             GoalKind::Diverge if diverged => Some(time <= self.time),
             GoalKind::Diverge if time > self.time => Some(false),
             GoalKind::Survive if diverged => Some(false),

@@ -10,14 +10,15 @@
 
 pub mod bench;
 pub mod cli;
-pub mod lesson;
 pub mod grade;
+pub mod lesson;
 pub mod physics;
 
 pub use physics::{Energy, Method, MethodParams, Model, Spring, SpringKind, State, Workspace};
 pub mod scene;
 pub mod simulation;
 pub mod study;
+pub mod tui;
 
 pub use scene::{Scene, SceneError};
 pub use simulation::{RunReport, Simulation};

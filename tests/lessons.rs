@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use springlab::lesson::{self, GoalKind, Plot};
+use springlab::lesson::{self, GoalKind, GoalProgress, Plot};
 
 #[test]
 fn every_lesson_file_loads_and_every_step_builds_its_scene() {
@@ -71,13 +71,44 @@ fn steps_carry_scene_parameters_method_plots_and_goal() {
     let scene = bridge.build_scene().expect("bridge");
     assert!(scene.bodies[0].model.is_pinned(8));
     assert_eq!(bridge.plots, vec![Plot::Energy, Plot::Speed]);
-    let goal = bridge.goal.as_ref().expect("goal");
+    let text = format!(
+        "{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\ngoal = {{ kind = \"settle\", time = 8.0, text = \"t\" }}\n+++\ntext\n"
+    );
+    let parsed = lesson::parse(&text, "goal.md", None).expect("a lesson with a goal");
+    let goal = parsed.steps[0].goal.as_ref().expect("goal");
     assert_eq!(goal.kind, GoalKind::Settle);
-    // The goal logic: met, failed, pending.
-    assert_eq!(goal.check(5.0, 0.01, false), Some(true));
-    assert_eq!(goal.check(9.0, 0.5, false), Some(false));
-    assert_eq!(goal.check(3.0, 0.5, false), None);
-    assert_eq!(goal.check(3.0, 0.0, true), Some(false));
+    assert_eq!(goal.speed, 0.05, "the default settle speed");
+    // The goal logic: pending while moving; a slow instant is not enough (a turning point); slow
+    // for half a second from before the deadline is met; still moving after it is failed.
+    let mut p = GoalProgress::default();
+    assert_eq!(goal.check(&mut p, 3.0, 0.5, false), None);
+    assert_eq!(goal.check(&mut p, 5.0, 0.01, false), None);
+    assert_eq!(
+        goal.check(&mut p, 5.1, 0.3, false),
+        None,
+        "the calm was a turning point"
+    );
+    assert_eq!(goal.check(&mut p, 7.9, 0.01, false), None);
+    assert_eq!(
+        goal.check(&mut p, 8.4, 0.01, false),
+        Some(true),
+        "calm from 7.9 s, before the 8 s deadline"
+    );
+    let mut late = GoalProgress::default();
+    assert_eq!(goal.check(&mut late, 8.2, 0.01, false), None);
+    assert_eq!(
+        goal.check(&mut late, 8.7, 0.01, false),
+        Some(false),
+        "calm only from 8.2 s"
+    );
+    assert_eq!(
+        goal.check(&mut GoalProgress::default(), 9.0, 0.5, false),
+        Some(false)
+    );
+    assert_eq!(
+        goal.check(&mut GoalProgress::default(), 3.0, 0.0, true),
+        Some(false)
+    );
 }
 
 fn error_of(text: &str) -> String {

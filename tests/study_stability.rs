@@ -415,7 +415,7 @@ fn bad_input_gives_clear_messages() {
         ),
         (&["study", "stability"], "<SCENE>"),
         (
-            &["study", "convergence", "oscillator"],
+            &["study", "nosuchstudy", "oscillator"],
             "unrecognized subcommand",
         ),
     ];

@@ -225,30 +225,3 @@ pub fn print_summary(out: &mut impl Write, r: &RunReport) -> std::io::Result<()>
         ),
     }
 }
-
-/// The default action until the lesson app exists: the GAMES101 ropes for 10 s, summarised.
-///
-/// # Errors
-/// Only when standard output cannot be written.
-pub fn demo() -> anyhow::Result<()> {
-    let mut out = std::io::stdout().lock();
-    writeln!(
-        out,
-        "springlab — the GAMES101 ropes, semi-implicit Euler beside Verlet, for 10 s:\n"
-    )?;
-    for method in ["semi-implicit-euler", "verlet", "explicit-euler"] {
-        let mut scene = scene::load("rope", &[])?;
-        apply_methods(&mut scene, method)?;
-        let steps = step_count(None, None, scene.duration, scene.dt)?;
-        let mut sim = Simulation::new(scene);
-        let start = Instant::now();
-        sim.run(steps, |_| {});
-        print_summary(&mut out, &sim.report(start.elapsed().as_secs_f64()))?;
-        writeln!(out)?;
-    }
-    writeln!(
-        out,
-        "Try `springlab scenes` and `springlab run oscillator --method rk4 --json`."
-    )?;
-    Ok(())
-}

@@ -1,0 +1,104 @@
+//! `springlab` (the lesson menu), `springlab lesson <N|slug>` and `springlab lessons`.
+
+use std::io::Write;
+use std::path::Path;
+
+use anyhow::{Context, bail};
+
+use crate::lesson::{self, Lesson, LessonError};
+use crate::tui;
+
+/// The embedded lessons, or those of `dir`.
+///
+/// # Errors
+/// `dir` cannot be read.
+pub fn load(dir: Option<&Path>) -> anyhow::Result<Vec<Result<Lesson, LessonError>>> {
+    match dir {
+        None => Ok(lesson::builtin()),
+        Some(dir) => lesson::load_dir(dir)
+            .with_context(|| format!("--lessons {}: cannot read the directory", dir.display())),
+    }
+}
+
+/// `springlab`: the lesson menu.
+///
+/// # Errors
+/// No terminal, an unreadable `--lessons` directory, or a terminal failure.
+pub fn menu(dir: Option<&Path>) -> anyhow::Result<()> {
+    tui::run(load(dir)?, None)
+}
+
+/// `springlab lesson <N|slug>`: the app, opened on that lesson.
+///
+/// # Errors
+/// No such lesson (the message lists them), a lesson that failed to load, no terminal.
+pub fn open(dir: Option<&Path>, which: &str) -> anyhow::Result<()> {
+    let lessons = load(dir)?;
+    let index = find(&lessons, which)?;
+    tui::run(lessons, Some(index))
+}
+
+/// The index of lesson `which` (a number or a slug) in `lessons`.
+///
+/// # Errors
+/// No lesson has that number or slug; the message lists the lessons.
+pub fn find(lessons: &[Result<Lesson, LessonError>], which: &str) -> anyhow::Result<usize> {
+    if let Some(i) = tui::find_lesson(lessons, which) {
+        return Ok(i);
+    }
+    let known: Vec<String> = lessons
+        .iter()
+        .filter_map(|l| l.as_ref().ok())
+        .map(|l| format!("{} ({})", l.number, l.slug))
+        .collect();
+    let broken = lessons.iter().filter(|l| l.is_err()).count();
+    let mut message = format!(
+        "no lesson `{which}`; lessons: {}",
+        if known.is_empty() {
+            "none".to_string()
+        } else {
+            known.join(", ")
+        }
+    );
+    if broken > 0 {
+        message.push_str(&format!(
+            " ({broken} failed to load: `springlab lessons` shows why)"
+        ));
+    }
+    bail!(message)
+}
+
+/// `springlab lessons`: one line per lesson; a lesson that failed to load prints its error.
+///
+/// # Errors
+/// Some lesson failed to load (after listing all of them), or stdout cannot be written.
+pub fn list(dir: Option<&Path>) -> anyhow::Result<()> {
+    let lessons = load(dir)?;
+    let mut out = std::io::stdout().lock();
+    let mut broken = 0;
+    for l in &lessons {
+        match l {
+            Ok(l) => writeln!(
+                out,
+                "{:>2}. {} ({}, {} steps): {}",
+                l.number,
+                l.title,
+                l.slug,
+                l.steps.len(),
+                l.summary
+            )?,
+            Err(e) => {
+                broken += 1;
+                writeln!(out, " !  {e}")?;
+            }
+        }
+    }
+    if lessons.is_empty() {
+        writeln!(out, "no lessons")?;
+    }
+    out.flush()?;
+    if broken > 0 {
+        bail!("{broken} lesson file(s) failed to load (marked with ! above)");
+    }
+    Ok(())
+}

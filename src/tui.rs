@@ -1,0 +1,500 @@
+//! The lesson walkthrough in the terminal: a menu of lessons, and for each step its text, the
+//! live scene, plots and a status line.
+//!
+//! The structure follows ratatui's demo2: an [`App`] owns the state and has
+//! [`run`](App::run) (the event loop), [`handle_event`](App::handle_event) and
+//! `impl Widget for &App` (drawing). Everything the loop does is reachable without a terminal:
+//! tests call [`App::handle_key`], [`App::handle_mouse`] and [`App::tick`] with explicit wall
+//! times and draw into ratatui's `TestBackend`.
+//!
+//! # Time
+//!
+//! Simulated time is decoupled from drawing (DESIGN.md). Each frame the loop measures the wall
+//! time since the previous frame and calls [`App::tick`]; the lesson adds that time (times the
+//! speed factor) to an accumulator and takes as many steps of the fixed `dt` as fit, at most the
+//! cap on steps per frame (`[` / `]`). When the cap (or the frame's time budget) is hit, the
+//! backlog is dropped: the simulation runs slower than real time and the status line shows a
+//! real-time factor below 1, instead of falling ever further behind. Frames are drawn at most
+//! 60 times a second; while nothing animates the loop blocks on input and uses no CPU.
+
+pub mod export;
+pub mod help;
+pub mod lesson_view;
+pub mod markdown;
+pub mod menu;
+pub mod plots;
+pub mod sim_view;
+pub mod status;
+
+use std::cell::Cell;
+use std::io::{IsTerminal, stdout};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context as _, bail};
+use ratatui::DefaultTerminal;
+use ratatui::buffer::Buffer;
+use ratatui::crossterm::event::{
+    self, DisableMouseCapture, EnableMouseCapture, Event, KeyCode, KeyEvent, KeyEventKind,
+    KeyModifiers, MouseEvent,
+};
+use ratatui::crossterm::execute;
+use ratatui::layout::{Alignment, Rect};
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::Line;
+use ratatui::widgets::{Paragraph, Widget, Wrap};
+
+use crate::lesson::{Lesson, LessonError};
+pub use lesson_view::LessonRun;
+
+/// The smallest terminal the app draws into (columns, rows).
+pub const MIN_SIZE: (u16, u16) = (80, 24);
+
+/// Frames are drawn at most this often while something animates.
+const FRAME: Duration = Duration::from_micros(16_667);
+
+/// Wall time a frame may spend stepping before the rest of its steps are dropped.
+const STEP_BUDGET: Duration = Duration::from_millis(20);
+
+/// Colours from the 16-colour palette, or none at all (`NO_COLOR`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Theme {
+    /// False when the `NO_COLOR` environment variable is set and not empty.
+    pub color: bool,
+}
+
+impl Theme {
+    /// Colours unless `NO_COLOR` is set to a non-empty value (<https://no-color.org>).
+    #[must_use]
+    pub fn from_env() -> Theme {
+        let no_color = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
+        Theme { color: !no_color }
+    }
+
+    /// `c`, or the terminal's default colour when colours are off.
+    #[must_use]
+    pub fn color(self, c: Color) -> Color {
+        if self.color { c } else { Color::Reset }
+    }
+
+    /// A style with foreground `c` (plain when colours are off).
+    #[must_use]
+    pub fn fg(self, c: Color) -> Style {
+        if self.color {
+            Style::new().fg(c)
+        } else {
+            Style::new()
+        }
+    }
+
+    /// Greyed-out text: dark grey, or dim without colours.
+    #[must_use]
+    pub fn dim(self) -> Style {
+        if self.color {
+            Style::new().fg(Color::DarkGray)
+        } else {
+            Style::new().add_modifier(Modifier::DIM)
+        }
+    }
+}
+
+/// Which screen is shown.
+#[derive(Debug)]
+pub enum Screen {
+    /// The list of lessons.
+    Menu,
+    /// One lesson, at one of its steps, with its live simulation.
+    Lesson(Box<LessonRun>),
+}
+
+/// The application: the lessons, the screen, and the overlay.
+#[derive(Debug)]
+pub struct App {
+    lessons: Vec<Result<Lesson, LessonError>>,
+    screen: Screen,
+    /// The highlighted menu entry.
+    selected: usize,
+    help: bool,
+    quit: bool,
+    /// A one-line message for the menu (for example why a lesson cannot open).
+    menu_message: Option<String>,
+    theme: Theme,
+    /// Frames drawn per second, measured by [`App::run`] (none in tests).
+    fps: Option<f64>,
+    /// Where the scene canvas was last drawn (for the mouse).
+    canvas_area: Cell<Rect>,
+}
+
+impl App {
+    /// An app showing the menu of `lessons` (each loaded, or the error that stopped it).
+    #[must_use]
+    pub fn new(lessons: Vec<Result<Lesson, LessonError>>, theme: Theme) -> App {
+        App {
+            lessons,
+            screen: Screen::Menu,
+            selected: 0,
+            help: false,
+            quit: false,
+            menu_message: None,
+            theme,
+            fps: None,
+            canvas_area: Cell::new(Rect::default()),
+        }
+    }
+
+    /// The lessons, as loaded.
+    pub fn lessons(&self) -> &[Result<Lesson, LessonError>] {
+        &self.lessons
+    }
+
+    /// The screen shown.
+    #[must_use]
+    pub fn screen(&self) -> &Screen {
+        &self.screen
+    }
+
+    /// The open lesson's live state, if a lesson is open.
+    #[must_use]
+    pub fn lesson(&self) -> Option<&LessonRun> {
+        match &self.screen {
+            Screen::Lesson(run) => Some(run),
+            Screen::Menu => None,
+        }
+    }
+
+    /// The open lesson's live state, mutably.
+    pub fn lesson_mut(&mut self) -> Option<&mut LessonRun> {
+        match &mut self.screen {
+            Screen::Lesson(run) => Some(run),
+            Screen::Menu => None,
+        }
+    }
+
+    /// The highlighted menu entry (an index into [`App::lessons`]).
+    #[must_use]
+    pub fn selected(&self) -> usize {
+        self.selected
+    }
+
+    /// The menu's message line, if any.
+    #[must_use]
+    pub fn menu_message(&self) -> Option<&str> {
+        self.menu_message.as_deref()
+    }
+
+    /// True when the help overlay is shown.
+    #[must_use]
+    pub fn help_shown(&self) -> bool {
+        self.help
+    }
+
+    /// True once the user asked to quit.
+    #[must_use]
+    pub fn should_quit(&self) -> bool {
+        self.quit
+    }
+
+    /// The index into [`App::lessons`] of lesson `which` (see [`find_lesson`]).
+    #[must_use]
+    pub fn find_lesson(&self, which: &str) -> Option<usize> {
+        find_lesson(&self.lessons, which)
+    }
+
+    /// Opens entry `index` of the menu at its first step.
+    ///
+    /// # Errors
+    /// The lesson failed to load (its message names the file and line), its first scene does
+    /// not build, or there is no such entry.
+    pub fn open_lesson(&mut self, index: usize) -> Result<(), String> {
+        let lesson = match self.lessons.get(index) {
+            Some(Ok(lesson)) => lesson.clone(),
+            Some(Err(e)) => return Err(format!("this lesson cannot be opened: {e}")),
+            None => return Err(format!("there is no lesson {}", index + 1)),
+        };
+        self.selected = index;
+        let run = LessonRun::new(lesson, 0)?;
+        self.screen = Screen::Lesson(Box::new(run));
+        self.menu_message = None;
+        Ok(())
+    }
+
+    /// True while the simulation runs (or something else needs frames without input).
+    #[must_use]
+    pub fn is_animating(&self) -> bool {
+        !self.help && self.lesson().is_some_and(LessonRun::is_running)
+    }
+
+    /// Advances the open lesson's simulation by `wall_dt` seconds of wall time (see the module
+    /// documentation). Does nothing in the menu, under the help overlay or while paused.
+    pub fn tick(&mut self, wall_dt: f64) {
+        self.tick_until(wall_dt, None);
+    }
+
+    /// As [`App::tick`], but stops stepping at `deadline` (the frame's time budget).
+    pub fn tick_until(&mut self, wall_dt: f64, deadline: Option<Instant>) {
+        let help = self.help;
+        if let Screen::Lesson(run) = &mut self.screen {
+            if help {
+                run.tick_until(0.0, None);
+            } else {
+                run.tick_until(wall_dt, deadline);
+            }
+        }
+    }
+
+    /// Handles one terminal event; returns true when the screen needs redrawing.
+    pub fn handle_event(&mut self, event: &Event) -> bool {
+        match event {
+            Event::Key(key) => {
+                self.handle_key(*key);
+                true
+            }
+            Event::Mouse(mouse) => self.handle_mouse(*mouse),
+            Event::Resize(..) => true,
+            _ => false,
+        }
+    }
+
+    /// Handles a key press (releases and repeats of other kinds are ignored).
+    pub fn handle_key(&mut self, key: KeyEvent) {
+        if key.kind == KeyEventKind::Release {
+            return;
+        }
+        // Ctrl-C arrives as a key in raw mode: quit from anywhere.
+        if key.modifiers.contains(KeyModifiers::CONTROL) {
+            if matches!(key.code, KeyCode::Char('c' | 'C')) {
+                self.quit = true;
+            }
+            return;
+        }
+        if self.help {
+            // Any key closes the overlay; `q` and Esc only close it.
+            self.help = false;
+            return;
+        }
+        if key.code == KeyCode::Char('?') {
+            self.help = true;
+            return;
+        }
+        match &mut self.screen {
+            Screen::Menu => self.menu_key(key.code),
+            Screen::Lesson(run) => {
+                if matches!(key.code, KeyCode::Char('q') | KeyCode::Esc) {
+                    self.screen = Screen::Menu;
+                } else {
+                    run.handle_key(key.code);
+                }
+            }
+        }
+    }
+
+    fn menu_key(&mut self, code: KeyCode) {
+        let count = self.lessons.len();
+        self.menu_message = None;
+        match code {
+            KeyCode::Char('q') | KeyCode::Esc => self.quit = true,
+            KeyCode::Up | KeyCode::Char('k') => self.selected = self.selected.saturating_sub(1),
+            KeyCode::Down | KeyCode::Char('j') if count > 0 => {
+                self.selected = (self.selected + 1).min(count - 1);
+            }
+            KeyCode::Home => self.selected = 0,
+            KeyCode::End => self.selected = count.saturating_sub(1),
+            KeyCode::Enter | KeyCode::Right | KeyCode::Char('l' | ' ') => {
+                if let Err(e) = self.open_lesson(self.selected) {
+                    self.menu_message = Some(e);
+                }
+            }
+            KeyCode::Char(c @ '1'..='9') => {
+                let digit = c.to_string();
+                match self.find_lesson(&digit) {
+                    Some(i) => {
+                        self.selected = i;
+                        if let Err(e) = self.open_lesson(i) {
+                            self.menu_message = Some(e);
+                        }
+                    }
+                    None => self.menu_message = Some(format!("there is no lesson {digit}")),
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// Handles a mouse event (grabbing and dragging particles); returns true when the screen
+    /// needs redrawing.
+    pub fn handle_mouse(&mut self, mouse: MouseEvent) -> bool {
+        let area = self.canvas_area.get();
+        if self.help {
+            return false;
+        }
+        match &mut self.screen {
+            Screen::Lesson(run) => run.handle_mouse(mouse, area),
+            Screen::Menu => false,
+        }
+    }
+
+    /// Sets the canvas rectangle the mouse maps to (normally recorded when drawing).
+    pub fn set_canvas_area(&self, area: Rect) {
+        self.canvas_area.set(area);
+    }
+
+    /// The event loop: draw, wait for input or the next frame, tick; until the user quits.
+    ///
+    /// # Errors
+    /// Only when the terminal cannot be read or written.
+    pub fn run(&mut self, terminal: &mut DefaultTerminal) -> anyhow::Result<()> {
+        let mut last_tick = Instant::now();
+        let mut next_frame = Instant::now();
+        let mut fps_window = (Instant::now(), 0u32);
+        let mut dirty = true;
+        while !self.quit {
+            if dirty {
+                terminal.draw(|frame| frame.render_widget(&*self, frame.area()))?;
+                fps_window.1 += 1;
+                dirty = false;
+            }
+            let animating = self.is_animating();
+            if animating {
+                // Frames on a fixed schedule; a late frame starts the schedule again from now.
+                let now = Instant::now();
+                next_frame = if next_frame + FRAME < now {
+                    now + FRAME
+                } else {
+                    next_frame + FRAME
+                };
+                while !self.quit {
+                    let timeout = next_frame.saturating_duration_since(Instant::now());
+                    if timeout.is_zero() || !event::poll(timeout)? {
+                        break;
+                    }
+                    dirty |= self.handle_pending_events()?;
+                    if !self.is_animating() {
+                        break;
+                    }
+                }
+            } else {
+                // Nothing moves: block until the user does something (no CPU while paused).
+                let event = event::read()?;
+                dirty |= self.handle_event(&event);
+                dirty |= self.drain_events()?;
+            }
+            let now = Instant::now();
+            // Wall time counts only while the simulation was running before this wait.
+            let wall = if animating {
+                (now - last_tick).as_secs_f64()
+            } else {
+                0.0
+            };
+            last_tick = now;
+            if animating {
+                self.tick_until(wall, Some(now + STEP_BUDGET));
+                dirty = true;
+                let elapsed = now - fps_window.0;
+                if elapsed >= Duration::from_millis(500) {
+                    self.fps = Some(f64::from(fps_window.1) / elapsed.as_secs_f64());
+                    fps_window = (now, 0);
+                }
+            } else {
+                fps_window = (now, 0);
+                next_frame = now;
+                self.fps = None;
+            }
+        }
+        Ok(())
+    }
+
+    fn handle_pending_events(&mut self) -> anyhow::Result<bool> {
+        let event = event::read()?;
+        let mut dirty = self.handle_event(&event);
+        dirty |= self.drain_events()?;
+        Ok(dirty)
+    }
+
+    /// Handles every event already waiting (a mouse drag sends many) before the next draw.
+    fn drain_events(&mut self) -> anyhow::Result<bool> {
+        let mut dirty = false;
+        while !self.quit && event::poll(Duration::ZERO)? {
+            let event = event::read()?;
+            dirty |= self.handle_event(&event);
+        }
+        Ok(dirty)
+    }
+}
+
+impl Widget for &App {
+    fn render(self, area: Rect, buf: &mut Buffer) {
+        let theme = self.theme;
+        if area.width < MIN_SIZE.0 || area.height < MIN_SIZE.1 {
+            too_small(area, buf, theme);
+            return;
+        }
+        match &self.screen {
+            Screen::Menu => menu::render(self, area, buf),
+            Screen::Lesson(run) => {
+                let canvas = lesson_view::render(run, self.fps, theme, area, buf);
+                self.canvas_area.set(canvas);
+            }
+        }
+        if self.help {
+            help::render(matches!(self.screen, Screen::Menu), theme, area, buf);
+        }
+    }
+}
+
+/// The index in `lessons` of the lesson numbered `which` or with slug `which` (any case).
+#[must_use]
+pub fn find_lesson(lessons: &[Result<Lesson, LessonError>], which: &str) -> Option<usize> {
+    let which = which.trim();
+    let number = which.parse::<u32>().ok();
+    lessons.iter().position(|l| {
+        l.as_ref()
+            .is_ok_and(|l| Some(l.number) == number || l.slug.eq_ignore_ascii_case(which))
+    })
+}
+
+fn too_small(area: Rect, buf: &mut Buffer, theme: Theme) {
+    let text = vec![
+        Line::from(format!(
+            "The terminal is {}×{}; springlab needs at least {}×{}.",
+            area.width, area.height, MIN_SIZE.0, MIN_SIZE.1
+        )),
+        Line::from("Enlarge the window, or press q to go back."),
+    ];
+    let top = area.height.saturating_sub(2) / 2;
+    let rect = Rect::new(area.x, area.y + top, area.width, area.height - top);
+    Paragraph::new(text)
+        .alignment(Alignment::Center)
+        .wrap(Wrap { trim: true })
+        .style(theme.fg(Color::Yellow))
+        .render(rect, buf);
+}
+
+/// Opens the app on the menu, or on lesson `open` (an index into `lessons`), and runs it until
+/// the user quits. The terminal is restored on return, on error and on panic.
+///
+/// # Errors
+/// Standard output is not a terminal, the lesson does not open, or the terminal fails.
+pub fn run(lessons: Vec<Result<Lesson, LessonError>>, open: Option<usize>) -> anyhow::Result<()> {
+    if !stdout().is_terminal() || !std::io::stdin().is_terminal() {
+        bail!(
+            "the lesson app needs a terminal; `springlab lessons` lists the lessons, \
+             `springlab run <scene>` runs a scene headless"
+        );
+    }
+    let mut app = App::new(lessons, Theme::from_env());
+    if let Some(i) = open {
+        app.open_lesson(i).map_err(anyhow::Error::msg)?;
+    }
+    let mut terminal = ratatui::try_init().context("cannot set up the terminal")?;
+    // ratatui's panic hook restores raw mode and the screen; turn the mouse off first.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let _ = execute!(stdout(), DisableMouseCapture);
+        hook(info);
+    }));
+    let result = execute!(stdout(), EnableMouseCapture)
+        .map_err(anyhow::Error::from)
+        .and_then(|()| app.run(&mut terminal));
+    let _ = execute!(stdout(), DisableMouseCapture);
+    ratatui::restore();
+    result
+}

@@ -1,0 +1,102 @@
+//! The help overlay (`?`): every key, on top of the screen.
+
+use ratatui::buffer::Buffer;
+use ratatui::layout::Rect;
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Block, Clear, Paragraph, Widget};
+
+use super::Theme;
+
+/// The controls: `(keys, what they do)`; an empty key starts a section.
+pub const LESSON_KEYS: &[(&str, &str)] = &[
+    ("", "Running"),
+    ("space", "run / pause"),
+    ("s", "one step (pauses)"),
+    ("r", "back to t = 0 (keeps method, dt, k, k_d, pins)"),
+    ("m", "next method"),
+    ("+ / -", "dt × 2 / ÷ 2"),
+    ("] / [", "cap on steps per frame × 2 / ÷ 2"),
+    ("> / <", "speed × 2 / ÷ 2 (simulated s per wall s)"),
+    ("", "Springs and pins"),
+    ("K / k", "stiffness × 1.5 / ÷ 1.5, every spring"),
+    ("D / d", "damping × 1.5 / ÷ 1.5 (from 1 % of critical)"),
+    ("1 – 4", "pin / free a cloth corner"),
+    ("mouse", "drag a particle (held still while held)"),
+    ("", "View"),
+    ("arrows", "orbit the camera"),
+    ("t", "springs shown: all, struct, shear, bend, none"),
+    ("PgUp/PgDn", "scroll the step's text"),
+    ("e", "export the frame as PNG"),
+    ("", "Lesson"),
+    ("n / p", "next / previous step"),
+    ("q / Esc", "back to the menu"),
+    ("Ctrl-C", "quit"),
+];
+
+/// The menu's keys.
+pub const MENU_KEYS: &[(&str, &str)] = &[
+    ("", "Menu"),
+    ("↑ / ↓", "choose a lesson"),
+    ("Enter", "open it"),
+    ("1 – 9", "open lesson N"),
+    ("q / Esc", "quit"),
+];
+
+/// Draws the overlay for the menu or for a lesson in the middle of `area`.
+pub fn render(menu: bool, theme: Theme, area: Rect, buf: &mut Buffer) {
+    let keys = if menu { MENU_KEYS } else { LESSON_KEYS };
+    let key_style = theme.fg(Color::Cyan).add_modifier(Modifier::BOLD);
+    let head_style = Style::new()
+        .add_modifier(Modifier::BOLD)
+        .patch(theme.fg(Color::Yellow));
+    // Section headings and the note only when the terminal is tall enough for them.
+    let roomy = keys.len() as u16 + 5 <= area.height;
+    let mut lines: Vec<Line> = Vec::new();
+    for (key, what) in keys {
+        if key.is_empty() {
+            if !roomy {
+                continue;
+            }
+            lines.push(Line::from(Span::styled(*what, head_style)));
+        } else {
+            lines.push(Line::from(vec![
+                Span::styled(format!("  {key:<10}"), key_style),
+                Span::raw(*what),
+            ]));
+        }
+    }
+    if !menu && roomy {
+        lines.push(Line::from(""));
+        lines.push(Line::from(Span::styled(
+            "dt·ω: ω bounds the fastest spring mode, √(k/m) for one spring.",
+            theme.dim(),
+        )));
+    }
+    lines.push(Line::from(Span::styled(
+        "any key closes this help",
+        theme.dim(),
+    )));
+    let width = lines
+        .iter()
+        .map(Line::width)
+        .max()
+        .unwrap_or(0)
+        .min(usize::from(area.width.saturating_sub(4))) as u16
+        + 4;
+    let height = (lines.len() as u16 + 2).min(area.height);
+    let rect = Rect::new(
+        area.x + (area.width.saturating_sub(width)) / 2,
+        area.y + (area.height.saturating_sub(height)) / 2,
+        width.min(area.width),
+        height,
+    );
+    Clear.render(rect, buf);
+    Paragraph::new(lines)
+        .block(
+            Block::bordered()
+                .title(" springlab keys ")
+                .border_style(theme.fg(Color::Cyan)),
+        )
+        .render(rect, buf);
+}

@@ -1,0 +1,997 @@
+//! One open lesson: its live simulation (stepping, controls, goal) and the lesson screen.
+//!
+//! The screen shows the step's title, its text on the left with the "try" list and the goal
+//! below it, the scene and the step's plots on the right, and two status lines at the bottom.
+
+use std::time::Instant;
+
+use glam::DVec3;
+use ratatui::buffer::Buffer;
+use ratatui::crossterm::event::{KeyCode, MouseButton, MouseEvent, MouseEventKind};
+use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Paragraph, Widget};
+
+use super::plots::{self, History, Oscillator, Studies};
+use super::sim_view::{self, Camera, ORBIT_STEP_DEGREES};
+use super::{Theme, export, markdown, status};
+use crate::lesson::{GoalKind, GoalProgress, Lesson, Step};
+use crate::physics::particles::pin_particle;
+use crate::physics::{SpringKind, State, diverge};
+use crate::scene::lattice;
+use crate::simulation::Simulation;
+
+/// Default cap on the steps taken in one frame.
+pub const DEFAULT_MAX_STEPS_PER_FRAME: u64 = 4096;
+
+/// Range of the cap on steps per frame (`[` halves it, `]` doubles it).
+pub const STEPS_PER_FRAME_RANGE: (u64, u64) = (1, 1 << 20);
+
+/// Range of the time step the `+` / `-` keys reach (s).
+pub const DT_RANGE: (f64, f64) = (1e-7, 1.0);
+
+/// Range of the speed factor (simulated seconds per wall second).
+pub const SPEED_RANGE: (f64, f64) = (1.0 / 64.0, 64.0);
+
+/// Factor of one press of `k` / `K` and `d` / `D`.
+pub const COEFFICIENT_FACTOR: f64 = 1.5;
+
+/// `D` on an undamped spring starts at this fraction of its critical damping `2√(k m)`.
+pub const FIRST_DAMPING: f64 = 0.01;
+
+/// Which spring kinds are drawn (`t` cycles through them).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SpringFilter {
+    /// Every spring.
+    All,
+    /// Structural springs only.
+    Struct,
+    /// Shear springs only.
+    Shear,
+    /// Bend springs only.
+    Bend,
+    /// No springs, particles only.
+    None,
+}
+
+impl SpringFilter {
+    /// The next filter in the cycle all → struct → shear → bend → none → all.
+    #[must_use]
+    pub fn next(self) -> SpringFilter {
+        match self {
+            SpringFilter::All => SpringFilter::Struct,
+            SpringFilter::Struct => SpringFilter::Shear,
+            SpringFilter::Shear => SpringFilter::Bend,
+            SpringFilter::Bend => SpringFilter::None,
+            SpringFilter::None => SpringFilter::All,
+        }
+    }
+
+    /// Whether springs of `kind` are drawn.
+    #[must_use]
+    pub fn shows(self, kind: SpringKind) -> bool {
+        match self {
+            SpringFilter::All => true,
+            SpringFilter::Struct => kind == SpringKind::Struct,
+            SpringFilter::Shear => kind == SpringKind::Shear,
+            SpringFilter::Bend => kind == SpringKind::Bend,
+            SpringFilter::None => false,
+        }
+    }
+
+    /// Its name in the status line.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            SpringFilter::All => "all",
+            SpringFilter::Struct => "struct",
+            SpringFilter::Shear => "shear",
+            SpringFilter::Bend => "bend",
+            SpringFilter::None => "none",
+        }
+    }
+}
+
+/// A particle held by the mouse: pinned while held, its inverse mass restored on release.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Drag {
+    body: usize,
+    index: usize,
+    inv_mass: f64,
+    /// Depth of the particle in view coordinates (m): it moves in the view plane.
+    depth: f64,
+}
+
+/// Rolling measurements of the run against wall time (from the wall times passed to
+/// [`LessonRun::tick`], so deterministic in tests).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Rates {
+    wall: f64,
+    simulated: f64,
+    steps: u64,
+    /// Simulated seconds per wall second over the last half second.
+    real_time_factor: Option<f64>,
+    /// Steps per wall second over the last half second.
+    steps_per_second: Option<f64>,
+}
+
+impl Rates {
+    fn add(&mut self, wall: f64, simulated: f64, steps: u64) {
+        self.wall += wall;
+        self.simulated += simulated;
+        self.steps += steps;
+        if self.wall >= 0.5 {
+            self.real_time_factor = Some(self.simulated / self.wall);
+            self.steps_per_second = Some(self.steps as f64 / self.wall);
+            self.wall = 0.0;
+            self.simulated = 0.0;
+            self.steps = 0;
+        }
+    }
+}
+
+/// The four corners of an `n × n` cloth body (keys 1–4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Cloth {
+    body: usize,
+    n: usize,
+}
+
+/// An open lesson at one step, with its simulation running or paused.
+#[derive(Clone, Debug)]
+pub struct LessonRun {
+    lesson: Lesson,
+    step: usize,
+    sim: Simulation,
+    /// The body states at `t = 0`, restored by `r`.
+    initial: Vec<State>,
+    running: bool,
+    /// Simulated time owed to the simulation (s), paid in whole steps.
+    accumulator: f64,
+    /// Simulated seconds per wall second.
+    speed: f64,
+    max_steps_per_frame: u64,
+    last_frame_steps: u64,
+    rates: Rates,
+    camera: Camera,
+    filter: SpringFilter,
+    history: History,
+    oscillator: Option<Oscillator>,
+    /// Study results for the step's study plots.
+    studies: Studies,
+    cloth: Option<Cloth>,
+    /// The goal's verdict once decided: met or failed.
+    goal: Option<bool>,
+    /// What the goal remembers between frames.
+    goal_progress: GoalProgress,
+    message: Option<String>,
+    drag: Option<Drag>,
+    text_scroll: u16,
+}
+
+impl LessonRun {
+    /// Opens `lesson` at step `step` (0-based), paused at `t = 0`.
+    ///
+    /// # Errors
+    /// The step does not exist or its scene does not build (the message says which).
+    pub fn new(lesson: Lesson, step: usize) -> Result<LessonRun, String> {
+        let sim = build(&lesson, step)?;
+        let mut run = LessonRun {
+            initial: Vec::new(),
+            camera: Camera::fit(&sim.scene),
+            history: History::new(sim.dt(), None),
+            sim,
+            lesson,
+            step,
+            running: false,
+            accumulator: 0.0,
+            speed: 1.0,
+            max_steps_per_frame: DEFAULT_MAX_STEPS_PER_FRAME,
+            last_frame_steps: 0,
+            rates: Rates::default(),
+            filter: SpringFilter::All,
+            oscillator: None,
+            studies: Studies::default(),
+            cloth: None,
+            goal: None,
+            goal_progress: GoalProgress::default(),
+            message: None,
+            drag: None,
+            text_scroll: 0,
+        };
+        run.start_step();
+        Ok(run)
+    }
+
+    /// Replaces the step's scene with `scene` (a scene built in code, for tests and tools), paused
+    /// at its start; `r` returns to this scene's initial state.
+    pub fn set_scene(&mut self, scene: crate::scene::Scene) {
+        self.sim = Simulation::new(scene);
+        self.filter = SpringFilter::All;
+        self.start_step();
+    }
+
+    /// Everything that follows from a freshly built scene.
+    fn start_step(&mut self) {
+        self.initial = self.sim.states().cloned().collect();
+        self.camera = Camera::fit(&self.sim.scene);
+        self.oscillator = Oscillator::detect(&self.sim.scene);
+        let step = &self.lesson.steps[self.step];
+        self.studies = Studies::compute(&step.plots, &step.scene, &step.params);
+        self.cloth = find_cloth(&self.sim);
+        self.running = false;
+        self.drag = None;
+        self.text_scroll = 0;
+        self.restart_records();
+    }
+
+    /// Clears what belongs to one run from `t = 0`: accumulator, history, goal, rates.
+    fn restart_records(&mut self) {
+        self.accumulator = 0.0;
+        self.last_frame_steps = 0;
+        self.rates = Rates::default();
+        self.goal = None;
+        self.goal_progress = GoalProgress::default();
+        if let Some(o) = &mut self.oscillator {
+            *o = o.restarted(&self.sim);
+        }
+        self.history = History::new(self.sim.dt(), self.oscillator.as_ref());
+        self.history.record(&self.sim, self.oscillator.as_ref());
+    }
+
+    /// The lesson.
+    #[must_use]
+    pub fn lesson(&self) -> &Lesson {
+        &self.lesson
+    }
+
+    /// The current step's index (0-based).
+    #[must_use]
+    pub fn step_index(&self) -> usize {
+        self.step
+    }
+
+    /// The current step.
+    #[must_use]
+    pub fn step(&self) -> &Step {
+        &self.lesson.steps[self.step]
+    }
+
+    /// The simulation.
+    #[must_use]
+    pub fn sim(&self) -> &Simulation {
+        &self.sim
+    }
+
+    /// True while the simulation runs.
+    #[must_use]
+    pub fn is_running(&self) -> bool {
+        self.running
+    }
+
+    /// The cap on steps per frame.
+    #[must_use]
+    pub fn max_steps_per_frame(&self) -> u64 {
+        self.max_steps_per_frame
+    }
+
+    /// Sets the cap on steps per frame (clamped to [`STEPS_PER_FRAME_RANGE`]).
+    pub fn set_max_steps_per_frame(&mut self, n: u64) {
+        self.max_steps_per_frame = n.clamp(STEPS_PER_FRAME_RANGE.0, STEPS_PER_FRAME_RANGE.1);
+    }
+
+    /// Steps taken in the last frame.
+    #[must_use]
+    pub fn last_frame_steps(&self) -> u64 {
+        self.last_frame_steps
+    }
+
+    /// Simulated time owed to the simulation (s).
+    #[must_use]
+    pub fn accumulator(&self) -> f64 {
+        self.accumulator
+    }
+
+    /// Simulated seconds per wall second.
+    #[must_use]
+    pub fn speed(&self) -> f64 {
+        self.speed
+    }
+
+    /// Measured simulated seconds per wall second, once half a second of wall time ran.
+    #[must_use]
+    pub fn real_time_factor(&self) -> Option<f64> {
+        self.rates.real_time_factor
+    }
+
+    /// Measured steps per wall second, once half a second of wall time ran.
+    #[must_use]
+    pub fn steps_per_second(&self) -> Option<f64> {
+        self.rates.steps_per_second
+    }
+
+    /// The camera.
+    #[must_use]
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// Which springs are drawn.
+    #[must_use]
+    pub fn spring_filter(&self) -> SpringFilter {
+        self.filter
+    }
+
+    /// The sampled history of this run.
+    #[must_use]
+    pub fn history(&self) -> &History {
+        &self.history
+    }
+
+    /// The oscillator's exact solution, when the scene is the one-spring oscillator.
+    #[must_use]
+    pub fn oscillator(&self) -> Option<&Oscillator> {
+        self.oscillator.as_ref()
+    }
+
+    /// The goal's state: `Some(true)` met, `Some(false)` failed, `None` pending (or no goal).
+    #[must_use]
+    pub fn goal_state(&self) -> Option<bool> {
+        self.goal
+    }
+
+    /// The last message of a key (for example why it did nothing).
+    #[must_use]
+    pub fn message(&self) -> Option<&str> {
+        self.message.as_deref()
+    }
+
+    /// The particle held by the mouse: `(body, index)`.
+    #[must_use]
+    pub fn dragged(&self) -> Option<(usize, usize)> {
+        self.drag.map(|d| (d.body, d.index))
+    }
+
+    /// An upper bound on the highest angular frequency of the springs (rad/s), by Gershgorin's
+    /// theorem on `M⁻¹K`:
+    ///
+    /// ```text
+    /// ω_max² ≤ max_i (1/m_i) Σ_{springs s at i} k_s (1 + [the other end is free])
+    /// ```
+    /// over free particles `i` (pinned ones have `1/m = 0`). Exact for one spring with a pinned
+    /// end (`ω = √(k/m)`); `2√(k/m)` for a long chain, the value of its fastest mode. Damping,
+    /// gravity and collisions are left out. `None` when no spring moves a free particle.
+    #[must_use]
+    pub fn omega_max(&self) -> Option<f64> {
+        let mut max = 0.0f64;
+        let mut any = false;
+        for body in &self.sim.scene.bodies {
+            let m = &body.model;
+            let mut row = vec![0.0f64; m.particle_count()];
+            for s in &m.springs {
+                let (a, b) = (s.a as usize, s.b as usize);
+                let (free_a, free_b) = (m.inv_mass[a] > 0.0, m.inv_mass[b] > 0.0);
+                row[a] += s.stiffness * (1.0 + f64::from(u8::from(free_b)));
+                row[b] += s.stiffness * (1.0 + f64::from(u8::from(free_a)));
+                any = true;
+            }
+            for (r, inv) in row.iter().zip(&m.inv_mass) {
+                max = max.max(r * inv);
+            }
+        }
+        (any && max > 0.0).then(|| max.sqrt())
+    }
+
+    /// The stiffness (N/m) when every spring has the same, else `None`.
+    #[must_use]
+    pub fn uniform_stiffness(&self) -> Option<f64> {
+        uniform(self.springs().map(|s| s.stiffness))
+    }
+
+    /// The damping (N·s/m) when every spring has the same, else `None`.
+    #[must_use]
+    pub fn uniform_damping(&self) -> Option<f64> {
+        uniform(self.springs().map(|s| s.damping))
+    }
+
+    fn springs(&self) -> impl Iterator<Item = &crate::physics::Spring> {
+        self.sim.scene.bodies.iter().flat_map(|b| &b.model.springs)
+    }
+
+    /// Advances the simulation by `wall_dt` seconds of wall time; see [`LessonRun::tick_until`].
+    pub fn tick(&mut self, wall_dt: f64) {
+        self.tick_until(wall_dt, None);
+    }
+
+    /// Adds `wall_dt` (s) times the speed factor to the accumulator and takes as many steps of
+    /// `dt` as fit, at most the cap on steps per frame, stopping early at `deadline` or at
+    /// divergence. When it stops early the rest of the accumulator is dropped: the run falls
+    /// behind real time rather than ever further behind. Does nothing while paused.
+    pub fn tick_until(&mut self, wall_dt: f64, deadline: Option<Instant>) {
+        if !self.running || self.sim.diverged.is_some() {
+            self.running = false;
+            self.accumulator = 0.0;
+            return;
+        }
+        let wall_dt = if wall_dt.is_finite() && wall_dt > 0.0 {
+            wall_dt
+        } else {
+            0.0
+        };
+        self.accumulator += wall_dt * self.speed;
+        let dt = self.sim.dt();
+        // Whole steps that fit, with a billionth of a step of slack against rounding
+        // (0.1 s at dt = 0.01 s is 10 steps, not 9.999...).
+        let fit = (self.accumulator / dt + 1e-9).floor();
+        let mut wanted = if fit >= self.max_steps_per_frame as f64 {
+            self.max_steps_per_frame
+        } else {
+            fit as u64
+        };
+        let mut behind = fit > self.max_steps_per_frame as f64;
+        let mut taken = 0;
+        while taken < wanted {
+            if self.step_once() {
+                taken += 1;
+                behind = true;
+                break;
+            }
+            taken += 1;
+            if let Some(deadline) = deadline
+                && taken % 16 == 0
+                && Instant::now() >= deadline
+            {
+                behind = true;
+                wanted = taken;
+            }
+        }
+        self.accumulator = if behind {
+            0.0
+        } else {
+            (self.accumulator - taken as f64 * dt).max(0.0)
+        };
+        self.last_frame_steps = taken;
+        self.rates.add(wall_dt, taken as f64 * dt, taken);
+        self.camera.follow(&self.sim);
+    }
+
+    /// One step, then the history, the goal and the divergence check; true when it diverged.
+    fn step_once(&mut self) -> bool {
+        let diverged = self.sim.step().is_some() || self.sim.diverged.is_some();
+        if !diverged {
+            self.history.record(&self.sim, self.oscillator.as_ref());
+        }
+        self.check_goal(diverged);
+        if diverged {
+            self.running = false;
+        }
+        diverged
+    }
+
+    fn check_goal(&mut self, diverged: bool) {
+        if self.goal.is_some() {
+            return;
+        }
+        let Some(goal) = &self.lesson.steps[self.step].goal else {
+            return;
+        };
+        let speed = if goal.kind == GoalKind::Settle && !diverged {
+            self.sim
+                .states()
+                .map(diverge::max_speed)
+                .fold(0.0f64, f64::max)
+        } else {
+            0.0
+        };
+        let time = self
+            .sim
+            .diverged
+            .as_ref()
+            .map_or(self.sim.time(), |d| d.time);
+        self.goal = goal.check(&mut self.goal_progress, time, speed, diverged);
+    }
+
+    /// Handles a key of the lesson screen (the app handles `q`, Esc, `?` and Ctrl-C).
+    pub fn handle_key(&mut self, code: KeyCode) {
+        self.message = None;
+        match code {
+            KeyCode::Char(' ') => self.toggle_run(),
+            KeyCode::Char('s') => self.single_step(),
+            KeyCode::Char('r') => self.reset(),
+            KeyCode::Char('m') => self.next_method(),
+            KeyCode::Char('+' | '=') => self.scale_dt(2.0),
+            KeyCode::Char('-' | '_') => self.scale_dt(0.5),
+            KeyCode::Char(']') => self.scale_steps_per_frame(true),
+            KeyCode::Char('[') => self.scale_steps_per_frame(false),
+            KeyCode::Char('>' | '.') => self.scale_speed(2.0),
+            KeyCode::Char('<' | ',') => self.scale_speed(0.5),
+            KeyCode::Char('K') => self.scale_stiffness(COEFFICIENT_FACTOR),
+            KeyCode::Char('k') => self.scale_stiffness(1.0 / COEFFICIENT_FACTOR),
+            KeyCode::Char('D') => self.scale_damping(true),
+            KeyCode::Char('d') => self.scale_damping(false),
+            KeyCode::Left => self.camera.orbit(-ORBIT_STEP_DEGREES, 0.0),
+            KeyCode::Right => self.camera.orbit(ORBIT_STEP_DEGREES, 0.0),
+            KeyCode::Up => self.camera.orbit(0.0, ORBIT_STEP_DEGREES),
+            KeyCode::Down => self.camera.orbit(0.0, -ORBIT_STEP_DEGREES),
+            KeyCode::Char(c @ '1'..='4') => self.toggle_corner(c as usize - '1' as usize),
+            KeyCode::Char('t') => self.filter = self.filter.next(),
+            KeyCode::Char('e') => self.export(),
+            KeyCode::Char('n') => self.go_to_step(self.step + 1),
+            KeyCode::Char('p') => match self.step.checked_sub(1) {
+                Some(s) => self.go_to_step(s),
+                None => self.message = Some("this is the first step".into()),
+            },
+            KeyCode::PageDown => self.text_scroll = self.text_scroll.saturating_add(5).min(999),
+            KeyCode::PageUp => self.text_scroll = self.text_scroll.saturating_sub(5),
+            _ => {}
+        }
+    }
+
+    fn toggle_run(&mut self) {
+        if let Some(d) = &self.sim.diverged {
+            self.message = Some(format!(
+                "unstable at step {}: press r to start over",
+                d.step
+            ));
+            return;
+        }
+        self.running = !self.running;
+        self.accumulator = 0.0;
+        self.rates = Rates::default();
+    }
+
+    fn single_step(&mut self) {
+        self.running = false;
+        if self.sim.diverged.is_some() {
+            self.message = Some("the run diverged: press r to start over".into());
+            return;
+        }
+        self.step_once();
+    }
+
+    /// Restores the state at `t = 0` bit for bit, keeping the chosen method, dt, stiffness,
+    /// damping and pins; pauses.
+    pub fn reset(&mut self) {
+        self.release();
+        let mut scene = self.sim.scene.clone();
+        for (body, initial) in scene.bodies.iter_mut().zip(&self.initial) {
+            body.state = initial.clone();
+        }
+        let dt = self.sim.dt();
+        self.sim = Simulation::new(scene);
+        if self.sim.dt() != dt {
+            self.sim.set_dt(dt);
+        }
+        self.running = false;
+        // The exact solution starts again from the initial state.
+        self.oscillator = Oscillator::detect(&self.sim.scene);
+        self.restart_records();
+    }
+
+    fn next_method(&mut self) {
+        let current = self
+            .sim
+            .scene
+            .bodies
+            .first()
+            .map(|b| b.method)
+            .unwrap_or(crate::physics::Method::SemiImplicitEuler);
+        let next = current.next();
+        self.sim.set_method(next);
+        self.message = Some(format!("method: {next}"));
+    }
+
+    fn scale_dt(&mut self, factor: f64) {
+        let dt = self.sim.dt() * factor;
+        if !(DT_RANGE.0..=DT_RANGE.1).contains(&dt) {
+            self.message = Some(format!(
+                "dt stays between {:e} s and {} s",
+                DT_RANGE.0, DT_RANGE.1
+            ));
+            return;
+        }
+        self.sim.set_dt(dt);
+        self.accumulator = 0.0;
+        self.message = Some(format!("dt = {} s", plots::number(dt)));
+    }
+
+    fn scale_steps_per_frame(&mut self, up: bool) {
+        let n = self.max_steps_per_frame;
+        self.set_max_steps_per_frame(if up { n.saturating_mul(2) } else { n / 2 });
+        self.message = Some(format!(
+            "at most {} steps per frame",
+            self.max_steps_per_frame
+        ));
+    }
+
+    fn scale_speed(&mut self, factor: f64) {
+        self.speed = (self.speed * factor).clamp(SPEED_RANGE.0, SPEED_RANGE.1);
+        self.accumulator = 0.0;
+        self.message = Some(format!("speed ×{} real time", plots::number(self.speed)));
+    }
+
+    /// Multiplies every spring's stiffness by `factor` (per spring, so kinds keep their ratios).
+    fn scale_stiffness(&mut self, factor: f64) {
+        if self.springs().next().is_none() {
+            self.message = Some("this scene has no springs".into());
+            return;
+        }
+        for body in &mut self.sim.scene.bodies {
+            for s in &mut body.model.springs {
+                s.stiffness *= factor;
+            }
+            body.model.rebuild();
+        }
+        self.coefficients_changed();
+        self.message = Some(match self.uniform_stiffness() {
+            Some(k) => format!("stiffness k = {} N/m", plots::number(k)),
+            None => format!("stiffness ×{} of every spring", plots::number(factor)),
+        });
+    }
+
+    /// `D`: ×1.5, starting an undamped spring at 1 % of its critical damping `2√(k m)` (m the
+    /// lighter end's mass); `d`: ÷1.5, down to zero below that.
+    fn scale_damping(&mut self, up: bool) {
+        if self.springs().next().is_none() {
+            self.message = Some("this scene has no springs".into());
+            return;
+        }
+        for body in &mut self.sim.scene.bodies {
+            let mass = body.model.mass.clone();
+            for s in &mut body.model.springs {
+                let m = mass[s.a as usize].min(mass[s.b as usize]);
+                let first = FIRST_DAMPING * 2.0 * (s.stiffness * m).sqrt();
+                s.damping = if up {
+                    if s.damping == 0.0 {
+                        first
+                    } else {
+                        s.damping * COEFFICIENT_FACTOR
+                    }
+                } else {
+                    let d = s.damping / COEFFICIENT_FACTOR;
+                    if d < first { 0.0 } else { d }
+                };
+            }
+            body.model.rebuild();
+        }
+        self.coefficients_changed();
+        self.message = Some(match self.uniform_damping() {
+            Some(c) => format!("damping k_d = {} N·s/m", plots::number(c)),
+            None => "damping changed on every spring".into(),
+        });
+    }
+
+    fn coefficients_changed(&mut self) {
+        // The exact solution continues from here with the new coefficients.
+        if let Some(o) = &mut self.oscillator {
+            *o = o.restarted(&self.sim);
+        }
+    }
+
+    /// Keys 1–4: pins or frees corner `corner` of the cloth.
+    fn toggle_corner(&mut self, corner: usize) {
+        let Some(cloth) = self.cloth else {
+            self.message = Some("keys 1–4 pin the corners of a cloth; this scene has none".into());
+            return;
+        };
+        let corners = lattice::corners(cloth.n);
+        let Some(&p) = corners.get(corner) else {
+            return;
+        };
+        if self
+            .drag
+            .is_some_and(|d| d.body == cloth.body && d.index == p)
+        {
+            return;
+        }
+        let body = &mut self.sim.scene.bodies[cloth.body];
+        if body.model.is_pinned(p) {
+            body.model.unpin(p);
+            self.message = Some(format!("corner {} (particle {p}) is free", corner + 1));
+        } else {
+            pin_particle(&mut body.model, &mut body.state, p);
+            self.message = Some(format!("corner {} (particle {p}) is pinned", corner + 1));
+        }
+    }
+
+    fn export(&mut self) {
+        let path = std::path::PathBuf::from(format!(
+            "springlab-{}-step{}-{:06}.png",
+            self.lesson.slug,
+            self.step + 1,
+            self.sim.steps
+        ));
+        self.message = Some(match export::export_png(&self.sim, &path) {
+            Ok(p) => format!("wrote {}", p.display()),
+            Err(e) => e,
+        });
+    }
+
+    /// Opens step `step` (0-based) of the lesson.
+    pub fn go_to_step(&mut self, step: usize) {
+        if step >= self.lesson.steps.len() {
+            self.message = Some("this is the last step: q goes back to the menu".into());
+            return;
+        }
+        match build(&self.lesson, step) {
+            Ok(sim) => {
+                self.sim = sim;
+                self.step = step;
+                self.filter = SpringFilter::All;
+                self.start_step();
+            }
+            Err(e) => self.message = Some(e),
+        }
+    }
+
+    /// Grabs, drags and releases particles with the left button; `canvas` is the canvas's inner
+    /// area on screen. Returns true when something changed.
+    pub fn handle_mouse(&mut self, mouse: MouseEvent, canvas: Rect) -> bool {
+        match mouse.kind {
+            MouseEventKind::Down(MouseButton::Left) => {
+                self.release();
+                if self.sim.diverged.is_some() {
+                    return false;
+                }
+                let Some((body, index, depth)) =
+                    self.camera.pick(&self.sim, canvas, mouse.column, mouse.row)
+                else {
+                    return false;
+                };
+                let b = &mut self.sim.scene.bodies[body];
+                let inv_mass = b.model.inv_mass[index];
+                pin_particle(&mut b.model, &mut b.state, index);
+                self.drag = Some(Drag {
+                    body,
+                    index,
+                    inv_mass,
+                    depth,
+                });
+                self.message = Some(format!("holding particle {index}"));
+                true
+            }
+            MouseEventKind::Drag(MouseButton::Left) => {
+                let Some(drag) = self.drag else {
+                    return false;
+                };
+                let (vx, vy) = self.camera.cell_to_view(canvas, mouse.column, mouse.row);
+                let p = self.camera.unproject(DVec3::new(vx, vy, drag.depth));
+                let state = &mut self.sim.scene.bodies[drag.body].state;
+                state.x[drag.index] = p;
+                state.x_prev[drag.index] = p;
+                state.v[drag.index] = DVec3::ZERO;
+                true
+            }
+            MouseEventKind::Up(MouseButton::Left) => {
+                let held = self.drag.is_some();
+                self.release();
+                held
+            }
+            _ => false,
+        }
+    }
+
+    /// Lets go of the held particle: its inverse mass comes back, it starts at rest.
+    fn release(&mut self) {
+        if let Some(d) = self.drag.take()
+            && let Some(body) = self.sim.scene.bodies.get_mut(d.body)
+        {
+            body.model.inv_mass[d.index] = d.inv_mass;
+            body.state.v[d.index] = DVec3::ZERO;
+            body.state.x_prev[d.index] = body.state.x[d.index];
+            self.message = Some(format!("let go of particle {}", d.index));
+        }
+    }
+
+    fn text_scroll(&self) -> u16 {
+        self.text_scroll
+    }
+}
+
+fn build(lesson: &Lesson, step: usize) -> Result<Simulation, String> {
+    let s = lesson
+        .steps
+        .get(step)
+        .ok_or_else(|| format!("lesson {} has no step {}", lesson.number, step + 1))?;
+    let scene = s
+        .build_scene()
+        .map_err(|e| format!("{}: step \"{}\": {e}", lesson.source, s.title))?;
+    let mut sim = Simulation::new(scene);
+    if let Some(dt) = s.dt
+        && dt > 0.0
+        && dt.is_finite()
+    {
+        sim.set_dt(dt);
+    }
+    Ok(sim)
+}
+
+fn uniform(mut values: impl Iterator<Item = f64>) -> Option<f64> {
+    let first = values.next()?;
+    values.all(|v| v == first).then_some(first)
+}
+
+/// The first body that is an `n × n` cloth: `n²` particles whose structural springs join
+/// `p` to `p + 1` within a row and `p` to `p + n`, `2n(n-1)` of them.
+fn find_cloth(sim: &Simulation) -> Option<Cloth> {
+    sim.scene.bodies.iter().enumerate().find_map(|(b, body)| {
+        let count = body.model.particle_count();
+        let n = (count as f64).sqrt().round() as usize;
+        if n < 2 || n * n != count {
+            return None;
+        }
+        let mut structural = 0;
+        for s in &body.model.springs {
+            if s.kind != SpringKind::Struct {
+                continue;
+            }
+            let (a, c) = (s.a.min(s.b) as usize, s.a.max(s.b) as usize);
+            let along_row = c == a + 1 && c % n != 0;
+            if !(along_row || c == a + n) {
+                return None;
+            }
+            structural += 1;
+        }
+        (structural == 2 * n * (n - 1)).then_some(Cloth { body: b, n })
+    })
+}
+
+/// Draws the lesson screen; returns the scene canvas's inner area (for the mouse).
+pub fn render(
+    run: &LessonRun,
+    fps: Option<f64>,
+    theme: Theme,
+    area: Rect,
+    buf: &mut Buffer,
+) -> Rect {
+    let [header, body, status_area, hints] = Layout::vertical([
+        Constraint::Length(1),
+        Constraint::Fill(1),
+        Constraint::Length(2),
+        Constraint::Length(1),
+    ])
+    .areas(area);
+    render_header(run, theme, header, buf);
+    let [left, right] =
+        Layout::horizontal([Constraint::Percentage(40), Constraint::Fill(1)]).areas(body);
+    render_text(run, theme, left, buf);
+    let step = run.step();
+    let canvas = if step.plots.is_empty() {
+        sim_view::render(run, theme, right, buf)
+    } else {
+        let plot_height = (right.height * 2 / 5)
+            .max(8)
+            .min(right.height.saturating_sub(6));
+        let [scene, plot_area] =
+            Layout::vertical([Constraint::Fill(1), Constraint::Length(plot_height)]).areas(right);
+        let inner = sim_view::render(run, theme, scene, buf);
+        plots::render(
+            &step.plots,
+            run.history(),
+            run.oscillator(),
+            &run.studies,
+            run.sim().time(),
+            theme,
+            plot_area,
+            buf,
+        );
+        inner
+    };
+    status::render(run, fps, theme, status_area, buf);
+    render_hints(run, theme, hints, buf);
+    canvas
+}
+
+fn render_header(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
+    let lesson = run.lesson();
+    let step = run.step();
+    let bold = Style::new().add_modifier(Modifier::BOLD);
+    let line = Line::from(vec![
+        Span::styled(
+            format!(" Lesson {}: {} ", lesson.number, lesson.title),
+            bold.patch(theme.fg(Color::Cyan)),
+        ),
+        Span::styled("· ", theme.dim()),
+        Span::styled(
+            format!(
+                "step {}/{}: {}",
+                run.step_index() + 1,
+                lesson.steps.len(),
+                step.title
+            ),
+            bold,
+        ),
+    ]);
+    buf.set_line(area.x, area.y, &line, area.width);
+    let right = "? help · q menu ";
+    let width = right.chars().count() as u16;
+    if area.width > width + line.width() as u16 + 2 {
+        buf.set_string(area.x + area.width - width, area.y, right, theme.dim());
+    }
+}
+
+/// The step text (scrollable with PgUp / PgDn) above the "try" list and the goal.
+fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
+    let area = Rect {
+        width: area.width.saturating_sub(1),
+        ..area
+    };
+    let width = area.width.saturating_sub(1).max(10);
+    let step = run.step();
+    // The try list and the goal, at most half of the column.
+    let mut tail: Vec<Line<'static>> = Vec::new();
+    if !step.try_list.is_empty() {
+        tail.push(Line::from(Span::styled(
+            "Try",
+            Style::new()
+                .add_modifier(Modifier::BOLD)
+                .patch(theme.fg(Color::Green)),
+        )));
+        for item in &step.try_list {
+            tail.extend(markdown::bullet(item, width, theme));
+        }
+    }
+    if let Some(goal) = &step.goal {
+        let (mark, style) = match run.goal_state() {
+            Some(true) => ("✓ met", theme.fg(Color::LightGreen)),
+            Some(false) => ("✗ failed: r to retry", theme.fg(Color::LightRed)),
+            None => ("… pending", theme.fg(Color::Yellow)),
+        };
+        tail.push(Line::from(vec![
+            Span::styled(
+                "Goal ",
+                Style::new()
+                    .add_modifier(Modifier::BOLD)
+                    .patch(theme.fg(Color::Green)),
+            ),
+            Span::styled(mark, style.add_modifier(Modifier::BOLD)),
+        ]));
+        tail.extend(markdown::wrap_text(&goal.text, width, theme));
+    }
+    let tail_height = (tail.len() as u16).min(area.height / 2);
+    let [text_area, tail_area] = Layout::vertical([
+        Constraint::Fill(1),
+        Constraint::Length(if tail.is_empty() { 0 } else { tail_height + 1 }),
+    ])
+    .areas(area);
+    let text = markdown::render(&step.text, width, theme);
+    let total = text.len() as u16;
+    let max_scroll = total.saturating_sub(text_area.height);
+    let scroll = run.text_scroll().min(max_scroll);
+    Paragraph::new(text)
+        .scroll((scroll, 0))
+        .render(text_area, buf);
+    if scroll < max_scroll && text_area.height > 0 {
+        let more = " ↓ more: PgDn ";
+        let w = more.chars().count() as u16;
+        buf.set_string(
+            text_area.x + text_area.width.saturating_sub(w),
+            text_area.y + text_area.height - 1,
+            more,
+            theme.fg(Color::Yellow).add_modifier(Modifier::REVERSED),
+        );
+    }
+    if !tail.is_empty() && tail_area.height > 0 {
+        let rule = "─".repeat(tail_area.width as usize);
+        buf.set_string(tail_area.x, tail_area.y, rule, theme.dim());
+        let rest = Rect {
+            y: tail_area.y + 1,
+            height: tail_area.height - 1,
+            ..tail_area
+        };
+        Paragraph::new(tail).render(rest, buf);
+    }
+}
+
+fn render_hints(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
+    let line = match run.message() {
+        Some(m) => Line::from(Span::styled(format!(" {m}"), theme.fg(Color::Yellow))),
+        None => Line::from(Span::styled(
+            " space run · s step · r reset · m method · +/- dt · k/K d/D · n/p step · ? help · \
+             q menu",
+            theme.dim(),
+        )),
+    };
+    buf.set_line(area.x, area.y, &line, area.width);
+}

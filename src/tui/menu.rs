@@ -1,0 +1,126 @@
+//! The lesson menu: number, title and summary of each lesson; a lesson that failed to load shows
+//! its error (file and line) greyed out instead.
+
+use ratatui::buffer::Buffer;
+use ratatui::layout::{Constraint, Layout, Rect};
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Paragraph, Widget};
+
+use super::{App, markdown};
+
+/// Draws the menu of `app` into `area`.
+pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
+    let theme = app.theme;
+    let [title, list, message, hints] = Layout::vertical([
+        Constraint::Length(3),
+        Constraint::Fill(1),
+        Constraint::Length(1),
+        Constraint::Length(1),
+    ])
+    .areas(area);
+    let bold = Style::new().add_modifier(Modifier::BOLD);
+    Paragraph::new(vec![
+        Line::from(Span::styled(
+            " springlab · lessons",
+            bold.patch(theme.fg(Color::Cyan)),
+        )),
+        Line::from(Span::styled(
+            " Mass-spring systems, the methods that move them, and where each one fails.",
+            theme.dim(),
+        )),
+    ])
+    .render(title, buf);
+
+    let width = list.width.saturating_sub(8);
+    let entries: Vec<Vec<Line>> = app
+        .lessons()
+        .iter()
+        .enumerate()
+        .map(|(i, lesson)| {
+            let selected = i == app.selected();
+            let pointer = if selected { " ▸ " } else { "   " };
+            let mut lines = Vec::new();
+            match lesson {
+                Ok(l) => {
+                    let mut head = bold;
+                    if selected {
+                        head = head.add_modifier(Modifier::REVERSED);
+                    }
+                    lines.push(Line::from(vec![
+                        Span::styled(pointer, theme.fg(Color::Yellow)),
+                        Span::styled(format!("{:>2}. {}", l.number, l.title), head),
+                        Span::styled(
+                            format!("  ({} steps, `springlab lesson {}`)", l.steps.len(), l.slug),
+                            theme.dim(),
+                        ),
+                    ]));
+                    for line in markdown::wrap_text(&l.summary, width, theme) {
+                        let mut spans = vec![Span::raw("       ")];
+                        spans.extend(line.spans);
+                        lines.push(Line::from(spans));
+                    }
+                }
+                Err(e) => {
+                    let mut head = theme.dim();
+                    if selected {
+                        head = head.add_modifier(Modifier::REVERSED);
+                    }
+                    lines.push(Line::from(vec![
+                        Span::styled(pointer, theme.fg(Color::Yellow)),
+                        Span::styled(" !  this lesson has an error:", head),
+                    ]));
+                    for line in markdown::wrap_text(&e.to_string(), width, theme) {
+                        let text: String = line.spans.iter().map(|s| s.content.as_ref()).collect();
+                        lines.push(Line::from(Span::styled(
+                            format!("       {text}"),
+                            theme.dim(),
+                        )));
+                    }
+                }
+            }
+            lines.push(Line::from(""));
+            lines
+        })
+        .collect();
+    if entries.is_empty() {
+        Paragraph::new(Line::from(Span::styled(
+            "   No lessons found. `--lessons DIR` loads the *.md files of DIR.",
+            theme.fg(Color::Yellow),
+        )))
+        .render(list, buf);
+    } else {
+        // Scroll so that the selected entry is on screen.
+        let height = usize::from(list.height);
+        let selected = app.selected().min(entries.len() - 1);
+        let mut first = 0;
+        while first < selected
+            && entries[first..=selected]
+                .iter()
+                .map(Vec::len)
+                .sum::<usize>()
+                > height
+        {
+            first += 1;
+        }
+        let lines: Vec<Line> = entries.into_iter().skip(first).flatten().collect();
+        Paragraph::new(lines).render(list, buf);
+    }
+    if let Some(m) = app.menu_message() {
+        buf.set_line(
+            message.x,
+            message.y,
+            &Line::from(Span::styled(format!(" {m}"), theme.fg(Color::Yellow))),
+            message.width,
+        );
+    }
+    buf.set_line(
+        hints.x,
+        hints.y,
+        &Line::from(Span::styled(
+            " ↑/↓ choose · Enter open · 1–9 lesson N · ? help · q quit",
+            theme.dim(),
+        )),
+        hints.width,
+    );
+}

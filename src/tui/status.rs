@@ -1,0 +1,113 @@
+//! The two status lines under a lesson: the method and its numbers, then the run's progress.
+//!
+//! ```text
+//!  rk4 · dt 0.010 s · dt·ω 0.100 · k 100 N/m · k_d 0 N·s/m
+//!  ‖ paused · t = 0.00 s · step 0 · 0/4096 steps/frame · ×— real time · — steps/s · — fps
+//! ```
+//! `ω` is the upper bound of [`LessonRun::omega_max`]: exact for one spring, `2√(k/m)` for a
+//! chain. Times are simulated times; the real-time factor, steps per second and frames per
+//! second are measured (a dash until measured).
+
+use ratatui::buffer::Buffer;
+use ratatui::layout::Rect;
+use ratatui::style::{Color, Modifier};
+use ratatui::text::{Line, Span};
+
+use super::Theme;
+use super::lesson_view::LessonRun;
+use super::plots::number;
+use super::sim_view::time_text;
+
+/// Draws the status lines of `run` into the two rows of `area`.
+pub fn render(run: &LessonRun, fps: Option<f64>, theme: Theme, area: Rect, buf: &mut Buffer) {
+    let sim = run.sim();
+    let dt = sim.dt();
+    let sep = || Span::styled(" · ", theme.dim());
+    let mut first = vec![
+        Span::raw(" "),
+        Span::styled(
+            sim.scene.method_label(),
+            theme.fg(Color::Cyan).add_modifier(Modifier::BOLD),
+        ),
+        sep(),
+        Span::raw(format!("dt {} s", number(dt))),
+    ];
+    if let Some(omega) = run.omega_max() {
+        let product = dt * omega;
+        let style = if product > 2.0 {
+            theme.fg(Color::LightRed)
+        } else if product > 1.0 {
+            theme.fg(Color::Yellow)
+        } else {
+            Default::default()
+        };
+        first.push(sep());
+        first.push(Span::styled(format!("dt·ω {}", number(product)), style));
+    }
+    if let Some(k) = run.uniform_stiffness() {
+        first.push(sep());
+        first.push(Span::raw(format!("k {} N/m", number(k))));
+    }
+    if let Some(c) = run.uniform_damping() {
+        first.push(sep());
+        first.push(Span::raw(format!("k_d {} N·s/m", number(c))));
+    }
+    if run.speed() != 1.0 {
+        first.push(sep());
+        first.push(Span::styled(
+            format!("speed ×{}", number(run.speed())),
+            theme.fg(Color::Yellow),
+        ));
+    }
+
+    let dash = |v: Option<f64>| v.map_or_else(|| "—".to_string(), number);
+    let second = if let Some(d) = &sim.diverged {
+        vec![
+            Span::styled(
+                format!(
+                    " ✗ unstable at step {}, t = {} s",
+                    d.step,
+                    time_text(d.time, dt)
+                ),
+                theme.fg(Color::LightRed).add_modifier(Modifier::BOLD),
+            ),
+            Span::styled(
+                format!(": max |v| = {} m/s; r to start over", number(d.max_speed)),
+                theme.fg(Color::LightRed),
+            ),
+        ]
+    } else {
+        let (mark, style) = if run.is_running() {
+            ("▶ running", theme.fg(Color::LightGreen))
+        } else {
+            ("‖ paused", theme.fg(Color::Yellow))
+        };
+        vec![
+            Span::raw(" "),
+            Span::styled(mark, style.add_modifier(Modifier::BOLD)),
+            sep(),
+            Span::raw(format!("t = {} s", time_text(sim.time(), dt))),
+            sep(),
+            Span::raw(format!("step {}", sim.steps)),
+            sep(),
+            Span::raw(format!(
+                "{}/{} steps/frame",
+                run.last_frame_steps(),
+                run.max_steps_per_frame()
+            )),
+            sep(),
+            Span::raw(format!("×{} real time", dash(run.real_time_factor()))),
+            sep(),
+            Span::raw(format!("{} steps/s", dash(run.steps_per_second()))),
+            sep(),
+            Span::raw(format!(
+                "{} fps",
+                fps.map_or_else(|| "—".to_string(), |f| format!("{f:.0}"))
+            )),
+        ]
+    };
+    buf.set_line(area.x, area.y, &Line::from(first), area.width);
+    if area.height > 1 {
+        buf.set_line(area.x, area.y + 1, &Line::from(second), area.width);
+    }
+}

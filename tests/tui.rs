@@ -1,0 +1,717 @@
+//! The lesson app driven without a terminal: keys, mouse and explicit wall times go in, the
+//! app's state comes out (and, where it matters, what it draws into a `TestBackend`).
+
+use std::path::PathBuf;
+
+use ratatui::Terminal;
+use ratatui::backend::TestBackend;
+use ratatui::crossterm::event::{
+    KeyCode, KeyEvent, KeyModifiers, MouseButton, MouseEvent, MouseEventKind,
+};
+use ratatui::layout::Rect;
+use ratatui::style::Color;
+use springlab::lesson;
+use springlab::physics::Method;
+use springlab::simulation::Simulation;
+use springlab::tui::{App, LessonRun, Screen, Theme};
+
+fn app() -> App {
+    App::new(lesson::builtin(), Theme { color: false })
+}
+
+/// The app with lesson `slug` open at its first step.
+fn open(slug: &str) -> App {
+    let mut app = app();
+    let i = app.find_lesson(slug).expect("lesson exists");
+    app.open_lesson(i).expect("lesson opens");
+    app
+}
+
+fn key(app: &mut App, code: KeyCode) {
+    app.handle_key(KeyEvent::new(code, KeyModifiers::NONE));
+}
+
+fn keys(app: &mut App, text: &str) {
+    for c in text.chars() {
+        key(app, KeyCode::Char(c));
+    }
+}
+
+fn run(app: &App) -> &LessonRun {
+    app.lesson().expect("a lesson is open")
+}
+
+fn draw(app: &App, width: u16, height: u16) -> Terminal<TestBackend> {
+    let mut terminal = Terminal::new(TestBackend::new(width, height)).expect("test backend");
+    terminal
+        .draw(|frame| frame.render_widget(app, frame.area()))
+        .expect("draw");
+    terminal
+}
+
+fn screen_text(app: &App, width: u16, height: u16) -> String {
+    draw(app, width, height).backend().to_string()
+}
+
+/// A directory of its own under the system's temporary directory.
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("springlab-tui-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+#[test]
+fn space_toggles_run_and_pause() {
+    let mut app = open("hooke");
+    assert!(!run(&app).is_running(), "a step opens paused");
+    key(&mut app, KeyCode::Char(' '));
+    assert!(run(&app).is_running());
+    assert!(app.is_animating());
+    key(&mut app, KeyCode::Char(' '));
+    assert!(!run(&app).is_running());
+    assert!(!app.is_animating(), "paused: the loop blocks on input");
+}
+
+#[test]
+fn paused_ticks_do_not_move_the_simulation() {
+    let mut app = open("hooke");
+    app.tick(1.0);
+    assert_eq!(run(&app).sim().steps, 0);
+    assert_eq!(run(&app).sim().time(), 0.0);
+}
+
+#[test]
+fn single_step_advances_time_by_dt_and_pauses() {
+    let mut app = open("hooke");
+    let dt = run(&app).sim().dt();
+    assert_eq!(dt, 0.01);
+    key(&mut app, KeyCode::Char('s'));
+    assert_eq!(run(&app).sim().steps, 1);
+    assert_eq!(run(&app).sim().time(), dt);
+    key(&mut app, KeyCode::Char(' '));
+    key(&mut app, KeyCode::Char('s'));
+    assert!(!run(&app).is_running(), "s pauses a running simulation");
+    assert_eq!(run(&app).sim().steps, 2);
+    assert_eq!(run(&app).sim().time(), 2.0 * dt);
+}
+
+#[test]
+fn m_cycles_the_method() {
+    let mut app = open("hooke");
+    let method = |app: &App| run(app).sim().scene.bodies[0].method;
+    assert_eq!(method(&app), Method::Rk4, "the step asks for rk4");
+    key(&mut app, KeyCode::Char('m'));
+    assert_eq!(method(&app), Method::Rk4.next());
+    for _ in 1..Method::ALL.len() {
+        key(&mut app, KeyCode::Char('m'));
+    }
+    assert_eq!(method(&app), Method::Rk4, "back after a full cycle");
+}
+
+#[test]
+fn plus_and_minus_double_and_halve_dt() {
+    let mut app = open("hooke");
+    key(&mut app, KeyCode::Char('+'));
+    assert_eq!(run(&app).sim().dt(), 0.02);
+    key(&mut app, KeyCode::Char('-'));
+    key(&mut app, KeyCode::Char('-'));
+    assert_eq!(run(&app).sim().dt(), 0.005);
+    // Time already simulated stays; new steps use the new dt.
+    key(&mut app, KeyCode::Char('s'));
+    assert_eq!(run(&app).sim().time(), 0.005);
+}
+
+#[test]
+fn reset_restores_the_initial_state_bit_for_bit() {
+    let mut app = open("rope");
+    let step = run(&app).step().clone();
+    let fresh = step.build_scene().expect("scene builds");
+    key(&mut app, KeyCode::Char(' '));
+    for _ in 0..30 {
+        app.tick(1.0 / 30.0);
+    }
+    assert!(run(&app).sim().steps > 50);
+    key(&mut app, KeyCode::Char('r'));
+    let sim = run(&app).sim();
+    assert!(!run(&app).is_running(), "r pauses");
+    assert_eq!((sim.steps, sim.time()), (0, 0.0));
+    for (body, fresh) in sim.scene.bodies.iter().zip(&fresh.bodies) {
+        assert_eq!(
+            body.state, fresh.state,
+            "positions, velocities, x_prev bit for bit"
+        );
+    }
+    // And the run from there repeats the first one exactly.
+    let mut reference = Simulation::new(fresh);
+    reference.run(40, |_| {});
+    for _ in 0..40 {
+        key(&mut app, KeyCode::Char('s'));
+    }
+    let sim = run(&app).sim();
+    assert_eq!(sim.time(), reference.time());
+    assert!(
+        sim.positions()
+            .zip(reference.positions())
+            .all(|(a, b)| a == b)
+    );
+}
+
+#[test]
+fn reset_keeps_the_chosen_method_and_dt() {
+    let mut app = open("euler");
+    keys(&mut app, "m+ss");
+    key(&mut app, KeyCode::Char('r'));
+    let sim = run(&app).sim();
+    assert_eq!(sim.scene.bodies[0].method, Method::ExplicitEuler.next());
+    assert_eq!(sim.dt(), 0.04);
+    assert_eq!(sim.time(), 0.0);
+}
+
+#[test]
+fn n_and_p_move_between_steps() {
+    let mut app = open("rope");
+    let count = run(&app).lesson().steps.len();
+    key(&mut app, KeyCode::Char('p'));
+    assert_eq!(run(&app).step_index(), 0, "no step before the first");
+    assert!(run(&app).message().is_some());
+    key(&mut app, KeyCode::Char('n'));
+    assert_eq!(run(&app).step_index(), 1);
+    // Step 2 of lesson 1 is the rope with 3 nodes.
+    assert_eq!(run(&app).sim().scene.particle_count(), 3);
+    for _ in 0..count + 2 {
+        key(&mut app, KeyCode::Char('n'));
+    }
+    assert_eq!(run(&app).step_index(), count - 1, "no step after the last");
+    key(&mut app, KeyCode::Char('p'));
+    assert_eq!(run(&app).step_index(), count - 2);
+    // A new step starts paused at t = 0 with the step's own dt (step 4 asks for 0.004).
+    key(&mut app, KeyCode::Char('n'));
+    assert_eq!(run(&app).sim().dt(), 0.004);
+    assert_eq!(run(&app).sim().time(), 0.0);
+}
+
+#[test]
+fn accumulator_turns_wall_time_into_whole_steps() {
+    let mut app = open("hooke");
+    key(&mut app, KeyCode::Char(' '));
+    // 0.1 s of wall time at dt = 0.01 s: 10 steps.
+    app.tick(0.1);
+    assert_eq!(run(&app).sim().steps, 10);
+    assert_eq!(run(&app).last_frame_steps(), 10);
+    // Less than a step waits in the accumulator.
+    app.tick(0.004);
+    assert_eq!(run(&app).sim().steps, 10);
+    assert!((run(&app).accumulator() - 0.004).abs() < 1e-12);
+    app.tick(0.007);
+    assert_eq!(run(&app).sim().steps, 11);
+    assert!((run(&app).accumulator() - 0.001).abs() < 1e-9);
+    // Capped: at most the cap per frame, and the backlog is dropped, not carried.
+    app.lesson_mut().expect("open").set_max_steps_per_frame(4);
+    app.tick(0.1);
+    assert_eq!(run(&app).sim().steps, 15);
+    assert_eq!(run(&app).accumulator(), 0.0);
+    app.tick(0.02);
+    assert_eq!(run(&app).sim().steps, 17);
+}
+
+#[test]
+fn brackets_change_the_cap_and_speed_scales_wall_time() {
+    let mut app = open("hooke");
+    let cap = run(&app).max_steps_per_frame();
+    key(&mut app, KeyCode::Char(']'));
+    assert_eq!(run(&app).max_steps_per_frame(), 2 * cap);
+    key(&mut app, KeyCode::Char('['));
+    key(&mut app, KeyCode::Char('['));
+    assert_eq!(run(&app).max_steps_per_frame(), cap / 2);
+    // Half speed: 0.1 s of wall time is 0.05 s of simulated time.
+    key(&mut app, KeyCode::Char('<'));
+    key(&mut app, KeyCode::Char(' '));
+    app.tick(0.1);
+    assert_eq!(run(&app).sim().steps, 5);
+}
+
+#[test]
+fn real_time_factor_and_steps_per_second_come_from_the_wall_times_given() {
+    let mut app = open("hooke");
+    key(&mut app, KeyCode::Char(' '));
+    for _ in 0..40 {
+        app.tick(1.0 / 60.0);
+    }
+    let rtf = run(&app).real_time_factor().expect("measured after 0.5 s");
+    assert!((rtf - 1.0).abs() < 0.05, "{rtf}");
+    let sps = run(&app).steps_per_second().expect("measured");
+    assert!((sps - 100.0).abs() < 5.0, "{sps}");
+}
+
+#[test]
+fn stiffness_and_damping_keys_scale_every_spring() {
+    let mut app = open("hooke");
+    assert_eq!(run(&app).uniform_stiffness(), Some(100.0));
+    assert_eq!(
+        run(&app).omega_max(),
+        Some(10.0),
+        "ω = √(k/m) for one spring"
+    );
+    key(&mut app, KeyCode::Char('K'));
+    assert_eq!(run(&app).uniform_stiffness(), Some(150.0));
+    key(&mut app, KeyCode::Char('k'));
+    key(&mut app, KeyCode::Char('k'));
+    assert!((run(&app).uniform_stiffness().expect("uniform") - 100.0 / 1.5).abs() < 1e-9);
+    // Damping starts from zero at 1 % of critical, 2√(k m).
+    let k = run(&app).uniform_stiffness().expect("uniform");
+    assert_eq!(run(&app).uniform_damping(), Some(0.0));
+    key(&mut app, KeyCode::Char('D'));
+    let first = 0.01 * 2.0 * (k * 1.0f64).sqrt();
+    assert!((run(&app).uniform_damping().expect("uniform") - first).abs() < 1e-12);
+    key(&mut app, KeyCode::Char('D'));
+    assert!((run(&app).uniform_damping().expect("uniform") - 1.5 * first).abs() < 1e-12);
+    key(&mut app, KeyCode::Char('d'));
+    key(&mut app, KeyCode::Char('d'));
+    assert_eq!(run(&app).uniform_damping(), Some(0.0), "back to none");
+}
+
+#[test]
+fn a_chain_has_omega_twice_that_of_one_spring() {
+    let mut app = open("rope");
+    key(&mut app, KeyCode::Char('n'));
+    key(&mut app, KeyCode::Char('n'));
+    key(&mut app, KeyCode::Char('n'));
+    // 16 nodes, k = 400 N/m, m = 1 kg: interior rows give 4k/m.
+    let omega = run(&app).omega_max().expect("springs");
+    assert!((omega - 2.0 * 400f64.sqrt()).abs() < 1e-9, "{omega}");
+}
+
+#[test]
+fn oscillator_exact_solution_matches_rk4() {
+    let mut app = open("hooke");
+    key(&mut app, KeyCode::Char(' '));
+    for _ in 0..100 {
+        app.tick(0.01);
+    }
+    let run = run(&app);
+    let o = run.oscillator().expect("the oscillator is detected");
+    assert_eq!((o.rest_length, o.stiffness, o.mass), (1.0, 100.0, 1.0));
+    assert!((o.u0 - 0.1).abs() < 1e-15, "A = x_1(0) - L0");
+    let t = run.sim().time();
+    assert!((o.exact(t) - (1.0 + 0.1 * (10.0 * t).cos())).abs() < 1e-12);
+    assert!((o.position(run.sim()) - o.exact(t)).abs() < 1e-6);
+}
+
+#[test]
+fn damped_exact_solution_solves_the_equation() {
+    let app = open("hooke");
+    let base = *run(&app).oscillator().expect("oscillator");
+    // Under-, critically and over-damped: m u'' + k_d u' + k u = 0 by finite differences,
+    // u(0) = u0 and u'(0) = v0.
+    for damping in [2.0, 20.0, 50.0] {
+        let o = springlab::tui::plots::Oscillator {
+            damping,
+            v0: 0.3,
+            ..base
+        };
+        let u = |t: f64| o.exact(t) - o.rest_length;
+        assert!((u(0.0) - o.u0).abs() < 1e-12);
+        let h = 1e-5;
+        assert!(((u(h) - u(-h)) / (2.0 * h) - 0.3).abs() < 1e-6, "{damping}");
+        for t in [0.05, 0.2, 0.7] {
+            let d1 = (u(t + h) - u(t - h)) / (2.0 * h);
+            let d2 = (u(t + h) - 2.0 * u(t) + u(t - h)) / (h * h);
+            let residual = o.mass * d2 + damping * d1 + o.stiffness * u(t);
+            assert!(residual.abs() < 1e-4, "k_d {damping}, t {t}: {residual}");
+        }
+    }
+}
+
+#[test]
+fn divergence_stops_the_run_and_meets_the_diverge_goal() {
+    let mut app = open("euler");
+    // Explicit Euler at dt·ω = 0.2 grows slowly; dt·ω = 1.6 blows up fast.
+    keys(&mut app, "+++ ");
+    for _ in 0..200 {
+        app.tick(0.1);
+        if !run(&app).is_running() {
+            break;
+        }
+    }
+    let run = run(&app);
+    let d = run.sim().diverged.as_ref().expect("diverged");
+    assert!(!run.is_running());
+    assert_eq!(run.goal_state(), Some(true), "goal: make it blow up");
+    assert!(d.time <= 60.0);
+    let text = screen_text(&app, 100, 32);
+    assert!(
+        text.contains(&format!("unstable at step {}", d.step)),
+        "{text}"
+    );
+    // Space does not restart a diverged run; r does.
+    key(&mut app, KeyCode::Char(' '));
+    assert!(!self::run(&app).is_running());
+    key(&mut app, KeyCode::Char('r'));
+    assert!(self::run(&app).sim().diverged.is_none());
+    assert_eq!(self::run(&app).goal_state(), None);
+}
+
+#[test]
+fn q_goes_back_from_lesson_to_menu_to_quit() {
+    let mut app = open("rope");
+    key(&mut app, KeyCode::Char('q'));
+    assert!(matches!(app.screen(), Screen::Menu));
+    assert!(!app.should_quit());
+    key(&mut app, KeyCode::Enter);
+    assert!(app.lesson().is_some(), "Enter opens the selected lesson");
+    key(&mut app, KeyCode::Esc);
+    assert!(matches!(app.screen(), Screen::Menu));
+    key(&mut app, KeyCode::Esc);
+    assert!(app.should_quit());
+}
+
+#[test]
+fn ctrl_c_quits_from_anywhere() {
+    let mut app = open("rope");
+    key(&mut app, KeyCode::Char('?'));
+    app.handle_key(KeyEvent::new(KeyCode::Char('c'), KeyModifiers::CONTROL));
+    assert!(app.should_quit());
+}
+
+#[test]
+fn help_overlay_opens_with_question_mark_and_closes_with_any_key() {
+    let mut app = open("rope");
+    key(&mut app, KeyCode::Char('?'));
+    assert!(app.help_shown());
+    assert!(screen_text(&app, 100, 32).contains("springlab keys"));
+    // Keys go to the overlay, not the lesson.
+    key(&mut app, KeyCode::Char(' '));
+    assert!(!app.help_shown());
+    assert!(!run(&app).is_running());
+    key(&mut app, KeyCode::Char('q'));
+    assert!(matches!(app.screen(), Screen::Menu));
+}
+
+#[test]
+fn menu_keys_choose_and_open_lessons() {
+    let mut app = app();
+    key(&mut app, KeyCode::Down);
+    key(&mut app, KeyCode::Down);
+    assert_eq!(app.selected(), 2);
+    key(&mut app, KeyCode::Up);
+    assert_eq!(app.selected(), 1);
+    key(&mut app, KeyCode::Char('4'));
+    assert_eq!(run(&app).lesson().number, 4);
+    key(&mut app, KeyCode::Char('q'));
+    key(&mut app, KeyCode::Char('9'));
+    assert!(matches!(app.screen(), Screen::Menu));
+    assert_eq!(app.menu_message(), Some("there is no lesson 9"));
+}
+
+#[test]
+fn lessons_are_found_by_number_or_slug() {
+    let app = app();
+    assert_eq!(app.find_lesson("2"), app.find_lesson("hooke"));
+    assert_eq!(app.find_lesson("HOOKE"), Some(1));
+    assert_eq!(app.find_lesson("nope"), None);
+    assert_eq!(app.find_lesson("0"), None);
+}
+
+#[test]
+fn a_malformed_lesson_shows_its_error_in_the_menu() {
+    let dir = temp_dir("malformed");
+    std::fs::write(
+        dir.join("01-rope.md"),
+        lesson::BUILTIN[0].1, // a good lesson beside the bad one
+    )
+    .expect("write");
+    std::fs::write(
+        dir.join("02-broken.md"),
+        "+++\nnumber = 2\nslug = \"broken\"\ntitle = \"Broken\"\nsummary = \"x\"\n+++\n\n\
+         +++ step\ntitle = \"A\"\nscene = \"no-such-scene\"\n+++\nText.\n",
+    )
+    .expect("write");
+    let lessons = lesson::load_dir(&dir).expect("readable");
+    let mut app = App::new(lessons, Theme { color: false });
+    let text = screen_text(&app, 100, 32);
+    assert!(text.contains("Building a rope"), "{text}");
+    assert!(text.contains("this lesson has an error"), "{text}");
+    assert!(text.contains("02-broken.md:8"), "file and line: {text}");
+    assert!(text.contains("unknown scene"), "{text}");
+    // Choosing it does not crash: the menu says why it cannot open.
+    key(&mut app, KeyCode::Down);
+    key(&mut app, KeyCode::Enter);
+    assert!(matches!(app.screen(), Screen::Menu));
+    assert!(
+        app.menu_message()
+            .is_some_and(|m| m.contains("cannot be opened"))
+    );
+    assert!(screen_text(&app, 100, 32).contains("cannot be opened"));
+    // The good lesson still opens.
+    key(&mut app, KeyCode::Up);
+    key(&mut app, KeyCode::Enter);
+    assert!(app.lesson().is_some());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A scene file (Form 2) with an `n × n` cloth: struct, shear and bend springs in the lattice
+/// order, corners 0 and n - 1 pinned.
+fn cloth_scene(n: usize) -> String {
+    let mut s = String::from(
+        "[world]\ngravity = [0.0, -9.8, 0.0]\n\n[run]\nmethod = \"semi-implicit-euler\"\ndt = 0.001\n\n",
+    );
+    let h = 1.0 / (n as f64 - 1.0);
+    for r in 0..n {
+        for c in 0..n {
+            let pinned = r == 0 && (c == 0 || c == n - 1);
+            s += &format!(
+                "[[particles]]\nposition = [{}, 1.0, {}]\nmass = 0.01\npinned = {pinned}\n\n",
+                c as f64 * h,
+                r as f64 * h
+            );
+        }
+    }
+    let kinds: [(&str, &[[i64; 2]]); 3] = [
+        ("struct", &[[0, 1], [1, 0]]),
+        ("shear", &[[1, 1], [1, -1]]),
+        ("bend", &[[0, 2], [2, 0]]),
+    ];
+    let n = n as i64;
+    for (kind, offsets) in kinds {
+        for r in 0..n {
+            for c in 0..n {
+                for [dr, dc] in offsets {
+                    let (r2, c2) = (r + dr, c + dc);
+                    if (0..n).contains(&r2) && (0..n).contains(&c2) {
+                        s += &format!(
+                            "[[springs]]\na = {}\nb = {}\nstiffness = 500.0\ndamping = 0.1\nkind = \"{kind}\"\n\n",
+                            r * n + c,
+                            r2 * n + c2
+                        );
+                    }
+                }
+            }
+        }
+    }
+    s
+}
+
+fn cloth_app(name: &str, n: usize) -> (App, PathBuf) {
+    let dir = temp_dir(name);
+    std::fs::write(dir.join("cloth.toml"), cloth_scene(n)).expect("write");
+    std::fs::write(
+        dir.join("01-cloth.md"),
+        "+++\nnumber = 1\nslug = \"cloth\"\ntitle = \"Cloth\"\nsummary = \"A cloth.\"\n+++\n\n\
+         +++ step\ntitle = \"Hanging cloth\"\nscene = \"cloth.toml\"\nplots = [\"energy\"]\n+++\nA cloth.\n",
+    )
+    .expect("write");
+    let lessons = lesson::load_dir(&dir).expect("readable");
+    let mut app = App::new(lessons, Theme { color: false });
+    app.open_lesson(0).expect("opens");
+    (app, dir)
+}
+
+#[test]
+fn keys_1_to_4_pin_and_free_cloth_corners() {
+    let (mut app, dir) = cloth_app("corners", 5);
+    let pinned = |app: &App, i: usize| run(app).sim().scene.bodies[0].model.is_pinned(i);
+    assert!(pinned(&app, 0) && pinned(&app, 4));
+    assert!(!pinned(&app, 20) && !pinned(&app, 24));
+    key(&mut app, KeyCode::Char('1'));
+    assert!(!pinned(&app, 0), "corner 1 freed");
+    key(&mut app, KeyCode::Char('3'));
+    key(&mut app, KeyCode::Char('4'));
+    assert!(
+        pinned(&app, 20) && pinned(&app, 24),
+        "corners 3 and 4 are n(n-1) and n²-1"
+    );
+    key(&mut app, KeyCode::Char('1'));
+    assert!(pinned(&app, 0));
+    // A freed corner falls; a pinned one stays put.
+    key(&mut app, KeyCode::Char('2'));
+    let before = run(&app).sim().scene.bodies[0].state.x.clone();
+    for _ in 0..20 {
+        key(&mut app, KeyCode::Char('s'));
+    }
+    let after = &run(&app).sim().scene.bodies[0].state.x;
+    assert_eq!(after[0], before[0]);
+    assert!(after[4].y < before[4].y);
+    // The spring-kind filter cycles.
+    for expected in ["struct", "shear", "bend", "none", "all"] {
+        key(&mut app, KeyCode::Char('t'));
+        assert_eq!(run(&app).spring_filter().name(), expected);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn corner_keys_on_a_scene_without_cloth_say_so() {
+    let mut app = open("rope");
+    key(&mut app, KeyCode::Char('1'));
+    assert!(run(&app).message().is_some_and(|m| m.contains("cloth")));
+    assert!(screen_text(&app, 100, 32).contains("pin the corners of a cloth"));
+}
+
+#[test]
+fn export_reports_the_missing_render_module() {
+    let mut app = open("rope");
+    key(&mut app, KeyCode::Char('e'));
+    assert_eq!(
+        run(&app).message(),
+        Some("PNG export needs the render module")
+    );
+}
+
+#[test]
+fn mouse_grabs_drags_and_releases_a_particle() {
+    let mut app = open("rope");
+    draw(&app, 100, 32); // records where the canvas is
+    let run_ref = run(&app);
+    let camera = *run_ref.camera();
+    let inner = canvas_inner(&app);
+    // The cell of particle 1 (the free end).
+    let p = camera.project(run_ref.sim().scene.bodies[0].state.x[1]);
+    let ([x0, x1], [y0, y1]) = camera.bounds(inner.width, inner.height);
+    let column = inner.x + ((p.x - x0) / (x1 - x0) * f64::from(inner.width)) as u16;
+    let row = inner.y + ((y1 - p.y) / (y1 - y0) * f64::from(inner.height)) as u16;
+    let mouse = |kind, column, row| MouseEvent {
+        kind,
+        column,
+        row,
+        modifiers: KeyModifiers::NONE,
+    };
+    assert!(app.handle_mouse(mouse(MouseEventKind::Down(MouseButton::Left), column, row)));
+    assert_eq!(run(&app).dragged(), Some((0, 1)));
+    assert!(
+        run(&app).sim().scene.bodies[0].model.is_pinned(1),
+        "held still"
+    );
+    // Drag 5 rows down: the particle follows in the view plane, at rest.
+    assert!(app.handle_mouse(mouse(
+        MouseEventKind::Drag(MouseButton::Left),
+        column,
+        row + 5
+    )));
+    let state = &run(&app).sim().scene.bodies[0].state;
+    let (vx, vy) = camera.cell_to_view(inner, column, row + 5);
+    let q = camera.project(state.x[1]);
+    assert!((q.x - vx).abs() < 1e-9 && (q.y - vy).abs() < 1e-9);
+    assert_eq!(state.v[1], glam::DVec3::ZERO);
+    // Stepping while held keeps it there.
+    let held = state.x[1];
+    key(&mut app, KeyCode::Char('s'));
+    assert_eq!(run(&app).sim().scene.bodies[0].state.x[1], held);
+    assert!(app.handle_mouse(mouse(
+        MouseEventKind::Up(MouseButton::Left),
+        column,
+        row + 5
+    )));
+    assert_eq!(run(&app).dragged(), None);
+    assert_eq!(
+        run(&app).sim().scene.bodies[0].model.inv_mass[1],
+        1.0,
+        "mass restored"
+    );
+    // A click far from every particle grabs nothing.
+    let far = mouse(MouseEventKind::Down(MouseButton::Left), inner.x, inner.y);
+    app.handle_mouse(far);
+    assert_eq!(run(&app).dragged(), None);
+}
+
+/// The canvas's inner area as drawn at 100 × 32 (the app records it while drawing).
+fn canvas_inner(app: &App) -> Rect {
+    let terminal = draw(app, 100, 32);
+    let buffer = terminal.backend().buffer();
+    // The canvas block's top-left corner is the first "┌" on row 1.
+    let x = (0..buffer.area.width)
+        .find(|&x| buffer[(x, 1)].symbol() == "┌")
+        .expect("canvas border");
+    let bottom = (2..buffer.area.height)
+        .find(|&y| buffer[(x, y)].symbol() == "└")
+        .expect("canvas bottom");
+    Rect::new(x + 1, 2, buffer.area.width - x - 2, bottom - 2)
+}
+
+#[test]
+fn arrows_orbit_the_camera() {
+    let mut app = open("rope");
+    let (yaw, pitch) = run(&app).camera().angles_degrees();
+    key(&mut app, KeyCode::Right);
+    key(&mut app, KeyCode::Up);
+    assert_eq!(run(&app).camera().angles_degrees(), (yaw + 15, pitch + 15));
+    for _ in 0..10 {
+        key(&mut app, KeyCode::Up);
+    }
+    assert_eq!(
+        run(&app).camera().angles_degrees().1,
+        89,
+        "elevation stops at 89°"
+    );
+    // Projection and its inverse agree.
+    let camera = run(&app).camera();
+    let p = glam::DVec3::new(0.3, -1.2, 2.5);
+    assert!((camera.unproject(camera.project(p)) - p).length() < 1e-12);
+}
+
+#[test]
+fn every_screen_draws_at_every_size_without_panicking() {
+    let mut app = app();
+    let sizes = [
+        (1, 1),
+        (10, 5),
+        (79, 24),
+        (80, 23),
+        (80, 24),
+        (120, 40),
+        (200, 60),
+    ];
+    for &(w, h) in &sizes {
+        draw(&app, w, h);
+    }
+    let (mut cloth, dir) = cloth_app("sizes", 6);
+    key(&mut cloth, KeyCode::Right);
+    for &(w, h) in &sizes {
+        draw(&cloth, w, h);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    for i in 0..app.lessons().len() {
+        app.open_lesson(i).expect("opens");
+        loop {
+            for &(w, h) in &sizes {
+                draw(&app, w, h);
+            }
+            key(&mut app, KeyCode::Char('?'));
+            draw(&app, 80, 24);
+            key(&mut app, KeyCode::Char('?'));
+            let step = run(&app).step_index();
+            key(&mut app, KeyCode::Char('n'));
+            if run(&app).step_index() == step {
+                break;
+            }
+        }
+    }
+    assert!(screen_text(&app, 70, 20).contains("needs at least 80×24"));
+}
+
+#[test]
+fn no_color_draws_without_colours() {
+    let plain = {
+        let mut app = app();
+        app.open_lesson(1).expect("opens");
+        draw(&app, 100, 32)
+    };
+    let buffer = plain.backend().buffer();
+    assert!(
+        buffer
+            .content()
+            .iter()
+            .all(|c| c.fg == Color::Reset && c.bg == Color::Reset)
+    );
+    let mut coloured = App::new(lesson::builtin(), Theme { color: true });
+    coloured.open_lesson(1).expect("opens");
+    let terminal = draw(&coloured, 100, 32);
+    assert!(
+        terminal
+            .backend()
+            .buffer()
+            .content()
+            .iter()
+            .any(|c| c.fg != Color::Reset)
+    );
+}
