@@ -7,9 +7,12 @@
 //! springlab run <scene|file.toml> [--method M] [--dt S] [--steps N | --time T]
 //!               [--set key=value ...] [--json] [--csv FILE]
 //! springlab bench [workload ...] [--json] [--repeats R]
+//! springlab render <scene|file> --frames N [--every K] [--size WxH] [--out DIR] [--gif F]
+//!                 [--apng F] [--energy-chart F] [--method M] [--dt S] [--set key=value ...]
 //! ```
 
 mod bench;
+mod render;
 mod run;
 mod scenes;
 
@@ -35,6 +38,8 @@ pub enum Command {
     Scenes,
     /// Time the peer-benchmark workloads and check their checksums.
     Bench(bench::BenchArgs),
+    /// Draw a scene's frames as PNG files, a GIF or an APNG, and its energy chart.
+    Render(render::RenderArgs),
 }
 
 /// Parses the process arguments and runs the command; prints errors and returns the exit code.
@@ -45,6 +50,7 @@ pub fn main() -> ExitCode {
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::Scenes) => scenes::list(),
         Some(Command::Bench(args)) => bench::run(&args),
+        Some(Command::Render(args)) => render::run(&args),
         None => run::demo(),
     };
     match result {

@@ -11,6 +11,7 @@
 pub mod bench;
 pub mod cli;
 pub mod physics;
+pub mod render;
 
 pub use physics::{Energy, Method, MethodParams, Model, Spring, SpringKind, State, Workspace};
 pub mod scene;
