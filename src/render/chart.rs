@@ -21,10 +21,12 @@
 //! lo = floor(a / d) d,   hi = ceil(b / d) d
 //! ticks: lo, lo + d, …, hi     labelled with max(0, -floor(log10 d)) decimals
 //! ```
-//! A log axis runs from the decade below the smallest value to the decade above the largest,
-//! `10^floor(log10 a)` to `10^ceil(log10 b)`, with a labelled tick at every decade (every
-//! second, third … when there are more than eight) and unlabelled minor ticks at
-//! `2, 3, …, 9 × 10^k` when there are at most six decades.
+//! A log axis has a labelled tick at every decade `10^k` (every second, third … when there are
+//! more than eight) and unlabelled minor ticks at `2, 3, …, 9 × 10^k` when there are at most
+//! six decades; with fewer than two decades in view every tick is labelled.
+//!
+//! The plot shows the data range plus a margin of 4 % of it at each end (of the range in
+//! decades on a log axis), so no point sits on the frame; only the ticks inside are drawn.
 //!
 //! Reference: P. S. Heckbert, "Nice Numbers for Graph Labels", in *Graphics Gems*, A. Glassner
 //! (ed.), Academic Press 1990, pp. 61–63.
@@ -329,6 +331,10 @@ fn data_range(chart: &Chart, first: bool, scale: Scale) -> Option<(f64, f64)> {
     range
 }
 
+/// Share of the data range left free beyond the data at each end of an axis (on a log axis, of
+/// the range in decades), so that nothing is drawn on the frame.
+const MARGIN: f64 = 0.04;
+
 fn make_axis(range: Option<(f64, f64)>, fixed: Option<(f64, f64)>, scale: Scale) -> Axis {
     let (a, b) = fixed.or(range).unwrap_or(match scale {
         Scale::Linear => (0.0, 1.0),
@@ -338,16 +344,65 @@ fn make_axis(range: Option<(f64, f64)>, fixed: Option<(f64, f64)>, scale: Scale)
         Scale::Linear => Axis::linear(a, b, 6),
         Scale::Log => Axis::log(a, b),
     };
-    if let Some((lo, hi)) = fixed
-        && lo < hi
-        && (scale == Scale::Linear || lo > 0.0)
-    {
-        // A fixed range is kept exactly; only the ticks inside it remain.
+    let ends = match fixed {
+        // A fixed range is kept exactly.
+        Some((lo, hi)) if lo < hi && (scale == Scale::Linear || lo > 0.0) => Some((lo, hi)),
+        Some(_) => None,
+        None if b > a => Some(match scale {
+            Scale::Linear => (a - MARGIN * (b - a), b + MARGIN * (b - a)),
+            Scale::Log => {
+                let span = b.log10() - a.log10();
+                (
+                    10f64.powf(a.log10() - MARGIN * span),
+                    10f64.powf(b.log10() + MARGIN * span),
+                )
+            }
+        }),
+        None => None,
+    };
+    if let Some((lo, hi)) = ends {
         axis.lo = lo;
         axis.hi = hi;
-        axis.ticks.retain(|t| t.value >= lo && t.value <= hi);
+        // Ticks just outside by rounding stay.
+        let slack = 1e-9 * (hi - lo).abs();
+        axis.ticks
+            .retain(|t| t.value >= lo - slack && t.value <= hi + slack);
+    }
+    if scale == Scale::Log && axis.ticks.iter().filter(|t| !t.label.is_empty()).count() < 2 {
+        // Less than two decades in view: label every tick.
+        for t in &mut axis.ticks {
+            t.label = format_number(t.value);
+        }
     }
     axis
+}
+
+/// A short label for `v`: plain decimals between 0.001 and 10 000 (three significant digits at
+/// most), else `m×10ᵏ`.
+fn format_number(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || !a.is_finite() {
+        return if a == 0.0 { "0".into() } else { format!("{v}") };
+    }
+    let k = a.log10().floor() as i32;
+    if (-3..4).contains(&k) {
+        let decimals = (2 - k).max(0) as usize;
+        let s = format!("{v:.decimals$}");
+        let s = if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        };
+        return s;
+    }
+    let m = v / 10f64.powi(k);
+    if (m.abs() - 1.0).abs() < 1e-9 {
+        let sign = if v < 0.0 { "-" } else { "" };
+        return format!("{sign}{}", power_of_ten(k));
+    }
+    let m = format!("{m:.2}");
+    let m = m.trim_end_matches('0').trim_end_matches('.');
+    format!("{m}×{}", power_of_ten(k))
 }
 
 /// Draws `chart` on a `width × height` image with the default [`Quality`].
@@ -719,8 +774,7 @@ mod tests {
     #[test]
     fn linear_ticks_are_nice() {
         let a = Axis::linear(0.13, 9.7, 6);
-        assert_eq!(a.lo, 0.0);
-        assert_eq!(a.hi, 10.0);
+        assert_eq!((a.lo, a.hi), (0.0, 10.0));
         let labels: Vec<&str> = a.ticks.iter().map(|t| t.label.as_str()).collect();
         assert_eq!(labels, ["0", "2", "4", "6", "8", "10"]);
         let b = Axis::linear(-0.031, 0.012, 6);
@@ -745,6 +799,20 @@ mod tests {
         assert_eq!(labels, ["10⁻³", "10⁻²", "10⁻¹", "10⁰", "10¹", "10²"]);
         assert!((a.fraction(0.1).expect("positive") - 0.4).abs() < 1e-12);
         assert_eq!(a.fraction(-1.0), None);
+    }
+
+    #[test]
+    fn chart_axes_leave_a_margin_and_keep_inner_ticks() {
+        let a = make_axis(Some((0.0, 0.5)), None, Scale::Linear);
+        assert!(a.lo < 0.0 && a.hi > 0.5);
+        let labels: Vec<&str> = a.ticks.iter().map(|t| t.label.as_str()).collect();
+        assert_eq!(labels, ["0.0", "0.1", "0.2", "0.3", "0.4", "0.5"]);
+        let l = make_axis(Some((0.002, 0.003)), None, Scale::Log);
+        let labels: Vec<&str> = l.ticks.iter().map(|t| t.label.as_str()).collect();
+        assert_eq!(labels, ["0.002", "0.003"]);
+        assert_eq!(format_number(123456.0), "1.23×10⁵");
+        assert_eq!(format_number(1e-6), "10⁻⁶");
+        assert_eq!(format_number(0.25), "0.25");
     }
 
     #[test]

@@ -8,8 +8,8 @@
 //! `z_c` (m) of a representative point: a triangle's centroid, a segment's midpoint, a disc's
 //! centre. Shapes are drawn from the farthest to the nearest, so nearer ones cover farther ones
 //! (Newell, Newell & Sancha 1972). Ties keep the order the shapes were made in, so a frame is
-//! the same every time. A mesh line is pulled towards the camera by a third of its length so
-//! that it lands after both triangles beside it.
+//! the same every time. A mesh line (an edge of a surface cell) takes the depth of the nearest
+//! triangle of the cells beside it, minus a hair, so that it lands right after them.
 //!
 //! **Floors and planes** are infinite; they are drawn as a square patch around the content (with
 //! the hole of a floor with a hole cut out, and a grid of nice spacing), in a layer of their
@@ -607,6 +607,8 @@ impl Renderer {
             Colouring::ByKind => None,
         };
         let mut visible = vec![!closed; geom.quads.len()];
+        // Nearest depth of each quad's drawn triangles: its mesh lines go just in front of it.
+        let mut quad_depth = vec![f64::INFINITY; geom.quads.len()];
         for (qi, q) in geom.quads.iter().enumerate() {
             for tri in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
                 let [a, b, c] = tri.map(|i| x[i as usize]);
@@ -640,9 +642,11 @@ impl Renderer {
                 let Some(p) = project3(view, cam) else {
                     continue;
                 };
+                let depth = (cam[0].z + cam[1].z + cam[2].z) / 3.0;
+                quad_depth[qi] = quad_depth[qi].min(depth);
                 items.push(Item {
                     layer: layer_of(centroid),
-                    depth: (cam[0].z + cam[1].z + cam[2].z) / 3.0,
+                    depth,
                     shape: Shape::Triangle {
                         p: grow(p, 0.5),
                         colour,
@@ -654,7 +658,7 @@ impl Renderer {
             return;
         }
         let line = if closed {
-            colour::JELLY.scaled(0.45).with_alpha(120)
+            colour::JELLY.scaled(0.3).with_alpha(160)
         } else {
             colour::CLOTH_FRONT.scaled(0.4).with_alpha(90)
         };
@@ -670,10 +674,17 @@ impl Renderer {
             let (Some(pa), Some(pb)) = (view.project_camera(ca), view.project_camera(cb)) else {
                 continue;
             };
+            // Just in front of the nearest triangle of the quads beside it (module docs).
+            let near = quads
+                .iter()
+                .map(|&q| quad_depth[q as usize])
+                .fold(f64::INFINITY, f64::min);
+            if !near.is_finite() {
+                continue;
+            }
             items.push(Item {
                 layer: layer_of(0.5 * (xa + xb)),
-                // Pulled towards the camera by a third of its length (module docs).
-                depth: 0.5 * (ca.z + cb.z) - (xb - xa).length() / 3.0,
+                depth: near - 1e-9 * near.abs().max(1.0),
                 shape: Shape::Line {
                     a: point(pa.x, pa.y),
                     b: point(pb.x, pb.y),
@@ -690,7 +701,13 @@ impl Renderer {
         let (ascent, descent) = vertical_metrics(px);
         let line_h = (ascent + descent) * 1.15;
         let pad = 0.5 * px;
-        let lines = o.lines();
+        // Lines wider than the image break at their " · " separators.
+        let room = self.width as f32 - 4.0 * pad;
+        let lines: Vec<String> = o
+            .lines()
+            .iter()
+            .flat_map(|l| wrap(l, " · ", room, px))
+            .collect();
         let w = lines
             .iter()
             .map(|l| text_width(l, px))
@@ -803,6 +820,21 @@ impl Renderer {
             }
         }
     }
+}
+
+/// `line` split at `separator` into pieces no wider than `room` px where possible.
+fn wrap(line: &str, separator: &str, room: f32, px: f32) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for part in line.split(separator) {
+        match out.last_mut() {
+            Some(last) if text_width(&format!("{last}{separator}{part}"), px) <= room => {
+                last.push_str(separator);
+                last.push_str(part);
+            }
+            _ => out.push(part.to_string()),
+        }
+    }
+    out
 }
 
 /// Text size (px) for an image `height` px high.

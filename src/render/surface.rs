@@ -239,6 +239,7 @@ mod tests {
             &mut b,
             &ClothSpec {
                 n: 5,
+                pinned: vec![],
                 ..ClothSpec::default()
             },
         );
@@ -308,6 +309,7 @@ mod tests {
             &mut b,
             &ClothSpec {
                 n: 4,
+                pinned: vec![],
                 ..ClothSpec::default()
             },
         );

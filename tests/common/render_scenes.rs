@@ -105,3 +105,68 @@ pub fn draped_cloth() -> Scene {
         duration: 1.0,
     }
 }
+
+/// The 2023 terrain with a 6 × 6 × 6 jelly (edge 3 m) turned 25° about (1, 0, 1) and sunk
+/// half into the floor's hole, made by formula (no simulation): the bowl, the floor, the hole's
+/// rim and a body both below and above the floor in one frame.
+pub fn jelly_in_bowl() -> Scene {
+    let spec = CubeSpec {
+        counts: [6; 3],
+        edge_length: DVec3::splat(3.0),
+        mass: 1.0,
+        coefficients: KindCoefficients::uniform(2000.0, 60.0),
+        offset: DVec3::new(0.5, -1.6, -0.5),
+        rotation: Some((DVec3::new(1.0, 0.0, 1.0), 25f64.to_radians())),
+        ..CubeSpec::default()
+    };
+    let mut b = Builder::new();
+    cube(&mut b, &spec);
+    let (model, state) = b.build(DVec3::new(0.0, -9.8, 0.0), 0.0);
+    Scene {
+        name: "jelly-in-bowl".into(),
+        bodies: vec![Body {
+            label: "jelly".into(),
+            model: model.with_colliders(
+                Collider::course_2023_terrain(),
+                ContactParams::course_2023(),
+            ),
+            state,
+            method: Method::SemiImplicitEuler,
+            params: MethodParams::default(),
+        }],
+        dt: 0.001,
+        duration: 1.0,
+    }
+}
+
+/// A free 4 × 4 × 4 spring cube (all three kinds) 1 m across, sheared and squashed by formula so
+/// that springs of every kind show and their strains differ; no colliders, no gravity.
+pub fn sheared_cube() -> Scene {
+    let spec = CubeSpec {
+        counts: [4; 3],
+        edge_length: DVec3::splat(1.0),
+        mass: 1.0,
+        coefficients: KindCoefficients::uniform(500.0, 1.0),
+        offset: DVec3::ZERO,
+        rotation: None,
+        ..CubeSpec::default()
+    };
+    let mut b = Builder::new();
+    cube(&mut b, &spec);
+    let (model, mut state) = b.build(DVec3::ZERO, 0.0);
+    for p in &mut state.x {
+        *p = DVec3::new(p.x + 0.35 * p.y, 0.8 * p.y, p.z * (1.0 + 0.15 * p.y));
+    }
+    Scene {
+        name: "sheared-cube".into(),
+        bodies: vec![Body {
+            label: "cube".into(),
+            model,
+            state,
+            method: Method::SemiImplicitEuler,
+            params: MethodParams::default(),
+        }],
+        dt: 0.001,
+        duration: 1.0,
+    }
+}
