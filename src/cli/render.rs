@@ -46,7 +46,12 @@ pub struct RenderArgs {
     #[arg(long, conflicts_with = "frames", allow_negative_numbers = true)]
     pub time: Option<f64>,
     /// Image size in pixels, WIDTHxHEIGHT.
-    #[arg(long, default_value = "640x480", value_name = "WxH", allow_hyphen_values = true)]
+    #[arg(
+        long,
+        default_value = "640x480",
+        value_name = "WxH",
+        allow_hyphen_values = true
+    )]
     pub size: String,
     /// Directory for frame_00000.png, … (default frames/ when nothing else is written).
     #[arg(long, value_name = "DIR")]

@@ -474,17 +474,13 @@ impl Renderer {
                 .then_with(|| b.depth.total_cmp(&a.depth))
         });
         let split = items.partition_point(|i| i.layer == 0);
-        for item in &items[..split] {
-            draw_shape(&mut pixmap, &mut paint, &item.shape);
-        }
+        draw_shapes(&mut pixmap, &mut paint, &items[..split]);
         if self.style.colliders {
             for floor in &self.floors {
                 draw_floor(&mut pixmap, &mut paint, &view, floor, s);
             }
         }
-        for item in &items[split..] {
-            draw_shape(&mut pixmap, &mut paint, &item.shape);
-        }
+        draw_shapes(&mut pixmap, &mut paint, &items[split..]);
         if let Some(o) = overlay.filter(|_| self.style.overlay) {
             self.draw_overlay(&mut pixmap, &mut paint, o, any_springs);
         }
@@ -520,7 +516,7 @@ impl Renderer {
             };
             let k = kind_index(spring.kind);
             any[k] = true;
-            let (mut colour, width) = match spring.kind {
+            let (mut colour, width): (Colour, f32) = match spring.kind {
                 SpringKind::Struct => (colour::STRUCT, 1.5),
                 SpringKind::Shear => (colour::SHEAR, 0.9),
                 SpringKind::Bend => (colour::BEND, 0.9),
@@ -537,7 +533,8 @@ impl Renderer {
                 shape: Shape::Line {
                     a: point(pa.x, pa.y),
                     b: point(pb.x, pb.y),
-                    width: width * s * if many { 0.7 } else { 1.0 },
+                    // Dense lattices: at most 1 px, which tiny-skia draws as a fast hairline.
+                    width: if many { width.min(1.0) * s } else { width * s },
                     colour,
                 },
             });
@@ -1286,6 +1283,69 @@ pub(crate) fn stroke_line(
             ..Stroke::default()
         };
         pixmap.stroke_path(&path, paint, &stroke, Transform::identity(), None);
+    }
+}
+
+/// Draws `items` in order. A run of consecutive lines of one colour and width, or of discs of
+/// one colour, is drawn as one path: the same picture (each run is one paint layer, so where two
+/// of its shapes cross the colour is not blended twice) for a fraction of the per-shape cost.
+fn draw_shapes(pixmap: &mut Pixmap, paint: &mut Paint, items: &[Item]) {
+    let mut k = 0;
+    while k < items.len() {
+        match items[k].shape {
+            Shape::Line { width, colour, .. } => {
+                let mut pb = PathBuilder::new();
+                while let Some(Item {
+                    shape:
+                        Shape::Line {
+                            a,
+                            b,
+                            width: w,
+                            colour: c,
+                        },
+                    ..
+                }) = items.get(k)
+                {
+                    if *w != width || *c != colour {
+                        break;
+                    }
+                    pb.move_to(a.x, a.y);
+                    pb.line_to(b.x, b.y);
+                    k += 1;
+                }
+                if let Some(path) = pb.finish() {
+                    paint.set_color(colour.to_skia());
+                    let stroke = Stroke {
+                        width,
+                        line_cap: tiny_skia::LineCap::Round,
+                        ..Stroke::default()
+                    };
+                    pixmap.stroke_path(&path, paint, &stroke, Transform::identity(), None);
+                }
+            }
+            Shape::Disc { colour, .. } => {
+                let mut pb = PathBuilder::new();
+                while let Some(Item {
+                    shape: Shape::Disc { c, r, colour: col },
+                    ..
+                }) = items.get(k)
+                {
+                    if *col != colour {
+                        break;
+                    }
+                    pb.push_circle(c.x, c.y, *r);
+                    k += 1;
+                }
+                if let Some(path) = pb.finish() {
+                    paint.set_color(colour.to_skia());
+                    pixmap.fill_path(&path, paint, FillRule::Winding, Transform::identity(), None);
+                }
+            }
+            _ => {
+                draw_shape(pixmap, paint, &items[k].shape);
+                k += 1;
+            }
+        }
     }
 }
 
