@@ -9,12 +9,16 @@
 //! springlab bench [workload ...] [--json] [--repeats R]
 //! springlab render <scene|file> --frames N [--every K] [--size WxH] [--out DIR] [--gif F]
 //!                 [--apng F] [--energy-chart F] [--method M] [--dt S] [--set key=value ...]
+//! springlab study stability <scene|file.toml> [--methods a,b] [--horizon T] [--set key=value ...]
+//!               [--json]
 //! ```
 
 mod bench;
 mod render;
 mod run;
 mod scenes;
+mod study;
+mod study_chart;
 
 use std::process::ExitCode;
 
@@ -40,6 +44,12 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// Draw a scene's frames as PNG files, a GIF or an APNG, and its energy chart.
     Render(render::RenderArgs),
+    /// Studies: which method, which dt (stability; convergence and work-precision to come).
+    Study {
+        /// The study to run.
+        #[command(subcommand)]
+        command: study::StudyCommand,
+    },
 }
 
 /// Parses the process arguments and runs the command; prints errors and returns the exit code.
@@ -51,6 +61,7 @@ pub fn main() -> ExitCode {
         Some(Command::Scenes) => scenes::list(),
         Some(Command::Bench(args)) => bench::run(&args),
         Some(Command::Render(args)) => render::run(&args),
+        Some(Command::Study { command }) => study::run(&command),
         None => run::demo(),
     };
     match result {

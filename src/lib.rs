@@ -10,12 +10,14 @@
 
 pub mod bench;
 pub mod cli;
+pub mod lesson;
 pub mod physics;
 pub mod render;
 
 pub use physics::{Energy, Method, MethodParams, Model, Spring, SpringKind, State, Workspace};
 pub mod scene;
 pub mod simulation;
+pub mod study;
 
 pub use scene::{Scene, SceneError};
 pub use simulation::{RunReport, Simulation};

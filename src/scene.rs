@@ -6,6 +6,7 @@
 //! [`Params`] list; the same parameters can be set with `--set key=value` or in a scene file.
 
 pub mod builder;
+pub mod course;
 pub mod file;
 pub mod lattice;
 pub mod params;
@@ -64,10 +65,14 @@ impl Scene {
         }
     }
 
-    /// The methods of the bodies joined by `,` (for example `semi-implicit-euler,verlet`).
+    /// The method of the bodies, or their methods joined by `,` when they differ (for example
+    /// `semi-implicit-euler,verlet`).
     #[must_use]
     pub fn method_label(&self) -> String {
         let names: Vec<&str> = self.bodies.iter().map(|b| b.method.name()).collect();
+        if names.windows(2).all(|w| w[0] == w[1]) {
+            return names.first().copied().unwrap_or_default().to_string();
+        }
         names.join(",")
     }
 }
@@ -152,6 +157,48 @@ pub const BUILTIN: &[SceneDef] = &[
         summary: "GAMES101's two ropes side by side: semi-implicit Euler and Verlet at once",
         params: rope::ropes_params,
         build: rope::ropes_scene,
+    },
+    SceneDef {
+        name: "cube-plane",
+        summary: "NYCU 2021: a 10×10×10 spring cube (K = 2000, D = 60) dropped on the plane y = -1",
+        params: course::cube_params,
+        build: course::cube_plane,
+    },
+    SceneDef {
+        name: "cube-tilted",
+        summary: "NYCU 2021: the cube lands on a 45° slope (normal (1,1,0)), tips over and slides down",
+        params: course::cube_params,
+        build: course::cube_tilted,
+    },
+    SceneDef {
+        name: "cube-sphere",
+        summary: "NYCU 2021: the cube lands off-centre on a ball of radius 3 at (0,-1,0) and slides off",
+        params: course::cube_params,
+        build: course::cube_sphere,
+    },
+    SceneDef {
+        name: "cube-bowl",
+        summary: "NYCU 2021: the cube falls into a bowl of radius 7 centred at (2,7,1), rim at y = 7",
+        params: course::cube_params,
+        build: course::cube_bowl,
+    },
+    SceneDef {
+        name: "jelly-bowl",
+        summary: "NYCU 2023: the jelly hits the edge of a hole in the floor and falls into the bowl below",
+        params: course::jelly_params,
+        build: course::jelly_bowl,
+    },
+    SceneDef {
+        name: "cloth-spheres",
+        summary: "NYCU 2022: four 125 kg spheres fall onto a 25×25 cloth pinned at its corners, dt = 1e-4",
+        params: course::cloth_spheres_params,
+        build: course::cloth_spheres,
+    },
+    SceneDef {
+        name: "cloth-sphere",
+        summary: "NYCU 2024: a 25×25 cloth drapes over a sphere of radius 1 that moves at a set velocity",
+        params: course::cloth_sphere_params,
+        build: course::cloth_sphere,
     },
 ];
 

@@ -167,6 +167,15 @@ impl Simulation {
                 .collect(),
             positions: self.positions().map(|p| p.to_array()).collect(),
             velocities: self.velocities().map(|v| v.to_array()).collect(),
+            spheres: self
+                .states()
+                .flat_map(|s| &s.spheres)
+                .map(|s| SphereReport {
+                    center: s.center.to_array(),
+                    radius: s.radius,
+                    velocity: s.velocity.to_array(),
+                })
+                .collect(),
         }
     }
 }
@@ -180,6 +189,17 @@ pub struct BodyReport {
     pub method: Method,
     /// Its particle count (its positions follow the previous bodies' in `positions`).
     pub particles: usize,
+}
+
+/// One dynamic sphere in a [`RunReport`] (cloth scenes).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SphereReport {
+    /// Centre (m).
+    pub center: [f64; 3],
+    /// Radius (m).
+    pub radius: f64,
+    /// Velocity (m/s).
+    pub velocity: [f64; 3],
 }
 
 /// What `springlab run --json` prints.
@@ -213,4 +233,8 @@ pub struct RunReport {
     pub positions: Vec<[f64; 3]>,
     /// Final velocities (m/s).
     pub velocities: Vec<[f64; 3]>,
+    /// The dynamic spheres at the end, every body's in order; the key is left out when there are
+    /// none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub spheres: Vec<SphereReport>,
 }

@@ -114,6 +114,10 @@ use super::particles::State;
 /// holds it: the velocity response sets `v·N = 0`, which rounding may turn into `+1e-17`.
 const ROUNDING_SPEED: f64 = 1e-9;
 
+/// Relative margin on a bowl's rim circle (`ρ² ≤ a² (1 + margin)`): points on the circle up to
+/// rounding still belong to the bowl (see [`Collider::contact`]).
+const RIM_MARGIN: f64 = 1e-9;
+
 /// A static obstacle. Normals are unit vectors: build colliders with the constructors
 /// ([`Collider::plane`] etc.) or pass them through [`Model::with_colliders`], which normalises.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -316,7 +320,11 @@ impl Collider {
                 // ρ² = horizontal distance² from the axis; a² = r² - (c_y - rim)².
                 let rho2 = (x.x - center.x).powi(2) + (x.z - center.z).powi(2);
                 let a2 = radius * radius - (center.y - rim).powi(2);
-                if rho2 > a2 {
+                // A floor's shaft of radius a (the 2023 terrain) projects a particle that
+                // crossed the floor beside the hole onto ρ = a just below the rim, where the
+                // bowl's wall has already turned inwards; ρ² then exceeds a² by rounding only.
+                // The margin keeps such a particle the bowl's, so it goes back into the bowl.
+                if rho2 > a2 * (1.0 + RIM_MARGIN) {
                     return None;
                 }
                 let (distance, outward) = distance_and_direction(x - center);

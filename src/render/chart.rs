@@ -23,7 +23,8 @@
 //! ```
 //! A log axis has a labelled tick at every decade `10^k` (every second, third … when there are
 //! more than eight) and unlabelled minor ticks at `2, 3, …, 9 × 10^k` when there are at most
-//! six decades; with fewer than two decades in view every tick is labelled.
+//! six decades; with fewer than two decades in view the ticks at 1, 2 and 5 times a power of
+//! ten are labelled too (every tick, if that still makes fewer than two labels). A label that would overlap the previous one is left out.
 //!
 //! The plot shows the data range plus a margin of 4 % of it at each end (of the range in
 //! decades on a log axis), so no point sits on the frame; only the ticks inside are drawn.
@@ -363,15 +364,26 @@ fn make_axis(range: Option<(f64, f64)>, fixed: Option<(f64, f64)>, scale: Scale)
     if let Some((lo, hi)) = ends {
         axis.lo = lo;
         axis.hi = hi;
-        // Ticks just outside by rounding stay.
-        let slack = 1e-9 * (hi - lo).abs();
-        axis.ticks
-            .retain(|t| t.value >= lo - slack && t.value <= hi + slack);
+        // Only ticks inside stay (or outside by rounding only).
+        let inside = axis.clone();
+        axis.ticks.retain(|t| {
+            inside
+                .fraction(t.value)
+                .is_some_and(|f| (-1e-9..=1.0 + 1e-9).contains(&f))
+        });
     }
     if scale == Scale::Log && axis.ticks.iter().filter(|t| !t.label.is_empty()).count() < 2 {
-        // Less than two decades in view: label every tick.
+        // Less than two decades in view: label 1, 2 and 5 times each power of ten, or every
+        // tick when that is still less than two labels.
+        let nice_125 = |v: f64| {
+            let m = v / 10f64.powf(v.log10().floor());
+            [1.0, 2.0, 5.0, 10.0].iter().any(|n| (m - n).abs() < 1e-6)
+        };
+        let all = axis.ticks.iter().filter(|t| nice_125(t.value)).count() < 2;
         for t in &mut axis.ticks {
-            t.label = format_number(t.value);
+            if all || nice_125(t.value) {
+                t.label = format_number(t.value);
+            }
         }
     }
     axis
@@ -555,6 +567,9 @@ pub fn draw_with(chart: &Chart, width: u32, height: u32, quality: Quality) -> Pi
     let grid = Colour::rgb(228, 231, 236);
     let minor_grid = Colour::rgb(242, 243, 246);
     let axis_colour = Colour::rgb(70, 74, 82);
+    // Right end of the last x label and top of the last y label drawn (px).
+    let mut last_x_label = f32::NEG_INFINITY;
+    let mut last_y_label = f32::INFINITY;
     for t in &x_axis.ticks {
         let Some(f) = x_axis.fraction(t.value) else {
             continue;
@@ -572,7 +587,9 @@ pub fn draw_with(chart: &Chart, width: u32, height: u32, quality: Quality) -> Pi
             s,
             axis_colour,
         );
-        if !t.label.is_empty() {
+        let half = 0.5 * text_width(&t.label, px);
+        if !t.label.is_empty() && x - half >= last_x_label + 0.5 * px {
+            last_x_label = x + half;
             draw_text(
                 &mut pixmap,
                 &t.label,
@@ -601,7 +618,9 @@ pub fn draw_with(chart: &Chart, width: u32, height: u32, quality: Quality) -> Pi
             s,
             axis_colour,
         );
-        if !t.label.is_empty() {
+        // Labels go upwards: the next one must end above this one's top.
+        if !t.label.is_empty() && y + 0.5 * ascent <= last_y_label - 0.2 * px {
+            last_y_label = y - 0.5 * ascent;
             draw_text(
                 &mut pixmap,
                 &t.label,
@@ -718,7 +737,9 @@ pub fn draw_with(chart: &Chart, width: u32, height: u32, quality: Quality) -> Pi
     // Legend rows, each centred over the plot.
     for (r, row) in rows.iter().enumerate() {
         let total: f32 = row.iter().map(|&i| entry_w(&chart.series[i])).sum::<f32>() - 1.2 * px;
-        let mut x = (0.5 * (left + right) - 0.5 * total).max(pad);
+        let mut x = (0.5 * (left + right) - 0.5 * total)
+            .min(w - pad - total)
+            .max(pad);
         let baseline = legend_top + ascent + r as f32 * legend_line;
         let mid = baseline - 0.35 * ascent;
         for &i in row {
@@ -810,6 +831,14 @@ mod tests {
         let l = make_axis(Some((0.002, 0.003)), None, Scale::Log);
         let labels: Vec<&str> = l.ticks.iter().map(|t| t.label.as_str()).collect();
         assert_eq!(labels, ["0.002", "0.003"]);
+        let l = make_axis(Some((6e-4, 5e-3)), None, Scale::Log);
+        let labels: Vec<&str> = l
+            .ticks
+            .iter()
+            .filter(|t| !t.label.is_empty())
+            .map(|t| t.label.as_str())
+            .collect();
+        assert_eq!(labels, ["0.001", "0.002", "0.005"]);
         assert_eq!(format_number(123456.0), "1.23×10⁵");
         assert_eq!(format_number(1e-6), "10⁻⁶");
         assert_eq!(format_number(0.25), "0.25");

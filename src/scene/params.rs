@@ -158,7 +158,12 @@ impl ParamSpec {
             Value::Number(_) => format!("a number {}", self.range),
             Value::Integer(_) => format!("a whole number {}", self.range),
             Value::Vector(_) => "a vector [x, y, z]".to_string(),
-            Value::Indices(_) => "a list of particle indices [i, j, ...]".to_string(),
+            // Particle indices are checked against the particle count by the scene; any other
+            // index list (the cloth's corner keys 1 ..= 4) says its range.
+            Value::Indices(_) if self.range == Range::AtLeast(0.0) => {
+                "a list of particle indices [i, j, ...]".to_string()
+            }
+            Value::Indices(_) => format!("a list [i, j, ...] of whole numbers {}", self.range),
         }
     }
 

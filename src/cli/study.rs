@@ -1,0 +1,329 @@
+//! `springlab study`: stability limits (convergence and work-precision to come).
+
+use std::io::{IsTerminal, Write};
+use std::time::{Duration, Instant};
+
+use clap::{Args, Subcommand};
+
+use crate::physics::Method;
+use crate::study::convergence::{self, ConvergenceOptions, ConvergenceReport};
+use crate::study::stability::{self, DEFAULT_HORIZON, StabilityOptions, StabilityReport};
+use crate::study::{Probe, Stability};
+
+/// The studies.
+#[derive(Debug, Subcommand)]
+pub enum StudyCommand {
+    /// Largest stable time step of each method, by bisection on dt·ω_max.
+    Stability(StabilityArgs),
+    /// Error at a fixed time for dt, dt/2, ... and the fitted order of each method.
+    Convergence(ConvergenceArgs),
+    /// Error against cost (force evaluations and wall time) for each method, log-log.
+    #[command(name = "work-precision")]
+    WorkPrecision(ConvergenceArgs),
+}
+
+/// Options of `springlab study convergence` and `springlab study work-precision`.
+#[derive(Debug, Args)]
+pub struct ConvergenceArgs {
+    /// A built-in scene (see `springlab scenes`) or a scene file (.toml).
+    pub scene: String,
+    /// Methods to study, comma separated (default: all), for example `rk4,verlet`.
+    #[arg(long, value_name = "A,B")]
+    pub methods: Option<String>,
+    /// The time at which the error is measured, in seconds (default 1).
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub time: Option<f64>,
+    /// The largest time step in seconds (default: the scene's; 0.005 s for the oscillator).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub dt: Option<f64>,
+    /// Number of time steps dt, dt/2, ... (default 4 for convergence, 6 for work-precision).
+    #[arg(long, value_name = "N")]
+    pub levels: Option<u32>,
+    /// Timed repeats per point; wall time is their median (default 1, 3 for work-precision).
+    #[arg(long, value_name = "R")]
+    pub repeats: Option<u32>,
+    /// Set a scene parameter, for example `--set stiffness=500` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Print the result as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Also draw the log-log chart into this PNG file.
+    #[arg(long, value_name = "FILE")]
+    pub png: Option<std::path::PathBuf>,
+}
+
+/// Options of `springlab study stability`.
+#[derive(Debug, Args)]
+pub struct StabilityArgs {
+    /// A built-in scene (see `springlab scenes`) or a scene file (.toml).
+    pub scene: String,
+    /// Methods to study, comma separated (default: all), for example `rk4,verlet`.
+    #[arg(long, value_name = "A,B")]
+    pub methods: Option<String>,
+    /// Horizon T in seconds: each probe runs max(T/dt, N_min) steps.
+    #[arg(long, value_name = "T", default_value_t = DEFAULT_HORIZON, allow_negative_numbers = true)]
+    pub horizon: f64,
+    /// Set a scene parameter, for example `--set stiffness=500` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Print the result as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `springlab study ...`.
+///
+/// # Errors
+/// As the study's `run`.
+pub fn run(command: &StudyCommand) -> anyhow::Result<()> {
+    match command {
+        StudyCommand::Stability(args) => run_stability(args),
+        StudyCommand::Convergence(args) => run_convergence(args, false),
+        StudyCommand::WorkPrecision(args) => run_convergence(args, true),
+    }
+}
+
+/// Progress on standard error, only on a terminal and only once the study has taken a second.
+struct Progress {
+    enabled: bool,
+    start: Instant,
+    shown: bool,
+}
+
+impl Progress {
+    fn new() -> Progress {
+        Progress {
+            enabled: std::io::stderr().is_terminal(),
+            start: Instant::now(),
+            shown: false,
+        }
+    }
+
+    fn update(&mut self, method: Method, probe: &Probe) {
+        if !self.enabled || self.start.elapsed() < Duration::from_secs(1) {
+            return;
+        }
+        let verdict = if probe.stable { "stable" } else { "unstable" };
+        // \r and "erase line": one line, rewritten.
+        eprint!(
+            "\r\x1b[2Kstudy stability: {method} dt = {:.4e} s (dt·ω = {:.4}) {verdict}",
+            probe.dt, probe.dt_omega
+        );
+        self.shown = true;
+    }
+
+    fn finish(&self) {
+        if self.shown {
+            eprint!("\r\x1b[2K");
+        }
+    }
+}
+
+fn run_stability(args: &StabilityArgs) -> anyhow::Result<()> {
+    let options = StabilityOptions {
+        methods: match &args.methods {
+            Some(text) => stability::parse_methods(text)?,
+            None => Method::ALL.to_vec(),
+        },
+        horizon: args.horizon,
+        criterion: None,
+    };
+    if !(options.horizon > 0.0 && options.horizon.is_finite()) {
+        return Err(crate::study::StudyError::Horizon(options.horizon).into());
+    }
+    let (scene, sets) = stability::load_scene(&args.scene, &args.sets)?;
+    let mut progress = Progress::new();
+    let start = Instant::now();
+    let result = stability::stability(&scene, &options, &mut |m, p| progress.update(m, p));
+    progress.finish();
+    let mut report = result?;
+    report.sets = sets;
+    let wall = start.elapsed().as_secs_f64();
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        serde_json::to_writer(&mut out, &report).map_err(std::io::Error::from)?;
+        writeln!(out)?;
+    } else {
+        print_table(&mut out, &report, wall)?;
+    }
+    Ok(())
+}
+
+/// The human-readable table.
+///
+/// # Errors
+/// Only when `out` cannot be written.
+pub fn print_table(
+    out: &mut impl Write,
+    r: &StabilityReport,
+    wall_seconds: f64,
+) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "study stability · scene {} · horizon {} s · criterion {}",
+        r.scene,
+        r.horizon,
+        match r.criterion {
+            stability::Criterion::Growth => "growth",
+            stability::Criterion::Divergence => "divergence",
+        }
+    )?;
+    if !r.sets.is_empty() {
+        writeln!(out, "set: {}", r.sets.join(" "))?;
+    }
+    writeln!(
+        out,
+        "ω_max = {:.6} rad/s ({}, {} iterations; Gershgorin bound {:.6} rad/s)",
+        r.omega_max, r.omega_method, r.omega_iterations, r.omega_gershgorin
+    )?;
+    writeln!(out, "stable means: {}", r.definition)?;
+    writeln!(
+        out,
+        "search: dt·ω_max from {} to {}, bisection in log dt to {:e} relative\n",
+        r.dt_omega_range[0],
+        r.dt_omega_range[1],
+        stability::BISECTION_TOLERANCE
+    )?;
+    writeln!(
+        out,
+        "{:<21} {:<14} {:>14} {:>11} {:>13} {:>7}",
+        "method", "stability", "max stable dt", "dt·ω limit", "theory dt·ω", "probes"
+    )?;
+    for m in &r.methods {
+        let dt = m
+            .max_stable_dt
+            .map_or_else(|| "—".to_string(), |dt| format!("{dt:.4e} s"));
+        let limit = match (m.stability, m.limit_dt_omega) {
+            (_, Some(z)) => format!("{z:.4}"),
+            (Stability::Unconditional, None) => format!("> {}", r.dt_omega_range[1]),
+            (_, None) => format!("< {}", r.dt_omega_range[0]),
+        };
+        let theory = match (m.theory, m.theory_dt_omega) {
+            (_, Some(z)) => format!("{z:.4}"),
+            (t, None) => t.name().to_string(),
+        };
+        writeln!(
+            out,
+            "{:<21} {:<14} {:>14} {:>11} {:>13} {:>7}",
+            m.method.name(),
+            m.stability.name(),
+            dt,
+            limit,
+            theory,
+            m.probes.len()
+        )?;
+    }
+    writeln!(
+        out,
+        "\ntheory: the undamped harmonic oscillator (Verlet without damping or projection); \
+         damping, gravity, contact, projection and large motions move the measured limit \
+         ({:.2} s wall)",
+        wall_seconds
+    )
+}
+
+fn run_convergence(args: &ConvergenceArgs, work_precision: bool) -> anyhow::Result<()> {
+    let options = ConvergenceOptions {
+        methods: match &args.methods {
+            Some(text) => stability::parse_methods(text)?,
+            None => Method::ALL.to_vec(),
+        },
+        time: args.time,
+        dt: args.dt,
+        levels: args.levels.unwrap_or(if work_precision { 6 } else { 4 }),
+        repeats: args.repeats.unwrap_or(if work_precision { 3 } else { 1 }),
+    };
+    let (scene, sets) = convergence::load_scene(&args.scene, &args.sets)?;
+    let name = if work_precision {
+        "work-precision"
+    } else {
+        "convergence"
+    };
+    let enabled = std::io::stderr().is_terminal();
+    let start = Instant::now();
+    let mut shown = false;
+    let result = convergence::convergence(&scene, &options, &mut |m, level| {
+        if enabled && start.elapsed() > Duration::from_secs(1) {
+            eprint!(
+                "\r\x1b[2Kstudy {name}: {m} dt level {} of {}",
+                level + 1,
+                options.levels
+            );
+            shown = true;
+        }
+    });
+    if shown {
+        eprint!("\r\x1b[2K");
+    }
+    let mut report = result?;
+    report.sets = sets;
+    if let Some(path) = &args.png {
+        crate::cli::study_chart::save(&report, work_precision, path)?;
+    }
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        serde_json::to_writer(&mut out, &report).map_err(std::io::Error::from)?;
+        writeln!(out)?;
+    } else {
+        print_convergence(&mut out, &report, work_precision)?;
+    }
+    Ok(())
+}
+
+/// The text table of a convergence or work-precision study.
+///
+/// # Errors
+/// Only when `out` cannot be written.
+pub fn print_convergence(
+    out: &mut impl Write,
+    r: &ConvergenceReport,
+    work_precision: bool,
+) -> std::io::Result<()> {
+    let name = if work_precision {
+        "work-precision"
+    } else {
+        "convergence"
+    };
+    writeln!(
+        out,
+        "study {name} · scene {} · error = max |x - x_ref| at t = {} s",
+        r.scene, r.time
+    )?;
+    writeln!(out, "set: {}", r.sets.join(" "))?;
+    let estimate = if r.reference_error > 0.0 {
+        format!(" (its own error ≈ {:.2e} m)", r.reference_error)
+    } else {
+        String::new()
+    };
+    writeln!(out, "reference: {}{estimate}\n", r.reference)?;
+    for m in &r.methods {
+        let order = m
+            .order
+            .map_or_else(|| "—".to_string(), |p| format!("{p:.3}"));
+        writeln!(out, "{:<21} order {order}", m.method.name())?;
+        writeln!(
+            out,
+            "    {:>12} {:>12} {:>12} {:>12}",
+            "dt (s)", "error (m)", "force evals", "wall (s)"
+        )?;
+        for p in &m.points {
+            let error = p
+                .error
+                .map_or_else(|| "diverged".to_string(), |e| format!("{e:.4e}"));
+            let mark = if p.fitted { "" } else { "  (not fitted)" };
+            writeln!(
+                out,
+                "    {:>12.4e} {error:>12} {:>12} {:>12.3e}{mark}",
+                p.dt, p.force_evals, p.wall_seconds
+            )?;
+        }
+    }
+    if work_precision {
+        writeln!(
+            out,
+            "\nCheapest method for an accuracy: the one with the fewest force evaluations at or below that error."
+        )?;
+    }
+    Ok(())
+}

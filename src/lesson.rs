@@ -1,0 +1,445 @@
+//! Lessons: plain Markdown files with TOML front matter, one per lesson, in `lessons/`.
+//!
+//! An instructor edits them without recompiling; the built-in ones are also embedded in the
+//! binary so `springlab` runs from anywhere (`--lessons DIR` loads others).
+//!
+//! # Format
+//!
+//! ```text
+//! +++
+//! number = 1
+//! slug = "rope"
+//! title = "Building a rope"
+//! summary = "Masses, springs, and a pinned end."
+//! +++
+//!
+//! +++ step
+//! title = "Three masses, two springs"
+//! scene = "rope"                    # a built-in scene, or a scene file relative to the lesson
+//! params = { nodes = 3 }            # scene parameters, as with --set
+//! method = "semi-implicit-euler"    # optional: the method to start with (default: the scene's)
+//! dt = 0.01                         # optional: the time step (s)
+//! plots = ["energy", "speed"]       # optional: energy | exact | speed | error
+//! try = ["Press space to run.", "Press k to stiffen the springs."]
+//! goal = { kind = "settle", time = 2.0, speed = 0.05, text = "Make it settle within 2 s." }
+//! +++
+//! The text of the step, in Markdown. Formulas go in code blocks:
+//!
+//!     f = -k (|b - a| - L0) (b - a)/|b - a|
+//! ```
+//!
+//! A goal is one of
+//! - `settle`: every particle slower than `speed` (m/s, default 0.05) before `time` (s);
+//! - `diverge`: the run blows up (NaN or |v| > 1000 m/s) before `time` (s);
+//! - `survive`: the run reaches `time` (s) without diverging.
+//!
+//! Every error names the file and the line (and the column where TOML gives one).
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::physics::Method;
+use crate::scene::{self, Scene, SceneError};
+
+/// The lessons shipped with springlab, embedded at compile time: `(file name, text)`.
+pub const BUILTIN: &[(&str, &str)] = &[
+    ("01-rope.md", include_str!("../lessons/01-rope.md")),
+    ("02-hooke.md", include_str!("../lessons/02-hooke.md")),
+    ("03-euler.md", include_str!("../lessons/03-euler.md")),
+    ("04-verlet.md", include_str!("../lessons/04-verlet.md")),
+    ("05-jelly.md", include_str!("../lessons/05-jelly.md")),
+    ("06-cloth.md", include_str!("../lessons/06-cloth.md")),
+];
+
+/// A plot the lesson screen can show beside the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Plot {
+    /// Kinetic, gravitational, elastic and total energy over time.
+    Energy,
+    /// The oscillator's simulated position beside its exact solution.
+    Exact,
+    /// The largest particle speed over time.
+    Speed,
+    /// The oscillator's error against its exact solution.
+    Error,
+}
+
+/// What the student is asked to achieve in a step.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Goal {
+    /// `settle`, `diverge` or `survive`.
+    pub kind: GoalKind,
+    /// Deadline or duration (s).
+    pub time: f64,
+    /// For `settle`: the speed below which a particle counts as at rest (m/s).
+    #[serde(default = "default_settle_speed")]
+    pub speed: f64,
+    /// What to tell the student.
+    pub text: String,
+}
+
+fn default_settle_speed() -> f64 {
+    0.05
+}
+
+/// The kinds of goal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum GoalKind {
+    /// Every particle slower than `speed` before `time`.
+    Settle,
+    /// The run diverges before `time`.
+    Diverge,
+    /// The run reaches `time` without diverging.
+    Survive,
+}
+
+impl Goal {
+    /// Whether a run at simulated time `time` (s) with largest speed `max_speed` (m/s), diverged
+    /// or not, has met the goal: `Some(true)` met, `Some(false)` failed for good, `None` not yet.
+    #[must_use]
+    pub fn check(&self, time: f64, max_speed: f64, diverged: bool) -> Option<bool> {
+        match self.kind {
+            GoalKind::Settle if diverged => Some(false),
+            GoalKind::Settle if max_speed < self.speed && time > 0.0 => Some(time <= self.time),
+            GoalKind::Settle if time > self.time => Some(false),
+            GoalKind::Diverge if diverged => Some(time <= self.time),
+            GoalKind::Diverge if time > self.time => Some(false),
+            GoalKind::Survive if diverged => Some(false),
+            GoalKind::Survive if time >= self.time => Some(true),
+            _ => None,
+        }
+    }
+}
+
+/// One step of a lesson: text, a scene and what to try.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Step {
+    /// Step title.
+    pub title: String,
+    /// The scene name or path, as written.
+    pub scene: String,
+    /// `key=value` scene parameters.
+    pub params: Vec<String>,
+    /// The method to start with (`None`: the scene's).
+    pub method: Option<Method>,
+    /// The time step (s) to start with (`None`: the scene's).
+    pub dt: Option<f64>,
+    /// Plots to show.
+    pub plots: Vec<Plot>,
+    /// Things to try, one per line.
+    pub try_list: Vec<String>,
+    /// An optional goal the app detects.
+    pub goal: Option<Goal>,
+    /// The Markdown text.
+    pub text: String,
+    /// Where scene file paths are resolved from.
+    base_dir: Option<PathBuf>,
+}
+
+impl Step {
+    /// Builds the step's scene with its parameters and method.
+    ///
+    /// # Errors
+    /// As [`scene::load`]; lessons are validated when loaded, so this fails only if a scene file
+    /// changed since.
+    pub fn build_scene(&self) -> Result<Scene, SceneError> {
+        let target = match &self.base_dir {
+            Some(dir) if self.scene.ends_with(".toml") => {
+                dir.join(&self.scene).to_string_lossy().into_owned()
+            }
+            _ => self.scene.clone(),
+        };
+        let mut scene = scene::load(&target, &self.params)?;
+        if let Some(m) = self.method {
+            scene.set_method(m);
+        }
+        if let Some(dt) = self.dt {
+            scene.dt = dt;
+        }
+        Ok(scene)
+    }
+}
+
+/// A lesson: a title and its steps.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Lesson {
+    /// Position in the menu.
+    pub number: u32,
+    /// Short name for `springlab lesson <slug>`.
+    pub slug: String,
+    /// Title.
+    pub title: String,
+    /// One line for the menu.
+    pub summary: String,
+    /// The steps, in order.
+    pub steps: Vec<Step>,
+    /// The file it came from.
+    pub source: String,
+}
+
+/// A lesson file that cannot be used.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{file}:{line}{}: {message}", column.map(|c| format!(":{c}")).unwrap_or_default())]
+pub struct LessonError {
+    /// The file.
+    pub file: String,
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column, when known.
+    pub column: Option<usize>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl fmt::Display for Lesson {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{}. {} ({}): {}",
+            self.number, self.title, self.slug, self.summary
+        )
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HeaderToml {
+    number: u32,
+    slug: String,
+    title: String,
+    summary: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StepToml {
+    title: String,
+    scene: String,
+    #[serde(default)]
+    params: toml::Table,
+    method: Option<toml::Spanned<String>>,
+    dt: Option<toml::Spanned<f64>>,
+    #[serde(default)]
+    plots: Vec<Plot>,
+    #[serde(default, rename = "try")]
+    try_list: Vec<String>,
+    goal: Option<toml::Spanned<Goal>>,
+}
+
+/// Parses lesson text; `file` names it in errors and `base_dir` resolves scene file paths.
+///
+/// # Errors
+/// A [`LessonError`] naming the file and line: missing or unterminated front matter, TOML errors
+/// (with column), unknown keys, a scene or parameter that does not build, an unknown method, a
+/// non-positive dt or goal time, a lesson without steps.
+pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, LessonError> {
+    let err = |line: usize, column: Option<usize>, message: String| LessonError {
+        file: file.to_string(),
+        line,
+        column,
+        message,
+    };
+    let lines: Vec<&str> = text.lines().collect();
+    // Blocks: (kind "lesson" | "step", first front-matter line index, toml text, body text).
+    let mut blocks: Vec<(bool, usize, String, String)> = Vec::new();
+    let mut i = 0;
+    while i < lines.len() {
+        let trimmed = lines[i].trim_end();
+        let is_step = trimmed == "+++ step";
+        if trimmed == "+++" || is_step {
+            if !is_step && !blocks.is_empty() {
+                return Err(err(
+                    i + 1,
+                    None,
+                    "expected `+++ step` to start a step (the lesson header comes once, first)"
+                        .into(),
+                ));
+            }
+            let start = i + 1;
+            let end = (start..lines.len())
+                .find(|&j| lines[j].trim_end() == "+++")
+                .ok_or_else(|| {
+                    err(
+                        i + 1,
+                        None,
+                        "front matter opened here is never closed with `+++`".into(),
+                    )
+                })?;
+            let toml_text = lines[start..end].join("\n");
+            let body_end = (end + 1..lines.len())
+                .find(|&j| matches!(lines[j].trim_end(), "+++ step" | "+++"))
+                .unwrap_or(lines.len());
+            let body = lines[end + 1..body_end].join("\n").trim().to_string();
+            blocks.push((is_step, start, toml_text, body));
+            i = body_end;
+        } else if blocks.is_empty() && !trimmed.is_empty() {
+            return Err(err(
+                i + 1,
+                None,
+                "expected the lesson header: a `+++` line, TOML, and `+++`".into(),
+            ));
+        } else {
+            i += 1;
+        }
+    }
+    // Line and column of a byte offset inside a front-matter block that starts at line index `start`.
+    let position = |start: usize, toml_text: &str, offset: usize| {
+        let before = &toml_text[..offset.min(toml_text.len())];
+        let line = start + 1 + before.matches('\n').count();
+        let column = before
+            .rfind('\n')
+            .map_or(before.len(), |p| before.len() - p - 1)
+            + 1;
+        (line, column)
+    };
+    let toml_err = |start: usize, toml_text: &str, e: toml::de::Error| {
+        let (line, column) = e
+            .span()
+            .map_or((start + 1, 1), |s| position(start, toml_text, s.start));
+        err(line, Some(column), e.message().trim().to_string())
+    };
+
+    let Some((false, hstart, htext, _)) = blocks.first() else {
+        return Err(err(
+            1,
+            None,
+            "expected the lesson header: a `+++` line, TOML, and `+++`".into(),
+        ));
+    };
+    let header: HeaderToml = toml::from_str(htext).map_err(|e| toml_err(*hstart, htext, e))?;
+    let mut steps = Vec::new();
+    for (_, start, toml_text, body) in blocks.iter().skip(1) {
+        let st: StepToml = toml::from_str(toml_text).map_err(|e| toml_err(*start, toml_text, e))?;
+        let at = |offset: usize| position(*start, toml_text, offset);
+        let method = match &st.method {
+            Some(m) => Some(m.get_ref().parse::<Method>().map_err(|e| {
+                let (l, c) = at(m.span().start);
+                err(l, Some(c), e.to_string())
+            })?),
+            None => None,
+        };
+        if let Some(dt) = &st.dt
+            && !(*dt.get_ref() > 0.0 && dt.get_ref().is_finite())
+        {
+            let (l, c) = at(dt.span().start);
+            return Err(err(
+                l,
+                Some(c),
+                format!("dt = {}: expected a time step in seconds > 0", dt.get_ref()),
+            ));
+        }
+        if let Some(goal) = &st.goal {
+            let g = goal.get_ref();
+            let valid = g.time > 0.0 && g.time.is_finite() && g.speed > 0.0;
+            if !valid {
+                let (l, c) = at(goal.span().start);
+                return Err(err(
+                    l,
+                    Some(c),
+                    "goal: expected time > 0 (s) and speed > 0 (m/s)".into(),
+                ));
+            }
+        }
+        let params: Vec<String> = st
+            .params
+            .iter()
+            .map(|(k, v)| format!("{k}={}", value_text(v)))
+            .collect();
+        let step = Step {
+            title: st.title,
+            scene: st.scene,
+            params,
+            method,
+            dt: st.dt.map(|d| *d.get_ref()),
+            plots: st.plots,
+            try_list: st.try_list,
+            goal: st.goal.map(toml::Spanned::into_inner),
+            text: body.clone(),
+            base_dir: base_dir.map(Path::to_path_buf),
+        };
+        // Validate now, so a broken lesson shows its error in the menu, not mid-lesson.
+        step.build_scene()
+            .map_err(|e| err(*start, None, format!("step \"{}\": {e}", step.title)))?;
+        steps.push(step);
+    }
+    if steps.is_empty() {
+        return Err(err(
+            lines.len().max(1),
+            None,
+            "a lesson needs at least one `+++ step`".into(),
+        ));
+    }
+    Ok(Lesson {
+        number: header.number,
+        slug: header.slug,
+        title: header.title,
+        summary: header.summary,
+        steps,
+        source: file.to_string(),
+    })
+}
+
+/// TOML value → the text `--set` accepts (`3`, `0.5`, `[0, 1]`, `[0.0, 2.0, 0.0]`).
+fn value_text(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Array(items) => {
+            let inner: Vec<String> = items.iter().map(value_text).collect();
+            format!("[{}]", inner.join(", "))
+        }
+        toml::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// The built-in lessons, each parsed or with its error (shown in the menu, never a crash).
+#[must_use]
+pub fn builtin() -> Vec<Result<Lesson, LessonError>> {
+    let mut lessons: Vec<_> = BUILTIN
+        .iter()
+        .map(|(file, text)| parse(text, &format!("lessons/{file}"), None))
+        .collect();
+    sort(&mut lessons);
+    lessons
+}
+
+/// Every `*.md` file of `dir`, each parsed or with its error, sorted by lesson number.
+///
+/// # Errors
+/// When the directory cannot be read.
+pub fn load_dir(dir: &Path) -> std::io::Result<Vec<Result<Lesson, LessonError>>> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)?
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    files.sort();
+    let mut lessons: Vec<_> = files
+        .iter()
+        .map(|path| {
+            let name = path.display().to_string();
+            match std::fs::read_to_string(path) {
+                Ok(text) => parse(&text, &name, path.parent()),
+                Err(e) => Err(LessonError {
+                    file: name,
+                    line: 1,
+                    column: None,
+                    message: format!("cannot read: {e}"),
+                }),
+            }
+        })
+        .collect();
+    sort(&mut lessons);
+    Ok(lessons)
+}
+
+fn sort(lessons: &mut [Result<Lesson, LessonError>]) {
+    lessons.sort_by_key(|l| match l {
+        Ok(l) => (l.number, String::new()),
+        Err(e) => (u32::MAX, e.file.clone()),
+    });
+}

@@ -1,0 +1,335 @@
+//! Convergence order and work-precision: how the error of each method shrinks with `dt`, and
+//! what each accuracy costs.
+//!
+//! # Theory
+//!
+//! A method of order `p` has a global error at a fixed time `T` that shrinks like `dt^p`:
+//!
+//! ```text
+//! e(dt) = |x_dt(T) - x(T)|_max ≈ C dt^p
+//! log e = log C + p log dt                      a straight line of slope p in log-log axes
+//! p     ≈ least-squares slope of (log dt_i, log e_i)
+//! ```
+//! where `x_dt(T)` are the positions (m) computed with step `dt` (s), `x(T)` the reference and the
+//! norm is the largest distance over the particles (m).
+//!
+//! **The reference.** Where the scene has an exact solution it is used:
+//! - the undamped `oscillator`: `x_1(t) = L0 + A cos(√(k/m) t)` along x;
+//! - free fall (no springs, no colliders, no drag): `x(t) = x_0 + v_0 t + ½ g t²`.
+//!
+//! Otherwise the reference is RK4 at `dt_ref = dt_min / 16`, whose own error is estimated by
+//! Richardson extrapolation from a second run at `2 dt_ref`:
+//!
+//! ```text
+//! e_ref ≈ |x_{dt_ref}(T) - x_{2 dt_ref}(T)| / (2⁴ - 1)
+//! ```
+//! Points whose error is below `10 e_ref` measure the reference, not the method: they are
+//! reported but left out of the fit, as are diverged runs.
+//!
+//! **Work-precision** plots the same errors against the cost of reaching them: force evaluations
+//! (repeatable, machine-independent) and wall time (median of repeats, this machine). For a wanted
+//! accuracy the cheapest method is the lowest curve at that error.
+//!
+//! **Same equations for every method.** Position Verlet's constraint projection and its `(1 - γ)`
+//! damping change the equations being solved (a rope of rods instead of springs), so the study
+//! runs Verlet with `iterations = 0` and `verlet_damping = 0`, and says so.
+//!
+//! Reference: E. Hairer, S. P. Nørsett, G. Wanner, *Solving Ordinary Differential Equations I*,
+//! 2nd ed., Springer 1993, §II.4 (order and error estimation, Richardson extrapolation) and
+//! §II.10 (work-precision diagrams).
+
+use std::time::Instant;
+
+use glam::DVec3;
+use serde::Serialize;
+
+use super::StudyError;
+use crate::physics::Method;
+use crate::scene::{self, Scene};
+use crate::simulation::Simulation;
+
+/// Scene parameters every convergence study applies first (see the module docs).
+pub const SAME_EQUATIONS: [&str; 2] = ["iterations=0", "verlet_damping=0"];
+
+/// Options of [`convergence`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConvergenceOptions {
+    /// Methods, in order.
+    pub methods: Vec<Method>,
+    /// The time at which errors are measured (s); `None`: 1 s.
+    pub time: Option<f64>,
+    /// The largest dt (s); `None`: the scene's default dt, or 0.005 s for the oscillator.
+    pub dt: Option<f64>,
+    /// Number of dt values: dt, dt/2, …, dt/2^(levels-1).
+    pub levels: u32,
+    /// Timed repeats per point (wall time is their median).
+    pub repeats: u32,
+}
+
+impl Default for ConvergenceOptions {
+    fn default() -> ConvergenceOptions {
+        ConvergenceOptions {
+            methods: Method::ALL.to_vec(),
+            time: None,
+            dt: None,
+            levels: 4,
+            repeats: 1,
+        }
+    }
+}
+
+/// One run of one method at one dt.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Point {
+    /// Time step (s).
+    pub dt: f64,
+    /// Largest position error at the study time (m); `null` in JSON when the run diverged.
+    pub error: Option<f64>,
+    /// Force evaluations the run took.
+    pub force_evals: u64,
+    /// Wall time of the run (s), median of the repeats.
+    pub wall_seconds: f64,
+    /// Whether the point entered the order fit.
+    pub fitted: bool,
+}
+
+/// The points of one method and its fitted order.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MethodConvergence {
+    /// The method.
+    pub method: Method,
+    /// Least-squares slope of log error against log dt over the fitted points; `null` when fewer
+    /// than two points could be fitted.
+    pub order: Option<f64>,
+    /// One point per dt, largest dt first.
+    pub points: Vec<Point>,
+}
+
+/// The result of [`convergence`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ConvergenceReport {
+    /// Scene name.
+    pub scene: String,
+    /// Parameters applied before the user's.
+    pub sets: Vec<String>,
+    /// The time the errors are measured at (s).
+    pub time: f64,
+    /// `exact` or `rk4 dt=…`.
+    pub reference: String,
+    /// Estimated error of the reference itself (m); 0 for an exact solution.
+    pub reference_error: f64,
+    /// One entry per method.
+    pub methods: Vec<MethodConvergence>,
+}
+
+/// The exact positions at time `t`, when the scene has a closed-form solution.
+fn exact_solution(scene: &Scene, t: f64) -> Option<Vec<DVec3>> {
+    let [body] = scene.bodies.as_slice() else {
+        return None;
+    };
+    let (model, state) = (&body.model, &body.state);
+    if !model.colliders.is_empty() || !state.spheres.is_empty() || model.drag != 0.0 {
+        return None;
+    }
+    if model.springs.is_empty() {
+        // Free fall: x(t) = x0 + v0 t + ½ g t² for free particles; pinned ones stay.
+        return Some(
+            state
+                .x
+                .iter()
+                .zip(&state.v)
+                .zip(&model.inv_mass)
+                .map(|((&x, &v), &w)| {
+                    if w == 0.0 {
+                        x
+                    } else {
+                        x + v * t + 0.5 * model.gravity * t * t
+                    }
+                })
+                .collect(),
+        );
+    }
+    // The oscillator: one spring from a pinned particle at the origin to a free one on the x axis,
+    // no gravity, no damping: x_1(t) = L0 + A cos(ω t).
+    let [s] = model.springs.as_slice() else {
+        return None;
+    };
+    let along_x = state
+        .x
+        .iter()
+        .chain(&state.v)
+        .all(|p| p.y == 0.0 && p.z == 0.0);
+    let pinned_origin = model.inv_mass[0] == 0.0 && state.x[0] == DVec3::ZERO;
+    if model.particle_count() != 2
+        || s.damping != 0.0
+        || model.gravity != DVec3::ZERO
+        || !along_x
+        || !pinned_origin
+    {
+        return None;
+    }
+    if state.v[1] != DVec3::ZERO || state.x[1].x <= 0.0 {
+        return None;
+    }
+    let omega = (s.stiffness * model.inv_mass[1]).sqrt();
+    let amplitude = state.x[1].x - s.rest_length;
+    Some(vec![
+        DVec3::ZERO,
+        DVec3::new(s.rest_length + amplitude * (omega * t).cos(), 0.0, 0.0),
+    ])
+}
+
+/// Positions after running `scene` with `method` at `dt` for `steps` steps, the force evaluations,
+/// and whether it diverged.
+fn run(scene: &Scene, method: Method, dt: f64, steps: u64) -> (Vec<DVec3>, u64, bool, f64) {
+    let mut scene = scene.clone();
+    scene.set_method(method);
+    let mut sim = Simulation::new(scene);
+    sim.set_dt(dt);
+    let start = Instant::now();
+    sim.run(steps, |_| {});
+    let wall = start.elapsed().as_secs_f64();
+    (
+        sim.positions().collect(),
+        sim.force_evals,
+        sim.diverged.is_some(),
+        wall,
+    )
+}
+
+fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| a.distance(*b))
+        .fold(0.0, f64::max)
+}
+
+/// Least-squares slope of `log y` against `log x`.
+#[must_use]
+pub fn fitted_slope(points: &[(f64, f64)]) -> Option<f64> {
+    if points.len() < 2 {
+        return None;
+    }
+    let n = points.len() as f64;
+    let (lx, ly): (Vec<f64>, Vec<f64>) = points.iter().map(|&(x, y)| (x.ln(), y.ln())).unzip();
+    let (mx, my) = (lx.iter().sum::<f64>() / n, ly.iter().sum::<f64>() / n);
+    let sxy: f64 = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = lx.iter().map(|x| (x - mx) * (x - mx)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+/// Loads `name_or_path` for a convergence study: [`SAME_EQUATIONS`] first, then `user_sets`.
+///
+/// # Errors
+/// As [`scene::load`].
+pub fn load_scene(
+    name_or_path: &str,
+    user_sets: &[String],
+) -> Result<(Scene, Vec<String>), StudyError> {
+    let mut sets: Vec<String> = SAME_EQUATIONS.iter().map(|s| (*s).to_string()).collect();
+    sets.extend(user_sets.iter().cloned());
+    let scene = scene::load(name_or_path, &sets)?;
+    Ok((scene, sets))
+}
+
+/// Measures each method's error at the study time for dt, dt/2, … and fits its order.
+/// Calls `progress(method, level)` after each run.
+///
+/// # Errors
+/// A time or dt that is not positive and finite, fewer than 2 levels, no method.
+pub fn convergence(
+    scene: &Scene,
+    options: &ConvergenceOptions,
+    progress: &mut dyn FnMut(Method, u32),
+) -> Result<ConvergenceReport, StudyError> {
+    let time = options.time.unwrap_or(1.0);
+    if !(time > 0.0 && time.is_finite()) {
+        return Err(StudyError::Time(time));
+    }
+    let exact_scene = exact_solution(scene, time).is_some();
+    let dt0 = options
+        .dt
+        .unwrap_or(if exact_scene && scene.name == "oscillator" {
+            0.005
+        } else {
+            scene.dt
+        });
+    if !(dt0 > 0.0 && dt0.is_finite()) {
+        return Err(StudyError::TimeStep(dt0));
+    }
+    if options.levels < 2 {
+        return Err(StudyError::Levels(options.levels));
+    }
+    if options.methods.is_empty() {
+        return Err(StudyError::NoMethods);
+    }
+    let dts: Vec<f64> = (0..options.levels)
+        .map(|i| dt0 / f64::from(1u32 << i.min(30)))
+        .collect();
+    let steps_for = |dt: f64| (time / dt).round().max(1.0) as u64;
+    let dt_min = dts[dts.len() - 1];
+    // Every run ends at exactly steps·dt; the reference is taken at the same instant.
+    let t_end = steps_for(dt0) as f64 * dt0;
+    let (reference_x, reference, reference_error) = match exact_solution(scene, t_end) {
+        Some(x) => (x, "exact".to_string(), 0.0),
+        None => {
+            let dt_ref = dt_min / 16.0;
+            let (fine, _, d1, _) = run(scene, Method::Rk4, dt_ref, steps_for(dt_ref));
+            let (coarse, _, d2, _) = run(scene, Method::Rk4, 2.0 * dt_ref, steps_for(2.0 * dt_ref));
+            let estimate = if d1 || d2 {
+                f64::INFINITY
+            } else {
+                max_distance(&fine, &coarse) / 15.0
+            };
+            (fine, format!("rk4 dt={dt_ref:e}"), estimate)
+        }
+    };
+    let mut methods = Vec::new();
+    for &method in &options.methods {
+        let mut points = Vec::new();
+        for (level, &dt) in dts.iter().enumerate() {
+            let steps = steps_for(dt);
+            let mut walls = Vec::new();
+            let mut last = None;
+            for _ in 0..options.repeats.max(1) {
+                let (x, evals, diverged, wall) = run(scene, method, dt, steps);
+                walls.push(wall);
+                last = Some((x, evals, diverged));
+            }
+            walls.sort_by(f64::total_cmp);
+            let Some((x, force_evals, diverged)) = last else {
+                continue;
+            };
+            let error = (!diverged)
+                .then(|| max_distance(&x, &reference_x))
+                .filter(|e| e.is_finite());
+            let fitted = error.is_some_and(|e| e > 10.0 * reference_error && e > 0.0);
+            points.push(Point {
+                dt,
+                error,
+                force_evals,
+                wall_seconds: walls[walls.len() / 2],
+                fitted,
+            });
+            progress(method, level as u32);
+        }
+        let fit: Vec<(f64, f64)> = points
+            .iter()
+            .filter(|p| p.fitted)
+            .filter_map(|p| p.error.map(|e| (p.dt, e)))
+            .collect();
+        methods.push(MethodConvergence {
+            method,
+            order: fitted_slope(&fit),
+            points,
+        });
+    }
+    Ok(ConvergenceReport {
+        scene: scene.name.clone(),
+        sets: Vec::new(),
+        time: t_end,
+        reference,
+        reference_error,
+        methods,
+    })
+}

@@ -1,0 +1,287 @@
+//! The stiffest mode of a mass-spring system: `ω_max`, the angular frequency that sets the
+//! stability limit of every explicit method.
+//!
+//! # Theory
+//!
+//! Linearised about a state `x`, the undamped motion of small displacements `δx` obeys
+//! `M δx'' = -K δx`, where `K = -∂f/∂x` is assembled from one 3×3 block per spring, exactly as the
+//! implicit Euler step builds it ([`crate::physics::integrators`], implicit Euler):
+//!
+//! ```text
+//! n       = (x_b - x_a) / L,   L = |x_b - x_a|
+//! K_s     = k [ n nᵀ + max(0, 1 - L0/L) (I - n nᵀ) ]        (N/m)
+//! K_aa   += K_s,   K_bb += K_s,   K_ab = K_ba = -K_s
+//! ω_i²    = λ_i(M⁻¹K)                                        (rad²/s²)
+//! ω_max   = √λ_max(M⁻¹K)                                     (rad/s)
+//! ```
+//! where
+//! - `k`: spring stiffness (N/m), `L0`: rest length (m), `L`: current length (m)
+//! - `M`: the diagonal mass matrix (kg); pinned particles (`1/m = 0`) are removed with their rows
+//!   and columns, since their `δx` is held at zero
+//! - `λ_i`: the eigenvalues (1/s²), `ω_i`: the angular frequencies of the normal modes (rad/s)
+//!
+//! The transverse term is clamped at zero for a compressed spring (Choi & Ko 2002, §4), so every
+//! `K_s` is symmetric positive semidefinite, and so is `K`. A spring of zero length has no
+//! direction and contributes nothing. Damping, drag and contact are left out: `ω_max` is the
+//! frequency of the undamped springs, the `ω` of the stability limits `dt·ω`.
+//!
+//! **Power iteration.** `M⁻¹K` is not symmetric, but it is similar to the symmetric positive
+//! semidefinite `A = M^(-1/2) K M^(-1/2)` (`A = M^(1/2) (M⁻¹K) M^(-1/2)`), which has the same
+//! eigenvalues. Starting from a fixed pseudo-random vector `q_0`:
+//!
+//! ```text
+//! y_k     = A q_k
+//! λ_k     = q_kᵀ y_k                    Rayleigh quotient, |q_k| = 1
+//! r_k     = |y_k - λ_k q_k| / λ_k       relative residual
+//! q_{k+1} = y_k / |y_k|
+//! ```
+//! For a symmetric positive semidefinite `A` the Rayleigh quotients never decrease and converge
+//! to `λ_max` like `(λ_2/λ_max)^(2k)` (Golub & Van Loan, §7.3.1, §8.2.1): they are lower bounds.
+//! The iteration stops when `r_k ≤ 10⁻¹⁰` (the vector has converged), when one iteration raises
+//! `λ_k` by less than `10⁻⁸ λ_k` (the quotient has: with the nearly degenerate top of a lattice's
+//! spectrum the vector converges far more slowly than the value), or after [`MAX_ITERATIONS`].
+//! On the W1 jelly that is about 2000 iterations, `λ` within `10⁻⁴` of its limit.
+//!
+//! **Gershgorin bound.** Every eigenvalue of `M⁻¹K` lies in a disc centred on a diagonal entry
+//! with radius the sum of the absolute values of the rest of its row (Golub & Van Loan, §7.2.1):
+//!
+//! ```text
+//! λ_max ≤ max_i Σ_j |(M⁻¹K)_ij|
+//! ```
+//! an upper bound that costs one pass over the springs. So `λ_power ≤ λ_max ≤ λ_Gershgorin`.
+//!
+//! Checks: for the oscillator (one spring, one free mass) `ω_max = √(k/m) = 10` rad/s exactly;
+//! for a chain of `N` free masses hanging from a pinned end, at rest,
+//! `ω_max² = 4 (k/m) sin²((2N - 1) π / (4N + 2))` (a fixed–free chain); for the W1 jelly at rest
+//! `λ_max = 3.37·10⁴` 1/s², `ω_max = 184` rad/s (`WORKLOADS.md`).
+//!
+//! References: G. H. Golub, C. F. Van Loan, *Matrix Computations*, 4th ed., Johns Hopkins 2013,
+//! §7.2.1 (Gershgorin), §7.3.1 (the power method), §8.2.1 (the symmetric power method);
+//! D. Baraff, A. Witkin, "Large Steps in Cloth Simulation", SIGGRAPH 1998, §5 (the spring
+//! Jacobians); K.-J. Choi, H.-S. Ko, "Stable but Responsive Cloth", SIGGRAPH 2002, §4.
+
+use glam::{DMat3, DVec3};
+use serde::Serialize;
+
+use crate::physics::{Model, State};
+
+/// Iteration limit of the power iteration.
+pub const MAX_ITERATIONS: u32 = 20_000;
+
+/// Stop when the relative residual `|A q - λ q| / λ` falls below this.
+pub const RESIDUAL_TOLERANCE: f64 = 1e-10;
+
+/// Stop when one iteration changes the Rayleigh quotient by less than this, relatively.
+pub const STALL_TOLERANCE: f64 = 1e-8;
+
+/// The estimate of the stiffest mode (see the module documentation).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct OmegaEstimate {
+    /// `ω_max = √λ_max(M⁻¹K)` from the power iteration (rad/s).
+    pub omega: f64,
+    /// How `omega` was computed: `"power iteration"`.
+    pub method: &'static str,
+    /// The Rayleigh quotient `λ_max(M⁻¹K)` (1/s²): a lower bound.
+    pub lambda: f64,
+    /// Power iterations taken.
+    pub iterations: u32,
+    /// Final relative residual `|A q - λ q| / λ` (dimensionless).
+    pub residual: f64,
+    /// The Gershgorin upper bound on `λ_max(M⁻¹K)` (1/s²).
+    pub gershgorin_lambda: f64,
+    /// `√gershgorin_lambda` (rad/s): an upper bound on `ω_max`.
+    pub gershgorin_omega: f64,
+}
+
+/// The angular frequency `ω_max` (rad/s) of the stiffest mode of `model` linearised at `state`,
+/// by power iteration on `M^(-1/2) K M^(-1/2)`, with the Gershgorin upper bound beside it.
+///
+/// Deterministic: the start vector is a fixed pseudo-random sequence. A model without free
+/// particles or without stiffness gives `omega = 0`.
+///
+/// # Panics
+/// If `state` has fewer particles than `model`.
+#[must_use]
+pub fn omega_max(model: &Model, state: &State) -> OmegaEstimate {
+    let n = model.particle_count();
+    let blocks = stiffness_blocks(model, &state.x);
+    let free: Vec<bool> = (0..n).map(|i| !model.is_pinned(i)).collect();
+    let gershgorin_lambda = gershgorin(model, &blocks, &free);
+
+    // s_i = 1/√m_i for free particles, 0 for pinned ones: A = S K S with the pinned rows
+    // and columns zeroed.
+    let scale: Vec<f64> = (0..n)
+        .map(|i| {
+            if free[i] {
+                model.inv_mass[i].sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mut q = start_vector(&scale);
+    let mut y = vec![DVec3::ZERO; n];
+    let mut u = vec![DVec3::ZERO; n];
+    let mut lambda = 0.0;
+    let mut residual = f64::INFINITY;
+    let mut iterations = 0;
+    if norm(&q) > 0.0 {
+        while iterations < MAX_ITERATIONS {
+            apply(model, &blocks, &scale, &q, &mut u, &mut y);
+            iterations += 1;
+            // λ_k = q_kᵀ A q_k (|q_k| = 1)
+            let lambda_new = dot(&q, &y);
+            // r_k = |A q_k - λ_k q_k|
+            let r: f64 = q
+                .iter()
+                .zip(&y)
+                .map(|(q, y)| (*y - lambda_new * *q).length_squared())
+                .sum::<f64>()
+                .sqrt();
+            let y_norm = norm(&y);
+            if lambda_new <= 0.0 || y_norm == 0.0 {
+                // q lies in the null space: no stiffness reaches the free particles.
+                lambda = 0.0;
+                residual = 0.0;
+                break;
+            }
+            let change = (lambda_new - lambda).abs();
+            lambda = lambda_new;
+            residual = r / lambda;
+            // q_{k+1} = A q_k / |A q_k|
+            for (q, y) in q.iter_mut().zip(&y) {
+                *q = *y / y_norm;
+            }
+            if residual <= RESIDUAL_TOLERANCE || change <= STALL_TOLERANCE * lambda {
+                break;
+            }
+        }
+    } else {
+        residual = 0.0;
+    }
+    OmegaEstimate {
+        omega: lambda.max(0.0).sqrt(),
+        method: "power iteration",
+        lambda,
+        iterations,
+        residual,
+        gershgorin_lambda,
+        gershgorin_omega: gershgorin_lambda.sqrt(),
+    }
+}
+
+/// `K_s = k [n nᵀ + max(0, 1 - L0/L)(I - n nᵀ)]` for every spring (zero for a zero length).
+fn stiffness_blocks(model: &Model, x: &[DVec3]) -> Vec<DMat3> {
+    model
+        .springs
+        .iter()
+        .map(|s| {
+            let d = x[s.b as usize] - x[s.a as usize];
+            let length = d.length();
+            if length == 0.0 {
+                return DMat3::ZERO;
+            }
+            let n = d / length;
+            let nn = DMat3::from_cols(n * n.x, n * n.y, n * n.z);
+            let transverse = (1.0 - s.rest_length / length).max(0.0);
+            s.stiffness * (nn + transverse * (DMat3::IDENTITY - nn))
+        })
+        .collect()
+}
+
+/// `y = S K S q`, with `S = diag(scale)`; `u` is scratch.
+fn apply(
+    model: &Model,
+    blocks: &[DMat3],
+    scale: &[f64],
+    q: &[DVec3],
+    u: &mut [DVec3],
+    y: &mut [DVec3],
+) {
+    for ((u, q), s) in u.iter_mut().zip(q).zip(scale) {
+        *u = *q * *s;
+    }
+    y.fill(DVec3::ZERO);
+    for (s, k_s) in model.springs.iter().zip(blocks) {
+        let (a, b) = (s.a as usize, s.b as usize);
+        // (K u)_a += K_s (u_a - u_b),  (K u)_b += K_s (u_b - u_a)
+        let f = *k_s * (u[a] - u[b]);
+        y[a] += f;
+        y[b] -= f;
+    }
+    for (y, s) in y.iter_mut().zip(scale) {
+        *y *= *s;
+    }
+}
+
+/// `max_i Σ_j |(M⁻¹K)_ij|` over the rows of free particles, pinned columns left out (1/s²).
+fn gershgorin(model: &Model, blocks: &[DMat3], free: &[bool]) -> f64 {
+    let n = model.particle_count();
+    let mut diagonal = vec![DMat3::ZERO; n];
+    let mut off = vec![DVec3::ZERO; n];
+    for (s, k_s) in model.springs.iter().zip(blocks) {
+        let (a, b) = (s.a as usize, s.b as usize);
+        diagonal[a] += *k_s;
+        diagonal[b] += *k_s;
+        // Row sums of |K_s|: the off-diagonal block -K_s of a free column.
+        let abs_rows = abs_row_sums(k_s);
+        if free[b] {
+            off[a] += abs_rows;
+        }
+        if free[a] {
+            off[b] += abs_rows;
+        }
+    }
+    (0..n)
+        .filter(|&i| free[i])
+        .map(|i| {
+            let rows = abs_row_sums(&diagonal[i]) + off[i];
+            model.inv_mass[i] * rows.max_element()
+        })
+        .fold(0.0, f64::max)
+}
+
+/// `(Σ_c |m_rc|)_r`: the absolute row sums of a 3×3 matrix.
+fn abs_row_sums(m: &DMat3) -> DVec3 {
+    let t = m.transpose();
+    DVec3::new(
+        t.x_axis.abs().element_sum(),
+        t.y_axis.abs().element_sum(),
+        t.z_axis.abs().element_sum(),
+    )
+}
+
+/// A fixed pseudo-random unit vector (xorshift64*), zero on pinned particles.
+fn start_vector(scale: &[f64]) -> Vec<DVec3> {
+    let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut next = || {
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        let bits = state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11;
+        // uniform in [-1, 1)
+        2.0 * (bits as f64 / (1u64 << 53) as f64) - 1.0
+    };
+    let mut q: Vec<DVec3> = scale
+        .iter()
+        .map(|&s| {
+            let v = DVec3::new(next(), next(), next());
+            if s > 0.0 { v } else { DVec3::ZERO }
+        })
+        .collect();
+    let q_norm = norm(&q);
+    if q_norm > 0.0 {
+        for q in &mut q {
+            *q /= q_norm;
+        }
+    }
+    q
+}
+
+fn dot(a: &[DVec3], b: &[DVec3]) -> f64 {
+    a.iter().zip(b).map(|(a, b)| a.dot(*b)).sum()
+}
+
+fn norm(a: &[DVec3]) -> f64 {
+    dot(a, a).sqrt()
+}

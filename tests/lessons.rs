@@ -1,0 +1,169 @@
+//! Lesson files: every shipped lesson loads and builds its scenes; malformed files get messages
+//! naming the file and line.
+
+use std::path::Path;
+
+use springlab::lesson::{self, GoalKind, Plot};
+
+#[test]
+fn every_lesson_file_loads_and_every_step_builds_its_scene() {
+    let lessons = lesson::load_dir(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("lessons")
+            .as_path(),
+    )
+    .expect("lessons/ is readable");
+    assert!(lessons.len() >= 4);
+    for l in &lessons {
+        let l = l.as_ref().unwrap_or_else(|e| panic!("{e}"));
+        assert!(!l.steps.is_empty());
+        for step in &l.steps {
+            let scene = step
+                .build_scene()
+                .unwrap_or_else(|e| panic!("{}: {e}", l.source));
+            assert!(scene.particle_count() >= 2, "{}: {}", l.source, step.title);
+            assert!(
+                !step.text.is_empty(),
+                "{}: step {} has no text",
+                l.source,
+                step.title
+            );
+        }
+    }
+    // Lessons are numbered 1, 2, ... without gaps.
+    let numbers: Vec<u32> = lessons
+        .iter()
+        .map(|l| l.as_ref().map(|l| l.number).unwrap_or(0))
+        .collect();
+    assert_eq!(numbers, (1..=lessons.len() as u32).collect::<Vec<_>>());
+}
+
+#[test]
+fn embedded_lessons_are_the_files_in_lessons_dir() {
+    for (name, text) in lesson::BUILTIN {
+        let on_disk = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("lessons")
+                .join(name),
+        )
+        .expect("embedded lesson exists on disk");
+        assert_eq!(&on_disk, text);
+    }
+    assert!(lesson::builtin().iter().all(Result::is_ok));
+}
+
+#[test]
+fn steps_carry_scene_parameters_method_plots_and_goal() {
+    let lessons = lesson::builtin();
+    let rope = lessons[0].as_ref().expect("lesson 1");
+    assert_eq!((rope.number, rope.slug.as_str()), (1, "rope"));
+    let bridge = &rope.steps[2];
+    assert_eq!(
+        bridge.params,
+        vec![
+            "damping=0.5",
+            "end=[4.0, 2.0, 0.0]",
+            "nodes=9",
+            "pinned=[0, 8]",
+            "start=[-4.0, 2.0, 0.0]"
+        ]
+    );
+    let scene = bridge.build_scene().expect("bridge");
+    assert!(scene.bodies[0].model.is_pinned(8));
+    assert_eq!(bridge.plots, vec![Plot::Energy, Plot::Speed]);
+    let goal = bridge.goal.as_ref().expect("goal");
+    assert_eq!(goal.kind, GoalKind::Settle);
+    // The goal logic: met, failed, pending.
+    assert_eq!(goal.check(5.0, 0.01, false), Some(true));
+    assert_eq!(goal.check(9.0, 0.5, false), Some(false));
+    assert_eq!(goal.check(3.0, 0.5, false), None);
+    assert_eq!(goal.check(3.0, 0.0, true), Some(false));
+}
+
+fn error_of(text: &str) -> String {
+    match lesson::parse(text, "bad.md", None) {
+        Ok(_) => panic!("expected an error for:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+const HEADER: &str = "+++\nnumber = 9\nslug = \"x\"\ntitle = \"X\"\nsummary = \"s\"\n+++\n";
+
+#[test]
+fn malformed_lessons_name_the_file_and_line() {
+    let cases: Vec<(String, &str)> = vec![
+        ("just text\n".into(), "bad.md:1: expected the lesson header"),
+        (
+            "+++\nnumber = 1\n".into(),
+            "bad.md:1: front matter opened here is never closed",
+        ),
+        (
+            HEADER.into(),
+            "bad.md:6: a lesson needs at least one `+++ step`",
+        ),
+        (
+            "+++\nnumber = 1\nslug = \"a\"\ntitle = \"t\"\nsummary = \"s\"\ncolour = 3\n+++\n"
+                .into(),
+            "bad.md:6:1: unknown field `colour`",
+        ),
+        (
+            "+++\nnumber = \"one\"\nslug = \"a\"\ntitle = \"t\"\nsummary = \"s\"\n+++\n".into(),
+            "bad.md:2:10:",
+        ),
+        (
+            format!("{HEADER}+++ step\ntitle = \"a\"\nscene = \"nosuch\"\n+++\ntext\n"),
+            "bad.md:7: step \"a\": unknown scene `nosuch`",
+        ),
+        (
+            format!(
+                "{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\nparams = {{ nodes = 1 }}\n+++\ntext\n"
+            ),
+            "`nodes` = 1 is out of range",
+        ),
+        (
+            format!(
+                "{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\nparams = {{ colour = 1 }}\n+++\n"
+            ),
+            "unknown parameter `colour` for scene `rope`",
+        ),
+        (
+            format!("{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\nmethod = \"euler\"\n+++\n"),
+            "bad.md:10:10: unknown method `euler`",
+        ),
+        (
+            format!("{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\ndt = -1.0\n+++\n"),
+            "bad.md:10:6: dt = -1: expected a time step in seconds > 0",
+        ),
+        (
+            format!("{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\nplots = [\"pie\"]\n+++\n"),
+            "bad.md:10:10: unknown variant `pie`",
+        ),
+        (
+            format!(
+                "{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\ngoal = {{ kind = \"win\", time = 1.0, text = \"t\" }}\n+++\n"
+            ),
+            "unknown variant `win`",
+        ),
+        (
+            format!(
+                "{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\ngoal = {{ kind = \"settle\", time = 0.0, text = \"t\" }}\n+++\n"
+            ),
+            "bad.md:10:8: goal: expected time > 0",
+        ),
+        (
+            format!("{HEADER}+++ step\nscene = \"rope\"\n+++\n"),
+            "missing field `title`",
+        ),
+        (
+            format!("{HEADER}+++\ntitle = \"a\"\nscene = \"rope\"\n+++\n"),
+            "bad.md:7: expected `+++ step`",
+        ),
+    ];
+    for (text, expected) in cases {
+        let message = error_of(&text);
+        assert!(
+            message.contains(expected),
+            "expected `{expected}` in `{message}`"
+        );
+    }
+}

@@ -1,0 +1,140 @@
+//! `springlab study convergence` and `work-precision` through the binary.
+
+use std::process::Command;
+
+fn springlab(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_springlab"))
+        .args(args)
+        .output()
+        .expect("run springlab")
+}
+
+fn json(args: &[&str]) -> serde_json::Value {
+    let out = springlab(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("JSON")
+}
+
+fn orders(v: &serde_json::Value) -> Vec<(String, Option<f64>)> {
+    v["methods"]
+        .as_array()
+        .expect("methods")
+        .iter()
+        .map(|m| {
+            (
+                m["method"].as_str().unwrap_or("").to_string(),
+                m["order"].as_f64(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn oscillator_orders_against_the_exact_solution() {
+    let v = json(&["study", "convergence", "oscillator", "--json"]);
+    assert_eq!(v["reference"], "exact");
+    assert_eq!(v["reference_error"], 0.0);
+    let expected = [
+        ("explicit-euler", 1.0),
+        ("semi-implicit-euler", 1.0),
+        ("midpoint", 2.0),
+        ("rk4", 4.0),
+        ("implicit-euler", 1.0),
+        ("verlet", 2.0),
+    ];
+    let got = orders(&v);
+    for (name, order) in expected {
+        let (_, measured) = got.iter().find(|(m, _)| m == name).expect("method present");
+        let measured = measured.expect("an order");
+        assert!((measured - order).abs() <= 0.15, "{name}: {measured}");
+    }
+    // Four dt levels per method, halving, each with its cost.
+    let rk4 = &v["methods"][3];
+    let points = rk4["points"].as_array().expect("points");
+    assert_eq!(points.len(), 4);
+    assert_eq!(points[0]["force_evals"], 800);
+    assert_eq!(points[1]["force_evals"], 1600);
+    assert!(
+        (points[0]["dt"].as_f64().unwrap() / points[1]["dt"].as_f64().unwrap() - 2.0).abs() < 1e-12
+    );
+}
+
+#[test]
+fn rope_work_precision_uses_an_rk4_reference_with_its_error() {
+    let v = json(&[
+        "study",
+        "work-precision",
+        "rope",
+        "--methods",
+        "semi-implicit-euler,rk4",
+        "--repeats",
+        "1",
+        "--json",
+    ]);
+    assert!(v["reference"].as_str().unwrap().starts_with("rk4 dt="));
+    assert!(v["reference_error"].as_f64().unwrap() < 1e-10);
+    let got = orders(&v);
+    assert_eq!(got.len(), 2);
+    assert!((got[0].1.unwrap() - 1.0).abs() < 0.15);
+    assert!((got[1].1.unwrap() - 4.0).abs() < 0.15);
+    // More accuracy costs more force evaluations: cost doubles with each halving of dt.
+    let pts = v["methods"][1]["points"].as_array().unwrap();
+    assert_eq!(pts.len(), 6);
+    for w in pts.windows(2) {
+        assert_eq!(
+            w[1]["force_evals"].as_u64().unwrap(),
+            2 * w[0]["force_evals"].as_u64().unwrap()
+        );
+        assert!(w[1]["error"].as_f64().unwrap() < w[0]["error"].as_f64().unwrap());
+    }
+}
+
+#[test]
+fn the_same_study_twice_gives_the_same_errors() {
+    let strip = |mut v: serde_json::Value| {
+        for m in v["methods"].as_array_mut().unwrap() {
+            for p in m["points"].as_array_mut().unwrap() {
+                p["wall_seconds"] = 0.into();
+            }
+        }
+        v
+    };
+    let args = ["study", "convergence", "rope", "--json"];
+    assert_eq!(strip(json(&args)), strip(json(&args)));
+}
+
+#[test]
+fn bad_study_input_gets_a_message() {
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["study", "convergence", "rope", "--dt", "0"],
+            "--dt 0: expected a time step in seconds > 0",
+        ),
+        (
+            &["study", "convergence", "rope", "--time", "-1"],
+            "--time -1: expected a duration in seconds > 0",
+        ),
+        (
+            &["study", "convergence", "rope", "--levels", "1"],
+            "--levels 1: expected at least 2 time steps",
+        ),
+        (
+            &["study", "convergence", "rope", "--methods", "euler"],
+            "unknown method `euler`",
+        ),
+        (
+            &["study", "work-precision", "nosuch"],
+            "unknown scene `nosuch`",
+        ),
+    ];
+    for (args, message) in cases {
+        let out = springlab(args);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(message), "{args:?}: {err}");
+    }
+}
