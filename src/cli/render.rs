@@ -219,8 +219,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             camera.elevation = finite_degrees("--elevation", e)?
                 .clamp(-89.0f64.to_radians(), 89.0f64.to_radians());
         }
-        let bounds = crate::render::scene_bounds(&scene);
-        renderer.camera = camera.fit(&bounds, f64::from(width) / f64::from(height));
+        renderer.camera = camera;
+        renderer.refit(&scene);
     }
 
     let mut sim = Simulation::new(scene);

@@ -124,29 +124,48 @@ impl Camera {
     /// box `bounds` fits into an image of aspect ratio `aspect = W/H` with a margin, looking at
     /// the box centre (module docs, "Framing"). An empty box leaves the camera unchanged.
     #[must_use]
-    pub fn fit(mut self, bounds: &Aabb, aspect: f64) -> Camera {
+    pub fn fit(self, bounds: &Aabb, aspect: f64) -> Camera {
+        self.fit_window(bounds, aspect, 0.0, 0.0)
+    }
+
+    /// As [`Camera::fit`], but keeping the top `top` and the bottom `bottom` of the image free
+    /// (fractions of its height, for the text overlay and the legend). The box is centred in the
+    /// band between them by moving the target along `û` by `δ`:
+    ///
+    /// ```text
+    /// band in NDC y:  m ± h,   m = bottom - top,   h = 1 - top - bottom
+    /// perspective:    d ≥ |y - m T z'| / (h T / M) - z',   |x| ≤ (T a / M)(d + z'),   δ = -m T d
+    /// orthographic:   H ≥ 2 M |y| / h,                     H ≥ 2 M |x| / a,           δ = -m H / 2
+    /// ```
+    /// where `(x, y, z')` are a corner's camera coordinates relative to the box centre,
+    /// `T = tan(φ/2)`, `a = W/H`, `M` the margin factor and `H` the orthographic height (m).
+    #[must_use]
+    pub fn fit_window(mut self, bounds: &Aabb, aspect: f64, top: f64, bottom: f64) -> Camera {
         if bounds.is_empty() || !(aspect > 0.0 && aspect.is_finite()) {
             return self;
         }
-        self.target = bounds.centre();
+        let (top, bottom) = (top.clamp(0.0, 0.4), bottom.clamp(0.0, 0.4));
+        let (m, h) = (bottom - top, 1.0 - top - bottom);
+        let centre = bounds.centre();
         let (right, up, forward) = self.basis();
         let corners = bounds.corners().map(|c| {
-            let d = c - self.target;
+            let d = c - centre;
             (d.dot(right), d.dot(up), d.dot(forward))
         });
-        // A box of zero size still gets a small view (1 m across).
+        // A box of zero size still gets a small view.
         let size = bounds.size().max_element().max(1e-3);
-        match self.projection {
+        let shift = match self.projection {
             Projection::Perspective { fov_y } => {
-                let t_v = (0.5 * fov_y).tan() / MARGIN;
-                let t_h = t_v * aspect;
-                // d ≥ max(|x|/t_h, |y|/t_v) - z' for every corner.
+                let t = (0.5 * fov_y).tan();
                 let mut d: f64 = 0.0;
                 for (x, y, z) in corners {
-                    d = d.max((x.abs() / t_h).max(y.abs() / t_v) - z);
+                    let vertical = (y - m * t * z).abs() / (h * t / MARGIN) - z;
+                    let horizontal = x.abs() / (t * aspect / MARGIN) - z;
+                    d = d.max(vertical).max(horizontal);
                 }
                 // The eye stays outside the box, at least one box size from its centre.
                 self.distance = d.max(size);
+                -m * t * self.distance
             }
             Projection::Orthographic { .. } => {
                 let (mut half_w, mut half_h): (f64, f64) = (0.0, 0.0);
@@ -154,12 +173,14 @@ impl Camera {
                     half_w = half_w.max(x.abs());
                     half_h = half_h.max(y.abs());
                 }
-                let height = 2.0 * MARGIN * half_h.max(half_w / aspect).max(0.05 * size);
+                let height = (2.0 * MARGIN * (half_h / h).max(half_w / aspect)).max(0.1 * size);
                 self.projection = Projection::Orthographic { height };
                 // Far enough that everything is in front of the eye.
                 self.distance = 2.0 * bounds.size().length().max(1.0);
+                -m * 0.5 * height
             }
-        }
+        };
+        self.target = centre + shift * up;
         self
     }
 
@@ -169,6 +190,19 @@ impl Camera {
     /// from the front-right and above.
     #[must_use]
     pub fn for_scene(scene: &Scene, aspect: f64, projection: Projection) -> Camera {
+        Camera::for_scene_window(scene, aspect, projection, 0.0, 0.0)
+    }
+
+    /// As [`Camera::for_scene`], keeping the top `top` and bottom `bottom` of the image free
+    /// (fractions of its height; see [`Camera::fit_window`]).
+    #[must_use]
+    pub fn for_scene_window(
+        scene: &Scene,
+        aspect: f64,
+        projection: Projection,
+        top: f64,
+        bottom: f64,
+    ) -> Camera {
         let bounds = scene_bounds(scene);
         let flat = scene.bodies.iter().all(|b| {
             b.model.colliders.is_empty()
@@ -186,7 +220,7 @@ impl Camera {
             projection,
             ..Camera::default()
         }
-        .fit(&bounds, aspect)
+        .fit_window(&bounds, aspect, top, bottom)
     }
 }
 
@@ -278,8 +312,9 @@ impl Aabb {
 ///
 /// - every particle, every dynamic sphere, static spheres and bowls (the bowl's rim circle and
 ///   its bottom), the hole of a floor with a hole;
-/// - the content's "shadow": the corners of the box so far projected onto every plane collider
-///   (an infinite plane has no box of its own);
+/// - where the content lands on every plane collider (an infinite plane has no box of its
+///   own): the corners of the box so far dropped along gravity onto the plane, and on a slope
+///   also one content size further downhill;
 /// - room to swing for a body whose particles lie on one line and hang from a pinned particle
 ///   (a rope): every point within the body's size of a pinned particle, in the plane of the line
 ///   and gravity, below the pin.
@@ -329,15 +364,29 @@ pub fn scene_bounds(scene: &Scene) -> Aabb {
     if b.is_empty() {
         return b;
     }
-    // Shadows on the planes.
+    // Where the content lands on each plane: the corners dropped along gravity (along the
+    // normal when gravity is parallel to the plane or zero), and on a slope one content size
+    // further downhill.
     let corners = b.corners();
+    let size = b.size().max_element();
     for body in &scene.bodies {
+        let down = body.model.gravity.normalize_or_zero();
         for c in &body.model.colliders {
             if let Collider::Plane { point, normal } | Collider::HolePlane { point, normal, .. } =
                 *c
             {
+                let along = down.dot(normal);
+                let (dir, rate) = if along < -1e-6 {
+                    (down, along)
+                } else {
+                    (-normal, -1.0)
+                };
+                let downhill = (down - along * normal).normalize_or_zero();
                 for p in corners {
-                    b.add(p - (p - point).dot(normal) * normal);
+                    // p + s dir on the plane: (p + s dir - point)·n = 0.
+                    let landing = p + (-(p - point).dot(normal) / rate) * dir;
+                    b.add(landing);
+                    b.add(landing + size * downhill);
                 }
             }
         }

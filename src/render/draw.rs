@@ -323,8 +323,13 @@ impl Renderer {
         style: Style,
     ) -> Result<Renderer, RenderError> {
         check_size(width, height)?;
-        let camera = Camera::for_scene(scene, f64::from(width) / f64::from(height), projection);
-        Ok(Renderer::with_camera(scene, width, height, camera, style))
+        let camera = Camera {
+            projection,
+            ..Camera::default()
+        };
+        let mut r = Renderer::with_camera(scene, width, height, camera, style);
+        r.camera = r.default_camera(scene, projection);
+        Ok(r)
     }
 
     /// A renderer with a given camera.
@@ -386,6 +391,44 @@ impl Renderer {
             bowls,
             background,
         }
+    }
+
+    /// The default camera for `scene` ([`Camera::for_scene_window`]) with `projection`, keeping
+    /// the overlay's band at the top and the legend's at the bottom free when the style shows
+    /// them.
+    #[must_use]
+    pub fn default_camera(&self, scene: &Scene, projection: Projection) -> Camera {
+        let (top, bottom) = self.overlay_bands();
+        Camera::for_scene_window(scene, self.aspect(), projection, top, bottom)
+    }
+
+    /// Moves the camera's target and distance so that `scene` fits, keeping its orbit,
+    /// elevation and kind of projection (after changing the angles, say).
+    pub fn refit(&mut self, scene: &Scene) {
+        let (top, bottom) = self.overlay_bands();
+        self.camera = self
+            .camera
+            .fit_window(&scene_bounds(scene), self.aspect(), top, bottom);
+    }
+
+    fn aspect(&self) -> f64 {
+        f64::from(self.width) / f64::from(self.height)
+    }
+
+    /// Fractions of the image height taken by the overlay (top) and the legend (bottom).
+    fn overlay_bands(&self) -> (f64, f64) {
+        if !self.style.overlay {
+            return (0.0, 0.0);
+        }
+        let px = font_size(self.height);
+        let (ascent, descent) = vertical_metrics(px);
+        let line_h = (ascent + descent) * 1.15;
+        // Two lines, or three when the image is narrow and the first line wraps.
+        let lines = if self.width < 480 { 3.0 } else { 2.0 };
+        let h = self.height as f32;
+        let top = (0.5 * px + lines * line_h + 0.5 * px) / h;
+        let bottom = (1.5 * px + line_h) / h;
+        (f64::from(top), f64::from(bottom))
     }
 
     /// Image width (px).
@@ -1090,8 +1133,8 @@ fn floor(
         w0 = w0.min(cw);
         w1 = w1.max(cw);
     }
-    // 20 % more on every side, at least 1 m across.
-    let margin = 0.2 * (u1 - u0).max(w1 - w0).max(1.0);
+    // Half the content's size more on every side, at least 1 m across.
+    let margin = 0.5 * (u1 - u0).max(w1 - w0).max(1.0);
     let spacing = nice((u1 - u0 + w1 - w0 + 4.0 * margin) / 24.0, true);
     let snap_down = |v: f64| (v / spacing).floor() * spacing;
     let snap_up = |v: f64| (v / spacing).ceil() * spacing;
