@@ -17,7 +17,8 @@
 //! - `k_a = 0.38`, `k_d = 0.62`: ambient and diffuse weights ([`AMBIENT`], [`DIFFUSE`])
 //!
 //! **Strain colour map.** A spring's engineering strain `ε = (L - L0)/L0` (dimensionless) is
-//! shown on a diverging map: blue for compressed, near-white at rest, red for stretched
+//! shown on a diverging map: blue for compressed, mid grey at rest (dark enough for thin lines on
+//! the light background), red for stretched
 //! (Moreland, "Diverging Color Maps for Scientific Visualization", ISVC 2009):
 //!
 //! ```text
@@ -141,7 +142,7 @@ pub const OVERLAY_BOX: Colour = Colour::rgba(255, 255, 255, 200);
 /// Strain map: most compressed.
 pub const COMPRESSED: Colour = Colour::rgb(59, 76, 192);
 /// Strain map: at rest.
-pub const NEUTRAL: Colour = Colour::rgb(221, 221, 221);
+pub const NEUTRAL: Colour = Colour::rgb(150, 150, 156);
 /// Strain map: most stretched.
 pub const STRETCHED: Colour = Colour::rgb(180, 4, 38);
 
