@@ -279,6 +279,24 @@ fn unwritable_outputs_are_explained() {
 
     let out = springlab_in(
         &dir,
+        &[
+            "render",
+            "rope",
+            "--energy-chart",
+            "nowhere/e.png",
+            "--time",
+            "1",
+        ],
+    );
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("cannot write nowhere/e.png: directory nowhere does not exist"),
+        "{stderr}"
+    );
+
+    let out = springlab_in(
+        &dir,
         &["render", "rope", "--frames", "2", "--out", "taken/sub"],
     );
     assert!(!out.status.success());

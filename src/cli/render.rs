@@ -9,7 +9,8 @@
 //!   no other output (`--gif`, `--apng`, `--energy-chart`) is asked for;
 //! - `--gif F` and `--apng F`: animations at `--fps` frames per second;
 //! - `--energy-chart F.png`: kinetic, gravitational, elastic and total energy (J) against time
-//!   (s) over the whole run.
+//!   (s) over the whole run (sampled at most about 4000 times), at the frames' size but at least
+//!   480×320.
 //!
 //! The run is `--frames N` frames `--every K` steps apart, or `--time T` seconds (then
 //! `N = steps / K + 1`), or the scene's duration when only a chart is asked for.
@@ -326,14 +327,12 @@ fn plan(args: &RenderArgs, dt: f64, duration: f64) -> anyhow::Result<Plan> {
         .ok()
         .filter(|&f| f <= 1_000_000)
         .with_context(|| format!("{frames} frames: at most 1000000 frames are allowed"))?;
-    if frames_dir.is_some() || args.gif.is_some() || args.apng.is_some() {
-        // Fail before the simulation when an output cannot be created.
-        for file in [&args.gif, &args.apng, &args.energy_chart]
-            .into_iter()
-            .flatten()
-        {
-            check_parent(file)?;
-        }
+    // Fail before the simulation when an output file cannot be created.
+    for file in [&args.gif, &args.apng, &args.energy_chart]
+        .into_iter()
+        .flatten()
+    {
+        check_parent(file)?;
     }
     Ok(Plan {
         frames,
