@@ -11,9 +11,12 @@
 //!                 [--apng F] [--energy-chart F] [--method M] [--dt S] [--set key=value ...]
 //! springlab study stability <scene|file.toml> [--methods a,b] [--horizon T] [--set key=value ...]
 //!               [--json]
+//! springlab homework new <DIR> --assignment rope|jelly|cloth
+//! springlab grade <DIR> [--json F] [--gradescope F] [--time-limit-ms MS] [--seed S]
 //! ```
 
 mod bench;
+mod grade;
 mod render;
 mod run;
 mod scenes;
@@ -44,12 +47,16 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// Draw a scene's frames as PNG files, a GIF or an APNG, and its energy chart.
     Render(render::RenderArgs),
-    /// Studies: which method, which dt (stability; convergence and work-precision to come).
+    /// Studies: stability limits, convergence orders, work-precision.
     Study {
         /// The study to run.
         #[command(subcommand)]
         command: study::StudyCommand,
     },
+    /// Write a homework crate for students (`homework new DIR --assignment rope|jelly|cloth`).
+    Homework(grade::HomeworkArgs),
+    /// Build and grade a homework crate; print the rubric, write JSON or Gradescope results.
+    Grade(grade::GradeArgs),
 }
 
 /// Parses the process arguments and runs the command; prints errors and returns the exit code.
@@ -62,6 +69,8 @@ pub fn main() -> ExitCode {
         Some(Command::Bench(args)) => bench::run(&args),
         Some(Command::Render(args)) => render::run(&args),
         Some(Command::Study { command }) => study::run(&command),
+        Some(Command::Homework(args)) => grade::homework(&args),
+        Some(Command::Grade(args)) => grade::grade(&args),
         None => run::demo(),
     };
     match result {

@@ -19,7 +19,8 @@
 //! params = { nodes = 3 }            # scene parameters, as with --set
 //! method = "semi-implicit-euler"    # optional: the method to start with (default: the scene's)
 //! dt = 0.01                         # optional: the time step (s)
-//! plots = ["energy", "speed"]       # optional: energy | exact | speed | error
+//! plots = ["energy", "speed"]       # optional: energy | exact | speed | error | convergence
+//!                                   # | stability | work-precision
 //! try = ["Press space to run.", "Press k to stiffen the springs."]
 //! goal = { kind = "settle", time = 2.0, speed = 0.05, text = "Make it settle within 2 s." }
 //! +++
@@ -51,6 +52,10 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("04-verlet.md", include_str!("../lessons/04-verlet.md")),
     ("05-jelly.md", include_str!("../lessons/05-jelly.md")),
     ("06-cloth.md", include_str!("../lessons/06-cloth.md")),
+    (
+        "07-speed-accuracy.md",
+        include_str!("../lessons/07-speed-accuracy.md"),
+    ),
 ];
 
 /// A plot the lesson screen can show beside the scene.
@@ -65,6 +70,13 @@ pub enum Plot {
     Speed,
     /// The oscillator's error against its exact solution.
     Error,
+    /// Error against dt per method, log-log (`study convergence` of the step's scene).
+    Convergence,
+    /// The largest stable dt per method beside the theory (`study stability`).
+    Stability,
+    /// Error against force evaluations per method, log-log (`study work-precision`).
+    #[serde(rename = "work-precision")]
+    WorkPrecision,
 }
 
 /// What the student is asked to achieve in a step.

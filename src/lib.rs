@@ -10,6 +10,7 @@
 
 pub mod bench;
 pub mod cli;
+pub mod grade;
 pub mod lesson;
 pub mod physics;
 pub mod render;

@@ -1,0 +1,342 @@
+//! The outcome of grading: [`Report`], its rubric table, its JSON and Gradescope's `results.json`.
+//!
+//! The Gradescope file follows the autograder specification ("Autograder Specifications",
+//! gradescope-autograders.readthedocs.io, section "Output format"): a top-level `score`,
+//! `output` and `tests`, each test with `name`, `score`, `max_score`, `status`, `output` and
+//! `visibility`. The top level also carries `max_score` (Gradescope ignores it; it keeps the file
+//! self-describing) and `execution_time` in seconds.
+
+use std::fmt::Write as _;
+
+use serde::{Deserialize, Serialize};
+
+/// One part of the course's grade the tool cannot judge (a written report, bonus work).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NotGraded {
+    /// What it is, for example "report".
+    pub name: String,
+    /// Its points within the course's maximum (0 for a bonus on top of it).
+    pub points: f64,
+    /// Who grades it instead.
+    pub reason: String,
+}
+
+/// Why a check failed: the case, what was expected, what came back, and what to look at.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Feedback {
+    /// The input of the failing case.
+    pub input: String,
+    /// The reference answer.
+    pub expected: String,
+    /// The student's answer.
+    pub got: String,
+    /// What is probably wrong.
+    pub hint: String,
+}
+
+/// What happened to one check.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CheckOutcome {
+    /// Every case agreed with the reference.
+    Passed,
+    /// A case disagreed; the check's points are lost.
+    Failed,
+    /// The item stopped before this check (an earlier check panicked, timed out or returned a
+    /// number that is not finite), or the crate did not build.
+    NotRun,
+}
+
+/// One check of an item.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CheckReport {
+    /// What the check establishes.
+    pub name: String,
+    /// Points earned.
+    pub score: f64,
+    /// Points available.
+    pub max_score: f64,
+    /// Passed, failed or not run.
+    pub outcome: CheckOutcome,
+    /// Why it failed (failed checks, and the check that stopped the item).
+    pub feedback: Option<Feedback>,
+}
+
+/// How an item ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ItemStatus {
+    /// Every check passed.
+    Full,
+    /// Some checks passed.
+    Partial,
+    /// No check passed.
+    Zero,
+    /// A check panicked: the item scores zero.
+    Panicked,
+    /// A check returned NaN or an infinite number: the item scores zero.
+    NotFinite,
+    /// A check did not finish within the time limit: the item scores zero.
+    TimedOut,
+    /// The crate did not build, or the grading process did not finish: nothing was run.
+    NotRun,
+}
+
+impl ItemStatus {
+    /// A short word for the table.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            ItemStatus::Full => "ok",
+            ItemStatus::Partial => "partial",
+            ItemStatus::Zero => "failed",
+            ItemStatus::Panicked => "panicked",
+            ItemStatus::NotFinite => "NaN/inf",
+            ItemStatus::TimedOut => "timed out",
+            ItemStatus::NotRun => "not run",
+        }
+    }
+}
+
+/// One rubric item: a course task with its points.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ItemReport {
+    /// Stable identifier, for example `rk4`.
+    pub id: String,
+    /// The course's rubric category, for example "integrators".
+    pub category: String,
+    /// The item's name, for example "RK4".
+    pub name: String,
+    /// Points earned.
+    pub score: f64,
+    /// Points available.
+    pub max_score: f64,
+    /// How it ended.
+    pub status: ItemStatus,
+    /// Why the item scored zero when a check panicked, timed out or was not finite.
+    pub reason: Option<String>,
+    /// The checks, in the order they ran.
+    pub checks: Vec<CheckReport>,
+}
+
+impl ItemReport {
+    /// "category: name", or the name alone when the course has no categories.
+    #[must_use]
+    pub fn label(&self) -> String {
+        if self.category.is_empty() {
+            self.name.clone()
+        } else {
+            format!("{}: {}", self.category, self.name)
+        }
+    }
+
+    /// The feedback of this item as text: one block per failed check (and the reason the item
+    /// stopped, if it did); empty when every check passed.
+    #[must_use]
+    pub fn feedback_text(&self) -> String {
+        let mut out = String::new();
+        if let Some(reason) = &self.reason {
+            let _ = writeln!(out, "{reason}");
+        }
+        for check in &self.checks {
+            let verdict = match check.outcome {
+                CheckOutcome::Passed => continue,
+                CheckOutcome::Failed => "failed",
+                CheckOutcome::NotRun => "not run",
+            };
+            let _ = writeln!(
+                out,
+                "- {} ({} of {} points): {verdict}",
+                check.name,
+                points(check.score),
+                points(check.max_score)
+            );
+            if let Some(f) = &check.feedback {
+                for (label, text) in [
+                    ("input", &f.input),
+                    ("expected", &f.expected),
+                    ("got", &f.got),
+                    ("hint", &f.hint),
+                ] {
+                    if !text.is_empty() {
+                        let _ = writeln!(out, "    {label:<9} {text}");
+                    }
+                }
+            }
+        }
+        if out.is_empty() {
+            out.push_str("all checks passed\n");
+        }
+        out
+    }
+}
+
+/// The result of grading one homework crate.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// `rope`, `jelly` or `cloth`.
+    pub assignment: String,
+    /// The course and assignment, for example "GAMES101 assignment 8 (2020): rope simulation".
+    pub title: String,
+    /// Points earned.
+    pub score: f64,
+    /// Points the tool grades.
+    pub max_score: f64,
+    /// Points of the whole assignment in the course.
+    pub course_max_score: f64,
+    /// The parts of the course's grade left out, which make up the difference.
+    pub not_graded: Vec<NotGraded>,
+    /// The rubric items.
+    pub items: Vec<ItemReport>,
+    /// The seed of the random cases.
+    pub seed: u64,
+    /// The time limit of one check (ms).
+    pub time_limit_ms: u64,
+    /// Wall-clock time of grading (s).
+    pub seconds: f64,
+}
+
+/// Points as text: `5`, `2.5`.
+#[must_use]
+pub fn points(p: f64) -> String {
+    if p.fract() == 0.0 {
+        format!("{p:.0}")
+    } else {
+        let s = format!("{p:.2}");
+        s.trim_end_matches('0').to_string()
+    }
+}
+
+impl Report {
+    /// "max 80 of the course's 100: the report (20) is graded by hand; ..." or, when nothing is
+    /// left out, "max 35 of the course's 35".
+    #[must_use]
+    pub fn scope(&self) -> String {
+        let mut s = format!(
+            "max {} of the course's {}",
+            points(self.max_score),
+            points(self.course_max_score)
+        );
+        let parts: Vec<String> = self
+            .not_graded
+            .iter()
+            .map(|n| {
+                if n.points > 0.0 {
+                    format!("{} ({}) {}", n.name, points(n.points), n.reason)
+                } else {
+                    format!("{} {}", n.name, n.reason)
+                }
+            })
+            .collect();
+        if !parts.is_empty() {
+            s.push_str(": ");
+            s.push_str(&parts.join("; "));
+        }
+        s
+    }
+
+    /// The rubric table followed by the feedback of every item that lost points.
+    #[must_use]
+    pub fn table(&self) -> String {
+        let mut out = String::new();
+        let _ = writeln!(out, "springlab grade: {}", self.title);
+        let _ = writeln!(
+            out,
+            "score {} / {}  ({})",
+            points(self.score),
+            points(self.max_score),
+            self.scope()
+        );
+        let _ = writeln!(out);
+        let name_width = self
+            .items
+            .iter()
+            .map(|i| i.label().chars().count())
+            .max()
+            .unwrap_or(10)
+            .max(10);
+        let _ = writeln!(out, "  {:<name_width$}  {:>11}  result", "item", "points");
+        for item in &self.items {
+            let name = item.label();
+            let pts = format!("{} / {}", points(item.score), points(item.max_score));
+            let _ = writeln!(
+                out,
+                "  {name:<name_width$}  {pts:>11}  {}",
+                item.status.label()
+            );
+        }
+        // Nothing ran (the build failed, the run crashed): one reason for every item.
+        let first_reason = self.items.first().and_then(|i| i.reason.as_ref());
+        if self
+            .items
+            .iter()
+            .all(|i| i.status == ItemStatus::NotRun && i.reason.as_ref() == first_reason)
+        {
+            if let Some(reason) = first_reason {
+                let _ = writeln!(out);
+                let _ = writeln!(out, "nothing was graded: {reason}");
+            }
+            return out;
+        }
+        let lost: Vec<&ItemReport> = self
+            .items
+            .iter()
+            .filter(|i| i.status != ItemStatus::Full)
+            .collect();
+        if !lost.is_empty() {
+            let _ = writeln!(out);
+            let _ = writeln!(out, "feedback");
+            for item in lost {
+                let _ = writeln!(
+                    out,
+                    "{} ({} / {})",
+                    item.label(),
+                    points(item.score),
+                    points(item.max_score)
+                );
+                for line in item.feedback_text().lines() {
+                    let _ = writeln!(out, "  {line}");
+                }
+            }
+        }
+        out
+    }
+
+    /// The report as pretty JSON (the shape of this struct).
+    ///
+    /// # Errors
+    /// Never in practice (serialising plain data); the error is serde_json's.
+    pub fn to_json(&self) -> serde_json::Result<String> {
+        serde_json::to_string_pretty(self)
+    }
+
+    /// Gradescope's `results.json` (module docs).
+    #[must_use]
+    pub fn gradescope(&self) -> serde_json::Value {
+        let tests: Vec<serde_json::Value> = self
+            .items
+            .iter()
+            .enumerate()
+            .map(|(i, item)| {
+                serde_json::json!({
+                    "name": item.label(),
+                    "number": (i + 1).to_string(),
+                    "score": item.score,
+                    "max_score": item.max_score,
+                    "status": if item.score == item.max_score { "passed" } else { "failed" },
+                    "output": item.feedback_text(),
+                    "visibility": "visible",
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "score": self.score,
+            "max_score": self.max_score,
+            "execution_time": self.seconds,
+            "output": format!("{}\nscore {} / {} ({})", self.title, points(self.score), points(self.max_score), self.scope()),
+            "visibility": "visible",
+            "stdout_visibility": "hidden",
+            "tests": tests,
+        })
+    }
+}

@@ -1,0 +1,209 @@
+//! `springlab homework new` and `springlab grade` through the real binary: the files written,
+//! the refusals with their messages, and a crate that does not build, which still gets a
+//! report, a Gradescope file and exit code 0.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn springlab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_springlab"))
+        .args(args)
+        .output()
+        .expect("run springlab")
+}
+
+/// A fresh, empty scratch directory for test `name`.
+fn scratch(name: &str) -> PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("springlab-grade-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create scratch dir");
+    dir
+}
+
+fn text(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn failure(args: &[&str]) -> String {
+    let out = springlab(args);
+    assert!(!out.status.success(), "expected failure for {args:?}");
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn homework_new_writes_a_student_crate_depending_on_this_springlab() {
+    for (assignment, main_fn, trait_name) in [
+        ("rope", "main_rope", "RopeHomework"),
+        ("jelly", "main_jelly", "JellyHomework"),
+        ("cloth", "main_cloth", "ClothHomework"),
+    ] {
+        let dir = scratch(assignment).join("hw");
+        let out = springlab(&[
+            "homework",
+            "new",
+            dir.to_str().expect("utf-8"),
+            "--assignment",
+            assignment,
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let manifest: toml::Value = toml::from_str(&text(&dir.join("Cargo.toml"))).expect("TOML");
+        assert_eq!(
+            manifest["package"]["metadata"]["springlab"]["assignment"].as_str(),
+            Some(assignment)
+        );
+        assert_eq!(
+            manifest["dependencies"]["springlab"]["path"].as_str(),
+            Some(env!("CARGO_MANIFEST_DIR"))
+        );
+        assert_eq!(manifest["test"][0]["harness"].as_bool(), Some(false));
+        assert!(
+            text(&dir.join("tests/grade.rs"))
+                .contains(&format!("springlab::grade::{main_fn}(homework::Student)"))
+        );
+        assert!(text(&dir.join("src/lib.rs")).contains(&format!("impl {trait_name} for Student")));
+        assert!(text(&dir.join("README.md")).contains("## Rubric"));
+        assert!(text(&dir.join("Cargo.lock")).contains("name = \"glam\""));
+        let _ = std::fs::remove_dir_all(dir.parent().expect("parent"));
+    }
+}
+
+#[test]
+fn homework_new_refuses_a_non_empty_directory_and_writes_nothing() {
+    let dir = scratch("nonempty");
+    std::fs::write(dir.join("notes.txt"), "mine").expect("write");
+    let err = failure(&[
+        "homework",
+        "new",
+        dir.to_str().expect("utf-8"),
+        "--assignment",
+        "rope",
+    ]);
+    assert!(
+        err.contains("is not empty; choose a new or empty directory (nothing was written)"),
+        "{err}"
+    );
+    assert!(!dir.join("Cargo.toml").exists());
+    assert_eq!(text(&dir.join("notes.txt")), "mine");
+    let file = dir.join("notes.txt");
+    let err = failure(&[
+        "homework",
+        "new",
+        file.to_str().expect("utf-8"),
+        "--assignment",
+        "rope",
+    ]);
+    assert!(err.contains("exists and is not a directory"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn homework_new_names_the_assignments_when_given_another() {
+    let err = failure(&[
+        "homework",
+        "new",
+        "/tmp/never-written",
+        "--assignment",
+        "spring",
+    ]);
+    assert!(err.contains("possible values: rope, jelly, cloth"), "{err}");
+    let err = failure(&["homework", "new", "/tmp/never-written"]);
+    assert!(err.contains("--assignment"), "{err}");
+}
+
+#[test]
+fn grade_refuses_what_is_not_a_homework_crate() {
+    let dir = scratch("notacrate");
+    let missing = dir.join("missing");
+    let err = failure(&["grade", missing.to_str().expect("utf-8")]);
+    assert!(
+        err.contains("is not a homework crate: no such directory"),
+        "{err}"
+    );
+    let err = failure(&["grade", dir.to_str().expect("utf-8")]);
+    assert!(err.contains("cannot read Cargo.toml"), "{err}");
+    std::fs::write(dir.join("Cargo.toml"), "[package]\nname = \"x\"\n").expect("write");
+    let err = failure(&["grade", dir.to_str().expect("utf-8")]);
+    assert!(
+        err.contains("has no [package.metadata.springlab] assignment"),
+        "{err}"
+    );
+    std::fs::write(
+        dir.join("Cargo.toml"),
+        "[package.metadata.springlab]\nassignment = \"spring\"\n",
+    )
+    .expect("write");
+    let err = failure(&["grade", dir.to_str().expect("utf-8")]);
+    assert!(err.contains("unknown assignment `spring`"), "{err}");
+    let err = failure(&[
+        "grade",
+        dir.to_str().expect("utf-8"),
+        "--time-limit-ms",
+        "0",
+    ]);
+    assert!(err.contains("time-limit-ms"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_crate_that_does_not_build_scores_zero_with_the_errors_and_exit_code_0() {
+    let root = scratch("broken");
+    let dir = root.join("hw");
+    let out = springlab(&[
+        "homework",
+        "new",
+        dir.to_str().expect("utf-8"),
+        "--assignment",
+        "jelly",
+    ]);
+    assert!(out.status.success());
+    // A dependency that does not exist: cargo fails at once, before compiling anything.
+    let manifest =
+        text(&dir.join("Cargo.toml")).replace(env!("CARGO_MANIFEST_DIR"), "/nonexistent/springlab");
+    std::fs::write(dir.join("Cargo.toml"), manifest).expect("write");
+    let results = root.join("results.json");
+    let report = root.join("report.json");
+    let out = springlab(&[
+        "grade",
+        dir.to_str().expect("utf-8"),
+        "--gradescope",
+        results.to_str().expect("utf-8"),
+        "--json",
+        report.to_str().expect("utf-8"),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("score 0 / 80"), "{stdout}");
+    assert!(stdout.contains("the crate did not build"), "{stdout}");
+    assert!(
+        stdout.contains("/nonexistent/springlab"),
+        "the compiler's message is shown: {stdout}"
+    );
+    let v: serde_json::Value = serde_json::from_str(&text(&results)).expect("results.json");
+    assert_eq!(v["score"].as_f64(), Some(0.0));
+    assert_eq!(v["max_score"].as_f64(), Some(80.0));
+    let tests = v["tests"].as_array().expect("tests");
+    assert_eq!(tests.len(), 10);
+    for t in tests {
+        assert_eq!(t["score"].as_f64(), Some(0.0));
+        assert!(t["max_score"].as_f64().is_some_and(|m| m > 0.0));
+        assert!(t["name"].is_string() && t["visibility"] == "visible");
+        assert!(
+            t["output"]
+                .as_str()
+                .unwrap_or_default()
+                .contains("did not build")
+        );
+    }
+    let r: serde_json::Value = serde_json::from_str(&text(&report)).expect("report.json");
+    assert_eq!(r["assignment"], "jelly");
+    let _ = std::fs::remove_dir_all(&root);
+}
