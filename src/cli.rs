@@ -9,6 +9,8 @@
 //! springlab run <scene|file.toml> [--method M] [--dt S] [--steps N | --time T]
 //!               [--set key=value ...] [--json] [--csv FILE]
 //! springlab bench [workload ...] [--json] [--repeats R]
+//! springlab render <scene|file> --frames N [--every K] [--size WxH] [--out DIR] [--gif F]
+//!                 [--apng F] [--energy-chart F] [--method M] [--dt S] [--set key=value ...]
 //! springlab study stability <scene|file.toml> [--methods a,b] [--horizon T] [--set key=value ...]
 //!               [--json]
 //! springlab homework new <DIR> --assignment rope|jelly|cloth
@@ -18,6 +20,7 @@
 mod bench;
 mod grade;
 mod lessons;
+mod render;
 mod run;
 mod scenes;
 mod study;
@@ -57,6 +60,8 @@ pub enum Command {
     Scenes,
     /// Time the peer-benchmark workloads and check their checksums.
     Bench(bench::BenchArgs),
+    /// Draw a scene's frames as PNG files, a GIF or an APNG, and its energy chart.
+    Render(render::RenderArgs),
     /// Studies: stability limits, convergence orders, work-precision.
     Study {
         /// The study to run.
@@ -80,6 +85,7 @@ pub fn main() -> ExitCode {
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::Scenes) => scenes::list(),
         Some(Command::Bench(args)) => bench::run(&args),
+        Some(Command::Render(args)) => render::run(&args),
         Some(Command::Study { command }) => study::run(&command),
         Some(Command::Homework(args)) => grade::homework(&args),
         Some(Command::Grade(args)) => grade::grade(&args),

@@ -13,6 +13,7 @@ pub mod cli;
 pub mod grade;
 pub mod lesson;
 pub mod physics;
+pub mod render;
 
 pub use physics::{Energy, Method, MethodParams, Model, Spring, SpringKind, State, Workspace};
 pub mod scene;

@@ -702,10 +702,12 @@ impl LessonRun {
             self.step + 1,
             self.sim.steps
         ));
-        self.message = Some(match export::export_png(&self.sim, &path) {
-            Ok(p) => format!("wrote {}", p.display()),
-            Err(e) => e,
-        });
+        self.message = Some(
+            match export::export_png(&self.sim, self.camera.yaw, self.camera.pitch, &path) {
+                Ok(p) => format!("wrote {}", p.display()),
+                Err(e) => e,
+            },
+        );
     }
 
     /// Opens step `step` (0-based) of the lesson.

@@ -1,0 +1,453 @@
+//! `springlab render`: PNG frames, GIF and APNG of a scene, and its energy chart.
+//!
+//! Frame `k` shows the state after `k · every` steps (frame 0 is the initial state). The
+//! simulation runs on this thread and draws each frame as soon as its step is reached; the
+//! encoder thread compresses and writes while the next frame is simulated and drawn.
+//!
+//! What is written:
+//! - PNG files `frame_00000.png`, … in `--out DIR` when `--out` is given, or in `frames/` when
+//!   no other output (`--gif`, `--apng`, `--energy-chart`) is asked for;
+//! - `--gif F` and `--apng F`: animations at `--fps` frames per second;
+//! - `--energy-chart F.png`: kinetic, gravitational, elastic and total energy (J) against time
+//!   (s) over the whole run (sampled at most about 4000 times), at the frames' size but at least
+//!   480×320.
+//!
+//! The run is `--frames N` frames `--every K` steps apart, or `--time T` seconds (then
+//! `N = steps / K + 1`), or the scene's duration when only a chart is asked for.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use clap::{Args, ValueEnum};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use super::run::{apply_methods, check_dt};
+use crate::physics::SpringKind;
+use crate::render::chart::{self, Chart, Series};
+use crate::render::colour::{self, Colour};
+use crate::render::{
+    Colouring, FrameEncoder, KindToggles, MAX_SIDE, Outputs, Projection, Renderer, Style,
+};
+use crate::scene;
+use crate::simulation::Simulation;
+
+/// Options of `springlab render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// A built-in scene (see `springlab scenes`) or a scene file (.toml).
+    pub scene: String,
+    /// Number of frames (frame 0 is the initial state).
+    #[arg(long, value_name = "N")]
+    pub frames: Option<u64>,
+    /// Steps between frames (default: the steps of 1/fps seconds, at least 1).
+    #[arg(long, value_name = "K")]
+    pub every: Option<u64>,
+    /// Simulated time in seconds instead of --frames (frames = steps / every + 1).
+    #[arg(long, conflicts_with = "frames", allow_negative_numbers = true)]
+    pub time: Option<f64>,
+    /// Image size in pixels, WIDTHxHEIGHT.
+    #[arg(
+        long,
+        default_value = "640x480",
+        value_name = "WxH",
+        allow_hyphen_values = true
+    )]
+    pub size: String,
+    /// Directory for frame_00000.png, … (default frames/ when nothing else is written).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Write an animated GIF.
+    #[arg(long, value_name = "FILE")]
+    pub gif: Option<PathBuf>,
+    /// Write an animated PNG (APNG).
+    #[arg(long, value_name = "FILE")]
+    pub apng: Option<PathBuf>,
+    /// Write a chart of the energies against time (PNG).
+    #[arg(long, value_name = "FILE")]
+    pub energy_chart: Option<PathBuf>,
+    /// Playback rate of the GIF and APNG, frames per second.
+    #[arg(long, default_value_t = 25.0, allow_negative_numbers = true)]
+    pub fps: f64,
+    /// Integration method, or one per body separated by commas.
+    #[arg(long, short)]
+    pub method: Option<String>,
+    /// Time step in seconds (default: the scene's).
+    #[arg(long, allow_negative_numbers = true)]
+    pub dt: Option<f64>,
+    /// Set a scene parameter, for example `--set stiffness=500` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Colour springs by kind or by strain.
+    #[arg(long, value_enum, default_value_t = ColourBy::Kind)]
+    pub colour: ColourBy,
+    /// Strain shown at full colour with --colour strain (0.1 = 10 %).
+    #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
+    pub max_strain: f64,
+    /// Spring kinds to draw: a comma-separated list of struct, shear, bend, or `none`.
+    #[arg(long, default_value = "struct,shear,bend", value_name = "KINDS")]
+    pub springs: String,
+    /// Draw cloth and jelly lattices as springs instead of shaded surfaces.
+    #[arg(long)]
+    pub no_surfaces: bool,
+    /// Leave out the text overlay.
+    #[arg(long)]
+    pub no_overlay: bool,
+    /// Camera orbit angle about the vertical axis in degrees (0: looking from +z).
+    #[arg(long, allow_negative_numbers = true)]
+    pub orbit: Option<f64>,
+    /// Camera elevation in degrees (positive: looking down).
+    #[arg(long, allow_negative_numbers = true)]
+    pub elevation: Option<f64>,
+    /// Orthographic instead of perspective projection.
+    #[arg(long)]
+    pub ortho: bool,
+}
+
+/// `--colour` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ColourBy {
+    /// Struct, shear and bend springs each their own colour.
+    Kind,
+    /// Blue compressed, grey at rest, red stretched.
+    Strain,
+}
+
+/// Parses `WIDTHxHEIGHT` (`x`, `X` or `×`), each side 1 ..= 8192.
+///
+/// # Errors
+/// A message naming the expected form or the allowed range.
+pub fn parse_size(text: &str) -> anyhow::Result<(u32, u32)> {
+    let parts: Vec<&str> = text.trim().split(['x', 'X', '×']).collect();
+    let [w, h] = parts.as_slice() else {
+        bail!("--size {text}: expected WIDTHxHEIGHT in pixels, for example 640x480");
+    };
+    let parse = |s: &str| s.trim().parse::<u64>().ok();
+    let (Some(w), Some(h)) = (parse(w), parse(h)) else {
+        bail!("--size {text}: expected WIDTHxHEIGHT in pixels, for example 640x480");
+    };
+    if w == 0 || h == 0 {
+        bail!("--size {text}: width and height must be at least 1 pixel");
+    }
+    if w > u64::from(MAX_SIDE) || h > u64::from(MAX_SIDE) {
+        bail!("--size {text}: width and height must be at most {MAX_SIDE} pixels");
+    }
+    Ok((w as u32, h as u32))
+}
+
+/// Parses `--springs`: `none` or a comma-separated list of kinds.
+///
+/// # Errors
+/// An unknown kind, with the known ones.
+pub fn parse_kinds(text: &str) -> anyhow::Result<KindToggles> {
+    let text = text.trim();
+    if text == "none" {
+        return Ok(KindToggles::NONE);
+    }
+    let mut toggles = KindToggles::NONE;
+    for name in text.split(',').map(str::trim) {
+        let Some(kind) = SpringKind::from_name(name) else {
+            bail!(
+                "--springs {text}: unknown spring kind `{name}`; expected struct, shear, bend (comma-separated) or none"
+            );
+        };
+        toggles = toggles.with(kind, true);
+    }
+    Ok(toggles)
+}
+
+/// The validated plan of a render.
+#[derive(Debug)]
+struct Plan {
+    frames: u64,
+    every: u64,
+    steps: u64,
+    outputs: Outputs,
+    chart: Option<PathBuf>,
+}
+
+/// `springlab render`.
+///
+/// # Errors
+/// Bad scene, parameters or options; an unwritable output.
+pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
+    let (width, height) = parse_size(&args.size)?;
+    let toggles = parse_kinds(&args.springs)?;
+    if !(args.fps.is_finite() && (0.1..=100.0).contains(&args.fps)) {
+        bail!("--fps {}: expected a frame rate from 0.1 to 100", args.fps);
+    }
+    let colouring = match args.colour {
+        ColourBy::Kind => Colouring::ByKind,
+        ColourBy::Strain => {
+            if !(args.max_strain.is_finite() && args.max_strain > 0.0) {
+                bail!(
+                    "--max-strain {}: expected a strain > 0 (0.1 = 10 %)",
+                    args.max_strain
+                );
+            }
+            Colouring::ByStrain {
+                max_strain: args.max_strain,
+            }
+        }
+    };
+    let mut scene = scene::load(&args.scene, &args.sets)?;
+    if let Some(m) = &args.method {
+        apply_methods(&mut scene, m)?;
+    }
+    let dt = check_dt(args.dt.unwrap_or(scene.dt))?;
+    let plan = plan(args, dt, scene.duration)?;
+
+    let style = Style {
+        springs: toggles,
+        colouring,
+        cloth_surface: !args.no_surfaces,
+        jelly_surface: !args.no_surfaces,
+        overlay: !args.no_overlay,
+        ..Style::default()
+    };
+    let projection = if args.ortho {
+        Projection::Orthographic { height: 1.0 }
+    } else {
+        Projection::default()
+    };
+    let mut renderer = Renderer::new(&scene, width, height, projection, style)?;
+    if args.orbit.is_some() || args.elevation.is_some() {
+        let mut camera = renderer.camera;
+        if let Some(a) = args.orbit {
+            camera.orbit = finite_degrees("--orbit", a)?;
+        }
+        if let Some(e) = args.elevation {
+            camera.elevation = finite_degrees("--elevation", e)?
+                .clamp(-89.0f64.to_radians(), 89.0f64.to_radians());
+        }
+        renderer.camera = camera;
+        renderer.refit(&scene);
+    }
+
+    let mut sim = Simulation::new(scene);
+    sim.set_dt(dt);
+    let any_frames = plan.outputs.frames_dir.is_some()
+        || plan.outputs.gif.is_some()
+        || plan.outputs.apng.is_some();
+    let mut encoder = if any_frames {
+        Some(FrameEncoder::start(plan.outputs.clone(), width, height)?)
+    } else {
+        None
+    };
+    let progress = progress_bar(if any_frames { plan.frames } else { plan.steps });
+
+    // Energy samples: at most about 4000 over the run, and at every frame.
+    let stride = plan.steps.div_ceil(4000).max(1);
+    let mut energies: Vec<(f64, crate::physics::Energy)> = Vec::new();
+    if plan.chart.is_some() {
+        energies.push((sim.time(), sim.energy()));
+    }
+    let mut drawn = 0u64;
+    if let Some(enc) = encoder.as_mut() {
+        enc.send(renderer.draw_simulation(&sim))?;
+        drawn = 1;
+        progress.inc(1);
+    }
+    for step in 1..=plan.steps {
+        if sim.step().is_some() {
+            break;
+        }
+        if plan.chart.is_some() && (step % stride == 0 || step == plan.steps) {
+            energies.push((sim.time(), sim.energy()));
+        }
+        if step % plan.every == 0
+            && let Some(enc) = encoder.as_mut()
+        {
+            enc.send(renderer.draw_simulation(&sim))?;
+            drawn += 1;
+            progress.inc(1);
+        }
+        if !any_frames && step % 1000 == 0 {
+            progress.set_position(step);
+        }
+    }
+    progress.finish_and_clear();
+    let written = match encoder {
+        Some(enc) => enc.finish()?.frames,
+        None => 0,
+    };
+    debug_assert_eq!(u64::from(written), drawn);
+
+    if let Some(path) = &plan.chart {
+        let chart = energy_chart(&sim, &energies);
+        chart::save_png(&chart, path, width.max(480), height.max(320))
+            .with_context(|| format!("cannot write the energy chart {}", path.display()))?;
+    }
+    report(&sim, &plan, written, width, height)
+}
+
+/// Validates the frame counts and outputs.
+fn plan(args: &RenderArgs, dt: f64, duration: f64) -> anyhow::Result<Plan> {
+    if args.frames == Some(0) {
+        bail!("--frames 0: expected at least 1 frame");
+    }
+    if args.every == Some(0) {
+        bail!("--every 0: expected a number of steps >= 1");
+    }
+    // Default: 1/fps seconds of simulated time per frame (real-time playback).
+    let every = args
+        .every
+        .unwrap_or_else(|| ((1.0 / args.fps) / dt).round().max(1.0) as u64);
+    let (frames, steps) = match (args.frames, args.time) {
+        (Some(n), _) => (
+            n,
+            (n - 1)
+                .checked_mul(every)
+                .context("--frames × --every is too many steps")?,
+        ),
+        (None, Some(t)) => {
+            if !(t.is_finite() && t >= 0.0) {
+                bail!("--time {t}: expected a duration in seconds >= 0");
+            }
+            let steps = (t / dt).round() as u64;
+            (steps / every + 1, steps)
+        }
+        (None, None) if args.energy_chart.is_some() => {
+            let steps = (duration / dt).round() as u64;
+            (steps / every + 1, steps)
+        }
+        (None, None) => bail!(
+            "render needs --frames N (or --time T); for example `springlab render {} --frames 60 --gif out.gif`",
+            args.scene
+        ),
+    };
+    let frames_dir = match &args.out {
+        Some(dir) => Some(dir.clone()),
+        None if args.gif.is_none() && args.apng.is_none() && args.energy_chart.is_none() => {
+            Some(PathBuf::from("frames"))
+        }
+        None => None,
+    };
+    let expected_frames = u32::try_from(frames)
+        .ok()
+        .filter(|&f| f <= 1_000_000)
+        .with_context(|| format!("{frames} frames: at most 1000000 frames are allowed"))?;
+    // Fail before the simulation when an output file cannot be created.
+    for file in [&args.gif, &args.apng, &args.energy_chart]
+        .into_iter()
+        .flatten()
+    {
+        check_parent(file)?;
+    }
+    Ok(Plan {
+        frames,
+        every,
+        steps,
+        outputs: Outputs {
+            frames_dir,
+            gif: args.gif.clone(),
+            apng: args.apng.clone(),
+            fps: args.fps,
+            expected_frames,
+        },
+        chart: args.energy_chart.clone(),
+    })
+}
+
+fn check_parent(file: &Path) -> anyhow::Result<()> {
+    if let Some(parent) = file.parent().filter(|p| !p.as_os_str().is_empty())
+        && !parent.is_dir()
+    {
+        bail!(
+            "cannot write {}: directory {} does not exist",
+            file.display(),
+            parent.display()
+        );
+    }
+    if file.is_dir() {
+        bail!("cannot write {}: it is a directory", file.display());
+    }
+    Ok(())
+}
+
+fn finite_degrees(flag: &str, degrees: f64) -> anyhow::Result<f64> {
+    if degrees.is_finite() {
+        Ok(degrees.to_radians())
+    } else {
+        bail!("{flag} {degrees}: expected an angle in degrees")
+    }
+}
+
+/// A progress bar on standard error when it is a terminal; hidden otherwise.
+fn progress_bar(len: u64) -> ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
+    if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} {per_sec} eta {eta}") {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// The energy chart of a run: kinetic, gravitational, elastic and total energy against time.
+#[must_use]
+pub fn energy_chart(sim: &Simulation, samples: &[(f64, crate::physics::Energy)]) -> Chart {
+    let series = |name: &str, c: Colour, f: fn(&crate::physics::Energy) -> f64| {
+        Series::line(name, samples.iter().map(|(t, e)| (*t, f(e))).collect()).with_colour(c)
+    };
+    let mut title = format!(
+        "Energy: {} ({}, dt = {} s)",
+        sim.scene.name,
+        sim.scene.method_label(),
+        sim.dt()
+    );
+    if let Some(d) = &sim.diverged {
+        title.push_str(&format!(", diverged at t = {:.3} s", d.time));
+    }
+    Chart::new(title, "time t (s)", "energy E (J)")
+        .with(series("kinetic", colour::SERIES[1], |e| e.kinetic))
+        .with(series("gravitational", colour::SERIES[2], |e| e.gravity))
+        .with(series("elastic", colour::SERIES[4], |e| e.elastic))
+        .with(series("total", Colour::rgb(30, 30, 30), |e| e.total))
+}
+
+/// One line per output, and the divergence if any.
+fn report(
+    sim: &Simulation,
+    plan: &Plan,
+    written: u32,
+    width: u32,
+    height: u32,
+) -> anyhow::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    if let Some(dir) = &plan.outputs.frames_dir {
+        writeln!(
+            out,
+            "wrote {written} frames of {width}x{height} to {}/frame_00000.png …",
+            dir.display()
+        )?;
+    }
+    if let Some(f) = &plan.outputs.gif {
+        writeln!(
+            out,
+            "wrote GIF {} ({written} frames, {} fps)",
+            f.display(),
+            plan.outputs.fps
+        )?;
+    }
+    if let Some(f) = &plan.outputs.apng {
+        writeln!(
+            out,
+            "wrote APNG {} ({written} frames, {} fps)",
+            f.display(),
+            plan.outputs.fps
+        )?;
+    }
+    if let Some(f) = &plan.chart {
+        writeln!(out, "wrote energy chart {}", f.display())?;
+    }
+    if let Some(d) = &sim.diverged {
+        eprintln!(
+            "springlab: the run diverged at step {} (t = {} s): {}; max speed {:.4e} m/s. Rendering stopped after {written} of {} frames.",
+            d.step, d.time, d.reason, d.max_speed, plan.frames
+        );
+    }
+    Ok(())
+}

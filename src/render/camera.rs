@@ -1,0 +1,667 @@
+//! The camera: where the eye is, how the world is projected onto the image, and a default view
+//! that frames a scene.
+//!
+//! # Theory
+//!
+//! The camera orbits a target point. Its eye sits on a sphere of radius `distance` around the
+//! target, at an orbit angle `a` about the vertical axis and an elevation `e` above the
+//! horizontal:
+//!
+//! ```text
+//! eye = target + distance · (cos e · sin a,  sin e,  cos e · cos a)
+//! f̂   = (target - eye) / |target - eye|          forward (into the image)
+//! r̂   = (f̂ × ŷ) / |f̂ × ŷ|                        right   (x̂ when looking straight down)
+//! û   = r̂ × f̂                                    up
+//! ```
+//! A world point `p` (m) has camera coordinates `(x_c, y_c, z_c) = ((p - eye)·r̂, (p - eye)·û,
+//! (p - eye)·f̂)`; `z_c` is its depth (m). The image has `W × H` pixels, `u` to the right and `v`
+//! downwards from the top-left corner:
+//!
+//! ```text
+//! perspective:   s = (H/2) / tan(φ/2)     u = W/2 + s x_c / z_c     v = H/2 - s y_c / z_c
+//! orthographic:  s = H / h                u = W/2 + s x_c           v = H/2 - s y_c
+//! ```
+//! where
+//! - `φ`: vertical field of view (rad); `s`: focal length in pixels (px)
+//! - `h`: height of the world seen by an orthographic camera (m); `s` is then px/m
+//!
+//! Points with `z_c` below the near distance are behind the eye; lines and polygons are clipped
+//! there in camera space before projection ([`View::clip_segment`], [`View::clip_polygon`]).
+//!
+//! **Framing.** [`Camera::fit`] keeps the view direction and moves the eye so that the eight
+//! corners of a box fit in the image with a margin. For a corner with camera coordinates
+//! `(x, y, z')` relative to the target, and the target at distance `d`, its depth is `d + z'`;
+//! it is inside the image when
+//!
+//! ```text
+//! |x| ≤ t_h (d + z')   and   |y| ≤ t_v (d + z')     t_v = tan(φ/2) / m,  t_h = t_v · W/H
+//! ⇔ d ≥ max(|x| / t_h, |y| / t_v) - z'
+//! ```
+//! where `m > 1` is the margin factor; the smallest `d` that satisfies every corner is taken.
+
+use glam::DVec3;
+
+use crate::physics::collide::Collider;
+use crate::scene::Scene;
+
+/// How the camera projects the world onto the image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// A pinhole camera with vertical field of view `fov_y` (rad).
+    Perspective {
+        /// Vertical field of view (rad), between 0 and π.
+        fov_y: f64,
+    },
+    /// Parallel projection showing `height` metres of the world from the top to the bottom of
+    /// the image.
+    Orthographic {
+        /// World height seen (m), > 0.
+        height: f64,
+    },
+}
+
+impl Default for Projection {
+    /// Perspective with a 40° vertical field of view.
+    fn default() -> Projection {
+        Projection::Perspective {
+            fov_y: 40f64.to_radians(),
+        }
+    }
+}
+
+/// An orbiting camera (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Orbit angle about the vertical axis (rad); 0 looks from +z towards -z.
+    pub orbit: f64,
+    /// Elevation above the horizontal plane (rad); positive looks down.
+    pub elevation: f64,
+    /// Distance from the eye to the target (m), > 0.
+    pub distance: f64,
+    /// The point the camera looks at (m).
+    pub target: DVec3,
+    /// Perspective or orthographic.
+    pub projection: Projection,
+}
+
+impl Default for Camera {
+    /// Looking at the origin from 10 m away, from the front-right and above.
+    fn default() -> Camera {
+        Camera {
+            orbit: DEFAULT_ORBIT.to_radians(),
+            elevation: DEFAULT_ELEVATION.to_radians(),
+            distance: 10.0,
+            target: DVec3::ZERO,
+            projection: Projection::default(),
+        }
+    }
+}
+
+/// Default orbit angle of [`Camera::for_scene`] (degrees).
+pub const DEFAULT_ORBIT: f64 = 35.0;
+/// Default elevation of [`Camera::for_scene`] (degrees).
+pub const DEFAULT_ELEVATION: f64 = 24.0;
+/// Margin factor of [`Camera::fit`]: the box fills at most `1/MARGIN` of the image.
+const MARGIN: f64 = 1.08;
+
+impl Camera {
+    /// The eye position `target + distance (cos e sin a, sin e, cos e cos a)` (m).
+    #[must_use]
+    pub fn eye(&self) -> DVec3 {
+        self.target + self.distance * direction(self.orbit, self.elevation)
+    }
+
+    /// The unit vectors `(r̂, û, f̂)` of the camera (right, up, forward; module docs).
+    #[must_use]
+    pub fn basis(&self) -> (DVec3, DVec3, DVec3) {
+        let forward = -direction(self.orbit, self.elevation);
+        let right = forward.cross(DVec3::Y).try_normalize().unwrap_or(DVec3::X);
+        let up = right.cross(forward);
+        (right, up, forward)
+    }
+
+    /// The same camera with its distance (perspective) or height (orthographic) set so that the
+    /// box `bounds` fits into an image of aspect ratio `aspect = W/H` with a margin, looking at
+    /// the box centre (module docs, "Framing"). An empty box leaves the camera unchanged.
+    #[must_use]
+    pub fn fit(self, bounds: &Aabb, aspect: f64) -> Camera {
+        self.fit_window(bounds, aspect, 0.0, 0.0)
+    }
+
+    /// As [`Camera::fit`], but keeping the top `top` and the bottom `bottom` of the image free
+    /// (fractions of its height, for the text overlay and the legend). The box is centred in the
+    /// band between them by moving the target along `û` by `δ`:
+    ///
+    /// ```text
+    /// band in NDC y:  m ± h,   m = bottom - top,   h = 1 - top - bottom
+    /// perspective:    d ≥ |y - m T z'| / (h T / M) - z',   |x| ≤ (T a / M)(d + z'),   δ = -m T d
+    /// orthographic:   H ≥ 2 M |y| / h,                     H ≥ 2 M |x| / a,           δ = -m H / 2
+    /// ```
+    /// where `(x, y, z')` are a corner's camera coordinates relative to the box centre,
+    /// `T = tan(φ/2)`, `a = W/H`, `M` the margin factor and `H` the orthographic height (m).
+    #[must_use]
+    pub fn fit_window(mut self, bounds: &Aabb, aspect: f64, top: f64, bottom: f64) -> Camera {
+        if bounds.is_empty() || !(aspect > 0.0 && aspect.is_finite()) {
+            return self;
+        }
+        let (top, bottom) = (top.clamp(0.0, 0.4), bottom.clamp(0.0, 0.4));
+        let (m, h) = (bottom - top, 1.0 - top - bottom);
+        let centre = bounds.centre();
+        let (right, up, forward) = self.basis();
+        let corners = bounds.corners().map(|c| {
+            let d = c - centre;
+            (d.dot(right), d.dot(up), d.dot(forward))
+        });
+        // A box of zero size still gets a small view.
+        let size = bounds.size().max_element().max(1e-3);
+        let shift = match self.projection {
+            Projection::Perspective { fov_y } => {
+                let t = (0.5 * fov_y).tan();
+                let mut d: f64 = 0.0;
+                for (x, y, z) in corners {
+                    let vertical = (y - m * t * z).abs() / (h * t / MARGIN) - z;
+                    let horizontal = x.abs() / (t * aspect / MARGIN) - z;
+                    d = d.max(vertical).max(horizontal);
+                }
+                // The eye stays outside the box, at least one box size from its centre.
+                self.distance = d.max(size);
+                -m * t * self.distance
+            }
+            Projection::Orthographic { .. } => {
+                let (mut half_w, mut half_h): (f64, f64) = (0.0, 0.0);
+                for (x, y, _) in corners {
+                    half_w = half_w.max(x.abs());
+                    half_h = half_h.max(y.abs());
+                }
+                let height = (2.0 * MARGIN * (half_h / h).max(half_w / aspect)).max(0.1 * size);
+                self.projection = Projection::Orthographic { height };
+                // Far enough that everything is in front of the eye.
+                self.distance = 2.0 * bounds.size().length().max(1.0);
+                -m * 0.5 * height
+            }
+        };
+        self.target = centre + shift * up;
+        self
+    }
+
+    /// A camera that frames `scene` (bodies, spheres and colliders, see [`scene_bounds`]) in an
+    /// image of aspect ratio `aspect = W/H`: from the front when every particle lies in one
+    /// plane `z = const` and nothing else is in the scene (ropes swing in that plane), else
+    /// from the front-right and above.
+    #[must_use]
+    pub fn for_scene(scene: &Scene, aspect: f64, projection: Projection) -> Camera {
+        Camera::for_scene_window(scene, aspect, projection, 0.0, 0.0)
+    }
+
+    /// As [`Camera::for_scene`], keeping the top `top` and bottom `bottom` of the image free
+    /// (fractions of its height; see [`Camera::fit_window`]).
+    #[must_use]
+    pub fn for_scene_window(
+        scene: &Scene,
+        aspect: f64,
+        projection: Projection,
+        top: f64,
+        bottom: f64,
+    ) -> Camera {
+        let bounds = scene_bounds(scene);
+        let flat = scene.bodies.iter().all(|b| {
+            b.model.colliders.is_empty()
+                && b.state.spheres.is_empty()
+                && b.state.x.iter().all(|p| p.z == b.state.x[0].z)
+        });
+        let (orbit, elevation) = if flat {
+            (0.0, 6.0)
+        } else {
+            (DEFAULT_ORBIT, DEFAULT_ELEVATION)
+        };
+        Camera {
+            orbit: orbit.to_radians(),
+            elevation: elevation.to_radians(),
+            projection,
+            ..Camera::default()
+        }
+        .fit_window(&bounds, aspect, top, bottom)
+    }
+}
+
+/// `(cos e sin a, sin e, cos e cos a)`: the unit vector from the target to the eye.
+fn direction(orbit: f64, elevation: f64) -> DVec3 {
+    DVec3::new(
+        elevation.cos() * orbit.sin(),
+        elevation.sin(),
+        elevation.cos() * orbit.cos(),
+    )
+}
+
+/// An axis-aligned box (m); empty until a point is added.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    /// Smallest x, y, z.
+    pub min: DVec3,
+    /// Largest x, y, z.
+    pub max: DVec3,
+}
+
+impl Default for Aabb {
+    fn default() -> Aabb {
+        Aabb::EMPTY
+    }
+}
+
+impl Aabb {
+    /// The box that contains nothing.
+    pub const EMPTY: Aabb = Aabb {
+        min: DVec3::splat(f64::INFINITY),
+        max: DVec3::splat(f64::NEG_INFINITY),
+    };
+
+    /// True when no point has been added.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.min.x > self.max.x
+    }
+
+    /// Grows the box to contain `p` (non-finite points are ignored).
+    pub fn add(&mut self, p: DVec3) {
+        if p.is_finite() {
+            self.min = self.min.min(p);
+            self.max = self.max.max(p);
+        }
+    }
+
+    /// Grows the box to contain the ball of `radius` (m) around `center`.
+    pub fn add_ball(&mut self, center: DVec3, radius: f64) {
+        self.add(center - DVec3::splat(radius));
+        self.add(center + DVec3::splat(radius));
+    }
+
+    /// Centre of the box (m).
+    #[must_use]
+    pub fn centre(&self) -> DVec3 {
+        0.5 * (self.min + self.max)
+    }
+
+    /// Edge lengths (m); zero for an empty box.
+    #[must_use]
+    pub fn size(&self) -> DVec3 {
+        if self.is_empty() {
+            DVec3::ZERO
+        } else {
+            self.max - self.min
+        }
+    }
+
+    /// The eight corners.
+    #[must_use]
+    pub fn corners(&self) -> [DVec3; 8] {
+        let (a, b) = (self.min, self.max);
+        [
+            DVec3::new(a.x, a.y, a.z),
+            DVec3::new(b.x, a.y, a.z),
+            DVec3::new(a.x, b.y, a.z),
+            DVec3::new(b.x, b.y, a.z),
+            DVec3::new(a.x, a.y, b.z),
+            DVec3::new(b.x, a.y, b.z),
+            DVec3::new(a.x, b.y, b.z),
+            DVec3::new(b.x, b.y, b.z),
+        ]
+    }
+}
+
+/// The region a scene's default camera frames (m):
+///
+/// - every particle, every dynamic sphere, static spheres and bowls (the bowl's rim circle and
+///   its bottom), the hole of a floor with a hole;
+/// - where the content lands on every plane collider (an infinite plane has no box of its
+///   own): the corners of the box so far dropped along gravity onto the plane, and on a slope
+///   also one content size further downhill;
+/// - room to swing for a body whose particles lie on one line and hang from a pinned particle
+///   (a rope): every point within the body's size of a pinned particle, in the plane of the line
+///   and gravity, below the pin.
+#[must_use]
+pub fn scene_bounds(scene: &Scene) -> Aabb {
+    let mut b = Aabb::EMPTY;
+    for body in &scene.bodies {
+        let mut own = Aabb::EMPTY;
+        for &p in &body.state.x {
+            own.add(p);
+        }
+        b.add(own.min);
+        b.add(own.max);
+        swing_room(&mut b, body, &own);
+        for s in &body.state.spheres {
+            b.add_ball(s.center, s.radius);
+        }
+        for c in &body.model.colliders {
+            match *c {
+                Collider::Sphere { center, radius } => b.add_ball(center, radius),
+                Collider::Bowl {
+                    center,
+                    radius,
+                    rim_height,
+                } => {
+                    let rim = rim_height.min(center.y);
+                    let a = (radius * radius - (center.y - rim).powi(2)).max(0.0).sqrt();
+                    b.add(DVec3::new(center.x - a, rim, center.z - a));
+                    b.add(DVec3::new(center.x + a, rim, center.z + a));
+                    b.add(center - DVec3::new(0.0, radius, 0.0));
+                }
+                Collider::HolePlane {
+                    hole_center,
+                    hole_radius,
+                    normal,
+                    ..
+                } => {
+                    let (u, w) = plane_axes(normal);
+                    for (su, sw) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
+                        b.add(hole_center + hole_radius * (su * u + sw * w));
+                    }
+                }
+                Collider::Plane { .. } => {}
+            }
+        }
+    }
+    if b.is_empty() {
+        return b;
+    }
+    // Where the content lands on each plane: the corners dropped along gravity (along the
+    // normal when gravity is parallel to the plane or zero), and on a slope one content size
+    // further downhill.
+    let corners = b.corners();
+    let size = b.size().max_element();
+    for body in &scene.bodies {
+        let down = body.model.gravity.normalize_or_zero();
+        for c in &body.model.colliders {
+            if let Collider::Plane { point, normal } | Collider::HolePlane { point, normal, .. } =
+                *c
+            {
+                let along = down.dot(normal);
+                let (dir, rate) = if along < -1e-6 {
+                    (down, along)
+                } else {
+                    (-normal, -1.0)
+                };
+                let downhill = (down - along * normal).normalize_or_zero();
+                for p in corners {
+                    // p + s dir on the plane: (p + s dir - point)·n = 0.
+                    let landing = p + (-(p - point).dot(normal) / rate) * dir;
+                    b.add(landing);
+                    b.add(landing + size * downhill);
+                }
+            }
+        }
+    }
+    b
+}
+
+/// Adds room to hang or swing for a body with pinned particles under gravity (see
+/// [`scene_bounds`]): a rope (particles on one line) gets every point within its length of a
+/// pin, below the pin, in the plane of the line and gravity; any other body (a cloth) gets room
+/// to sag by a third of its size below its lowest pin.
+fn swing_room(b: &mut Aabb, body: &crate::scene::Body, own: &Aabb) {
+    let g = body.model.gravity;
+    let pins: Vec<DVec3> = body
+        .state
+        .x
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| i < body.model.particle_count() && body.model.is_pinned(i))
+        .map(|(_, &p)| p)
+        .collect();
+    if g == DVec3::ZERO || body.state.x.len() < 2 || pins.is_empty() {
+        return;
+    }
+    let size = own.size();
+    let reach = size.max_element();
+    let down = g.normalize();
+    let along: Vec<usize> = (0..3).filter(|&k| size[k] > 0.0).collect();
+    if let [axis] = along.as_slice() {
+        let axis = DVec3::AXES[*axis];
+        for p in pins {
+            b.add(p + reach * down);
+            b.add(p + reach * axis);
+            b.add(p - reach * axis);
+        }
+    } else {
+        for p in pins {
+            b.add(p + reach / 3.0 * down);
+        }
+    }
+}
+
+/// Two unit vectors `(û, ŵ)` spanning the plane with unit normal `normal`, with `û × ŵ` along
+/// the normal: `û = normalize(n × e)` for the world axis `e` least aligned with `n`, `ŵ = û × n`
+/// reversed so that the triple is right-handed.
+#[must_use]
+pub fn plane_axes(normal: DVec3) -> (DVec3, DVec3) {
+    let n = normal.try_normalize().unwrap_or(DVec3::Y);
+    let a = n.abs();
+    let e = if a.x <= a.y && a.x <= a.z {
+        DVec3::X
+    } else if a.z <= a.y {
+        DVec3::Z
+    } else {
+        DVec3::Y
+    };
+    let u = e.cross(n).normalize();
+    let w = n.cross(u);
+    (u, w)
+}
+
+/// A point projected onto the image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Projected {
+    /// Pixels from the left edge.
+    pub x: f32,
+    /// Pixels from the top edge.
+    pub y: f32,
+    /// Depth `z_c` along the view direction (m).
+    pub depth: f64,
+}
+
+/// A camera bound to an image size: projects world points to pixels (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    /// Eye position (m).
+    pub eye: DVec3,
+    /// Right, up and forward unit vectors.
+    pub right: DVec3,
+    /// Up unit vector.
+    pub up: DVec3,
+    /// Forward unit vector (into the image).
+    pub forward: DVec3,
+    /// Image width (px).
+    pub width: f64,
+    /// Image height (px).
+    pub height: f64,
+    /// Focal length `s` (px) for perspective, or the scale (px/m) for orthographic.
+    pub scale: f64,
+    /// True for perspective, false for orthographic.
+    pub perspective: bool,
+    /// Depth below which points are behind the eye (m).
+    pub near: f64,
+}
+
+impl View {
+    /// The view of `camera` on a `width × height` image.
+    #[must_use]
+    pub fn new(camera: &Camera, width: u32, height: u32) -> View {
+        let (right, up, forward) = camera.basis();
+        let h = f64::from(height);
+        let (scale, perspective) = match camera.projection {
+            Projection::Perspective { fov_y } => (0.5 * h / (0.5 * fov_y).tan(), true),
+            Projection::Orthographic { height } => (h / height, false),
+        };
+        View {
+            eye: camera.eye(),
+            right,
+            up,
+            forward,
+            width: f64::from(width),
+            height: h,
+            scale,
+            perspective,
+            near: if perspective {
+                1e-3 * camera.distance
+            } else {
+                f64::NEG_INFINITY
+            },
+        }
+    }
+
+    /// Camera coordinates `(x_c, y_c, z_c)` of world point `p` (m).
+    #[must_use]
+    pub fn to_camera(&self, p: DVec3) -> DVec3 {
+        let d = p - self.eye;
+        DVec3::new(d.dot(self.right), d.dot(self.up), d.dot(self.forward))
+    }
+
+    /// Depth `z_c` of `p` (m).
+    #[must_use]
+    pub fn depth(&self, p: DVec3) -> f64 {
+        (p - self.eye).dot(self.forward)
+    }
+
+    /// The pixel of camera-space point `c`, or `None` behind the near distance.
+    #[must_use]
+    pub fn project_camera(&self, c: DVec3) -> Option<Projected> {
+        if c.z < self.near || !c.is_finite() {
+            return None;
+        }
+        let k = if self.perspective {
+            self.scale / c.z
+        } else {
+            self.scale
+        };
+        Some(Projected {
+            x: (0.5 * self.width + k * c.x) as f32,
+            y: (0.5 * self.height - k * c.y) as f32,
+            depth: c.z,
+        })
+    }
+
+    /// The pixel of world point `p`, or `None` when it is behind the eye.
+    #[must_use]
+    pub fn project(&self, p: DVec3) -> Option<Projected> {
+        self.project_camera(self.to_camera(p))
+    }
+
+    /// Pixels per metre at depth `depth` (m): `s / depth` for perspective, `s` for orthographic.
+    #[must_use]
+    pub fn pixels_per_metre(&self, depth: f64) -> f64 {
+        if self.perspective {
+            self.scale / depth.max(self.near)
+        } else {
+            self.scale
+        }
+    }
+
+    /// The part of the segment `a`–`b` (camera coordinates) in front of the near distance, or
+    /// `None` when all of it is behind.
+    #[must_use]
+    pub fn clip_segment(&self, a: DVec3, b: DVec3) -> Option<(DVec3, DVec3)> {
+        let near = self.near;
+        match (a.z >= near, b.z >= near) {
+            (true, true) => Some((a, b)),
+            (false, false) => None,
+            (true, false) => Some((a, a + (b - a) * ((near - a.z) / (b.z - a.z)))),
+            (false, true) => Some((a + (b - a) * ((near - a.z) / (b.z - a.z)), b)),
+        }
+    }
+
+    /// The polygon `points` (camera coordinates) clipped to the half-space in front of the near
+    /// distance (Sutherland–Hodgman, one plane).
+    #[must_use]
+    pub fn clip_polygon(&self, points: &[DVec3]) -> Vec<DVec3> {
+        let near = self.near;
+        if points.iter().all(|p| p.z >= near) {
+            return points.to_vec();
+        }
+        let mut out = Vec::with_capacity(points.len() + 2);
+        for (i, &a) in points.iter().enumerate() {
+            let b = points[(i + 1) % points.len()];
+            if a.z >= near {
+                out.push(a);
+            }
+            if (a.z >= near) != (b.z >= near) {
+                out.push(a + (b - a) * ((near - a.z) / (b.z - a.z)));
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn target_projects_to_the_centre() {
+        let cam = Camera {
+            target: DVec3::new(1.0, 2.0, 3.0),
+            ..Camera::default()
+        };
+        let v = View::new(&cam, 640, 480);
+        let p = v.project(cam.target).expect("in front");
+        assert!((p.x - 320.0).abs() < 1e-3 && (p.y - 240.0).abs() < 1e-3);
+        assert!((p.depth - cam.distance).abs() < 1e-9);
+    }
+
+    #[test]
+    fn up_is_up_and_right_is_right() {
+        let cam = Camera::default();
+        let v = View::new(&cam, 100, 100);
+        let above = v.project(DVec3::Y).expect("in front");
+        assert!(above.y < 50.0);
+        let (right, _, _) = cam.basis();
+        let r = v.project(right).expect("in front");
+        assert!(r.x > 50.0);
+    }
+
+    #[test]
+    fn fit_keeps_every_corner_inside() {
+        let mut b = Aabb::EMPTY;
+        b.add(DVec3::new(-3.0, 0.0, -1.0));
+        b.add(DVec3::new(5.0, 2.0, 4.0));
+        for projection in [
+            Projection::default(),
+            Projection::Orthographic { height: 1.0 },
+        ] {
+            for aspect in [0.5, 1.0, 2.0] {
+                let cam = Camera {
+                    projection,
+                    ..Camera::default()
+                }
+                .fit(&b, aspect);
+                let (w, h) = ((200.0 * aspect) as u32, 200);
+                let v = View::new(&cam, w, h);
+                let mut touches = false;
+                for c in b.corners() {
+                    let p = v.project(c).expect("in front");
+                    assert!(p.x >= 0.0 && p.x <= w as f32 && p.y >= 0.0 && p.y <= h as f32);
+                    touches |= p.x < 0.1 * w as f32
+                        || p.x > 0.9 * w as f32
+                        || p.y < 0.1 * h as f32
+                        || p.y > 0.9 * h as f32;
+                }
+                assert!(touches, "the box fills the image");
+            }
+        }
+    }
+
+    #[test]
+    fn clipping_keeps_the_front_part() {
+        let v = View::new(&Camera::default(), 10, 10);
+        let (a, b) = v
+            .clip_segment(DVec3::new(0.0, 0.0, -1.0), DVec3::new(0.0, 0.0, 1.0))
+            .expect("half in front");
+        assert!(a.z >= v.near - 1e-12 && b.z == 1.0);
+        let poly = v.clip_polygon(&[
+            DVec3::new(0.0, 0.0, -1.0),
+            DVec3::new(1.0, 0.0, 1.0),
+            DVec3::new(-1.0, 0.0, 1.0),
+        ]);
+        assert_eq!(poly.len(), 4);
+        assert!(poly.iter().all(|p| p.z >= v.near - 1e-12));
+    }
+}

@@ -1,0 +1,1563 @@
+//! Drawing a scene into a [`Pixmap`]: springs, particles, cloth and jelly surfaces, colliders and
+//! the text overlay, back to front.
+//!
+//! # Theory
+//!
+//! **Painter's algorithm.** Everything is turned into flat shapes — line segments (springs,
+//! mesh lines), discs (particles, spheres) and triangles (surfaces, bowls) — each with the depth
+//! `z_c` (m) of a representative point: a triangle's centroid, a segment's midpoint, a disc's
+//! centre. Shapes are drawn from the farthest to the nearest, so nearer ones cover farther ones
+//! (Newell, Newell & Sancha 1972). Ties keep the order the shapes were made in, so a frame is
+//! the same every time. A mesh line (an edge of a surface cell) takes the depth of the nearest
+//! triangle of the cells beside it, minus a hair, so that it lands right after them.
+//!
+//! **Floors and planes** are infinite; they are drawn as a square patch around the content (with
+//! the hole of a floor with a hole cut out, and a grid of nice spacing), in a layer of their
+//! own: first every shape *below* a plane the camera is above (the bowl under the floor's hole,
+//! a jelly falling through it), then the planes, then everything else. Seen from the free side
+//! of a plane nothing on that side can be behind it, so this order is exact for planes.
+//!
+//! **Spheres** are drawn as discs of the projected radius `r s / z_c` (px) around the projected
+//! centre (exact for orthographic views, the usual small-angle approximation for perspective),
+//! shaded by a radial gradient whose bright spot sits towards the light.
+//!
+//! **Triangles** of surfaces are shaded with Lambert's law ([`super::colour`]): a cloth shows
+//! [`super::colour::CLOTH_FRONT`] on the side its normal points to and
+//! [`super::colour::CLOTH_BACK`] on the other; a jelly's faces that turn away from the camera are
+//! hidden (back-face culling on a closed surface). Each projected triangle is grown by half a
+//! pixel so that anti-aliased neighbours leave no light seam between them.
+//!
+//! Reference: M. E. Newell, R. G. Newell, T. L. Sancha, "A solution to the hidden surface
+//! problem", Proc. ACM Annual Conference 1972.
+
+use glam::DVec3;
+use tiny_skia::{
+    FillRule, GradientStop, LinearGradient, Paint, PathBuilder, Pixmap, Point, RadialGradient,
+    Rect, Shader, SpreadMode, Stroke, Transform,
+};
+
+use super::camera::{Camera, Projection, View, plane_axes, scene_bounds};
+use super::colour::{self, Colour};
+use super::surface::{Lattice, quad_edges};
+use super::text::{Align, draw_text, text_width, vertical_metrics};
+use super::{MAX_SIDE, Quality, RenderError};
+use crate::physics::SpringKind;
+use crate::physics::collide::Collider;
+use crate::scene::Scene;
+use crate::simulation::Simulation;
+
+/// Which spring kinds are drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct KindToggles {
+    /// Draw struct springs.
+    pub struct_: bool,
+    /// Draw shear springs.
+    pub shear: bool,
+    /// Draw bend springs.
+    pub bend: bool,
+}
+
+impl KindToggles {
+    /// Every kind on.
+    pub const ALL: KindToggles = KindToggles {
+        struct_: true,
+        shear: true,
+        bend: true,
+    };
+    /// Every kind off.
+    pub const NONE: KindToggles = KindToggles {
+        struct_: false,
+        shear: false,
+        bend: false,
+    };
+
+    /// True when springs of `kind` are drawn.
+    #[must_use]
+    pub fn shows(&self, kind: SpringKind) -> bool {
+        match kind {
+            SpringKind::Struct => self.struct_,
+            SpringKind::Shear => self.shear,
+            SpringKind::Bend => self.bend,
+        }
+    }
+
+    /// The toggles with `kind` set to `on`.
+    #[must_use]
+    pub fn with(mut self, kind: SpringKind, on: bool) -> KindToggles {
+        match kind {
+            SpringKind::Struct => self.struct_ = on,
+            SpringKind::Shear => self.shear = on,
+            SpringKind::Bend => self.bend = on,
+        }
+        self
+    }
+}
+
+impl Default for KindToggles {
+    fn default() -> KindToggles {
+        KindToggles::ALL
+    }
+}
+
+/// How springs (and surfaces) are coloured.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Colouring {
+    /// Each spring kind its own colour ([`colour::STRUCT`], [`colour::SHEAR`], [`colour::BEND`]);
+    /// surfaces their material colour.
+    #[default]
+    ByKind,
+    /// Strain `(L - L0)/L0` on the diverging map of [`colour::strain_colour`], full colour at
+    /// `±max_strain` (dimensionless); surfaces by the mean strain of the struct springs at each
+    /// corner.
+    ByStrain {
+        /// Strain shown at full colour (0.1 = 10 %), > 0.
+        max_strain: f64,
+    },
+}
+
+/// What to draw and how.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Style {
+    /// Spring kinds drawn (for bodies not drawn as surfaces).
+    pub springs: KindToggles,
+    /// Colours of springs and surfaces.
+    pub colouring: Colouring,
+    /// Draw particles as discs (pinned ones are always marked).
+    pub particles: bool,
+    /// Draw cloth lattices as a shaded surface instead of springs.
+    pub cloth_surface: bool,
+    /// Draw jelly (cube) lattices as a shaded surface instead of springs.
+    pub jelly_surface: bool,
+    /// Thin lines along the edges of surface cells.
+    pub mesh_lines: bool,
+    /// Draw colliders and dynamic spheres.
+    pub colliders: bool,
+    /// Draw the text overlay (scene, method, dt, t, energy) and the colour legend.
+    pub overlay: bool,
+    /// Rasteriser settings.
+    pub quality: Quality,
+}
+
+impl Default for Style {
+    /// Every spring kind coloured by kind, particles, cloth and jelly as surfaces with mesh
+    /// lines, colliders and the overlay.
+    fn default() -> Style {
+        Style {
+            springs: KindToggles::ALL,
+            colouring: Colouring::ByKind,
+            particles: true,
+            cloth_surface: true,
+            jelly_surface: true,
+            mesh_lines: true,
+            colliders: true,
+            overlay: true,
+            quality: Quality::default(),
+        }
+    }
+}
+
+/// The text of the overlay.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Overlay {
+    /// Scene name.
+    pub scene: String,
+    /// Method name(s).
+    pub method: String,
+    /// Time step (s).
+    pub dt: f64,
+    /// Simulated time (s).
+    pub time: f64,
+    /// Total mechanical energy (J).
+    pub energy: f64,
+}
+
+impl Overlay {
+    /// The overlay of a running simulation.
+    #[must_use]
+    pub fn of(sim: &Simulation) -> Overlay {
+        Overlay {
+            scene: sim.scene.name.clone(),
+            method: sim.scene.method_label(),
+            dt: sim.dt(),
+            time: sim.time(),
+            energy: sim.energy().total,
+        }
+    }
+
+    /// The two lines shown: `scene · method · dt = … s` and `t = … s · E = … J`.
+    #[must_use]
+    pub fn lines(&self) -> [String; 2] {
+        [
+            format!("{} · {} · dt = {} s", self.scene, self.method, self.dt),
+            format!(
+                "t = {:.3} s · E = {} J",
+                self.time,
+                format_energy(self.energy)
+            ),
+        ]
+    }
+}
+
+/// `E` with 5 significant digits, in plain notation between 0.001 and 100 000.
+fn format_energy(e: f64) -> String {
+    let a = e.abs();
+    if a == 0.0 || (1e-3..1e5).contains(&a) {
+        let digits = if a == 0.0 {
+            1
+        } else {
+            (4 - a.log10().floor() as i32).clamp(0, 7) as usize
+        };
+        format!("{e:.digits$}")
+    } else {
+        format!("{e:.4e}")
+    }
+}
+
+/// What is drawn of one body, found once from its springs.
+#[derive(Clone, Debug)]
+struct BodyGeometry {
+    /// Particle count the geometry was made for (a body that changed is drawn as springs).
+    particles: usize,
+    /// The lattice when the body is drawn as a surface.
+    lattice: Option<Lattice>,
+    /// Surface quads.
+    quads: Vec<[u32; 4]>,
+    /// Unique quad edges with their one or two quads.
+    edges: Vec<(u32, u32, [u32; 2])>,
+    /// Particle disc radius in metres: an eighth of the median spring rest length.
+    particle_radius: f64,
+}
+
+/// A floor or plane patch in world coordinates.
+#[derive(Clone, Debug)]
+struct Floor {
+    /// A point of the plane and its unit normal (into the free side).
+    point: DVec3,
+    normal: DVec3,
+    /// Outer rectangle, counter-clockwise seen from the free side.
+    outline: [DVec3; 4],
+    /// Hole polygon (empty when there is none).
+    hole: Vec<DVec3>,
+    /// Grid segments.
+    grid: Vec<(DVec3, DVec3)>,
+}
+
+/// A scene renderer: camera, style, image size and the geometry found once from the scene.
+#[derive(Clone, Debug)]
+pub struct Renderer {
+    /// The camera.
+    pub camera: Camera,
+    /// What to draw.
+    pub style: Style,
+    width: u32,
+    height: u32,
+    bodies: Vec<BodyGeometry>,
+    floors: Vec<Floor>,
+    bowls: Vec<Bowl>,
+    /// The background gradient, drawn once and copied into every frame.
+    background: Pixmap,
+}
+
+/// A bowl's tessellation in world coordinates.
+#[derive(Clone, Debug)]
+struct Bowl {
+    /// Centre of the bowl's sphere (m).
+    center: DVec3,
+    /// Triangles from the bottom to the rim.
+    triangles: Vec<[DVec3; 3]>,
+}
+
+/// One shape waiting to be drawn.
+#[derive(Clone, Debug)]
+enum Shape {
+    Line {
+        a: Point,
+        b: Point,
+        width: f32,
+        colour: Colour,
+    },
+    Disc {
+        c: Point,
+        r: f32,
+        colour: Colour,
+    },
+    Pin {
+        c: Point,
+        r: f32,
+    },
+    Triangle {
+        p: [Point; 3],
+        colour: Colour,
+    },
+    Ball {
+        c: Point,
+        r: f32,
+        base: Colour,
+        highlight: (f32, f32),
+    },
+}
+
+#[derive(Clone, Debug)]
+struct Item {
+    /// 0: below a plane, 1: above.
+    layer: u8,
+    depth: f64,
+    shape: Shape,
+}
+
+/// Segments of a bowl's tessellation: around and from the bottom to the rim.
+const BOWL_SEGMENTS: usize = 48;
+const BOWL_RINGS: usize = 12;
+
+impl Renderer {
+    /// A renderer for `scene` on a `width × height` image with the default camera for the scene
+    /// ([`Camera::for_scene`]) and projection `projection`.
+    ///
+    /// # Errors
+    /// [`RenderError::Size`] when a side is 0 or larger than [`MAX_SIDE`].
+    pub fn new(
+        scene: &Scene,
+        width: u32,
+        height: u32,
+        projection: Projection,
+        style: Style,
+    ) -> Result<Renderer, RenderError> {
+        check_size(width, height)?;
+        let camera = Camera {
+            projection,
+            ..Camera::default()
+        };
+        let mut r = Renderer::with_camera(scene, width, height, camera, style);
+        r.camera = r.default_camera(scene, projection);
+        Ok(r)
+    }
+
+    /// A renderer with a given camera.
+    ///
+    /// # Panics
+    /// If a side is 0 or larger than [`MAX_SIDE`] (use [`Renderer::new`] for user input).
+    #[must_use]
+    pub fn with_camera(
+        scene: &Scene,
+        width: u32,
+        height: u32,
+        camera: Camera,
+        style: Style,
+    ) -> Renderer {
+        assert!(check_size(width, height).is_ok(), "image size out of range");
+        let bodies = scene
+            .bodies
+            .iter()
+            .map(|b| {
+                let lattice = Lattice::detect(&b.model).filter(|l| match l {
+                    Lattice::Grid { .. } => style.cloth_surface,
+                    Lattice::Block { .. } => style.jelly_surface,
+                });
+                let quads = lattice.map(|l| l.quads()).unwrap_or_default();
+                let edges = edges_with_quads(&quads);
+                let mut rest: Vec<f64> = b
+                    .model
+                    .springs
+                    .iter()
+                    .map(|s| s.rest_length)
+                    .filter(|l| *l > 0.0)
+                    .collect();
+                rest.sort_by(f64::total_cmp);
+                let median = rest.get(rest.len() / 2).copied().unwrap_or(0.8);
+                BodyGeometry {
+                    particles: b.model.particle_count(),
+                    lattice,
+                    quads,
+                    edges,
+                    particle_radius: median / 8.0,
+                }
+            })
+            .collect();
+        let (floors, bowls) = static_geometry(scene);
+        let mut background = Pixmap::new(width, height).expect("size checked");
+        let mut paint = Paint {
+            anti_alias: style.quality.anti_alias,
+            force_hq_pipeline: style.quality.force_hq_pipeline,
+            ..Paint::default()
+        };
+        draw_background(&mut background, &mut paint);
+        Renderer {
+            camera,
+            style,
+            width,
+            height,
+            bodies,
+            floors,
+            bowls,
+            background,
+        }
+    }
+
+    /// The default camera for `scene` ([`Camera::for_scene_window`]) with `projection`, keeping
+    /// the overlay's band at the top and the legend's at the bottom free when the style shows
+    /// them.
+    #[must_use]
+    pub fn default_camera(&self, scene: &Scene, projection: Projection) -> Camera {
+        let (top, bottom) = self.overlay_bands();
+        Camera::for_scene_window(scene, self.aspect(), projection, top, bottom)
+    }
+
+    /// Moves the camera's target and distance so that `scene` fits, keeping its orbit,
+    /// elevation and kind of projection (after changing the angles, say).
+    pub fn refit(&mut self, scene: &Scene) {
+        let (top, bottom) = self.overlay_bands();
+        self.camera = self
+            .camera
+            .fit_window(&scene_bounds(scene), self.aspect(), top, bottom);
+    }
+
+    fn aspect(&self) -> f64 {
+        f64::from(self.width) / f64::from(self.height)
+    }
+
+    /// Fractions of the image height taken by the overlay (top) and the legend (bottom).
+    fn overlay_bands(&self) -> (f64, f64) {
+        if !self.style.overlay {
+            return (0.0, 0.0);
+        }
+        let px = font_size(self.height);
+        let (ascent, descent) = vertical_metrics(px);
+        let line_h = (ascent + descent) * 1.15;
+        // Two lines, or three when the image is narrow and the first line wraps.
+        let lines = if self.width < 480 { 3.0 } else { 2.0 };
+        let h = self.height as f32;
+        let top = (0.5 * px + lines * line_h + 0.5 * px) / h;
+        let bottom = (1.5 * px + line_h) / h;
+        (f64::from(top), f64::from(bottom))
+    }
+
+    /// Image width (px).
+    #[must_use]
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Image height (px).
+    #[must_use]
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Draws the current state of `sim`, with its overlay when the style asks for one.
+    #[must_use]
+    pub fn draw_simulation(&self, sim: &Simulation) -> Pixmap {
+        let overlay = self.style.overlay.then(|| Overlay::of(sim));
+        self.draw(&sim.scene, overlay.as_ref())
+    }
+
+    /// Draws `scene` (the one the renderer was made for, in any state) with an optional
+    /// overlay.
+    #[must_use]
+    pub fn draw(&self, scene: &Scene, overlay: Option<&Overlay>) -> Pixmap {
+        let mut pixmap = self.background.clone();
+        let view = View::new(&self.camera, self.width, self.height);
+        // Line widths and text grow with the image: 1 at 480 px high.
+        let s = (self.height as f32 / 480.0).max(0.5);
+        let mut paint = Paint {
+            anti_alias: self.style.quality.anti_alias,
+            force_hq_pipeline: self.style.quality.force_hq_pipeline,
+            ..Paint::default()
+        };
+
+        // Planes the camera is above split the shapes into two layers.
+        let above: Vec<(DVec3, DVec3)> = self
+            .floors
+            .iter()
+            .filter(|f| (view.eye - f.point).dot(f.normal) > 0.0)
+            .map(|f| (f.point, f.normal))
+            .collect();
+        let layer_of =
+            |p: DVec3| -> u8 { u8::from(!above.iter().any(|&(q, n)| (p - q).dot(n) < -1e-9)) };
+
+        let mut items = Vec::new();
+        let mut any_springs = [false; 3];
+        for (body, geom) in scene.bodies.iter().zip(&self.bodies) {
+            let x = &body.state.x;
+            let surface = geom.lattice.is_some() && geom.particles == x.len();
+            if surface {
+                self.surface_items(&view, body, geom, s, &layer_of, &mut items);
+            } else {
+                self.spring_items(&view, body, s, &layer_of, &mut items, &mut any_springs);
+            }
+            self.particle_items(&view, body, geom, surface, s, &layer_of, &mut items);
+            if self.style.colliders {
+                for sphere in &body.state.spheres {
+                    if let Some(item) =
+                        ball_item(&view, sphere.center, sphere.radius, colour::BALL, &layer_of)
+                    {
+                        items.push(item);
+                    }
+                }
+            }
+        }
+        if self.style.colliders {
+            for body in &scene.bodies {
+                for c in &body.model.colliders {
+                    if let Collider::Sphere { center, radius } = *c
+                        && let Some(item) =
+                            ball_item(&view, center, radius, colour::SPHERE, &layer_of)
+                    {
+                        items.push(item);
+                    }
+                }
+            }
+            for bowl in &self.bowls {
+                bowl_items(&view, bowl, &layer_of, &mut items);
+            }
+        }
+        // Back to front; a stable sort keeps creation order on ties.
+        items.sort_by(|a, b| {
+            a.layer
+                .cmp(&b.layer)
+                .then_with(|| b.depth.total_cmp(&a.depth))
+        });
+        let split = items.partition_point(|i| i.layer == 0);
+        draw_shapes(&mut pixmap, &mut paint, &items[..split]);
+        if self.style.colliders {
+            for floor in &self.floors {
+                draw_floor(&mut pixmap, &mut paint, &view, floor, s);
+            }
+        }
+        draw_shapes(&mut pixmap, &mut paint, &items[split..]);
+        if let Some(o) = overlay.filter(|_| self.style.overlay) {
+            self.draw_overlay(&mut pixmap, &mut paint, o, any_springs);
+        }
+        pixmap
+    }
+
+    /// Spring segments of a body drawn as springs.
+    fn spring_items(
+        &self,
+        view: &View,
+        body: &crate::scene::Body,
+        s: f32,
+        layer_of: &impl Fn(DVec3) -> u8,
+        items: &mut Vec<Item>,
+        any: &mut [bool; 3],
+    ) {
+        let x = &body.state.x;
+        let many = body.model.springs.len() > 2000;
+        for spring in &body.model.springs {
+            if !self.style.springs.shows(spring.kind) {
+                continue;
+            }
+            let (a, b) = (spring.a as usize, spring.b as usize);
+            if a >= x.len() || b >= x.len() {
+                continue;
+            }
+            let (ca, cb) = (view.to_camera(x[a]), view.to_camera(x[b]));
+            let Some((ca, cb)) = view.clip_segment(ca, cb) else {
+                continue;
+            };
+            let (Some(pa), Some(pb)) = (view.project_camera(ca), view.project_camera(cb)) else {
+                continue;
+            };
+            let k = kind_index(spring.kind);
+            any[k] = true;
+            let (mut colour, width): (Colour, f32) = match spring.kind {
+                SpringKind::Struct => (colour::STRUCT, 1.5),
+                SpringKind::Shear => (colour::SHEAR, 0.9),
+                SpringKind::Bend => (colour::BEND, 0.9),
+            };
+            if let Colouring::ByStrain { max_strain } = self.style.colouring {
+                colour = colour::strain_colour(strain(spring.rest_length, x[a], x[b]), max_strain);
+            }
+            if many && spring.kind != SpringKind::Struct {
+                colour = colour.with_alpha(110);
+            }
+            items.push(Item {
+                layer: layer_of(0.5 * (x[a] + x[b])),
+                depth: 0.5 * (ca.z + cb.z),
+                shape: Shape::Line {
+                    a: point(pa.x, pa.y),
+                    b: point(pb.x, pb.y),
+                    // Dense lattices: at most 1 px, which tiny-skia draws as a fast hairline.
+                    width: if many { width.min(1.0) * s } else { width * s },
+                    colour,
+                },
+            });
+        }
+    }
+
+    /// Particle discs and pin markers.
+    #[allow(clippy::too_many_arguments)]
+    fn particle_items(
+        &self,
+        view: &View,
+        body: &crate::scene::Body,
+        geom: &BodyGeometry,
+        surface: bool,
+        s: f32,
+        layer_of: &impl Fn(DVec3) -> u8,
+        items: &mut Vec<Item>,
+    ) {
+        for (i, &p) in body.state.x.iter().enumerate() {
+            let pinned = i < body.model.particle_count() && body.model.is_pinned(i);
+            if !pinned && (surface || !self.style.particles) {
+                continue;
+            }
+            let Some(q) = view.project(p) else { continue };
+            let r = (geom.particle_radius * view.pixels_per_metre(q.depth)) as f32;
+            let r = r.clamp(1.2 * s, 5.0 * s);
+            let c = point(q.x, q.y);
+            items.push(Item {
+                layer: layer_of(p),
+                // Slightly in front of the springs that end here.
+                depth: q.depth - 1e-6 * q.depth.abs().max(1.0),
+                shape: if pinned {
+                    Shape::Pin {
+                        c,
+                        r: r.max(2.5 * s),
+                    }
+                } else {
+                    Shape::Disc {
+                        c,
+                        r,
+                        colour: colour::PARTICLE,
+                    }
+                },
+            });
+        }
+    }
+
+    /// Shaded triangles and mesh lines of a body drawn as a surface.
+    fn surface_items(
+        &self,
+        view: &View,
+        body: &crate::scene::Body,
+        geom: &BodyGeometry,
+        s: f32,
+        layer_of: &impl Fn(DVec3) -> u8,
+        items: &mut Vec<Item>,
+    ) {
+        let x = &body.state.x;
+        let closed = geom.lattice.is_some_and(|l| l.is_closed());
+        let (front, back) = if closed {
+            (colour::JELLY, colour::JELLY)
+        } else {
+            (colour::CLOTH_FRONT, colour::CLOTH_BACK)
+        };
+        let vertex_strain = match self.style.colouring {
+            Colouring::ByStrain { .. } => Some(vertex_strains(body)),
+            Colouring::ByKind => None,
+        };
+        let mut visible = vec![!closed; geom.quads.len()];
+        // Nearest depth of each quad's drawn triangles: its mesh lines go just in front of it.
+        let mut quad_depth = vec![f64::INFINITY; geom.quads.len()];
+        for (qi, q) in geom.quads.iter().enumerate() {
+            for tri in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+                let [a, b, c] = tri.map(|i| x[i as usize]);
+                let mut n = (b - a).cross(c - a);
+                let centroid = (a + b + c) / 3.0;
+                let to_eye = if view.perspective {
+                    view.eye - centroid
+                } else {
+                    -view.forward
+                };
+                let facing = n.dot(to_eye) >= 0.0;
+                if closed && !facing {
+                    continue;
+                }
+                visible[qi] = true;
+                let mut base = if facing { front } else { back };
+                if !facing {
+                    n = -n;
+                }
+                if let (Some(vs), Colouring::ByStrain { max_strain }) =
+                    (&vertex_strain, self.style.colouring)
+                {
+                    let e = tri.iter().map(|&i| vs[i as usize]).sum::<f64>() / 3.0;
+                    base = colour::strain_colour(e, max_strain);
+                }
+                let colour = colour::shade(base, n.try_normalize().unwrap_or(to_eye.normalize()));
+                let cam = [a, b, c].map(|p| view.to_camera(p));
+                if cam.iter().any(|p| p.z < view.near) {
+                    continue;
+                }
+                let Some(p) = project3(view, cam) else {
+                    continue;
+                };
+                let depth = (cam[0].z + cam[1].z + cam[2].z) / 3.0;
+                quad_depth[qi] = quad_depth[qi].min(depth);
+                items.push(Item {
+                    layer: layer_of(centroid),
+                    depth,
+                    shape: Shape::Triangle {
+                        p: grow(p, 0.5),
+                        colour,
+                    },
+                });
+            }
+        }
+        if !self.style.mesh_lines {
+            return;
+        }
+        let line = if closed {
+            colour::JELLY.scaled(0.3).with_alpha(160)
+        } else {
+            colour::CLOTH_FRONT.scaled(0.4).with_alpha(90)
+        };
+        for &(a, b, quads) in &geom.edges {
+            if !quads.iter().any(|&q| visible[q as usize]) {
+                continue;
+            }
+            let (xa, xb) = (x[a as usize], x[b as usize]);
+            let (ca, cb) = (view.to_camera(xa), view.to_camera(xb));
+            let Some((ca, cb)) = view.clip_segment(ca, cb) else {
+                continue;
+            };
+            let (Some(pa), Some(pb)) = (view.project_camera(ca), view.project_camera(cb)) else {
+                continue;
+            };
+            // Just in front of the nearest triangle of the quads beside it (module docs).
+            let near = quads
+                .iter()
+                .map(|&q| quad_depth[q as usize])
+                .fold(f64::INFINITY, f64::min);
+            if !near.is_finite() {
+                continue;
+            }
+            items.push(Item {
+                layer: layer_of(0.5 * (xa + xb)),
+                depth: near - 1e-9 * near.abs().max(1.0),
+                shape: Shape::Line {
+                    a: point(pa.x, pa.y),
+                    b: point(pb.x, pb.y),
+                    width: 0.6 * s,
+                    colour: line,
+                },
+            });
+        }
+    }
+
+    /// The text box in the top-left corner and the colour legend in the bottom-left.
+    fn draw_overlay(&self, pixmap: &mut Pixmap, paint: &mut Paint, o: &Overlay, kinds: [bool; 3]) {
+        let px = font_size(self.height);
+        let (ascent, descent) = vertical_metrics(px);
+        let line_h = (ascent + descent) * 1.15;
+        let pad = 0.5 * px;
+        // Lines wider than the image break at their " · " separators.
+        let room = self.width as f32 - 4.0 * pad;
+        let lines: Vec<String> = o
+            .lines()
+            .iter()
+            .flat_map(|l| wrap(l, " · ", room, px))
+            .collect();
+        let w = lines
+            .iter()
+            .map(|l| text_width(l, px))
+            .fold(0.0f32, f32::max);
+        fill_rect(
+            pixmap,
+            paint,
+            pad,
+            pad,
+            w + 2.0 * pad,
+            line_h * lines.len() as f32 + pad,
+            colour::OVERLAY_BOX,
+        );
+        for (k, line) in lines.iter().enumerate() {
+            let baseline = pad + 0.5 * pad + ascent + k as f32 * line_h;
+            draw_text(
+                pixmap,
+                line,
+                2.0 * pad,
+                baseline,
+                px,
+                colour::TEXT,
+                Align::Left,
+            );
+        }
+        // Legend at the bottom left.
+        let h = self.height as f32;
+        match self.style.colouring {
+            Colouring::ByKind => {
+                let entries: Vec<(&str, Colour)> = SpringKind::ALL
+                    .iter()
+                    .filter(|k| kinds[kind_index(**k)])
+                    .map(|k| {
+                        (
+                            k.name(),
+                            match k {
+                                SpringKind::Struct => colour::STRUCT,
+                                SpringKind::Shear => colour::SHEAR,
+                                SpringKind::Bend => colour::BEND,
+                            },
+                        )
+                    })
+                    .collect();
+                if entries.is_empty() {
+                    return;
+                }
+                let sample = 1.6 * px;
+                let total: f32 = entries
+                    .iter()
+                    .map(|(n, _)| sample + 0.4 * px + text_width(n, px) + px)
+                    .sum();
+                fill_rect(
+                    pixmap,
+                    paint,
+                    pad,
+                    h - pad - line_h - pad,
+                    total + pad,
+                    line_h + pad,
+                    colour::OVERLAY_BOX,
+                );
+                let baseline = h - pad - 0.5 * pad - descent;
+                let mut x = 1.5 * pad;
+                for (name, c) in entries {
+                    let y = baseline - 0.35 * ascent;
+                    stroke_line(pixmap, paint, point(x, y), point(x + sample, y), 2.0, c);
+                    x += sample + 0.4 * px;
+                    draw_text(pixmap, name, x, baseline, px, colour::TEXT, Align::Left);
+                    x += text_width(name, px) + px;
+                }
+            }
+            Colouring::ByStrain { max_strain } => {
+                let bar_w = (12.0 * px).min(0.4 * self.width as f32);
+                let bar_h = 0.7 * px;
+                let label = |v: f64| format!("{:+.0}%", 100.0 * v);
+                let (lo, hi) = (label(-max_strain), label(max_strain));
+                let title = "strain";
+                let total = text_width(title, px) + px + bar_w + text_width(&hi, px) * 2.0 + px;
+                fill_rect(
+                    pixmap,
+                    paint,
+                    pad,
+                    h - pad - line_h - pad,
+                    total + 2.0 * pad,
+                    line_h + pad,
+                    colour::OVERLAY_BOX,
+                );
+                let baseline = h - pad - 0.5 * pad - descent;
+                let mut x = 1.5 * pad;
+                draw_text(pixmap, title, x, baseline, px, colour::TEXT, Align::Left);
+                x += text_width(title, px) + 0.5 * px;
+                draw_text(pixmap, &lo, x, baseline, px, colour::TEXT, Align::Left);
+                x += text_width(&lo, px) + 0.3 * px;
+                let steps = 32;
+                for k in 0..steps {
+                    let t = (k as f64 + 0.5) / steps as f64 * 2.0 - 1.0;
+                    let c = colour::strain_colour(t * max_strain, max_strain);
+                    let seg = bar_w / steps as f32;
+                    fill_rect(
+                        pixmap,
+                        paint,
+                        x + k as f32 * seg,
+                        baseline - 0.5 * ascent - 0.5 * bar_h,
+                        seg + 0.5,
+                        bar_h,
+                        c,
+                    );
+                }
+                x += bar_w + 0.3 * px;
+                draw_text(pixmap, &hi, x, baseline, px, colour::TEXT, Align::Left);
+            }
+        }
+    }
+}
+
+/// `line` split at `separator` into pieces no wider than `room` px where possible.
+fn wrap(line: &str, separator: &str, room: f32, px: f32) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for part in line.split(separator) {
+        match out.last_mut() {
+            Some(last) if text_width(&format!("{last}{separator}{part}"), px) <= room => {
+                last.push_str(separator);
+                last.push_str(part);
+            }
+            _ => out.push(part.to_string()),
+        }
+    }
+    out
+}
+
+/// Text size (px) for an image `height` px high.
+pub(crate) fn font_size(height: u32) -> f32 {
+    (height as f32 / 32.0).clamp(10.0, 48.0).round()
+}
+
+/// Checks an image size: each side 1 ..= [`MAX_SIDE`].
+///
+/// # Errors
+/// [`RenderError::Size`] naming the allowed range.
+pub fn check_size(width: u32, height: u32) -> Result<(), RenderError> {
+    if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
+        return Err(RenderError::Size { width, height });
+    }
+    Ok(())
+}
+
+fn kind_index(kind: SpringKind) -> usize {
+    match kind {
+        SpringKind::Struct => 0,
+        SpringKind::Shear => 1,
+        SpringKind::Bend => 2,
+    }
+}
+
+/// Engineering strain `(L - L0)/L0` of a spring between `a` and `b` (0 for `L0 = 0`).
+fn strain(rest_length: f64, a: DVec3, b: DVec3) -> f64 {
+    if rest_length > 0.0 {
+        ((b - a).length() - rest_length) / rest_length
+    } else {
+        0.0
+    }
+}
+
+/// Mean strain of the struct springs at each particle (0 where there are none).
+fn vertex_strains(body: &crate::scene::Body) -> Vec<f64> {
+    let x = &body.state.x;
+    let mut sum = vec![0.0; x.len()];
+    let mut count = vec![0u32; x.len()];
+    for s in &body.model.springs {
+        let (a, b) = (s.a as usize, s.b as usize);
+        if s.kind != SpringKind::Struct || a >= x.len() || b >= x.len() {
+            continue;
+        }
+        let e = strain(s.rest_length, x[a], x[b]);
+        for p in [a, b] {
+            sum[p] += e;
+            count[p] += 1;
+        }
+    }
+    sum.iter()
+        .zip(&count)
+        .map(|(s, &c)| if c > 0 { s / f64::from(c) } else { 0.0 })
+        .collect()
+}
+
+/// Unique edges of `quads` with the indices of the (one or two) quads they border.
+fn edges_with_quads(quads: &[[u32; 4]]) -> Vec<(u32, u32, [u32; 2])> {
+    let edges = quad_edges(quads);
+    let mut owners: Vec<[u32; 2]> = vec![[u32::MAX; 2]; edges.len()];
+    for (qi, q) in quads.iter().enumerate() {
+        for k in 0..4 {
+            let (a, b) = (q[k], q[(k + 1) % 4]);
+            let key = (a.min(b), a.max(b));
+            if let Ok(e) = edges.binary_search(&key) {
+                let o = &mut owners[e];
+                if o[0] == u32::MAX {
+                    o[0] = qi as u32;
+                } else {
+                    o[1] = qi as u32;
+                }
+            }
+        }
+    }
+    edges
+        .into_iter()
+        .zip(owners)
+        .map(|((a, b), o)| (a, b, [o[0], if o[1] == u32::MAX { o[0] } else { o[1] }]))
+        .collect()
+}
+
+fn point(x: f32, y: f32) -> Point {
+    Point::from_xy(x, y)
+}
+
+/// The three camera-space points projected, or `None` if one is behind the eye.
+fn project3(view: &View, cam: [DVec3; 3]) -> Option<[Point; 3]> {
+    let a = view.project_camera(cam[0])?;
+    let b = view.project_camera(cam[1])?;
+    let c = view.project_camera(cam[2])?;
+    Some([point(a.x, a.y), point(b.x, b.y), point(c.x, c.y)])
+}
+
+/// The triangle `p` with every edge moved `by` px outwards (a mitred offset): each corner
+/// moves to where its two offset edges meet,
+///
+/// ```text
+/// p_i' = p_i + by (n_a + n_b) / (1 + n_a·n_b)
+/// ```
+/// where `n_a`, `n_b` are the outward unit normals of the two edges at `p_i`; the move is capped
+/// at `4 by` for very sharp corners. A degenerate triangle is returned unchanged.
+fn grow(p: [Point; 3], by: f32) -> [Point; 3] {
+    // Twice the signed area, (p_1 - p_0) × (p_2 - p_0): its sign fixes which side is out.
+    let area = (p[1].x - p[0].x) * (p[2].y - p[0].y) - (p[2].x - p[0].x) * (p[1].y - p[0].y);
+    if area.abs() < 1e-6 {
+        return p;
+    }
+    let sign = area.signum();
+    // Outward unit normal of edge i (from p_i to p_{i+1}).
+    let normal = |i: usize| {
+        let (a, b) = (p[i], p[(i + 1) % 3]);
+        let (dx, dy) = (b.x - a.x, b.y - a.y);
+        let len = (dx * dx + dy * dy).sqrt().max(1e-9);
+        (sign * dy / len, -sign * dx / len)
+    };
+    let n = [normal(0), normal(1), normal(2)];
+    let mut out = p;
+    for i in 0..3 {
+        let (na, nb) = (n[(i + 2) % 3], n[i]);
+        let denom = (1.0 + na.0 * nb.0 + na.1 * nb.1).max(1.0 / 16.0);
+        let (mut mx, mut my) = (by * (na.0 + nb.0) / denom, by * (na.1 + nb.1) / denom);
+        let len = (mx * mx + my * my).sqrt();
+        if len > 4.0 * by {
+            mx *= 4.0 * by / len;
+            my *= 4.0 * by / len;
+        }
+        out[i] = point(p[i].x + mx, p[i].y + my);
+    }
+    out
+}
+
+/// A shaded disc for a sphere of `radius` (m) at `center`.
+fn ball_item(
+    view: &View,
+    center: DVec3,
+    radius: f64,
+    base: Colour,
+    layer_of: &impl Fn(DVec3) -> u8,
+) -> Option<Item> {
+    let q = view.project(center)?;
+    let r = (radius * view.pixels_per_metre(q.depth)) as f32;
+    if !(r > 0.0 && r.is_finite()) {
+        return None;
+    }
+    // The light seen on the screen: (L·r̂, -L·û), towards the bright spot.
+    let l = colour::LIGHT.normalize();
+    let (lx, ly) = (l.dot(view.right) as f32, -(l.dot(view.up)) as f32);
+    let len = (lx * lx + ly * ly).sqrt().max(1e-6);
+    Some(Item {
+        layer: layer_of(center),
+        depth: q.depth,
+        shape: Shape::Ball {
+            c: point(q.x, q.y),
+            r,
+            base,
+            highlight: (0.4 * r * lx / len.max(1.0), 0.4 * r * ly / len.max(1.0)),
+        },
+    })
+}
+
+/// The floors and bowls of a scene, in world coordinates.
+fn static_geometry(scene: &Scene) -> (Vec<Floor>, Vec<Bowl>) {
+    let bounds = scene_bounds(scene);
+    let mut floors = Vec::new();
+    let mut bowls = Vec::new();
+    let mut seen: Vec<Collider> = Vec::new();
+    for body in &scene.bodies {
+        for c in &body.model.colliders {
+            if seen.contains(c) {
+                continue;
+            }
+            seen.push(*c);
+            match *c {
+                Collider::Plane { point, normal } => {
+                    floors.push(floor(point, normal, None, &bounds));
+                }
+                Collider::HolePlane {
+                    point,
+                    normal,
+                    hole_center,
+                    hole_radius,
+                } => floors.push(floor(
+                    point,
+                    normal,
+                    Some((hole_center, hole_radius)),
+                    &bounds,
+                )),
+                Collider::Bowl {
+                    center,
+                    radius,
+                    rim_height,
+                } => bowls.push(Bowl {
+                    center,
+                    triangles: bowl_triangles(center, radius, rim_height),
+                }),
+                Collider::Sphere { .. } => {}
+            }
+        }
+    }
+    (floors, bowls)
+}
+
+/// A "nice" number near `x > 0`: 1, 2 or 5 times a power of ten (Heckbert 1990).
+#[must_use]
+pub(crate) fn nice(x: f64, round: bool) -> f64 {
+    let e = x.log10().floor();
+    let f = x / 10f64.powf(e);
+    let n = if round {
+        if f < 1.5 {
+            1.0
+        } else if f < 3.0 {
+            2.0
+        } else if f < 7.0 {
+            5.0
+        } else {
+            10.0
+        }
+    } else if f <= 1.0 {
+        1.0
+    } else if f <= 2.0 {
+        2.0
+    } else if f <= 5.0 {
+        5.0
+    } else {
+        10.0
+    };
+    n * 10f64.powf(e)
+}
+
+/// A plane patch around the content `bounds` with grid lines every nice distance, and the hole.
+fn floor(
+    point: DVec3,
+    normal: DVec3,
+    hole: Option<(DVec3, f64)>,
+    bounds: &super::camera::Aabb,
+) -> Floor {
+    let n = normal.try_normalize().unwrap_or(DVec3::Y);
+    let (u, w) = plane_axes(n);
+    // Plane coordinates (along û, ŵ) of the content's corners, measured from `point`.
+    let (mut u0, mut u1, mut w0, mut w1) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let mut first = true;
+    let corners = if bounds.is_empty() {
+        [point; 8]
+    } else {
+        bounds.corners()
+    };
+    for c in corners {
+        let (cu, cw) = ((c - point).dot(u), (c - point).dot(w));
+        if first {
+            (u0, u1, w0, w1) = (cu, cu, cw, cw);
+            first = false;
+        }
+        u0 = u0.min(cu);
+        u1 = u1.max(cu);
+        w0 = w0.min(cw);
+        w1 = w1.max(cw);
+    }
+    // Half the content's size more on every side, at least 1 m across.
+    let margin = 0.5 * (u1 - u0).max(w1 - w0).max(1.0);
+    let spacing = nice((u1 - u0 + w1 - w0 + 4.0 * margin) / 24.0, true);
+    let snap_down = |v: f64| (v / spacing).floor() * spacing;
+    let snap_up = |v: f64| (v / spacing).ceil() * spacing;
+    let (u0, u1, w0, w1) = (
+        snap_down(u0 - margin),
+        snap_up(u1 + margin),
+        snap_down(w0 - margin),
+        snap_up(w1 + margin),
+    );
+    let at = |a: f64, b: f64| point + a * u + b * w;
+    let outline = [at(u0, w0), at(u1, w0), at(u1, w1), at(u0, w1)];
+    let hole_uv = hole.map(|(c, r)| ((c - point).dot(u), (c - point).dot(w), r));
+    let hole_poly = hole_uv
+        .map(|(hu, hw, r)| {
+            (0..96)
+                .map(|k| {
+                    let phi = std::f64::consts::TAU * k as f64 / 96.0;
+                    at(hu + r * phi.cos(), hw + r * phi.sin())
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut grid = Vec::new();
+    // Lines u = const from w0 to w1, cut where they cross the hole; then w = const likewise.
+    let count_u = ((u1 - u0) / spacing).round() as i64;
+    let count_w = ((w1 - w0) / spacing).round() as i64;
+    for k in 0..=count_u {
+        let a = u0 + k as f64 * spacing;
+        for (b0, b1) in cut(w0, w1, hole_uv.map(|(hu, hw, r)| (a - hu, hw, r))) {
+            grid.push((at(a, b0), at(a, b1)));
+        }
+    }
+    for k in 0..=count_w {
+        let b = w0 + k as f64 * spacing;
+        for (a0, a1) in cut(u0, u1, hole_uv.map(|(hu, hw, r)| (b - hw, hu, r))) {
+            grid.push((at(a0, b), at(a1, b)));
+        }
+    }
+    Floor {
+        point,
+        normal: n,
+        outline,
+        hole: hole_poly,
+        grid,
+    }
+}
+
+/// The parts of the interval `[lo, hi]` outside a circle: `hole = (offset of the line from the
+/// centre, centre along the line, radius)`.
+fn cut(lo: f64, hi: f64, hole: Option<(f64, f64, f64)>) -> Vec<(f64, f64)> {
+    match hole {
+        Some((off, centre, r)) if off.abs() < r => {
+            let half = (r * r - off * off).sqrt();
+            let (c0, c1) = (centre - half, centre + half);
+            let mut out = Vec::new();
+            if c0 > lo {
+                out.push((lo, c0.min(hi)));
+            }
+            if c1 < hi {
+                out.push((c1.max(lo), hi));
+            }
+            out
+        }
+        _ => vec![(lo, hi)],
+    }
+}
+
+/// Triangles of the bowl: the sphere below the rim, from the bottom (polar angle 0) to the rim
+/// angle `θ_rim = acos((c_y - rim)/r)`, each with vertices
+/// `c + r (sin θ cos φ, -cos θ, sin θ sin φ)`.
+fn bowl_triangles(center: DVec3, radius: f64, rim_height: f64) -> Vec<[DVec3; 3]> {
+    let rim = rim_height.min(center.y);
+    let theta_rim = ((center.y - rim) / radius).clamp(-1.0, 1.0).acos();
+    let at = |i: usize, j: usize| {
+        let theta = theta_rim * i as f64 / BOWL_RINGS as f64;
+        let phi = std::f64::consts::TAU * j as f64 / BOWL_SEGMENTS as f64;
+        center
+            + radius
+                * DVec3::new(
+                    theta.sin() * phi.cos(),
+                    -theta.cos(),
+                    theta.sin() * phi.sin(),
+                )
+    };
+    let mut t = Vec::with_capacity(2 * BOWL_RINGS * BOWL_SEGMENTS);
+    for i in 0..BOWL_RINGS {
+        for j in 0..BOWL_SEGMENTS {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            // At the bottom (i = 0) a = d is the pole: one triangle per segment.
+            t.push([a, b, c]);
+            if i > 0 {
+                t.push([a, c, d]);
+            }
+        }
+    }
+    t
+}
+
+/// The bowl's triangles, inside and outside coloured differently.
+fn bowl_items(view: &View, bowl: &Bowl, layer_of: &impl Fn(DVec3) -> u8, items: &mut Vec<Item>) {
+    for &[a, b, c] in &bowl.triangles {
+        let centroid = (a + b + c) / 3.0;
+        let cam = [a, b, c].map(|p| view.to_camera(p));
+        if cam.iter().any(|p| p.z < view.near) {
+            continue;
+        }
+        let Some(p) = project3(view, cam) else {
+            continue;
+        };
+        let mut n = (b - a).cross(c - a).normalize_or_zero();
+        let to_eye = if view.perspective {
+            view.eye - centroid
+        } else {
+            -view.forward
+        };
+        // The normal of the side the camera sees.
+        if n.dot(to_eye) < 0.0 {
+            n = -n;
+        }
+        // That side is the inside when its normal points towards the sphere's centre.
+        let inside = n.dot(bowl.center - centroid) > 0.0;
+        let base = if inside {
+            colour::BOWL_INSIDE
+        } else {
+            colour::BOWL_OUTSIDE
+        };
+        items.push(Item {
+            layer: layer_of(centroid),
+            depth: (cam[0].z + cam[1].z + cam[2].z) / 3.0,
+            shape: Shape::Triangle {
+                p: grow(p, 0.5),
+                colour: colour::shade(base, n),
+            },
+        });
+    }
+}
+
+/// The background: a vertical gradient from [`colour::SKY_TOP`] to [`colour::SKY_BOTTOM`].
+fn draw_background(pixmap: &mut Pixmap, paint: &mut Paint) {
+    let h = pixmap.height() as f32;
+    let w = pixmap.width() as f32;
+    paint.shader = LinearGradient::new(
+        point(0.0, 0.0),
+        point(0.0, h),
+        vec![
+            GradientStop::new(0.0, colour::SKY_TOP.to_skia()),
+            GradientStop::new(1.0, colour::SKY_BOTTOM.to_skia()),
+        ],
+        SpreadMode::Pad,
+        Transform::identity(),
+    )
+    .unwrap_or(Shader::SolidColor(colour::SKY_TOP.to_skia()));
+    if let Some(r) = Rect::from_xywh(0.0, 0.0, w, h) {
+        pixmap.fill_rect(r, paint, Transform::identity(), None);
+    }
+}
+
+pub(crate) fn fill_rect(
+    pixmap: &mut Pixmap,
+    paint: &mut Paint,
+    x: f32,
+    y: f32,
+    w: f32,
+    h: f32,
+    c: Colour,
+) {
+    paint.set_color(c.to_skia());
+    if let Some(r) = Rect::from_xywh(x, y, w, h) {
+        pixmap.fill_rect(r, paint, Transform::identity(), None);
+    }
+}
+
+pub(crate) fn stroke_line(
+    pixmap: &mut Pixmap,
+    paint: &mut Paint,
+    a: Point,
+    b: Point,
+    width: f32,
+    c: Colour,
+) {
+    let mut pb = PathBuilder::new();
+    pb.move_to(a.x, a.y);
+    pb.line_to(b.x, b.y);
+    if let Some(path) = pb.finish() {
+        paint.set_color(c.to_skia());
+        let stroke = Stroke {
+            width,
+            line_cap: tiny_skia::LineCap::Round,
+            ..Stroke::default()
+        };
+        pixmap.stroke_path(&path, paint, &stroke, Transform::identity(), None);
+    }
+}
+
+/// Draws `items` in order. A run of consecutive lines of one colour and width, or of discs of
+/// one colour, is drawn as one path: the same picture (each run is one paint layer, so where two
+/// of its shapes cross the colour is not blended twice) for a fraction of the per-shape cost.
+fn draw_shapes(pixmap: &mut Pixmap, paint: &mut Paint, items: &[Item]) {
+    let mut k = 0;
+    while k < items.len() {
+        match items[k].shape {
+            Shape::Line { width, colour, .. } => {
+                let mut pb = PathBuilder::new();
+                while let Some(Item {
+                    shape:
+                        Shape::Line {
+                            a,
+                            b,
+                            width: w,
+                            colour: c,
+                        },
+                    ..
+                }) = items.get(k)
+                {
+                    if *w != width || *c != colour {
+                        break;
+                    }
+                    pb.move_to(a.x, a.y);
+                    pb.line_to(b.x, b.y);
+                    k += 1;
+                }
+                if let Some(path) = pb.finish() {
+                    paint.set_color(colour.to_skia());
+                    let stroke = Stroke {
+                        width,
+                        line_cap: tiny_skia::LineCap::Round,
+                        ..Stroke::default()
+                    };
+                    pixmap.stroke_path(&path, paint, &stroke, Transform::identity(), None);
+                }
+            }
+            Shape::Disc { colour, .. } => {
+                let mut pb = PathBuilder::new();
+                while let Some(Item {
+                    shape: Shape::Disc { c, r, colour: col },
+                    ..
+                }) = items.get(k)
+                {
+                    if *col != colour {
+                        break;
+                    }
+                    pb.push_circle(c.x, c.y, *r);
+                    k += 1;
+                }
+                if let Some(path) = pb.finish() {
+                    paint.set_color(colour.to_skia());
+                    pixmap.fill_path(&path, paint, FillRule::Winding, Transform::identity(), None);
+                }
+            }
+            _ => {
+                draw_shape(pixmap, paint, &items[k].shape);
+                k += 1;
+            }
+        }
+    }
+}
+
+fn draw_shape(pixmap: &mut Pixmap, paint: &mut Paint, shape: &Shape) {
+    match *shape {
+        Shape::Line {
+            a,
+            b,
+            width,
+            colour,
+        } => stroke_line(pixmap, paint, a, b, width, colour),
+        Shape::Disc { c, r, colour } => {
+            if let Some(path) = PathBuilder::from_circle(c.x, c.y, r) {
+                paint.set_color(colour.to_skia());
+                pixmap.fill_path(&path, paint, FillRule::Winding, Transform::identity(), None);
+            }
+        }
+        Shape::Pin { c, r } => {
+            if let Some(rect) = Rect::from_xywh(c.x - r, c.y - r, 2.0 * r, 2.0 * r) {
+                let path = PathBuilder::from_rect(rect);
+                paint.set_color(colour::PINNED.to_skia());
+                pixmap.fill_path(&path, paint, FillRule::Winding, Transform::identity(), None);
+                paint.set_color(colour::PARTICLE.to_skia());
+                let stroke = Stroke {
+                    width: (0.35 * r).max(1.0),
+                    ..Stroke::default()
+                };
+                pixmap.stroke_path(&path, paint, &stroke, Transform::identity(), None);
+            }
+        }
+        Shape::Triangle { p, colour } => {
+            let mut pb = PathBuilder::new();
+            pb.move_to(p[0].x, p[0].y);
+            pb.line_to(p[1].x, p[1].y);
+            pb.line_to(p[2].x, p[2].y);
+            pb.close();
+            if let Some(path) = pb.finish() {
+                paint.set_color(colour.to_skia());
+                pixmap.fill_path(&path, paint, FillRule::Winding, Transform::identity(), None);
+            }
+        }
+        Shape::Ball {
+            c,
+            r,
+            base,
+            highlight,
+        } => {
+            let Some(path) = PathBuilder::from_circle(c.x, c.y, r) else {
+                return;
+            };
+            let spot = point(c.x + highlight.0, c.y + highlight.1);
+            paint.shader = RadialGradient::new(
+                spot,
+                0.0,
+                c,
+                r,
+                vec![
+                    GradientStop::new(0.0, base.lerp(Colour::rgb(255, 255, 255), 0.6).to_skia()),
+                    GradientStop::new(0.55, base.to_skia()),
+                    GradientStop::new(1.0, base.scaled(0.45).to_skia()),
+                ],
+                SpreadMode::Pad,
+                Transform::identity(),
+            )
+            .unwrap_or(Shader::SolidColor(base.to_skia()));
+            pixmap.fill_path(&path, paint, FillRule::Winding, Transform::identity(), None);
+            paint.set_color(base.scaled(0.35).with_alpha(160).to_skia());
+            let stroke = Stroke {
+                width: 0.8,
+                ..Stroke::default()
+            };
+            pixmap.stroke_path(&path, paint, &stroke, Transform::identity(), None);
+        }
+    }
+}
+
+/// A floor: the shaded patch with its hole cut out, its grid and the hole's rim.
+fn draw_floor(pixmap: &mut Pixmap, paint: &mut Paint, view: &View, floor: &Floor, s: f32) {
+    let camera_above = (view.eye - floor.point).dot(floor.normal) > 0.0;
+    let alpha = if camera_above { 255 } else { 70 };
+    let mut pb = PathBuilder::new();
+    let add_ring = |pb: &mut PathBuilder, ring: &[DVec3]| {
+        let cam: Vec<DVec3> = ring.iter().map(|&p| view.to_camera(p)).collect();
+        let clipped = view.clip_polygon(&cam);
+        let mut first = true;
+        for c in clipped {
+            if let Some(p) = view.project_camera(c) {
+                if first {
+                    pb.move_to(p.x, p.y);
+                    first = false;
+                } else {
+                    pb.line_to(p.x, p.y);
+                }
+            }
+        }
+        if !first {
+            pb.close();
+        }
+    };
+    add_ring(&mut pb, &floor.outline);
+    if !floor.hole.is_empty() {
+        add_ring(&mut pb, &floor.hole);
+    }
+    if let Some(path) = pb.finish() {
+        paint.set_color(
+            colour::shade(colour::GROUND, floor.normal)
+                .with_alpha(alpha)
+                .to_skia(),
+        );
+        pixmap.fill_path(&path, paint, FillRule::EvenOdd, Transform::identity(), None);
+    }
+    let grid = colour::GROUND_GRID;
+    for &(a, b) in &floor.grid {
+        if let Some((ca, cb)) = view.clip_segment(view.to_camera(a), view.to_camera(b))
+            && let (Some(pa), Some(pb)) = (view.project_camera(ca), view.project_camera(cb))
+        {
+            stroke_line(
+                pixmap,
+                paint,
+                point(pa.x, pa.y),
+                point(pb.x, pb.y),
+                0.8 * s,
+                grid,
+            );
+        }
+    }
+    let n = floor.hole.len();
+    for k in 0..n {
+        let (a, b) = (floor.hole[k], floor.hole[(k + 1) % n]);
+        if let Some((ca, cb)) = view.clip_segment(view.to_camera(a), view.to_camera(b))
+            && let (Some(pa), Some(pb)) = (view.project_camera(ca), view.project_camera(cb))
+        {
+            stroke_line(
+                pixmap,
+                paint,
+                point(pa.x, pa.y),
+                point(pb.x, pb.y),
+                1.5 * s,
+                colour::GROUND.scaled(0.45),
+            );
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grown_triangles_contain_the_original_corners_pushed_out() {
+        for p in [
+            [point(0.0, 0.0), point(10.0, 0.0), point(0.0, 10.0)],
+            [point(0.0, 0.0), point(0.0, 10.0), point(10.0, 0.0)],
+        ] {
+            let g = grow(p, 0.5);
+            // Corner (0, 0) moves to (-0.5, -0.5); the legs move out by 0.5 px.
+            let c = g.iter().find(|q| q.x < 1.0 && q.y < 1.0).expect("corner");
+            assert!(
+                (c.x + 0.5).abs() < 1e-5 && (c.y + 0.5).abs() < 1e-5,
+                "{c:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn nice_numbers() {
+        assert_eq!(nice(0.34, true), 0.5);
+        assert_eq!(nice(7.5, true), 10.0);
+        assert_eq!(nice(1.2, false), 2.0);
+        assert_eq!(nice(0.9, false), 1.0);
+    }
+}
