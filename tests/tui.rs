@@ -549,13 +549,16 @@ fn corner_keys_on_a_scene_without_cloth_say_so() {
 }
 
 #[test]
-fn export_reports_the_missing_render_module() {
+fn e_exports_the_current_frame_as_png() {
     let mut app = open("rope");
+    key(&mut app, KeyCode::Char('s'));
     key(&mut app, KeyCode::Char('e'));
-    assert_eq!(
-        run(&app).message(),
-        Some("PNG export needs the render module")
-    );
+    // The file goes to the current directory, named after lesson, step and simulation step.
+    let name = "springlab-rope-step1-000001.png";
+    assert_eq!(run(&app).message(), Some(format!("wrote {name}").as_str()));
+    let bytes = std::fs::read(name).expect("the exported file");
+    std::fs::remove_file(name).ok();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "a PNG signature");
 }
 
 #[test]
