@@ -225,3 +225,63 @@ fn cli_json_has_the_design_shape() {
         "no progress when stderr is not a terminal"
     );
 }
+
+#[test]
+fn bench_times_every_method_on_a_spring_workload() {
+    let out = springlab(&[
+        "bench",
+        "rope-se",
+        "--json",
+        "--repeats",
+        "1",
+        "--budget",
+        "0.05",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let entries = v["workloads"].as_array().expect("entries");
+    let methods: Vec<&str> = entries
+        .iter()
+        .map(|w| w["method"].as_str().unwrap_or(""))
+        .collect();
+    assert_eq!(
+        methods,
+        [
+            "semi-implicit-euler",
+            "explicit-euler",
+            "midpoint",
+            "rk4",
+            "implicit-euler",
+            "predictor-corrector",
+            "verlet",
+            "xpbd"
+        ]
+    );
+    assert_eq!(entries[0]["reference_method"], true);
+    assert_eq!(entries[0]["checksum_ok"], true);
+    for w in &entries[1..] {
+        assert_eq!(w["workload"], "rope-se");
+        assert_eq!(w["reference_method"], false);
+        assert!(w["reference"].is_null());
+        assert!(w["steps"].as_u64().is_some_and(|n| n > 0));
+        assert!(
+            w["spring_steps_per_second"]
+                .as_f64()
+                .is_some_and(|s| s > 0.0)
+        );
+    }
+    // RK4 costs four force evaluations a step, midpoint two.
+    assert_eq!(entries[3]["force_evals_per_step"], 4);
+    assert_eq!(entries[2]["force_evals_per_step"], 2);
+    // Explicit Euler blows up on this stiff rope at dt = 1e-4 (|1 + i dt ω| > 1): reported.
+    assert!(entries[1]["diverged_at"].as_u64().is_some());
+    let bad = springlab(&["bench", "rope-se", "--budget", "nan"]);
+    assert!(
+        String::from_utf8_lossy(&bad.stderr)
+            .contains("--budget NaN: expected a wall time in seconds >= 0")
+    );
+}

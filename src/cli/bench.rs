@@ -21,6 +21,10 @@ pub struct BenchArgs {
     #[arg(long, value_name = "R", default_value_t = 3,
           value_parser = clap::value_parser!(u32).range(1..))]
     pub repeats: u32,
+    /// Also time every other method on each workload (wall-time budget per run, in seconds;
+    /// 0 times only the workloads' own methods).
+    #[arg(long, value_name = "S", default_value_t = 0.2)]
+    pub budget: f64,
 }
 
 /// The JSON document of `springlab bench --json` (DESIGN.md), fields in declaration order.
@@ -50,6 +54,12 @@ pub fn selected(names: &[String]) -> anyhow::Result<Vec<Workload>> {
 /// reference (after the results are printed).
 pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     let workloads = selected(&args.workloads)?;
+    if !(args.budget >= 0.0 && args.budget.is_finite()) {
+        bail!(
+            "--budget {}: expected a wall time in seconds >= 0",
+            args.budget
+        );
+    }
     let progress = std::io::stderr().is_terminal();
     let mut results = Vec::with_capacity(workloads.len());
     for w in workloads {
@@ -65,6 +75,17 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             }
         });
         results.push(result);
+        if args.budget > 0.0 {
+            for m in bench::methods_for(w)
+                .into_iter()
+                .filter(|&m| m != w.method())
+            {
+                if progress {
+                    eprintln!("{w}: {m} for up to {} s per run", args.budget);
+                }
+                results.push(bench::measure_method(w, m, args.repeats, args.budget));
+            }
+        }
     }
     let mut out = std::io::stdout().lock();
     if args.json {
@@ -81,7 +102,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     out.flush()?;
     let bad: Vec<&str> = results
         .iter()
-        .filter(|r| !r.checksum_ok)
+        .filter(|r| r.reference_method && !r.checksum_ok)
         .map(|r| r.workload.name())
         .collect();
     if !bad.is_empty() {
@@ -115,7 +136,12 @@ pub fn print_table(out: &mut impl Write, results: &[BenchResult]) -> std::io::Re
     for r in results {
         let [cx, cy, cz] = r.centroid;
         let centroid = format!("({cx:.12}, {cy:.12}, {cz:.12})");
-        let ok = if r.checksum_ok {
+        let ok = if !r.reference_method {
+            match r.diverged_at {
+                Some(step) => format!("— (other method; diverged at step {step})"),
+                None => "— (other method: no reference)".to_string(),
+            }
+        } else if r.checksum_ok {
             format!("ok ({:.1e})", r.max_relative_deviation)
         } else if !r.deterministic {
             "MISMATCH (not deterministic)".to_string()
