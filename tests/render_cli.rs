@@ -364,3 +364,48 @@ fn bad_counts_and_options_are_explained() {
         assert!(stderr.contains(message), "{args:?}: {stderr}");
     }
 }
+
+#[test]
+fn start_skips_simulated_time_before_the_first_frame() {
+    // `--start 10 dt` then one frame equals frame 10 of a run drawn every step (dt = 1/64 s).
+    let dir = scratch("start");
+    success(
+        &dir,
+        &[
+            "render",
+            "rope",
+            "--frames",
+            "11",
+            "--every",
+            "1",
+            "--size",
+            "96x72",
+            "--out",
+            "dense",
+            "--no-overlay",
+        ],
+    );
+    success(
+        &dir,
+        &[
+            "render",
+            "rope",
+            "--frames",
+            "1",
+            "--start",
+            "0.15625",
+            "--size",
+            "96x72",
+            "--out",
+            "late",
+            "--no-overlay",
+        ],
+    );
+    let a = std::fs::read(dir.join("late/frame_00000.png")).expect("frame");
+    let b = std::fs::read(dir.join("dense/frame_00010.png")).expect("frame");
+    assert!(a == b, "--start 10·dt shows step 10");
+    assert!(
+        failure(&["render", "rope", "--frames", "1", "--start", "-1"])
+            .contains("--start -1: expected a time in seconds >= 0")
+    );
+}

@@ -1,6 +1,7 @@
 //! `springlab render`: PNG frames, GIF and APNG of a scene, and its energy chart.
 //!
-//! Frame `k` shows the state after `k · every` steps (frame 0 is the initial state). The
+//! Frame `k` shows the state after `k · every` steps (frame 0 is the initial state), counted
+//! from `--start T` seconds into the run when given. The
 //! simulation runs on this thread and draws each frame as soon as its step is reached; the
 //! encoder thread compresses and writes while the next frame is simulated and drawn.
 //!
@@ -43,6 +44,15 @@ pub struct RenderArgs {
     /// Steps between frames (default: the steps of 1/fps seconds, at least 1).
     #[arg(long, value_name = "K")]
     pub every: Option<u64>,
+    /// Simulated time in seconds to run before the first frame (default 0: frame 0 is the
+    /// initial state); for example `--frames 1 --start 2` draws the scene at t = 2 s.
+    #[arg(
+        long,
+        value_name = "T",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub start: f64,
     /// Simulated time in seconds instead of --frames (frames = steps / every + 1).
     #[arg(long, conflicts_with = "frames", allow_negative_numbers = true)]
     pub time: Option<f64>,
@@ -171,6 +181,9 @@ struct Plan {
 /// # Errors
 /// Bad scene, parameters or options; an unwritable output.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
+    if !(args.start >= 0.0 && args.start.is_finite()) {
+        bail!("--start {}: expected a time in seconds >= 0", args.start);
+    }
     let (width, height) = parse_size(&args.size)?;
     let toggles = parse_kinds(&args.springs)?;
     if !(args.fps.is_finite() && (0.1..=100.0).contains(&args.fps)) {
@@ -242,14 +255,26 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if plan.chart.is_some() {
         energies.push((sim.time(), sim.energy()));
     }
+    // Run up to --start before the first frame.
+    let start_steps = (args.start / dt).round() as u64;
+    for step in 1..=start_steps {
+        if sim.step().is_some() {
+            break;
+        }
+        if plan.chart.is_some() && step % stride == 0 {
+            energies.push((sim.time(), sim.energy()));
+        }
+    }
     let mut drawn = 0u64;
-    if let Some(enc) = encoder.as_mut() {
+    if let Some(enc) = encoder.as_mut()
+        && sim.diverged.is_none()
+    {
         enc.send(renderer.draw_simulation(&sim))?;
         drawn = 1;
         progress.inc(1);
     }
     for step in 1..=plan.steps {
-        if sim.step().is_some() {
+        if sim.diverged.is_some() || sim.step().is_some() {
             break;
         }
         if plan.chart.is_some() && (step % stride == 0 || step == plan.steps) {
