@@ -1,12 +1,12 @@
-//! Steps the jelly-se workload for profiling: `perf record target/release/examples/profile_jelly`.
-use springlab::bench::{Workload, setup};
-use springlab::physics::{Method, MethodParams, Workspace};
+//! Steps the jelly-se workload for profiling: `perf record target/release/examples/profile_jelly [steps]`.
+use springlab::bench::{Run, Workload};
 
 fn main() {
-    let (model, mut state) = setup(Workload::JellySe);
-    let mut w = Workspace::new();
-    for _ in 0..20_000 {
-        Method::SemiImplicitEuler.step(&model, &mut state, 1e-4, &MethodParams::default(), &mut w);
-    }
-    println!("{}", state.centroid());
+    let steps = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(20_000);
+    let mut run = Run::new(Workload::JellySe);
+    run.advance(steps);
+    println!("{:?}", run.checksum());
 }

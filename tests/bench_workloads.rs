@@ -137,6 +137,31 @@ fn rope_se_is_bit_identical_run_to_run() {
 }
 
 #[test]
+fn lattice_runs_are_bit_identical_with_one_thread_and_with_two() {
+    use springlab::physics::pool::Pool;
+    let bits = |s: &springlab::State| {
+        s.x.iter()
+            .chain(&s.v)
+            .flat_map(|p| p.to_array().map(f64::to_bits))
+            .collect::<Vec<u64>>()
+    };
+    let pool = Pool::global();
+    let all = pool.threads();
+    for w in [Workload::JellySe, Workload::Cloth64Se] {
+        let run = |threads: usize| {
+            // Other tests may run meanwhile with this setting: it changes their speed only.
+            pool.set_threads(threads);
+            let mut r = Run::new(w);
+            r.advance(300);
+            r.state
+        };
+        let (one, two) = (run(1), run(2));
+        assert!(bits(&one) == bits(&two), "{w}: 1 and 2 threads differ");
+    }
+    pool.set_threads(all);
+}
+
+#[test]
 fn checksum_comparison_uses_relative_tolerance_and_absolute_floor() {
     let r = bench::REFERENCE_ROPE_SE;
     let mut c = r;

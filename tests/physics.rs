@@ -233,44 +233,118 @@ fn the_same_run_twice_is_bit_identical() {
     assert_eq!(run(), run());
 }
 
+/// A deformed, moving copy of a workload's lattice, with one pair of particles on top of each
+/// other (a zero-length spring).
+fn shaken(workload: springlab::bench::Workload, rng: &mut Rng) -> (Model, State) {
+    let (model, mut state) = springlab::bench::setup(workload);
+    for (x, v) in state.x.iter_mut().zip(state.v.iter_mut()) {
+        *x += DVec3::new(
+            rng.range(-0.02, 0.02),
+            rng.range(-0.02, 0.02),
+            rng.range(-0.02, 0.02),
+        );
+        *v = DVec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
+    }
+    state.x[1] = state.x[0];
+    (model, state)
+}
+
 #[test]
 fn the_stencil_form_gives_the_spring_list_forces() {
-    use springlab::bench::{Workload, setup};
+    use springlab::bench::Workload;
+    use springlab::physics::stencil::Kernel;
     let mut rng = Rng(0x57e9_c11a_0000_0042);
     for workload in [Workload::JellySe, Workload::Cloth64Se] {
-        let (model, mut state) = setup(workload);
+        let (model, state) = shaken(workload, &mut rng);
         assert!(
             model.uses_stencil(),
             "{} should use the stencil",
             workload.name()
         );
         let list = model.clone().without_stencil();
-        // A deformed, moving lattice, with one pair of particles on top of each other.
-        for (x, v) in state.x.iter_mut().zip(state.v.iter_mut()) {
-            *x += DVec3::new(
-                rng.range(-0.02, 0.02),
-                rng.range(-0.02, 0.02),
-                rng.range(-0.02, 0.02),
-            );
-            *v = DVec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            );
-        }
-        state.x[1] = state.x[0];
         let n = state.len();
-        let (mut fast, mut slow) = (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
-        forces(&model, &state.x, &state.v, &mut fast);
+        let mut slow = vec![DVec3::ZERO; n];
         forces(&list, &state.x, &state.v, &mut slow);
         let scale = slow.iter().map(|f| f.length()).fold(0.0, f64::max);
-        for (i, (a, b)) in fast.iter().zip(&slow).enumerate() {
-            assert!(a.is_finite(), "{}: NaN at {i}", workload.name());
-            assert!(
-                (*a - *b).length() <= 1e-12 * scale,
-                "{}: particle {i}: {a} vs {b}",
-                workload.name()
-            );
+        for kernel in Kernel::ALL.into_iter().filter(|k| k.is_available()) {
+            let stencil = model
+                .stencil()
+                .expect("a stencil")
+                .clone()
+                .with_kernel(kernel);
+            let mut fast = vec![DVec3::ZERO; n];
+            stencil.add_forces(&state.x, &state.v, &mut fast);
+            for (i, (a, b)) in fast.iter().zip(&slow).enumerate() {
+                // `slow` includes gravity; the stencil adds the springs only.
+                let b = *b - model.mass[i] * model.gravity;
+                assert!(a.is_finite(), "{} {kernel:?}: NaN at {i}", workload.name());
+                assert!(
+                    (*a - b).length() <= 1e-12 * scale,
+                    "{} {kernel:?}: particle {i}: {a} vs {b}",
+                    workload.name()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_avx2_kernel_gives_the_portable_forces_bit_for_bit() {
+    use springlab::bench::Workload;
+    use springlab::physics::stencil::Kernel;
+    if !Kernel::Avx2.is_available() {
+        return;
+    }
+    let mut rng = Rng(0xa7b2_0000_0000_0003);
+    let (model, state) = shaken(Workload::JellySe, &mut rng);
+    let run = |kernel| {
+        let stencil = model
+            .stencil()
+            .expect("a stencil")
+            .clone()
+            .with_kernel(kernel);
+        let mut f = vec![DVec3::ZERO; state.len()];
+        stencil.add_forces(&state.x, &state.v, &mut f);
+        f.iter()
+            .flat_map(|f| f.to_array().map(f64::to_bits))
+            .collect::<Vec<u64>>()
+    };
+    assert!(run(Kernel::Avx2) == run(Kernel::Portable));
+}
+
+#[test]
+fn the_stencil_forces_are_bit_identical_for_any_number_of_threads() {
+    use springlab::bench::Workload;
+    use springlab::physics::stencil::Kernel;
+    let mut rng = Rng(0xb17_1de7_0000_0001);
+    for workload in [Workload::JellySe, Workload::Cloth64Se, Workload::Cloth128Se] {
+        let (model, state) = shaken(workload, &mut rng);
+        let n = state.len();
+        for kernel in Kernel::ALL.into_iter().filter(|k| k.is_available()) {
+            let stencil = model
+                .stencil()
+                .expect("a stencil")
+                .clone()
+                .with_kernel(kernel);
+            let run = |parts: usize| {
+                let mut f = vec![DVec3::ZERO; n];
+                stencil.add_forces_in_parts(&state.x, &state.v, &mut f, parts);
+                f.iter()
+                    .flat_map(|f| f.to_array().map(f64::to_bits))
+                    .collect::<Vec<u64>>()
+            };
+            let one = run(1);
+            for parts in [2, 3, 5] {
+                assert!(
+                    run(parts) == one,
+                    "{} {kernel:?}: {parts} parts differ from 1",
+                    workload.name()
+                );
+            }
         }
     }
 }

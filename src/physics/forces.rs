@@ -121,6 +121,12 @@ impl Model {
         self.stencil.is_some()
     }
 
+    /// The stencil form of the springs, when the force loop uses it.
+    #[must_use]
+    pub fn stencil(&self) -> Option<&Stencil> {
+        self.stencil.as_ref()
+    }
+
     /// The same model without the stencil form: forces from the spring list only (for tests
     /// and for comparing the two loops).
     #[must_use]
