@@ -293,6 +293,31 @@ fn the_stencil_form_gives_the_spring_list_forces() {
 }
 
 #[test]
+fn fused_accelerations_are_the_forces_over_the_masses_bit_for_bit() {
+    use springlab::bench::Workload;
+    use springlab::physics::accelerations;
+    let mut rng = Rng(0xacce_1000_0000_0007);
+    for workload in [Workload::JellySe, Workload::Cloth64Se, Workload::RopeSe] {
+        let (mut model, state) = shaken(workload, &mut rng);
+        model.drag = 0.25;
+        assert!(model.uses_stencil(), "{}", workload.name());
+        let n = state.len();
+        let (mut f, mut a) = (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
+        forces(&model, &state.x, &state.v, &mut f);
+        accelerations(&model, &state.x, &state.v, &mut a);
+        for i in 0..n {
+            let expected = f[i] * model.inv_mass[i];
+            assert!(
+                a[i].to_array().map(f64::to_bits) == expected.to_array().map(f64::to_bits),
+                "{} particle {i}: {} vs {expected}",
+                workload.name(),
+                a[i]
+            );
+        }
+    }
+}
+
+#[test]
 fn the_avx2_kernel_gives_the_portable_forces_bit_for_bit() {
     use springlab::bench::Workload;
     use springlab::physics::stencil::Kernel;
@@ -350,13 +375,20 @@ fn the_stencil_forces_are_bit_identical_for_any_number_of_threads() {
 }
 
 #[test]
-fn a_rope_or_random_springs_use_the_spring_list() {
+fn random_springs_and_short_ropes_use_the_spring_list_and_long_ropes_the_stencil() {
     let mut rng = Rng(7);
     let (model, _) = random_system(&mut rng, 300, 400);
     assert!(!model.uses_stencil(), "random springs are not a lattice");
-    let scene = scene::load("rope", &["nodes=64".to_string()]).expect("rope");
+    let rope = |nodes: usize| {
+        let scene = scene::load("rope", &[format!("nodes={nodes}")]).expect("rope");
+        scene.bodies[0].model.uses_stencil()
+    };
+    assert!(!rope(12), "11 springs: the list is as fast");
+    assert!(rope(64), "63 springs: a chain is a lattice with one offset");
+    // Springs without stiffness and damping exert no force: no stencil for them.
+    let (verlet, _) = springlab::bench::setup(springlab::bench::Workload::RopeVerlet);
     assert!(
-        !scene.bodies[0].model.uses_stencil(),
-        "63 springs: the list is as fast"
+        !verlet.uses_stencil(),
+        "pure constraints need no force loop"
     );
 }

@@ -80,10 +80,10 @@ const MAX_GROUPS: usize = 32;
 const MIN_DENSITY: f64 = 0.5;
 
 /// Below this many springs the spring list is as fast: the stencil's passes have fixed costs.
-const MIN_SPRINGS: usize = 256;
+const MIN_SPRINGS: usize = 32;
 
 /// Particles per tile of the streaming loop (a multiple of `LANES`): the springs of a tile are
-/// computed before their forces are gathered (see `add_range_body`).
+/// computed before their forces are gathered (see `range_body`).
 const TILE: usize = 64;
 
 /// At most this many parts (threads) per force evaluation.
@@ -135,6 +135,28 @@ impl Kernel {
     }
 }
 
+/// What the stencil writes for each particle `q`, given its spring force `F_springs[q]` (N).
+#[derive(Clone, Copy, Debug)]
+pub enum Output<'a> {
+    /// Adds the spring force: `f[q] += F_springs[q]`.
+    Add,
+    /// The total force with weight and drag, `f[q] = (m_q g - c v_q) + F_springs[q]` (N), or,
+    /// when `inv_mass` is given, the acceleration `a[q] = f[q] · (1/m_q)` (m/s²). The same
+    /// operations in the same order as [`super::forces::forces`] and
+    /// [`super::forces::accelerations`] without the stencil (so the same numbers), done by each
+    /// thread for its own particles, eight at a time, instead of in separate passes.
+    Total {
+        /// Masses `m` (kg).
+        mass: &'a [f64],
+        /// Gravitational acceleration `g` (m/s²).
+        gravity: DVec3,
+        /// Drag coefficient `c` (N·s/m).
+        drag: f64,
+        /// Inverse masses `1/m` (1/kg, 0 for pinned particles), for accelerations.
+        inv_mass: Option<&'a [f64]>,
+    },
+}
+
 /// The springs of one index offset `δ`, all with the same stiffness and damping.
 #[derive(Clone, Debug, PartialEq)]
 struct Group {
@@ -178,14 +200,19 @@ pub struct Stencil {
 impl Stencil {
     /// The stencil form of `springs` over `particles` particles, or `None` when the springs are
     /// not a lattice worth it (too few springs, too many offsets, too sparse, or two springs
-    /// with the same start and offset).
+    /// with the same start and offset). Springs without stiffness and damping exert no force
+    /// and are left out.
     #[must_use]
     pub fn detect(particles: usize, springs: &[Spring]) -> Option<Stencil> {
-        if springs.len() < MIN_SPRINGS {
+        let mut groups: Vec<Group> = Vec::new();
+        // Springs without stiffness and damping exert no force (pure distance constraints).
+        let elastic = springs
+            .iter()
+            .filter(|s| s.stiffness != 0.0 || s.damping != 0.0);
+        if elastic.clone().count() < MIN_SPRINGS {
             return None;
         }
-        let mut groups: Vec<Group> = Vec::new();
-        for s in springs {
+        for s in elastic {
             // Orient every spring from its lower index: swapping the ends negates d, n and the
             // relative velocity, so the force on the lower end is exactly the same number.
             let (a, b) = if s.a < s.b {
@@ -229,7 +256,11 @@ impl Stencil {
             group.rest_length[a] = s.rest_length;
         }
         let slots: usize = groups.iter().map(|g| g.starts).sum();
-        if (springs.len() as f64) < MIN_DENSITY * slots as f64 {
+        let count: usize = groups
+            .iter()
+            .map(|g| g.present.iter().sum::<f64>() as usize)
+            .sum();
+        if (count as f64) < MIN_DENSITY * slots as f64 {
             return None;
         }
         // Visit offsets in increasing order: neighbouring streams, better locality.
@@ -307,8 +338,7 @@ impl Stencil {
     /// # Panics
     /// If the slices are shorter than the stencil's particle count.
     pub fn add_forces(&self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
-        let parts = self.parallel_parts(Pool::global().threads());
-        self.add_forces_in_parts(x, v, f, parts);
+        self.write(x, v, f, Output::Add);
     }
 
     /// [`Stencil::add_forces`] with the particles split into `parts` ranges (at most 8), run
@@ -318,16 +348,45 @@ impl Stencil {
     /// # Panics
     /// If the slices are shorter than the stencil's particle count.
     pub fn add_forces_in_parts(&self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3], parts: usize) {
+        self.write_in_parts(x, v, f, Output::Add, parts);
+    }
+
+    /// Writes `output` (see [`Output`]) for every particle into `out`, on as many threads of
+    /// [`Pool::global`] as pay off.
+    ///
+    /// # Panics
+    /// If the slices (or the masses of `output`) are shorter than the stencil's particle count.
+    pub fn write(&self, x: &[DVec3], v: &[DVec3], out: &mut [DVec3], output: Output) {
+        let parts = self.parallel_parts(Pool::global().threads());
+        self.write_in_parts(x, v, out, output, parts);
+    }
+
+    /// [`Stencil::write`] with the particles split into `parts` ranges (at most 8); the result
+    /// is bit-identical for every `parts`.
+    ///
+    /// # Panics
+    /// If the slices (or the masses of `output`) are shorter than the stencil's particle count.
+    pub fn write_in_parts(
+        &self,
+        x: &[DVec3],
+        v: &[DVec3],
+        out: &mut [DVec3],
+        output: Output,
+        parts: usize,
+    ) {
         let n = self.particles;
-        let (x, v, f) = (&x[..n], &v[..n], &mut f[..n]);
+        let (x, v, out) = (&x[..n], &v[..n], &mut out[..n]);
+        if let Output::Total { mass, inv_mass, .. } = output {
+            assert!(mass.len() >= n && inv_mass.is_none_or(|w| w.len() >= n));
+        }
         let parts = parts.clamp(1, MAX_PARTS);
         if parts == 1 {
-            SCRATCH.with(|s| self.add_range(&mut s.borrow_mut(), x, v, 0, n, f));
+            SCRATCH.with(|s| self.range(&mut s.borrow_mut(), x, v, 0, n, out, &output));
             return;
         }
         let bounds = self.split(parts);
-        // Each part gets its own slice of `f` (disjoint, so no thread writes another's forces).
-        let mut rest = f;
+        // Each part gets its own slice of `out` (disjoint: no thread writes another's values).
+        let mut rest = out;
         let outputs: [Mutex<&mut [DVec3]>; MAX_PARTS] = std::array::from_fn(|k| {
             let len = if k < parts {
                 bounds[k + 1] - bounds[k]
@@ -339,19 +398,11 @@ impl Stencil {
             Mutex::new(mine)
         });
         Pool::global().run(parts, &|k| {
-            let mut out = outputs[k]
+            let mut mine = outputs[k]
                 .lock()
                 .unwrap_or_else(std::sync::PoisonError::into_inner);
-            SCRATCH.with(|s| {
-                self.add_range(
-                    &mut s.borrow_mut(),
-                    x,
-                    v,
-                    bounds[k],
-                    bounds[k + 1],
-                    &mut out,
-                );
-            });
+            let (q0, q1) = (bounds[k], bounds[k + 1]);
+            SCRATCH.with(|s| self.range(&mut s.borrow_mut(), x, v, q0, q1, &mut mine, &output));
         });
     }
 
@@ -375,8 +426,9 @@ impl Stencil {
         bounds
     }
 
-    /// Adds the spring forces on particles `q0..q1` to `out` (`out[i]` is particle `q0 + i`).
-    fn add_range(
+    /// Writes `output` for particles `q0..q1` into `out` (`out[i]` is particle `q0 + i`).
+    #[allow(clippy::too_many_arguments)]
+    fn range(
         &self,
         s: &mut Scratch,
         x: &[DVec3],
@@ -384,21 +436,22 @@ impl Stencil {
         q0: usize,
         q1: usize,
         out: &mut [DVec3],
+        output: &Output,
     ) {
         match self.kernel {
             #[cfg(target_arch = "x86_64")]
             Kernel::Avx512 => {
                 // SAFETY: `with_kernel` and `Kernel::best` only choose `Avx512` on a CPU that
                 // supports AVX-512F.
-                unsafe { add_range_avx512(self, s, x, v, q0, q1, out) }
+                unsafe { range_avx512(self, s, x, v, q0, q1, out, output) }
             }
             #[cfg(target_arch = "x86_64")]
             Kernel::Avx2 => {
                 // SAFETY: `with_kernel` and `Kernel::best` only choose `Avx2` on a CPU that
                 // supports AVX2.
-                unsafe { add_range_avx2(self, s, x, v, q0, q1, out) }
+                unsafe { range_avx2(self, s, x, v, q0, q1, out, output) }
             }
-            _ => add_range_body(self, s, x, v, q0, q1, out, springs_portable),
+            _ => range_body(self, s, x, v, q0, q1, out, output, springs_portable),
         }
     }
 }
@@ -458,6 +511,10 @@ trait Lanes: Copy {
     fn add(self, other: Self) -> Self;
     /// Lane-wise `self - other`.
     fn sub(self, other: Self) -> Self;
+    /// Lane-wise `self · other`.
+    fn mul(self, other: Self) -> Self;
+    /// `value` in every lane.
+    fn splat(value: f64) -> Self;
     /// The same lanes with lanes `0..k` set to zero.
     fn clear_below(self, k: usize) -> Self;
 }
@@ -486,6 +543,14 @@ impl Lanes for Plain {
     #[inline(always)]
     fn sub(self, other: Plain) -> Plain {
         Plain(std::array::from_fn(|l| self.0[l] - other.0[l]))
+    }
+    #[inline(always)]
+    fn mul(self, other: Plain) -> Plain {
+        Plain(std::array::from_fn(|l| self.0[l] * other.0[l]))
+    }
+    #[inline(always)]
+    fn splat(value: f64) -> Plain {
+        Plain([value; LANES])
     }
     #[inline(always)]
     fn clear_below(self, k: usize) -> Plain {
@@ -534,7 +599,7 @@ impl Window<'_> {
 /// both their ends are inside the window and inside `g`'s padded arrays.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn add_range_body<V: Lanes>(
+fn range_body<V: Lanes>(
     st: &Stencil,
     s: &mut Scratch,
     x: &[DVec3],
@@ -542,6 +607,7 @@ fn add_range_body<V: Lanes>(
     q0: usize,
     q1: usize,
     out: &mut [DVec3],
+    output: &Output,
     // The `LANES` springs of a group starting at window index `i` (particle `p`), given the
     // positions and velocities of their first ends.
     springs: impl Fn(&Group, &[V; 6], &Window, usize, usize) -> Forces<V>,
@@ -631,15 +697,82 @@ fn add_range_body<V: Lanes>(
                 plus[1].sub(minus[1]),
                 plus[2].sub(minus[2]),
             ];
-            let mut values = [[0.0; LANES]; 3];
-            for (total, values) in sum.into_iter().zip(&mut values) {
-                total.store(values);
-            }
-            let end = (q + LANES).min(q1);
-            for (l, f) in out[q - q0..end - q0].iter_mut().enumerate() {
-                *f += DVec3::new(values[0][l], values[1][l], values[2][l]);
-            }
+            let count = (q1 - q).min(LANES);
+            let out = &mut out[q - q0..q - q0 + count];
+            let value = match *output {
+                Output::Add => {
+                    let old = to_lanes::<V>(out);
+                    [old[0].add(sum[0]), old[1].add(sum[1]), old[2].add(sum[2])]
+                }
+                Output::Total {
+                    mass,
+                    gravity,
+                    drag,
+                    inv_mass,
+                } => {
+                    // (m g - c v) + F_springs, lane by lane, in the order of `forces`.
+                    let m = load_padded::<V>(mass, q, count);
+                    let c = V::splat(drag);
+                    let i = q - base;
+                    let t = [
+                        weight_drag_springs(m, gravity.x, c, V::load(lanes(w.v[0], i)), sum[0]),
+                        weight_drag_springs(m, gravity.y, c, V::load(lanes(w.v[1], i)), sum[1]),
+                        weight_drag_springs(m, gravity.z, c, V::load(lanes(w.v[2], i)), sum[2]),
+                    ];
+                    match inv_mass {
+                        Some(inv_mass) => {
+                            let w = load_padded::<V>(inv_mass, q, count);
+                            [t[0].mul(w), t[1].mul(w), t[2].mul(w)]
+                        }
+                        None => t,
+                    }
+                }
+            };
+            from_lanes(value, out);
         }
+    }
+}
+
+/// One component of `(m g - c v) + F_springs` (N), lane by lane.
+#[inline(always)]
+fn weight_drag_springs<V: Lanes>(m: V, g: f64, c: V, v: V, spring: V) -> V {
+    m.mul(V::splat(g)).sub(c.mul(v)).add(spring)
+}
+
+/// `values[q..q + count]` as lanes, zero past `count`.
+#[inline(always)]
+fn load_padded<V: Lanes>(values: &[f64], q: usize, count: usize) -> V {
+    if count == LANES {
+        V::load(lanes(values, q))
+    } else {
+        // The last chunk of a range that does not end on a multiple of LANES.
+        let mut chunk = [0.0; LANES];
+        chunk[..count].copy_from_slice(&values[q..q + count]);
+        V::load(&chunk)
+    }
+}
+
+/// The components of up to `LANES` vectors as lanes `[x, y, z]` (zero past the end).
+#[inline(always)]
+fn to_lanes<V: Lanes>(vectors: &[DVec3]) -> [V; 3] {
+    let mut soa = [[0.0; LANES]; 3];
+    for (l, p) in vectors.iter().enumerate().take(LANES) {
+        soa[0][l] = p.x;
+        soa[1][l] = p.y;
+        soa[2][l] = p.z;
+    }
+    [V::load(&soa[0]), V::load(&soa[1]), V::load(&soa[2])]
+}
+
+/// Writes lanes `[x, y, z]` into up to `LANES` vectors.
+#[inline(always)]
+fn from_lanes<V: Lanes>(lanes: [V; 3], vectors: &mut [DVec3]) {
+    let mut soa = [[0.0; LANES]; 3];
+    lanes[0].store(&mut soa[0]);
+    lanes[1].store(&mut soa[1]);
+    lanes[2].store(&mut soa[2]);
+    for (l, p) in vectors.iter_mut().enumerate().take(LANES) {
+        *p = DVec3::new(soa[0][l], soa[1][l], soa[2][l]);
     }
 }
 
@@ -647,7 +780,7 @@ fn add_range_body<V: Lanes>(
 /// ring of `g`: component `c` of particle `p` at `ring_offset + c (R + LANES) + p mod R`.
 ///
 /// # Panics
-/// If `ring` is shorter than the stencil's `ring_len` (never: `add_range_body` sizes it).
+/// If `ring` is shorter than the stencil's `ring_len` (never: `range_body` sizes it).
 #[inline(always)]
 fn ring_store<V: Lanes>(ring: &mut [f64], g: &Group, p: usize, f: Forces<V>) {
     let slot = p & (g.ring - 1);
@@ -674,7 +807,7 @@ fn ring_store<V: Lanes>(ring: &mut [f64], g: &Group, p: usize, f: Forces<V>) {
 /// the ring.
 ///
 /// # Panics
-/// If `ring` is shorter than the stencil's `ring_len` (never: `add_range_body` sizes it).
+/// If `ring` is shorter than the stencil's `ring_len` (never: `range_body` sizes it).
 #[inline(always)]
 fn ring_load<V: Lanes>(ring: &[f64], g: &Group, p: usize) -> Forces<V> {
     let slot = p & (g.ring - 1);
@@ -723,7 +856,8 @@ fn springs_portable(
 /// formed: Rust never contracts, so the result is bit-identical to the portable loop).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn add_range_avx2(
+#[allow(clippy::too_many_arguments)]
+fn range_avx2(
     st: &Stencil,
     s: &mut Scratch,
     x: &[DVec3],
@@ -731,14 +865,16 @@ fn add_range_avx2(
     q0: usize,
     q1: usize,
     out: &mut [DVec3],
+    output: &Output,
 ) {
-    add_range_body(st, s, x, v, q0, q1, out, springs_portable);
+    range_body(st, s, x, v, q0, q1, out, output, springs_portable);
 }
 
 /// The streaming loop with the AVX-512 springs.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn add_range_avx512(
+#[allow(clippy::too_many_arguments)]
+fn range_avx512(
     st: &Stencil,
     s: &mut Scratch,
     x: &[DVec3],
@@ -746,8 +882,9 @@ fn add_range_avx512(
     q0: usize,
     q1: usize,
     out: &mut [DVec3],
+    output: &Output,
 ) {
-    add_range_body(
+    range_body(
         st,
         s,
         x,
@@ -755,10 +892,11 @@ fn add_range_avx512(
         q0,
         q1,
         out,
+        output,
         #[inline(always)]
         |g, first, w, i, p| {
-            // SAFETY: this function only runs on a CPU with AVX-512F (see `add_range`), and
-            // `add_range_body` calls with chunks inside the window and the group's arrays.
+            // SAFETY: this function only runs on a CPU with AVX-512F (see `Stencil::range`), and
+            // `range_body` calls with chunks inside the window and the group's arrays.
             unsafe { springs_avx512(g, first, w, i, p) }
         },
     );
@@ -806,6 +944,16 @@ impl Lanes for Avx512 {
         Avx512(unsafe { std::arch::x86_64::_mm512_sub_pd(self.0, other.0) })
     }
     #[inline(always)]
+    fn mul(self, other: Avx512) -> Avx512 {
+        // SAFETY: AVX-512F, see the type's docs.
+        Avx512(unsafe { std::arch::x86_64::_mm512_mul_pd(self.0, other.0) })
+    }
+    #[inline(always)]
+    fn splat(value: f64) -> Avx512 {
+        // SAFETY: AVX-512F, see the type's docs.
+        Avx512(unsafe { std::arch::x86_64::_mm512_set1_pd(value) })
+    }
+    #[inline(always)]
     fn clear_below(self, k: usize) -> Avx512 {
         // Keep lanes k.. : bit l of the mask is lane l.
         let keep = (0xFF_u32 << k.min(LANES)) as u8;
@@ -819,11 +967,11 @@ impl Lanes for Avx512 {
 ///
 /// Not itself a `target_feature` function, so that the compiler inlines it (a function with
 /// more target features than its caller is never inlined); it is only called from
-/// `add_range_avx512`, which has them.
+/// `range_avx512`, which has them.
 ///
 /// # Safety
 /// The CPU must support AVX-512F, and the window and `g`'s arrays must hold the chunk (see
-/// `add_range_body`): `i + g.delta + LANES` at most the window's length, `p + LANES` at most
+/// `range_body`): `i + g.delta + LANES` at most the window's length, `p + LANES` at most
 /// the length of `g.rest_length` and `g.present`. These are not checked in release builds.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
