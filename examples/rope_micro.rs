@@ -16,6 +16,7 @@ fn cpu() -> f64 {
         seconds: 0,
         nanoseconds: 0,
     };
+    // SAFETY: `clock_gettime` writes one timespec to a valid pointer.
     unsafe { clock_gettime(3, &mut t) };
     t.seconds as f64 + t.nanoseconds as f64 * 1e-9
 }
