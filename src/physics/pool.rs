@@ -4,13 +4,18 @@
 //!
 //! Starting a thread costs tens of microseconds, about as long as one step of the jelly cube,
 //! so the workers are started once and then wait for work. Each job is one function
-//! `job(part)` that the caller runs for `part = 0` while the workers run `part = 1, 2, …` at the
-//! same time; [`Pool::run`] returns when every part is done.
+//! `job(part)` for `part = 0, 1, …, parts - 1`. The caller and the workers take parts from a
+//! shared counter until none is left; [`Pool::run`] returns when every part is done.
 //!
 //! ```text
-//! caller:   publish job, epoch += 1 ──► job(0) ──► wait until done = parts - 1 ──► return
-//! worker k:   (spin, then sleep) until epoch changes ──► job(k) ──► done += 1 ──► (spin …)
+//! caller:   publish job, epoch += 1 ──► take parts, run them ──► close the job,
+//!                                                               wait for workers inside ──► return
+//! worker:   (spin, then sleep) until epoch changes ──► enter the job (if still open),
+//!                                                     take parts, run them ──► leave ──► (spin …)
 //! ```
+//! Taking parts, rather than giving part `k` to worker `k`, matters on a busy machine: when the
+//! operating system has paused a worker, the caller runs that worker's part itself instead of
+//! waiting for the worker's next time slice (milliseconds).
 //!
 //! **Determinism.** The pool decides only *who* runs a part, never *what* a part computes: the
 //! caller splits the data into parts by a fixed rule, and each part writes only its own outputs.
@@ -62,12 +67,15 @@ unsafe impl Send for Job {}
 
 /// State shared between the caller and the workers.
 struct Shared {
-    /// Incremented once per job; a worker runs a job when it sees a new value.
+    /// Incremented once per job; a worker looks for a job when it sees a new value.
     epoch: AtomicU64,
-    /// The current job (valid while `epoch` is the one it was published with).
+    /// The open job, if any. A worker enters it (counted in `running`) while holding this lock;
+    /// the caller closes it (sets `None`) under the lock, after which no worker can enter.
     job: Mutex<Option<Job>>,
-    /// Workers that have finished the current job.
-    done: AtomicUsize,
+    /// The next part to take.
+    next: AtomicUsize,
+    /// Workers inside the current job.
+    running: AtomicUsize,
     /// One flag per worker: true while it is (about to be) parked.
     sleeping: Vec<AtomicBool>,
     /// Set when a part run by a worker panicked; the caller re-raises it.
@@ -97,7 +105,8 @@ impl Pool {
         let shared = Arc::new(Shared {
             epoch: AtomicU64::new(0),
             job: Mutex::new(None),
-            done: AtomicUsize::new(0),
+            next: AtomicUsize::new(0),
+            running: AtomicUsize::new(0),
             sleeping: (0..count).map(|_| AtomicBool::new(false)).collect(),
             panicked: AtomicBool::new(false),
             shutdown: AtomicBool::new(false),
@@ -151,9 +160,9 @@ impl Pool {
     }
 
     /// Runs `job(0)`, `job(1)`, …, `job(parts - 1)`, in parallel where workers are free, and
-    /// returns when all have finished. Parts beyond the thread count, or all parts when another
-    /// thread is using the pool, run one after the other on the caller's thread — the same
-    /// results, because a part's work never depends on who runs it.
+    /// returns when all have finished. Each part runs exactly once, on the caller's thread or a
+    /// worker's; all of them run on the caller's thread when another thread is using the pool
+    /// — the same results, because a part's work never depends on who runs it.
     ///
     /// # Panics
     /// If a part panics (after all parts have finished).
@@ -169,14 +178,18 @@ impl Pool {
             Err(TryLockError::WouldBlock) => return sequential(),
         };
         let shared = &*self.shared;
-        // SAFETY: only the lifetime is changed. The workers dereference the pointer only for
-        // this epoch's job, and `Wait` below does not let this function return (or unwind)
-        // before every worker has reported `done` for it, so `job` outlives every use.
+        // SAFETY: only the lifetime is changed. A worker dereferences the pointer only between
+        // entering the job (under the `job` lock, while it is open) and leaving it
+        // (`running -= 1`), and `Finish` below does not let this function return (or unwind)
+        // before the job is closed and no worker is inside, so `job` outlives every use.
         let function: *const (dyn Fn(usize) + Sync + 'static) = unsafe {
             std::mem::transmute::<*const (dyn Fn(usize) + Sync + '_), _>(std::ptr::from_ref(job))
         };
-        *lock(&shared.job) = Some(Job { function, parts });
-        shared.done.store(0, Ordering::SeqCst);
+        {
+            let mut open = lock(&shared.job);
+            shared.next.store(0, Ordering::SeqCst);
+            *open = Some(Job { function, parts });
+        }
         shared.epoch.fetch_add(1, Ordering::SeqCst);
         for ((thread, _), sleeping) in self.workers.iter().zip(&shared.sleeping) {
             if sleeping.load(Ordering::SeqCst) {
@@ -184,16 +197,10 @@ impl Pool {
             }
         }
         {
-            // Waits for the workers even if our own part panics (the job must outlive them).
-            let _wait = Wait {
-                shared,
-                workers: self.workers.len(),
-            };
-            job(0);
-            // Parts without a worker, when parts > threads.
-            (self.workers.len() + 1..parts).for_each(job);
+            // Closes the job and waits for the workers inside, even if a part panics here.
+            let _finish = Finish { shared };
+            take_parts(shared, job, parts);
         }
-        *lock(&shared.job) = None;
         if shared.panicked.swap(false, Ordering::SeqCst) {
             panic!("a worker thread panicked");
         }
@@ -210,20 +217,32 @@ impl Drop for Pool {
     }
 }
 
-/// Blocks (spinning, then yielding) until every worker has finished the current job.
-struct Wait<'a> {
-    shared: &'a Shared,
-    workers: usize,
+/// Runs parts from the shared counter until none is left.
+fn take_parts(shared: &Shared, job: &(dyn Fn(usize) + Sync), parts: usize) {
+    loop {
+        let part = shared.next.fetch_add(1, Ordering::SeqCst);
+        if part >= parts {
+            return;
+        }
+        job(part);
+    }
 }
 
-impl Drop for Wait<'_> {
+/// Closes the current job, then blocks (spinning, then yielding) until no worker is inside.
+struct Finish<'a> {
+    shared: &'a Shared,
+}
+
+impl Drop for Finish<'_> {
     fn drop(&mut self) {
+        *lock(&self.shared.job) = None;
         let start = Instant::now();
-        while self.shared.done.load(Ordering::Acquire) < self.workers {
+        while self.shared.running.load(Ordering::Acquire) > 0 {
             if start.elapsed() < SPIN {
                 std::hint::spin_loop();
             } else {
-                // A worker was descheduled (a busy machine): let it have our core.
+                // A worker was descheduled in the middle of a part (a busy machine): let it
+                // have our core.
                 thread::yield_now();
             }
         }
@@ -234,7 +253,7 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
-/// The loop of worker `k` (it runs part `k + 1`).
+/// The loop of worker `k`.
 fn worker(shared: &Shared, k: usize) {
     let mut seen = 0;
     loop {
@@ -261,19 +280,23 @@ fn worker(shared: &Shared, k: usize) {
                 shared.sleeping[k].store(false, Ordering::SeqCst);
             }
         }
-        let job = *lock(&shared.job);
-        if let Some(job) = job {
-            let part = k + 1;
-            if part < job.parts {
-                // SAFETY: the caller of `Pool::run` keeps the closure alive until `done` counts
-                // this worker (see `Pool::run`), and the closure is `Sync`.
-                let function = unsafe { &*job.function };
-                if catch_unwind(AssertUnwindSafe(|| function(part))).is_err() {
-                    shared.panicked.store(true, Ordering::SeqCst);
-                }
+        // Enter the job if it is still open (a late worker finds it closed, or a newer one).
+        let job = {
+            let open = lock(&shared.job);
+            if open.is_some() {
+                shared.running.fetch_add(1, Ordering::SeqCst);
             }
+            *open
+        };
+        if let Some(job) = job {
+            // SAFETY: the caller of `Pool::run` keeps the closure alive until the job is closed
+            // and `running` is back to zero (see `Pool::run`), and the closure is `Sync`.
+            let function = unsafe { &*job.function };
+            if catch_unwind(AssertUnwindSafe(|| take_parts(shared, function, job.parts))).is_err() {
+                shared.panicked.store(true, Ordering::SeqCst);
+            }
+            shared.running.fetch_sub(1, Ordering::Release);
         }
-        shared.done.fetch_add(1, Ordering::Release);
     }
 }
 

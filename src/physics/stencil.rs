@@ -99,7 +99,7 @@ const MIN_SLOTS_PER_PART: usize = 4096;
 pub enum Kernel {
     /// Plain Rust: `sqrt`, then one division `1/L`. Runs everywhere.
     Portable,
-    /// The portable loop compiled for AVX2 (x86-64): the same results bit for bit.
+    /// The same operations on AVX2 registers (x86-64): the same results bit for bit.
     Avx2,
     /// AVX-512F (x86-64): reciprocal square root estimate, two Newton steps and fused
     /// multiply-adds.
@@ -451,7 +451,21 @@ impl Stencil {
                 // supports AVX2.
                 unsafe { range_avx2(self, s, x, v, q0, q1, out, output) }
             }
-            _ => range_body(self, s, x, v, q0, q1, out, output, springs_portable),
+            _ => range_body(
+                self,
+                s,
+                x,
+                v,
+                q0,
+                q1,
+                out,
+                output,
+                // A closure, not the function item: the item would be called through a shim
+                // that is not inlined.
+                #[inline(always)]
+                #[allow(clippy::redundant_closure)]
+                |g, first, w, i, p| springs_exact::<Plain>(g, first, w, i, p),
+            ),
         }
     }
 }
@@ -517,6 +531,12 @@ trait Lanes: Copy {
     fn splat(value: f64) -> Self;
     /// The same lanes with lanes `0..k` set to zero.
     fn clear_below(self, k: usize) -> Self;
+    /// Lane-wise square root (correctly rounded, IEEE 754).
+    fn sqrt(self) -> Self;
+    /// Lane-wise `self / other` (correctly rounded).
+    fn div(self, other: Self) -> Self;
+    /// `self` in the lanes where `condition > 0`, zero elsewhere (also where it is NaN).
+    fn where_positive(self, condition: Self) -> Self;
 }
 
 /// [`Lanes`] as a plain array.
@@ -555,6 +575,20 @@ impl Lanes for Plain {
     #[inline(always)]
     fn clear_below(self, k: usize) -> Plain {
         Plain(std::array::from_fn(|l| if l < k { 0.0 } else { self.0[l] }))
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Plain {
+        Plain(self.0.map(f64::sqrt))
+    }
+    #[inline(always)]
+    fn div(self, other: Plain) -> Plain {
+        Plain(std::array::from_fn(|l| self.0[l] / other.0[l]))
+    }
+    #[inline(always)]
+    fn where_positive(self, condition: Plain) -> Plain {
+        Plain(std::array::from_fn(|l| {
+            if condition.0[l] > 0.0 { self.0[l] } else { 0.0 }
+        }))
     }
 }
 
@@ -820,40 +854,34 @@ fn ring_load<V: Lanes>(ring: &[f64], g: &Group, p: usize) -> Forces<V> {
     [load(0), load(1), load(2)]
 }
 
-/// The springs of one chunk in plain Rust: `sqrt`, then `1/L`.
+/// The springs of one chunk with correctly rounded operations only: `sqrt`, then `1/L`, in the
+/// order of [`Spring::force_on_a`](super::springs::Spring::force_on_a) (the result does not
+/// depend on the lane type: [`Plain`] and [`Avx2`] give the same bits).
 #[inline(always)]
-fn springs_portable(
-    g: &Group,
-    first: &[Plain; 6],
-    w: &Window,
-    i: usize,
-    p: usize,
-) -> Forces<Plain> {
+fn springs_exact<V: Lanes>(g: &Group, first: &[V; 6], w: &Window, i: usize, p: usize) -> Forces<V> {
     let j = i + g.delta;
-    let [xa, ya, za, vxa, vya, vza] = first.each_ref().map(|c| &c.0);
-    let (xb, yb, zb) = (lanes(w.x[0], j), lanes(w.x[1], j), lanes(w.x[2], j));
-    let (vxb, vyb, vzb) = (lanes(w.v[0], j), lanes(w.v[1], j), lanes(w.v[2], j));
-    let (rest, present) = (lanes(&g.rest_length, p), lanes(&g.present, p));
-    let mut f = [Plain::zero(); 3];
-    for l in 0..LANES {
-        // d = x_b - x_a, L = |d|
-        let (dx, dy, dz) = (xb[l] - xa[l], yb[l] - ya[l], zb[l] - za[l]);
-        let length = (dx * dx + dy * dy + dz * dz).sqrt();
-        // n = d / L; a zero-length spring has no direction and no force.
-        let inv = if length > 0.0 { 1.0 / length } else { 0.0 };
-        let (nx, ny, nz) = (dx * inv, dy * inv, dz * inv);
-        // Hooke k (L - L0) plus the damper k_d (v_b - v_a)·n, zero where there is no spring.
-        let rel = (vxb[l] - vxa[l]) * nx + (vyb[l] - vya[l]) * ny + (vzb[l] - vza[l]) * nz;
-        let tension = present[l] * (g.stiffness * (length - rest[l]) + g.damping * rel);
-        f[0].0[l] = tension * nx;
-        f[1].0[l] = tension * ny;
-        f[2].0[l] = tension * nz;
-    }
-    f
+    // d = x_b - x_a, L = |d|
+    let dx = V::load(lanes(w.x[0], j)).sub(first[0]);
+    let dy = V::load(lanes(w.x[1], j)).sub(first[1]);
+    let dz = V::load(lanes(w.x[2], j)).sub(first[2]);
+    let length = dx.mul(dx).add(dy.mul(dy)).add(dz.mul(dz)).sqrt();
+    // n = d / L; a zero-length spring has no direction and no force.
+    let inv = V::splat(1.0).div(length).where_positive(length);
+    let (nx, ny, nz) = (dx.mul(inv), dy.mul(inv), dz.mul(inv));
+    // Hooke k (L - L0) plus the damper k_d (v_b - v_a)·n, zero where there is no spring.
+    let dvx = V::load(lanes(w.v[0], j)).sub(first[3]);
+    let dvy = V::load(lanes(w.v[1], j)).sub(first[4]);
+    let dvz = V::load(lanes(w.v[2], j)).sub(first[5]);
+    let rel = dvx.mul(nx).add(dvy.mul(ny)).add(dvz.mul(nz));
+    let rest = V::load(lanes(&g.rest_length, p));
+    let hooke = V::splat(g.stiffness).mul(length.sub(rest));
+    let damper = V::splat(g.damping).mul(rel);
+    let tension = V::load(lanes(&g.present, p)).mul(hooke.add(damper));
+    [tension.mul(nx), tension.mul(ny), tension.mul(nz)]
 }
 
-/// The streaming loop compiled for AVX2 with the portable springs (no fused multiply-add is
-/// formed: Rust never contracts, so the result is bit-identical to the portable loop).
+/// The streaming loop on AVX2 registers with the exact springs (the same operations as the
+/// portable loop, no fused multiply-add: bit-identical results).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[allow(clippy::too_many_arguments)]
@@ -867,7 +895,21 @@ fn range_avx2(
     out: &mut [DVec3],
     output: &Output,
 ) {
-    range_body(st, s, x, v, q0, q1, out, output, springs_portable);
+    range_body(
+        st,
+        s,
+        x,
+        v,
+        q0,
+        q1,
+        out,
+        output,
+        // A closure, not the function item: only a closure is inlined (and with it the AVX2
+        // instructions, which cannot be inlined into a function without AVX2).
+        #[inline(always)]
+        #[allow(clippy::redundant_closure)]
+        |g, first, w, i, p| springs_exact::<Avx2>(g, first, w, i, p),
+    );
 }
 
 /// The streaming loop with the AVX-512 springs.
@@ -959,6 +1001,146 @@ impl Lanes for Avx512 {
         let keep = (0xFF_u32 << k.min(LANES)) as u8;
         // SAFETY: AVX-512F, see the type's docs.
         Avx512(unsafe { std::arch::x86_64::_mm512_maskz_mov_pd(keep, self.0) })
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Avx512 {
+        // SAFETY: AVX-512F, see the type's docs.
+        Avx512(unsafe { std::arch::x86_64::_mm512_sqrt_pd(self.0) })
+    }
+    #[inline(always)]
+    fn div(self, other: Avx512) -> Avx512 {
+        // SAFETY: AVX-512F, see the type's docs.
+        Avx512(unsafe { std::arch::x86_64::_mm512_div_pd(self.0, other.0) })
+    }
+    #[inline(always)]
+    fn where_positive(self, condition: Avx512) -> Avx512 {
+        use std::arch::x86_64::{_CMP_GT_OQ, _mm512_cmp_pd_mask, _mm512_maskz_mov_pd};
+        // SAFETY: AVX-512F, see the type's docs.
+        unsafe {
+            let zero = std::arch::x86_64::_mm512_setzero_pd();
+            let positive = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(condition.0, zero);
+            Avx512(_mm512_maskz_mov_pd(positive, self.0))
+        }
+    }
+}
+
+/// [`Lanes`] as two AVX2 registers of four f64 each.
+///
+/// Its methods call AVX2 instructions without checking the CPU: an `Avx2` value is only ever
+/// created inside `range_avx2` (a `target_feature(enable = "avx2")` function, which runs only
+/// where AVX2 was detected) or by the methods of a value that already exists.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct Avx2([std::arch::x86_64::__m256d; 2]);
+
+#[cfg(target_arch = "x86_64")]
+impl Lanes for Avx2 {
+    #[inline(always)]
+    fn zero() -> Avx2 {
+        // SAFETY: AVX2, see the type's docs.
+        let zero = unsafe { std::arch::x86_64::_mm256_setzero_pd() };
+        Avx2([zero, zero])
+    }
+    #[inline(always)]
+    fn load(values: &[f64; LANES]) -> Avx2 {
+        use std::arch::x86_64::_mm256_loadu_pd;
+        // SAFETY: AVX2, see the type's docs; two unaligned 256-bit loads of 4 f64 each, inside
+        // the 8 values of `values`.
+        unsafe {
+            Avx2([
+                _mm256_loadu_pd(values.as_ptr()),
+                _mm256_loadu_pd(values.as_ptr().add(4)),
+            ])
+        }
+    }
+    #[inline(always)]
+    fn store(self, out: &mut [f64; LANES]) {
+        use std::arch::x86_64::_mm256_storeu_pd;
+        // SAFETY: AVX2, see the type's docs; two 256-bit stores inside the 8 values of `out`.
+        unsafe {
+            _mm256_storeu_pd(out.as_mut_ptr(), self.0[0]);
+            _mm256_storeu_pd(out.as_mut_ptr().add(4), self.0[1]);
+        }
+    }
+    #[inline(always)]
+    fn add(self, other: Avx2) -> Avx2 {
+        use std::arch::x86_64::_mm256_add_pd;
+        // SAFETY: AVX2, see the type's docs.
+        unsafe {
+            Avx2([
+                _mm256_add_pd(self.0[0], other.0[0]),
+                _mm256_add_pd(self.0[1], other.0[1]),
+            ])
+        }
+    }
+    #[inline(always)]
+    fn sub(self, other: Avx2) -> Avx2 {
+        use std::arch::x86_64::_mm256_sub_pd;
+        // SAFETY: AVX2, see the type's docs.
+        unsafe {
+            Avx2([
+                _mm256_sub_pd(self.0[0], other.0[0]),
+                _mm256_sub_pd(self.0[1], other.0[1]),
+            ])
+        }
+    }
+    #[inline(always)]
+    fn mul(self, other: Avx2) -> Avx2 {
+        use std::arch::x86_64::_mm256_mul_pd;
+        // SAFETY: AVX2, see the type's docs.
+        unsafe {
+            Avx2([
+                _mm256_mul_pd(self.0[0], other.0[0]),
+                _mm256_mul_pd(self.0[1], other.0[1]),
+            ])
+        }
+    }
+    #[inline(always)]
+    fn splat(value: f64) -> Avx2 {
+        // SAFETY: AVX2, see the type's docs.
+        let v = unsafe { std::arch::x86_64::_mm256_set1_pd(value) };
+        Avx2([v, v])
+    }
+    #[inline(always)]
+    fn clear_below(self, k: usize) -> Avx2 {
+        let mut values = [0.0; LANES];
+        self.store(&mut values);
+        values[..k.min(LANES)].fill(0.0);
+        Avx2::load(&values)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Avx2 {
+        use std::arch::x86_64::_mm256_sqrt_pd;
+        // SAFETY: AVX2, see the type's docs.
+        unsafe { Avx2([_mm256_sqrt_pd(self.0[0]), _mm256_sqrt_pd(self.0[1])]) }
+    }
+    #[inline(always)]
+    fn div(self, other: Avx2) -> Avx2 {
+        use std::arch::x86_64::_mm256_div_pd;
+        // SAFETY: AVX2, see the type's docs.
+        unsafe {
+            Avx2([
+                _mm256_div_pd(self.0[0], other.0[0]),
+                _mm256_div_pd(self.0[1], other.0[1]),
+            ])
+        }
+    }
+    #[inline(always)]
+    fn where_positive(self, condition: Avx2) -> Avx2 {
+        use std::arch::x86_64::{_CMP_GT_OQ, _mm256_and_pd, _mm256_cmp_pd, _mm256_setzero_pd};
+        // SAFETY: AVX2, see the type's docs. The comparison gives all-ones lanes where
+        // `condition > 0` (false for NaN), and `and` keeps `self` there.
+        unsafe {
+            let zero = _mm256_setzero_pd();
+            let keep = [
+                _mm256_cmp_pd::<_CMP_GT_OQ>(condition.0[0], zero),
+                _mm256_cmp_pd::<_CMP_GT_OQ>(condition.0[1], zero),
+            ];
+            Avx2([
+                _mm256_and_pd(self.0[0], keep[0]),
+                _mm256_and_pd(self.0[1], keep[1]),
+            ])
+        }
     }
 }
 
