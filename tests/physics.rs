@@ -318,6 +318,51 @@ fn fused_accelerations_are_the_forces_over_the_masses_bit_for_bit() {
 }
 
 #[test]
+fn the_fused_semi_implicit_euler_step_is_the_textbook_step_bit_for_bit() {
+    use springlab::bench::Workload;
+    use springlab::physics::accelerations;
+    let mut rng = Rng(0x5e5e_0000_0000_0009);
+    for workload in [Workload::JellySe, Workload::Cloth64Se, Workload::RopeSe] {
+        let (mut model, state) = shaken(workload, &mut rng);
+        model.drag = 0.25;
+        let dt = 1e-4;
+        // v' = v + dt a(x, v), x' = x + dt v', written out.
+        let mut a = vec![DVec3::ZERO; state.len()];
+        accelerations(&model, &state.x, &state.v, &mut a);
+        let v_new: Vec<DVec3> = state.v.iter().zip(&a).map(|(v, a)| *v + dt * *a).collect();
+        let x_new: Vec<DVec3> = state
+            .x
+            .iter()
+            .zip(&v_new)
+            .map(|(x, v)| *x + dt * *v)
+            .collect();
+        let mut fused = state.clone();
+        Method::SemiImplicitEuler.step(
+            &model,
+            &mut fused,
+            dt,
+            &MethodParams::default(),
+            &mut Workspace::new(),
+        );
+        let bits = |p: &[DVec3]| {
+            p.iter()
+                .flat_map(|p| p.to_array().map(f64::to_bits))
+                .collect::<Vec<u64>>()
+        };
+        assert!(
+            bits(&fused.v) == bits(&v_new),
+            "{} velocities",
+            workload.name()
+        );
+        assert!(
+            bits(&fused.x) == bits(&x_new),
+            "{} positions",
+            workload.name()
+        );
+    }
+}
+
+#[test]
 fn the_avx2_kernel_gives_the_portable_forces_bit_for_bit() {
     use springlab::bench::Workload;
     use springlab::physics::stencil::Kernel;

@@ -238,7 +238,7 @@ pub fn forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
     if let Some(stencil) = &model.stencil {
         // The same sums, grouped by lattice offset for speed and split between the cores
         // (see `stencil`); weight and drag are added by each thread for its own particles.
-        stencil.write(x, v, f, model.total(None));
+        stencil.write(x, v, f, &mut [], model.total(None));
     } else {
         // External forces: weight m g and viscous drag -c v.
         for ((f_i, &m_i), &v_i) in f.iter_mut().zip(&model.mass).zip(v) {
@@ -271,7 +271,7 @@ pub fn accelerations(model: &Model, x: &[DVec3], v: &[DVec3], a: &mut [DVec3]) {
         && model.colliders.is_empty()
     {
         // Forces and a = f w in one pass per thread (bit-identical to the two steps below).
-        stencil.write(x, v, a, model.total(Some(&model.inv_mass)));
+        stencil.write(x, v, a, &mut [], model.total(Some(&model.inv_mass)));
         return;
     }
     forces(model, x, v, a);

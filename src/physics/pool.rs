@@ -207,6 +207,50 @@ impl Pool {
     }
 }
 
+impl Pool {
+    /// Calls `body(start, a_part, b_part)` for `parts` (at most 8) contiguous, equally long
+    /// pieces of `a` and `b` (which must be equally long), where `start` is the index of the
+    /// piece's first element; in parallel where workers are free. Every element is in exactly
+    /// one piece, so a `body` that treats each element on its own gives the same result for
+    /// any `parts`.
+    ///
+    /// # Panics
+    /// If `a` and `b` differ in length, or a call of `body` panics.
+    pub fn for_each_part<A: Send, B: Send>(
+        &self,
+        a: &mut [A],
+        b: &mut [B],
+        parts: usize,
+        body: impl Fn(usize, &mut [A], &mut [B]) + Sync,
+    ) {
+        const MAX: usize = 8;
+        assert_eq!(a.len(), b.len(), "equally long slices");
+        let parts = parts.clamp(1, MAX);
+        let n = a.len();
+        if parts == 1 {
+            return body(0, a, b);
+        }
+        let start = |k: usize| n * k / parts;
+        let (mut rest_a, mut rest_b) = (a, b);
+        let pieces: [Mutex<(&mut [A], &mut [B])>; MAX] = std::array::from_fn(|k| {
+            let len = if k < parts {
+                start(k + 1) - start(k)
+            } else {
+                0
+            };
+            let (mine_a, others_a) = std::mem::take(&mut rest_a).split_at_mut(len);
+            let (mine_b, others_b) = std::mem::take(&mut rest_b).split_at_mut(len);
+            (rest_a, rest_b) = (others_a, others_b);
+            Mutex::new((mine_a, mine_b))
+        });
+        self.run(parts, &|k| {
+            let mut piece = lock(&pieces[k]);
+            let (a, b) = &mut *piece;
+            body(start(k), a, b);
+        });
+    }
+}
+
 impl Drop for Pool {
     fn drop(&mut self) {
         self.shared.shutdown.store(true, Ordering::SeqCst);
@@ -314,6 +358,23 @@ mod tests {
                 counts[k].fetch_add(1, Ordering::SeqCst);
             });
             assert!(counts.iter().all(|c| c.load(Ordering::SeqCst) == 1));
+        }
+    }
+
+    #[test]
+    fn for_each_part_visits_every_element_once_with_its_index() {
+        let pool = Pool::new(2);
+        for parts in 1..=5 {
+            let mut a: Vec<usize> = vec![0; 37];
+            let mut b: Vec<usize> = vec![0; 37];
+            pool.for_each_part(&mut a, &mut b, parts, |start, a, b| {
+                for (i, (a, b)) in a.iter_mut().zip(b.iter_mut()).enumerate() {
+                    *a += start + i;
+                    *b += 1;
+                }
+            });
+            assert_eq!(a, (0..37).collect::<Vec<_>>());
+            assert!(b.iter().all(|&b| b == 1));
         }
     }
 

@@ -89,9 +89,12 @@ const TILE: usize = 64;
 /// At most this many parts (threads) per force evaluation.
 const MAX_PARTS: usize = 8;
 
-/// Split the work between threads only above this many spring slots per thread: below it,
-/// waking a second thread costs more than it saves (measured with `examples/stencil_ab.rs`).
-const MIN_SLOTS_PER_PART: usize = 4096;
+/// Split the work between threads only with at least this many spring slots per thread
+/// (about 3 µs of work): measured with `examples/stencil_micro.rs`, two parts already win on a
+/// 24×24 cloth (3 500 slots: 7.7 → 4.7 µs per call) and on a 16×16 cloth (1 500 slots:
+/// 3.4 → 2.4 µs) when the second core is free, but lose on the 64-node rope (0.3 → 0.6 µs);
+/// the margin keeps small lattices on one thread when the machine is busy.
+const MIN_SLOTS_PER_PART: usize = 1024;
 
 /// The instructions that compute the springs (see the module docs). All give the same forces
 /// to about 1e-16 relative; each is deterministic.
@@ -155,6 +158,22 @@ pub enum Output<'a> {
         /// Inverse masses `1/m` (1/kg, 0 for pinned particles), for accelerations.
         inv_mass: Option<&'a [f64]>,
     },
+    /// One semi-implicit Euler step: with `a[q]` the acceleration of [`Output::Total`],
+    /// `v'[q] = v[q] + dt a[q]` goes to the first output and `x'[q] = x[q] + dt v'[q]` to the
+    /// second (the operations of `semi_implicit_euler::step`, so the same numbers). The
+    /// outputs must not be `x` and `v` themselves: other threads still read those.
+    SemiImplicitEuler {
+        /// Masses `m` (kg).
+        mass: &'a [f64],
+        /// Gravitational acceleration `g` (m/s²).
+        gravity: DVec3,
+        /// Drag coefficient `c` (N·s/m).
+        drag: f64,
+        /// Inverse masses `1/m` (1/kg, 0 for pinned particles).
+        inv_mass: &'a [f64],
+        /// Time step (s).
+        dt: f64,
+    },
 }
 
 /// The springs of one index offset `δ`, all with the same stiffness and damping.
@@ -193,7 +212,8 @@ pub struct Stencil {
     kernel: Kernel,
     /// `work[j]` = spring slots in chunks `0..j` (for splitting the work between threads).
     work: Vec<usize>,
-    /// Spring slots a thread recomputes when its range does not start at particle 0.
+    /// The work of the spring slots a thread recomputes when its range does not start at
+    /// particle 0, in own slots.
     halo_work: usize,
 }
 
@@ -277,10 +297,13 @@ impl Stencil {
             let here = groups.iter().filter(|g| j * LANES < g.starts).count();
             work.push(work[j] + here * LANES);
         }
-        let halo_work = groups
+        // A halo slot costs pass 1 only, about two thirds of an own slot (pass 1, pass 2 and the
+        // output; measured on the jelly cube with `examples/stencil_micro.rs`).
+        let halo_slots: usize = groups
             .iter()
             .map(|g| (g.delta.div_ceil(LANES) + 1) * LANES)
             .sum();
+        let halo_work = halo_slots * 2 / 3;
         Some(Stencil {
             particles,
             reach: groups.iter().map(|g| g.delta).max().unwrap_or(0),
@@ -338,7 +361,7 @@ impl Stencil {
     /// # Panics
     /// If the slices are shorter than the stencil's particle count.
     pub fn add_forces(&self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
-        self.write(x, v, f, Output::Add);
+        self.write(x, v, f, &mut [], Output::Add);
     }
 
     /// [`Stencil::add_forces`] with the particles split into `parts` ranges (at most 8), run
@@ -348,17 +371,25 @@ impl Stencil {
     /// # Panics
     /// If the slices are shorter than the stencil's particle count.
     pub fn add_forces_in_parts(&self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3], parts: usize) {
-        self.write_in_parts(x, v, f, Output::Add, parts);
+        self.write_in_parts(x, v, f, &mut [], Output::Add, parts);
     }
 
-    /// Writes `output` (see [`Output`]) for every particle into `out`, on as many threads of
-    /// [`Pool::global`] as pay off.
+    /// Writes `output` (see [`Output`]) for every particle into `out` (and, for
+    /// [`Output::SemiImplicitEuler`], the new positions into `out2`; otherwise `out2` is not
+    /// used and may be empty), on as many threads of [`Pool::global`] as pay off.
     ///
     /// # Panics
     /// If the slices (or the masses of `output`) are shorter than the stencil's particle count.
-    pub fn write(&self, x: &[DVec3], v: &[DVec3], out: &mut [DVec3], output: Output) {
+    pub fn write(
+        &self,
+        x: &[DVec3],
+        v: &[DVec3],
+        out: &mut [DVec3],
+        out2: &mut [DVec3],
+        output: Output,
+    ) {
         let parts = self.parallel_parts(Pool::global().threads());
-        self.write_in_parts(x, v, out, output, parts);
+        self.write_in_parts(x, v, out, out2, output, parts);
     }
 
     /// [`Stencil::write`] with the particles split into `parts` ranges (at most 8); the result
@@ -371,23 +402,33 @@ impl Stencil {
         x: &[DVec3],
         v: &[DVec3],
         out: &mut [DVec3],
+        out2: &mut [DVec3],
         output: Output,
         parts: usize,
     ) {
         let n = self.particles;
         let (x, v, out) = (&x[..n], &v[..n], &mut out[..n]);
-        if let Output::Total { mass, inv_mass, .. } = output {
-            assert!(mass.len() >= n && inv_mass.is_none_or(|w| w.len() >= n));
-        }
+        let out2 = match output {
+            Output::Total { mass, inv_mass, .. } => {
+                assert!(mass.len() >= n && inv_mass.is_none_or(|w| w.len() >= n));
+                &mut out2[..0]
+            }
+            Output::SemiImplicitEuler { mass, inv_mass, .. } => {
+                assert!(mass.len() >= n && inv_mass.len() >= n);
+                &mut out2[..n]
+            }
+            Output::Add => &mut out2[..0],
+        };
         let parts = parts.clamp(1, MAX_PARTS);
         if parts == 1 {
-            SCRATCH.with(|s| self.range(&mut s.borrow_mut(), x, v, 0, n, out, &output));
+            SCRATCH.with(|s| self.range(&mut s.borrow_mut(), x, v, 0, n, out, out2, &output));
             return;
         }
         let bounds = self.split(parts);
-        // Each part gets its own slice of `out` (disjoint: no thread writes another's values).
-        let mut rest = out;
-        let outputs: [Mutex<&mut [DVec3]>; MAX_PARTS] = std::array::from_fn(|k| {
+        // Each part gets its own slices of the outputs (disjoint: no thread writes another's
+        // values).
+        let (mut rest, mut rest2) = (out, out2);
+        let outputs: [Mutex<(&mut [DVec3], &mut [DVec3])>; MAX_PARTS] = std::array::from_fn(|k| {
             let len = if k < parts {
                 bounds[k + 1] - bounds[k]
             } else {
@@ -395,14 +436,18 @@ impl Stencil {
             };
             let (mine, others) = std::mem::take(&mut rest).split_at_mut(len);
             rest = others;
-            Mutex::new(mine)
+            let len2 = len.min(rest2.len());
+            let (mine2, others2) = std::mem::take(&mut rest2).split_at_mut(len2);
+            rest2 = others2;
+            Mutex::new((mine, mine2))
         });
         Pool::global().run(parts, &|k| {
             let mut mine = outputs[k]
                 .lock()
                 .unwrap_or_else(std::sync::PoisonError::into_inner);
+            let (out, out2) = &mut *mine;
             let (q0, q1) = (bounds[k], bounds[k + 1]);
-            SCRATCH.with(|s| self.range(&mut s.borrow_mut(), x, v, q0, q1, &mut mine, &output));
+            SCRATCH.with(|s| self.range(&mut s.borrow_mut(), x, v, q0, q1, out, out2, &output));
         });
     }
 
@@ -410,8 +455,9 @@ impl Stencil {
     /// `LANES` (except `n`), such that every part does about the same work: part 0 its own
     /// slots, every other part its own slots plus its halo.
     ///
-    /// With `W` slots in all and `H` halo slots, each part does `X = (W + (parts-1) H) / parts`;
-    /// part 0 ends where the slot count reaches `X`, part `k` where it reaches `k X - (k-1) H`.
+    /// With `W` slots in all and a halo worth `H` slots, each part does
+    /// `X = (W + (parts-1) H) / parts`; part 0 ends where the slot count reaches `X`, part `k`
+    /// where it reaches `k X - (k-1) H`.
     fn split(&self, parts: usize) -> [usize; MAX_PARTS + 1] {
         let n = self.particles;
         let total = self.work.last().copied().unwrap_or(0);
@@ -426,7 +472,8 @@ impl Stencil {
         bounds
     }
 
-    /// Writes `output` for particles `q0..q1` into `out` (`out[i]` is particle `q0 + i`).
+    /// Writes `output` for particles `q0..q1` into `out` and `out2` (`out[i]` is particle
+    /// `q0 + i`; `out2` is empty unless the output needs it).
     #[allow(clippy::too_many_arguments)]
     fn range(
         &self,
@@ -436,6 +483,7 @@ impl Stencil {
         q0: usize,
         q1: usize,
         out: &mut [DVec3],
+        out2: &mut [DVec3],
         output: &Output,
     ) {
         match self.kernel {
@@ -443,13 +491,13 @@ impl Stencil {
             Kernel::Avx512 => {
                 // SAFETY: `with_kernel` and `Kernel::best` only choose `Avx512` on a CPU that
                 // supports AVX-512F.
-                unsafe { range_avx512(self, s, x, v, q0, q1, out, output) }
+                unsafe { range_avx512(self, s, x, v, q0, q1, out, out2, output) }
             }
             #[cfg(target_arch = "x86_64")]
             Kernel::Avx2 => {
                 // SAFETY: `with_kernel` and `Kernel::best` only choose `Avx2` on a CPU that
                 // supports AVX2.
-                unsafe { range_avx2(self, s, x, v, q0, q1, out, output) }
+                unsafe { range_avx2(self, s, x, v, q0, q1, out, out2, output) }
             }
             _ => range_body(
                 self,
@@ -459,6 +507,7 @@ impl Stencil {
                 q0,
                 q1,
                 out,
+                out2,
                 output,
                 // A closure, not the function item: the item would be called through a shim
                 // that is not inlined.
@@ -641,6 +690,7 @@ fn range_body<V: Lanes>(
     q0: usize,
     q1: usize,
     out: &mut [DVec3],
+    out2: &mut [DVec3],
     output: &Output,
     // The `LANES` springs of a group starting at window index `i` (particle `p`), given the
     // positions and velocities of their first ends.
@@ -732,11 +782,15 @@ fn range_body<V: Lanes>(
                 plus[2].sub(minus[2]),
             ];
             let count = (q1 - q).min(LANES);
+            let i = q - base;
             let out = &mut out[q - q0..q - q0 + count];
-            let value = match *output {
+            match *output {
                 Output::Add => {
                     let old = to_lanes::<V>(out);
-                    [old[0].add(sum[0]), old[1].add(sum[1]), old[2].add(sum[2])]
+                    from_lanes(
+                        [old[0].add(sum[0]), old[1].add(sum[1]), old[2].add(sum[2])],
+                        out,
+                    );
                 }
                 Output::Total {
                     mass,
@@ -744,33 +798,67 @@ fn range_body<V: Lanes>(
                     drag,
                     inv_mass,
                 } => {
-                    // (m g - c v) + F_springs, lane by lane, in the order of `forces`.
                     let m = load_padded::<V>(mass, q, count);
-                    let c = V::splat(drag);
-                    let i = q - base;
-                    let t = [
-                        weight_drag_springs(m, gravity.x, c, V::load(lanes(w.v[0], i)), sum[0]),
-                        weight_drag_springs(m, gravity.y, c, V::load(lanes(w.v[1], i)), sum[1]),
-                        weight_drag_springs(m, gravity.z, c, V::load(lanes(w.v[2], i)), sum[2]),
-                    ];
+                    let total = weight_drag_springs(m, gravity, drag, components(w.v, i), sum);
                     match inv_mass {
                         Some(inv_mass) => {
                             let w = load_padded::<V>(inv_mass, q, count);
-                            [t[0].mul(w), t[1].mul(w), t[2].mul(w)]
+                            from_lanes([total[0].mul(w), total[1].mul(w), total[2].mul(w)], out);
                         }
-                        None => t,
+                        None => from_lanes(total, out),
                     }
                 }
-            };
-            from_lanes(value, out);
+                Output::SemiImplicitEuler {
+                    mass,
+                    gravity,
+                    drag,
+                    inv_mass,
+                    dt,
+                } => {
+                    let m = load_padded::<V>(mass, q, count);
+                    let v: [V; 3] = components(w.v, i);
+                    let total = weight_drag_springs(m, gravity, drag, v, sum);
+                    let inv = load_padded::<V>(inv_mass, q, count);
+                    let dt = V::splat(dt);
+                    // v' = v + dt a, a = f w; then x' = x + dt v'.
+                    let v_new = [
+                        v[0].add(dt.mul(total[0].mul(inv))),
+                        v[1].add(dt.mul(total[1].mul(inv))),
+                        v[2].add(dt.mul(total[2].mul(inv))),
+                    ];
+                    let x: [V; 3] = components(w.x, i);
+                    let x_new = [
+                        x[0].add(dt.mul(v_new[0])),
+                        x[1].add(dt.mul(v_new[1])),
+                        x[2].add(dt.mul(v_new[2])),
+                    ];
+                    from_lanes(v_new, out);
+                    from_lanes(x_new, &mut out2[q - q0..q - q0 + count]);
+                }
+            }
         }
     }
 }
 
-/// One component of `(m g - c v) + F_springs` (N), lane by lane.
+/// The `x`, `y`, `z` lanes of window arrays (positions or velocities) from index `i`.
 #[inline(always)]
-fn weight_drag_springs<V: Lanes>(m: V, g: f64, c: V, v: V, spring: V) -> V {
-    m.mul(V::splat(g)).sub(c.mul(v)).add(spring)
+fn components<V: Lanes>(arrays: [&[f64]; 3], i: usize) -> [V; 3] {
+    [
+        V::load(lanes(arrays[0], i)),
+        V::load(lanes(arrays[1], i)),
+        V::load(lanes(arrays[2], i)),
+    ]
+}
+
+/// `(m g - c v) + F_springs` (N), lane by lane, in the order of `forces`.
+#[inline(always)]
+fn weight_drag_springs<V: Lanes>(m: V, g: DVec3, c: f64, v: [V; 3], spring: [V; 3]) -> [V; 3] {
+    let c = V::splat(c);
+    [
+        m.mul(V::splat(g.x)).sub(c.mul(v[0])).add(spring[0]),
+        m.mul(V::splat(g.y)).sub(c.mul(v[1])).add(spring[1]),
+        m.mul(V::splat(g.z)).sub(c.mul(v[2])).add(spring[2]),
+    ]
 }
 
 /// `values[q..q + count]` as lanes, zero past `count`.
@@ -893,6 +981,7 @@ fn range_avx2(
     q0: usize,
     q1: usize,
     out: &mut [DVec3],
+    out2: &mut [DVec3],
     output: &Output,
 ) {
     range_body(
@@ -903,6 +992,7 @@ fn range_avx2(
         q0,
         q1,
         out,
+        out2,
         output,
         // A closure, not the function item: only a closure is inlined (and with it the AVX2
         // instructions, which cannot be inlined into a function without AVX2).
@@ -924,6 +1014,7 @@ fn range_avx512(
     q0: usize,
     q1: usize,
     out: &mut [DVec3],
+    out2: &mut [DVec3],
     output: &Output,
 ) {
     range_body(
@@ -934,6 +1025,7 @@ fn range_avx512(
         q0,
         q1,
         out,
+        out2,
         output,
         #[inline(always)]
         |g, first, w, i, p| {
@@ -1207,9 +1299,12 @@ unsafe fn springs_avx512(
             stretch,
             _mm512_mul_pd(damper, y),
         );
-        // f = tension n with n = d / L = d y, zero where there is no spring (present = 0).
-        let y_present = _mm512_mul_pd(y, load(&g.present, p));
-        let force = |d| Avx512(_mm512_mul_pd(tension, _mm512_mul_pd(d, y_present)));
-        [force(dx), force(dy), force(dz)]
+        // f = tension n = (tension / L) d, zero where there is no spring (present = 0).
+        let scale = _mm512_mul_pd(_mm512_mul_pd(tension, y), load(&g.present, p));
+        [
+            Avx512(_mm512_mul_pd(dx, scale)),
+            Avx512(_mm512_mul_pd(dy, scale)),
+            Avx512(_mm512_mul_pd(dz, scale)),
+        ]
     }
 }
