@@ -120,6 +120,24 @@ fn rope_verlet_checksum_agrees_with_reference() {
 }
 
 #[test]
+fn every_kernel_this_cpu_has_gives_the_reference_checksums() {
+    use springlab::physics::stencil::Kernel;
+    for w in [Workload::JellySe, Workload::Cloth64Se, Workload::RopeSe] {
+        for kernel in Kernel::ALL.into_iter().filter(|k| k.is_available()) {
+            let (model, state) = bench::setup(w);
+            let mut run = Run::from_setup(w, model.with_kernel(kernel), state);
+            run.advance(w.steps());
+            let got = run.checksum();
+            assert!(
+                got.agrees(&w.reference(), REL_TOL),
+                "{w} with {kernel:?}: {got:?}, deviation {:.3e}",
+                got.max_relative_deviation(&w.reference())
+            );
+        }
+    }
+}
+
+#[test]
 fn rope_se_is_bit_identical_run_to_run() {
     let run = || {
         let mut r = Run::new(Workload::RopeSe);

@@ -22,7 +22,7 @@ use glam::DVec3;
 
 use super::collide::{Collider, ContactParams, contact_forces};
 use super::springs::Spring;
-use super::stencil::{Output, Stencil};
+use super::stencil::{Kernel, Output, Stencil};
 
 /// The physics of one system: masses, springs, gravity, drag and static colliders. It does not
 /// change during a step.
@@ -133,6 +133,16 @@ impl Model {
     #[must_use]
     pub fn stencil(&self) -> Option<&Stencil> {
         self.stencil.as_ref()
+    }
+
+    /// The same model with its stencil (if any) computing with `kernel`.
+    ///
+    /// # Panics
+    /// If this CPU cannot run `kernel` (see [`Kernel::is_available`]).
+    #[must_use]
+    pub fn with_kernel(mut self, kernel: Kernel) -> Model {
+        self.stencil = self.stencil.map(|s| s.with_kernel(kernel));
+        self
     }
 
     /// The same model without the stencil form: forces from the spring list only (for tests

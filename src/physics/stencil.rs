@@ -3,7 +3,7 @@
 //!
 //! # Theory
 //!
-//! **Stencil.** In a lattice (the jelly cube, the cloth) every spring joins particle `p` to
+//! **Stencil.** In a lattice (the jelly cube, the cloth, a rope) every spring joins particle `p` to
 //! particle `p + δ` for one of a few index offsets `δ`, and all springs of one offset share their
 //! stiffness `k` and damping `k_d`. Grouping the springs by offset (a "stencil") turns the force
 //! loop into passes over contiguous arrays with no scattered writes. Spring `(p, p + δ)` pushes
@@ -34,6 +34,14 @@
 //! in the core's caches however large the lattice is. Positions and velocities are first copied
 //! into one contiguous `f64` array per component (structure of arrays).
 //!
+//! **To the end of the step in the same pass.** Pass 2 finishes each chunk with what the caller
+//! asked for ([`Output`]): the spring force, the total force with weight and drag, the
+//! acceleration `f/m`, or a whole semi-implicit Euler step `v' = v + dt a`, `x' = x + dt v'`. So
+//! [`super::forces::forces`], [`super::forces::accelerations`] and the semi-implicit Euler step
+//! need no further pass over the particles, and that work is split between the threads too.
+//! Each output does the same operations in the same order as the plain loop it replaces, so
+//! the numbers are the same.
+//!
 //! **One reciprocal square root.** The length and the direction need `L = √(d·d)` and `1/L`.
 //! A 512-bit square root or division keeps the divider busy for about 13–16 cycles (measured on
 //! the benchmark machine; Intel Intrinsics Guide, `VSQRTPD`, `VDIVPD`), as long as the twenty
@@ -48,9 +56,16 @@
 //! ```
 //! Two steps reach the last bit or two of an f64 (relative error ≈ 1e-16, against 2.2e-16 for
 //! one rounding), cheaper than one division. The result is not always the correctly rounded
-//! `1/√a`, so the AVX-512 kernel differs from the portable one (`sqrt`, then `1/L`) in the last
-//! bits: runs are bit-identical run to run on one machine, but a machine with AVX-512 and one
-//! without give results that differ at the 1e-16 level (the peer checksums agree to 1e-8).
+//! `1/√a`.
+//!
+//! **Three kernels** ([`Kernel`]), chosen at run time for the CPU: `Portable` (plain Rust,
+//! `sqrt` then `1/L`), `Avx2` (the same operations on 256-bit registers, so the same bits) and
+//! `Avx512` (the reciprocal square root above, with fused multiply-adds). Runs are
+//! bit-identical run to run on one machine, but a machine with AVX-512 and one without give
+//! results that differ in the last bits of a force (about 1e-16 relative; after the peer
+//! workloads' N steps their checksums differ by at most 2e-13 relative, on cloth64, and all
+//! agree with the C++ references to 1.1e-10; `examples/kernel_checksums.rs` prints them). Measured on the benchmark machine (2-core Xeon, one thread, jelly cube): about
+//! 2.1 ns per spring slot with AVX-512, 2.9 ns with AVX2, 7.5 ns portable (SSE2).
 //!
 //! The sums run in a different order than the spring-list loop, so forces agree with
 //! [`super::forces`] to rounding (about 1e-15 relative), not bit for bit; a test checks it.
