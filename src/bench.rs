@@ -48,6 +48,7 @@ use std::time::Instant;
 use glam::DVec3;
 use serde::Serialize;
 
+use crate::physics::pool::Pool;
 use crate::physics::{Method, MethodParams, Model, SpringKind, State, Workspace};
 use crate::scene::builder::Builder;
 
@@ -442,19 +443,38 @@ enum Contact {
     },
 }
 
+/// From this many particles on, the contact projection is split between the pool's threads
+/// (every particle is projected on its own, so the result does not depend on the split).
+const PARALLEL_CONTACT: usize = 4096;
+
 impl Contact {
     fn apply(self, state: &mut State) {
+        let pool = Pool::global();
+        let parts = if state.len() >= PARALLEL_CONTACT {
+            pool.threads()
+        } else {
+            1
+        };
         match self {
             Contact::None => {}
-            Contact::Ground { restitution } => ground(state, restitution),
-            Contact::Sphere { centre, radius } => sphere(state, centre, radius),
+            Contact::Ground { restitution } => {
+                pool.for_each_part(&mut state.x, &mut state.v, parts, |_, x, v| {
+                    ground(x, v, restitution);
+                });
+            }
+            Contact::Sphere { centre, radius } => {
+                pool.for_each_part(&mut state.x, &mut state.v, parts, |_, x, v| {
+                    sphere(x, v, centre, radius);
+                });
+            }
         }
     }
 }
 
-/// `if y < 0 { y = 0; if v_y < 0 { v_y = -e v_y } }` for every particle.
-fn ground(state: &mut State, restitution: f64) {
-    for (x, v) in state.x.iter_mut().zip(state.v.iter_mut()) {
+/// `if y < 0 { y = 0; if v_y < 0 { v_y = -e v_y } }` for every particle (positions `x`,
+/// velocities `v`).
+fn ground(x: &mut [DVec3], v: &mut [DVec3], restitution: f64) {
+    for (x, v) in x.iter_mut().zip(v.iter_mut()) {
         if x.y < 0.0 {
             x.y = 0.0;
             if v.y < 0.0 {
@@ -466,9 +486,9 @@ fn ground(state: &mut State, restitution: f64) {
 }
 
 /// Pushes every particle inside the sphere out to its surface and removes the inward normal
-/// velocity.
-fn sphere(state: &mut State, centre: DVec3, radius: f64) {
-    for (x, v) in state.x.iter_mut().zip(state.v.iter_mut()) {
+/// velocity (positions `x`, velocities `v`).
+fn sphere(x: &mut [DVec3], v: &mut [DVec3], centre: DVec3, radius: f64) {
+    for (x, v) in x.iter_mut().zip(v.iter_mut()) {
         let dd = *x - centre;
         let dist = dd.length();
         if dist < radius {

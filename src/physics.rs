@@ -24,6 +24,7 @@ pub mod energy;
 pub mod forces;
 pub mod integrators;
 pub mod particles;
+pub mod pool;
 pub mod springs;
 pub mod stencil;
 

@@ -120,6 +120,24 @@ fn rope_verlet_checksum_agrees_with_reference() {
 }
 
 #[test]
+fn every_kernel_this_cpu_has_gives_the_reference_checksums() {
+    use springlab::physics::stencil::Kernel;
+    for w in [Workload::JellySe, Workload::Cloth64Se, Workload::RopeSe] {
+        for kernel in Kernel::ALL.into_iter().filter(|k| k.is_available()) {
+            let (model, state) = bench::setup(w);
+            let mut run = Run::from_setup(w, model.with_kernel(kernel), state);
+            run.advance(w.steps());
+            let got = run.checksum();
+            assert!(
+                got.agrees(&w.reference(), REL_TOL),
+                "{w} with {kernel:?}: {got:?}, deviation {:.3e}",
+                got.max_relative_deviation(&w.reference())
+            );
+        }
+    }
+}
+
+#[test]
 fn rope_se_is_bit_identical_run_to_run() {
     let run = || {
         let mut r = Run::new(Workload::RopeSe);
@@ -134,6 +152,31 @@ fn rope_se_is_bit_identical_run_to_run() {
             .collect::<Vec<u64>>()
     };
     assert_eq!(bits(&a), bits(&b));
+}
+
+#[test]
+fn lattice_runs_are_bit_identical_with_one_thread_and_with_two() {
+    use springlab::physics::pool::Pool;
+    let bits = |s: &springlab::State| {
+        s.x.iter()
+            .chain(&s.v)
+            .flat_map(|p| p.to_array().map(f64::to_bits))
+            .collect::<Vec<u64>>()
+    };
+    let pool = Pool::global();
+    let all = pool.threads();
+    for w in [Workload::JellySe, Workload::Cloth64Se] {
+        let run = |threads: usize| {
+            // Other tests may run meanwhile with this setting: it changes their speed only.
+            pool.set_threads(threads);
+            let mut r = Run::new(w);
+            r.advance(300);
+            r.state
+        };
+        let (one, two) = (run(1), run(2));
+        assert!(bits(&one) == bits(&two), "{w}: 1 and 2 threads differ");
+    }
+    pool.set_threads(all);
 }
 
 #[test]

@@ -233,56 +233,207 @@ fn the_same_run_twice_is_bit_identical() {
     assert_eq!(run(), run());
 }
 
+/// A deformed, moving copy of a workload's lattice, with one pair of particles on top of each
+/// other (a zero-length spring).
+fn shaken(workload: springlab::bench::Workload, rng: &mut Rng) -> (Model, State) {
+    let (model, mut state) = springlab::bench::setup(workload);
+    for (x, v) in state.x.iter_mut().zip(state.v.iter_mut()) {
+        *x += DVec3::new(
+            rng.range(-0.02, 0.02),
+            rng.range(-0.02, 0.02),
+            rng.range(-0.02, 0.02),
+        );
+        *v = DVec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
+    }
+    state.x[1] = state.x[0];
+    (model, state)
+}
+
 #[test]
 fn the_stencil_form_gives_the_spring_list_forces() {
-    use springlab::bench::{Workload, setup};
+    use springlab::bench::Workload;
+    use springlab::physics::stencil::Kernel;
     let mut rng = Rng(0x57e9_c11a_0000_0042);
     for workload in [Workload::JellySe, Workload::Cloth64Se] {
-        let (model, mut state) = setup(workload);
+        let (model, state) = shaken(workload, &mut rng);
         assert!(
             model.uses_stencil(),
             "{} should use the stencil",
             workload.name()
         );
         let list = model.clone().without_stencil();
-        // A deformed, moving lattice, with one pair of particles on top of each other.
-        for (x, v) in state.x.iter_mut().zip(state.v.iter_mut()) {
-            *x += DVec3::new(
-                rng.range(-0.02, 0.02),
-                rng.range(-0.02, 0.02),
-                rng.range(-0.02, 0.02),
-            );
-            *v = DVec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            );
-        }
-        state.x[1] = state.x[0];
         let n = state.len();
-        let (mut fast, mut slow) = (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
-        forces(&model, &state.x, &state.v, &mut fast);
+        let mut slow = vec![DVec3::ZERO; n];
         forces(&list, &state.x, &state.v, &mut slow);
         let scale = slow.iter().map(|f| f.length()).fold(0.0, f64::max);
-        for (i, (a, b)) in fast.iter().zip(&slow).enumerate() {
-            assert!(a.is_finite(), "{}: NaN at {i}", workload.name());
+        for kernel in Kernel::ALL.into_iter().filter(|k| k.is_available()) {
+            let stencil = model
+                .stencil()
+                .expect("a stencil")
+                .clone()
+                .with_kernel(kernel);
+            let mut fast = vec![DVec3::ZERO; n];
+            stencil.add_forces(&state.x, &state.v, &mut fast);
+            for (i, (a, b)) in fast.iter().zip(&slow).enumerate() {
+                // `slow` includes gravity; the stencil adds the springs only.
+                let b = *b - model.mass[i] * model.gravity;
+                assert!(a.is_finite(), "{} {kernel:?}: NaN at {i}", workload.name());
+                assert!(
+                    (*a - b).length() <= 1e-12 * scale,
+                    "{} {kernel:?}: particle {i}: {a} vs {b}",
+                    workload.name()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn fused_accelerations_are_the_forces_over_the_masses_bit_for_bit() {
+    use springlab::bench::Workload;
+    use springlab::physics::accelerations;
+    let mut rng = Rng(0xacce_1000_0000_0007);
+    for workload in [Workload::JellySe, Workload::Cloth64Se, Workload::RopeSe] {
+        let (mut model, state) = shaken(workload, &mut rng);
+        model.drag = 0.25;
+        assert!(model.uses_stencil(), "{}", workload.name());
+        let n = state.len();
+        let (mut f, mut a) = (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
+        forces(&model, &state.x, &state.v, &mut f);
+        accelerations(&model, &state.x, &state.v, &mut a);
+        for i in 0..n {
+            let expected = f[i] * model.inv_mass[i];
             assert!(
-                (*a - *b).length() <= 1e-12 * scale,
-                "{}: particle {i}: {a} vs {b}",
-                workload.name()
+                a[i].to_array().map(f64::to_bits) == expected.to_array().map(f64::to_bits),
+                "{} particle {i}: {} vs {expected}",
+                workload.name(),
+                a[i]
             );
         }
     }
 }
 
 #[test]
-fn a_rope_or_random_springs_use_the_spring_list() {
+fn the_fused_semi_implicit_euler_step_is_the_textbook_step_bit_for_bit() {
+    use springlab::bench::Workload;
+    use springlab::physics::accelerations;
+    let mut rng = Rng(0x5e5e_0000_0000_0009);
+    for workload in [Workload::JellySe, Workload::Cloth64Se, Workload::RopeSe] {
+        let (mut model, state) = shaken(workload, &mut rng);
+        model.drag = 0.25;
+        let dt = 1e-4;
+        // v' = v + dt a(x, v), x' = x + dt v', written out.
+        let mut a = vec![DVec3::ZERO; state.len()];
+        accelerations(&model, &state.x, &state.v, &mut a);
+        let v_new: Vec<DVec3> = state.v.iter().zip(&a).map(|(v, a)| *v + dt * *a).collect();
+        let x_new: Vec<DVec3> = state
+            .x
+            .iter()
+            .zip(&v_new)
+            .map(|(x, v)| *x + dt * *v)
+            .collect();
+        let mut fused = state.clone();
+        Method::SemiImplicitEuler.step(
+            &model,
+            &mut fused,
+            dt,
+            &MethodParams::default(),
+            &mut Workspace::new(),
+        );
+        let bits = |p: &[DVec3]| {
+            p.iter()
+                .flat_map(|p| p.to_array().map(f64::to_bits))
+                .collect::<Vec<u64>>()
+        };
+        assert!(
+            bits(&fused.v) == bits(&v_new),
+            "{} velocities",
+            workload.name()
+        );
+        assert!(
+            bits(&fused.x) == bits(&x_new),
+            "{} positions",
+            workload.name()
+        );
+    }
+}
+
+#[test]
+fn the_avx2_kernel_gives_the_portable_forces_bit_for_bit() {
+    use springlab::bench::Workload;
+    use springlab::physics::stencil::Kernel;
+    if !Kernel::Avx2.is_available() {
+        return;
+    }
+    let mut rng = Rng(0xa7b2_0000_0000_0003);
+    let (model, state) = shaken(Workload::JellySe, &mut rng);
+    let run = |kernel| {
+        let stencil = model
+            .stencil()
+            .expect("a stencil")
+            .clone()
+            .with_kernel(kernel);
+        let mut f = vec![DVec3::ZERO; state.len()];
+        stencil.add_forces(&state.x, &state.v, &mut f);
+        f.iter()
+            .flat_map(|f| f.to_array().map(f64::to_bits))
+            .collect::<Vec<u64>>()
+    };
+    assert!(run(Kernel::Avx2) == run(Kernel::Portable));
+}
+
+#[test]
+fn the_stencil_forces_are_bit_identical_for_any_number_of_threads() {
+    use springlab::bench::Workload;
+    use springlab::physics::stencil::Kernel;
+    let mut rng = Rng(0xb17_1de7_0000_0001);
+    for workload in [Workload::JellySe, Workload::Cloth64Se, Workload::Cloth128Se] {
+        let (model, state) = shaken(workload, &mut rng);
+        let n = state.len();
+        for kernel in Kernel::ALL.into_iter().filter(|k| k.is_available()) {
+            let stencil = model
+                .stencil()
+                .expect("a stencil")
+                .clone()
+                .with_kernel(kernel);
+            let run = |parts: usize| {
+                let mut f = vec![DVec3::ZERO; n];
+                stencil.add_forces_in_parts(&state.x, &state.v, &mut f, parts);
+                f.iter()
+                    .flat_map(|f| f.to_array().map(f64::to_bits))
+                    .collect::<Vec<u64>>()
+            };
+            let one = run(1);
+            for parts in [2, 3, 5] {
+                assert!(
+                    run(parts) == one,
+                    "{} {kernel:?}: {parts} parts differ from 1",
+                    workload.name()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn random_springs_and_short_ropes_use_the_spring_list_and_long_ropes_the_stencil() {
     let mut rng = Rng(7);
     let (model, _) = random_system(&mut rng, 300, 400);
     assert!(!model.uses_stencil(), "random springs are not a lattice");
-    let scene = scene::load("rope", &["nodes=64".to_string()]).expect("rope");
+    let rope = |nodes: usize| {
+        let scene = scene::load("rope", &[format!("nodes={nodes}")]).expect("rope");
+        scene.bodies[0].model.uses_stencil()
+    };
+    assert!(!rope(12), "11 springs: the list is as fast");
+    assert!(rope(64), "63 springs: a chain is a lattice with one offset");
+    // Springs without stiffness and damping exert no force: no stencil for them.
+    let (verlet, _) = springlab::bench::setup(springlab::bench::Workload::RopeVerlet);
     assert!(
-        !scene.bodies[0].model.uses_stencil(),
-        "63 springs: the list is as fast"
+        !verlet.uses_stencil(),
+        "pure constraints need no force loop"
     );
 }

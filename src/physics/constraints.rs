@@ -20,7 +20,8 @@
 //! ```
 //! where `w = 1/m` (1/kg), zero for a pinned end. With equal masses each end moves half; a pinned
 //! end does not move and the free end takes all of it. Constraints are visited colour by colour
-//! (see [`Model::spring_colours`]): Gauss–Seidel, red-black on a chain.
+//! (see [`Model::spring_colours`]): Gauss–Seidel, red-black on a chain. The shares
+//! `w_a / (w_a + w_b)` are computed once per step ([`prepare_rods`]), not once per pass.
 //!
 //! **XPBD** (Macklin, Müller & Chentanez, "XPBD: Position-Based Simulation of Compliant
 //! Constrained Dynamics", MIG 2016, eq. 18 and 26) treats a spring of stiffness `k` as a
@@ -39,31 +40,69 @@ use glam::DVec3;
 
 use super::forces::Model;
 
-/// Projects every spring of `model` to its rest length `iterations` times (Gauss–Seidel by colour).
+/// One distance constraint ready for projection: its ends, its rest length and the share of
+/// the correction each end takes, `w_a / (w_a + w_b)` and `w_b / (w_a + w_b)`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Rod {
+    /// First end.
+    pub a: u32,
+    /// Second end.
+    pub b: u32,
+    /// Rest length `L0` (m).
+    pub rest_length: f64,
+    /// `w_a / (w_a + w_b)` (dimensionless).
+    pub share_a: f64,
+    /// `w_b / (w_a + w_b)` (dimensionless).
+    pub share_b: f64,
+}
+
+/// The springs of `model` as rods in projection order (colour by colour, see
+/// [`Model::spring_colours`]), with the shares of the current inverse masses; a spring between
+/// two pinned particles is left out (neither end can move). Reuses `rods`' allocation.
 ///
-/// Pinned particles (`inv_mass = 0`) never move; a spring between two pinned particles or of zero
-/// length is skipped.
-pub fn project_distances(model: &Model, x: &mut [DVec3], iterations: u32) {
-    for _ in 0..iterations {
-        for colour in model.spring_colours() {
-            for &s in colour {
-                let s = &model.springs[s as usize];
-                let (a, b) = (s.a as usize, s.b as usize);
-                let (w_a, w_b) = (model.inv_mass[a], model.inv_mass[b]);
-                let w = w_a + w_b;
-                if w == 0.0 {
-                    continue;
-                }
-                let d = x[b] - x[a];
-                let length = d.length();
-                if length == 0.0 {
-                    continue;
-                }
-                // corr = d (L - L0) / L: the whole stretch, as a vector from a to b.
-                let corr = d * ((length - s.rest_length) / length);
-                x[a] += (w_a / w) * corr;
-                x[b] -= (w_b / w) * corr;
+/// The shares depend only on the masses, so computing them once per step instead of once per
+/// pass saves two divisions per constraint and pass.
+pub fn prepare_rods(model: &Model, rods: &mut Vec<Rod>) {
+    rods.clear();
+    for colour in model.spring_colours() {
+        for &s in colour {
+            let s = &model.springs[s as usize];
+            let (w_a, w_b) = (model.inv_mass[s.a as usize], model.inv_mass[s.b as usize]);
+            let w = w_a + w_b;
+            if w == 0.0 {
+                continue;
             }
+            rods.push(Rod {
+                a: s.a,
+                b: s.b,
+                rest_length: s.rest_length,
+                share_a: w_a / w,
+                share_b: w_b / w,
+            });
+        }
+    }
+}
+
+/// Projects every rod to its rest length, `iterations` times over the list (Gauss–Seidel in
+/// the order of [`prepare_rods`]).
+///
+/// Pinned particles (share 0) never move; a rod of zero length is skipped.
+///
+/// # Panics
+/// If a rod's end is out of range of `x`.
+pub fn project_distances(rods: &[Rod], x: &mut [DVec3], iterations: u32) {
+    for _ in 0..iterations {
+        for rod in rods {
+            let (a, b) = (rod.a as usize, rod.b as usize);
+            let d = x[b] - x[a];
+            let length = d.length();
+            if length == 0.0 {
+                continue;
+            }
+            // corr = d (L - L0) / L: the whole stretch, as a vector from a to b.
+            let corr = d * ((length - rod.rest_length) / length);
+            x[a] += rod.share_a * corr;
+            x[b] -= rod.share_b * corr;
         }
     }
 }

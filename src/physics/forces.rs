@@ -22,7 +22,7 @@ use glam::DVec3;
 
 use super::collide::{Collider, ContactParams, contact_forces};
 use super::springs::Spring;
-use super::stencil::Stencil;
+use super::stencil::{Kernel, Output, Stencil};
 
 /// The physics of one system: masses, springs, gravity, drag and static colliders. It does not
 /// change during a step.
@@ -51,6 +51,9 @@ pub struct Model {
     projection_order: Vec<u32>,
     /// `projection_order[colour_starts[c]..colour_starts[c + 1]]` are the springs of colour `c`.
     colour_starts: Vec<usize>,
+    /// False when every spring has zero stiffness and damping (pure distance constraints, as in
+    /// a Verlet rope): the force loop then skips the springs.
+    elastic: bool,
 }
 
 impl Model {
@@ -82,6 +85,7 @@ impl Model {
         let (projection_order, colour_starts) = colour_springs(n, &springs);
         let stencil = Stencil::detect(n, &springs);
         Model {
+            elastic: any_elastic(&springs),
             stencil,
             mass,
             inv_mass,
@@ -102,6 +106,7 @@ impl Model {
         self.projection_order = order;
         self.colour_starts = starts;
         self.stencil = Stencil::detect(self.particle_count(), &self.springs);
+        self.elastic = any_elastic(&self.springs);
     }
 
     /// Sets the stiffness (N/m) and damping (N·s/m) of every spring.
@@ -110,7 +115,10 @@ impl Model {
             s.stiffness = stiffness;
             s.damping = damping;
         }
-        if let Some(stencil) = &mut self.stencil {
+        if any_elastic(&self.springs) != self.elastic {
+            // Springs became forces or stopped being forces: the stencil may change too.
+            self.rebuild();
+        } else if let Some(stencil) = &mut self.stencil {
             stencil.set_coefficients(stiffness, damping);
         }
     }
@@ -119,6 +127,22 @@ impl Model {
     #[must_use]
     pub fn uses_stencil(&self) -> bool {
         self.stencil.is_some()
+    }
+
+    /// The stencil form of the springs, when the force loop uses it.
+    #[must_use]
+    pub fn stencil(&self) -> Option<&Stencil> {
+        self.stencil.as_ref()
+    }
+
+    /// The same model with its stencil (if any) computing with `kernel`.
+    ///
+    /// # Panics
+    /// If this CPU cannot run `kernel` (see [`Kernel::is_available`]).
+    #[must_use]
+    pub fn with_kernel(mut self, kernel: Kernel) -> Model {
+        self.stencil = self.stencil.map(|s| s.with_kernel(kernel));
+        self
     }
 
     /// The same model without the stencil form: forces from the spring list only (for tests
@@ -168,6 +192,13 @@ impl Model {
     }
 }
 
+/// True when some spring has a stiffness or a damping (exerts a force).
+fn any_elastic(springs: &[Spring]) -> bool {
+    springs
+        .iter()
+        .any(|s| s.stiffness != 0.0 || s.damping != 0.0)
+}
+
 /// Greedy edge colouring in spring order: each spring takes the smallest colour not yet used at
 /// either end. A chain `(0,1), (1,2), ...` gets colours 0, 1, 0, 1, ... (red-black).
 fn colour_springs(particles: usize, springs: &[Spring]) -> (Vec<u32>, Vec<usize>) {
@@ -214,19 +245,22 @@ fn colour_springs(particles: usize, springs: &[Spring]) -> (Vec<u32>, Vec<usize>
 pub fn forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
     let n = model.particle_count();
     let (v, f) = (&v[..n], &mut f[..n]);
-    // External forces: weight m g and viscous drag -c v.
-    for ((f_i, &m_i), &v_i) in f.iter_mut().zip(&model.mass).zip(v) {
-        *f_i = m_i * model.gravity - model.drag * v_i;
-    }
-    // Internal forces: each spring pushes its ends with equal and opposite forces.
     if let Some(stencil) = &model.stencil {
-        // The same sum, grouped by lattice offset for speed (see `stencil`).
-        stencil.add_forces(x, v, f);
+        // The same sums, grouped by lattice offset for speed and split between the cores
+        // (see `stencil`); weight and drag are added by each thread for its own particles.
+        stencil.write(x, v, f, &mut [], model.total(None));
     } else {
-        for s in &model.springs {
-            let f_a = s.force_on_a(x, v);
-            f[s.a as usize] += f_a;
-            f[s.b as usize] -= f_a;
+        // External forces: weight m g and viscous drag -c v.
+        for ((f_i, &m_i), &v_i) in f.iter_mut().zip(&model.mass).zip(v) {
+            *f_i = m_i * model.gravity - model.drag * v_i;
+        }
+        // Internal forces: each spring pushes its ends with equal and opposite forces.
+        if model.elastic {
+            for s in &model.springs {
+                let f_a = s.force_on_a(x, v);
+                f[s.a as usize] += f_a;
+                f[s.b as usize] -= f_a;
+            }
         }
     }
     // Contact: it cancels what pushes into a surface, so it comes after everything else.
@@ -243,9 +277,28 @@ pub fn forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
 /// # Panics
 /// If `x`, `v` or `a` is shorter than the model's particle count.
 pub fn accelerations(model: &Model, x: &[DVec3], v: &[DVec3], a: &mut [DVec3]) {
+    if let Some(stencil) = &model.stencil
+        && model.colliders.is_empty()
+    {
+        // Forces and a = f w in one pass per thread (bit-identical to the two steps below).
+        stencil.write(x, v, a, &mut [], model.total(Some(&model.inv_mass)));
+        return;
+    }
     forces(model, x, v, a);
     for (a_i, &w_i) in a.iter_mut().zip(&model.inv_mass) {
         // a = f / m, with w = 1/m (zero for a pinned particle).
         *a_i *= w_i;
+    }
+}
+
+impl Model {
+    /// The stencil output "weight + drag + springs", times `inv_mass` when given.
+    fn total<'a>(&'a self, inv_mass: Option<&'a [f64]>) -> Output<'a> {
+        Output::Total {
+            mass: &self.mass,
+            gravity: self.gravity,
+            drag: self.drag,
+            inv_mass,
+        }
     }
 }

@@ -192,6 +192,8 @@ pub struct Workspace {
     pub(crate) diag_inv: Vec<DMat3>,
     pub(crate) cg: [Vec<DVec3>; 4],
     pub(crate) lambda: Vec<f64>,
+    /// Verlet: the springs as rods, in projection order.
+    pub(crate) rods: Vec<crate::physics::constraints::Rod>,
     /// Statistics of the last implicit solve.
     pub last_solve: SolveStats,
 }

@@ -20,8 +20,29 @@
 use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::Workspace;
 use crate::physics::particles::State;
+use crate::physics::stencil::Output;
 
 pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
+    if let Some(stencil) = model.stencil()
+        && model.colliders.is_empty()
+    {
+        // A lattice: every thread computes the accelerations of its particles and advances
+        // them in the same pass, with the operations below (so the same numbers), into fresh
+        // buffers, because the other threads still read the old positions and velocities.
+        let output = Output::SemiImplicitEuler {
+            mass: &model.mass,
+            gravity: model.gravity,
+            drag: model.drag,
+            inv_mass: &model.inv_mass,
+            dt,
+        };
+        let (v_new, x_new) = (&mut work.v_stage, &mut work.x_stage);
+        stencil.write(&state.x, &state.v, v_new, x_new, output);
+        std::mem::swap(&mut state.v, v_new);
+        std::mem::swap(&mut state.x, x_new);
+        state.history_valid = false;
+        return 1;
+    }
     let a = &mut work.a;
     accelerations(model, &state.x, &state.v, a);
     for ((x, v), a) in state.x.iter_mut().zip(state.v.iter_mut()).zip(a.iter()) {

@@ -29,7 +29,7 @@
 //! Störmer–Verlet method", Acta Numerica 12 (2003), §1; T. Jakobsen, "Advanced Character
 //! Physics", GDC 2001; GAMES101 assignment 8 (2020), §1.3–1.4.
 
-use crate::physics::constraints::project_distances;
+use crate::physics::constraints::{prepare_rods, project_distances};
 use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::{MethodParams, Workspace};
 use crate::physics::particles::State;
@@ -57,7 +57,10 @@ pub(super) fn step(
         state.x[i] = x_n + keep * (x_n - state.x_prev[i]) + dt2 * a[i];
         state.x_prev[i] = x_n;
     }
-    project_distances(model, &mut state.x, params.iterations);
+    if params.iterations > 0 {
+        prepare_rods(model, &mut work.rods);
+        project_distances(&work.rods, &mut state.x, params.iterations);
+    }
     let inv_dt = 1.0 / dt;
     for i in 0..state.x.len() {
         // v_{n+1} = (x_{n+1} - x_n) / dt
