@@ -249,46 +249,31 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     };
     let progress = progress_bar(if any_frames { plan.frames } else { plan.steps });
 
-    // Energy samples: at most about 4000 over the run, and at every frame.
-    let stride = plan.steps.div_ceil(4000).max(1);
-    let mut energies: Vec<(f64, crate::physics::Energy)> = Vec::new();
-    if plan.chart.is_some() {
-        energies.push((sim.time(), sim.energy()));
-    }
-    // Run up to --start before the first frame.
+    // One loop over the whole run: `--start` steps first, then the frames. Frame k is drawn at
+    // step start + k·every (frame 0 before any step when there is no --start).
     let start_steps = (args.start / dt).round() as u64;
-    for step in 1..=start_steps {
-        if sim.step().is_some() {
-            break;
-        }
-        if plan.chart.is_some() && step % stride == 0 {
-            energies.push((sim.time(), sim.energy()));
-        }
-    }
+    let total = start_steps + plan.steps;
+    // Energy samples: at most about 4000 over the run, and the last step.
+    let stride = total.div_ceil(4000).max(1);
+    let mut energies: Vec<(f64, crate::physics::Energy)> = Vec::new();
     let mut drawn = 0u64;
-    if let Some(enc) = encoder.as_mut()
-        && sim.diverged.is_none()
-    {
-        enc.send(renderer.draw_simulation(&sim))?;
-        drawn = 1;
-        progress.inc(1);
-    }
-    for step in 1..=plan.steps {
-        if sim.diverged.is_some() || sim.step().is_some() {
+    for step in 0..=total {
+        if step > 0 && sim.step().is_some() {
             break;
         }
-        if plan.chart.is_some() && (step % stride == 0 || step == plan.steps) {
+        if plan.chart.is_some() && (step.is_multiple_of(stride) || step == total) {
             energies.push((sim.time(), sim.energy()));
         }
-        if step % plan.every == 0
+        if step >= start_steps
+            && (step - start_steps).is_multiple_of(plan.every)
             && let Some(enc) = encoder.as_mut()
         {
             enc.send(renderer.draw_simulation(&sim))?;
             drawn += 1;
             progress.inc(1);
         }
-        if !any_frames && step % 1000 == 0 {
-            progress.set_position(step);
+        if !any_frames && step.is_multiple_of(1000) {
+            progress.set_position(step.saturating_sub(start_steps));
         }
     }
     progress.finish_and_clear();

@@ -668,6 +668,11 @@ fn verlet_rope(
 
 const VERLET: &str = "x(t+dt) = x(t) + (1 - γ)[x(t) - x(t-dt)] + a(t) dt², then every spring projected back to its rest length";
 
+/// Points as `(x, y, z), (x, y, z), …` for feedback.
+fn listed(points: impl Iterator<Item = DVec3>) -> String {
+    points.map(vec3).collect::<Vec<_>>().join(", ")
+}
+
 fn verlet_free_fall<H: RopeHomework>(hw: &H, ctx: &Ctx) -> CheckResult {
     let mut rng = Rng::new(ctx.seed, 401);
     let dt = 0.01;
@@ -680,18 +685,8 @@ fn verlet_free_fall<H: RopeHomework>(hw: &H, ctx: &Ctx) -> CheckResult {
     let input = format!(
         "three Verlet steps (γ = 0, dt = {dt} s) of three unconnected masses (node 0 pinned) under \
          gravity 9.8 m/s², x = [{}], last_position = [{}]",
-        start
-            .masses
-            .iter()
-            .map(|m| vec3(m.position))
-            .collect::<Vec<_>>()
-            .join(", "),
-        start
-            .masses
-            .iter()
-            .map(|m| vec3(m.last_position))
-            .collect::<Vec<_>>()
-            .join(", ")
+        listed(start.masses.iter().map(|m| m.position)),
+        listed(start.masses.iter().map(|m| m.last_position))
     );
     let mut got = start.clone();
     let mut want = start;
@@ -844,18 +839,8 @@ fn damping_one_step<H: RopeHomework>(hw: &H, ctx: &Ctx) -> CheckResult {
     let input = format!(
         "one Verlet step with γ = {gamma}, dt = {dt} s of three free masses moving at about 1–3 m/s \
          under gravity 9.8 m/s²: x = [{}], last_position = [{}]",
-        start
-            .masses
-            .iter()
-            .map(|m| vec3(m.position))
-            .collect::<Vec<_>>()
-            .join(", "),
-        start
-            .masses
-            .iter()
-            .map(|m| vec3(m.last_position))
-            .collect::<Vec<_>>()
-            .join(", ")
+        listed(start.masses.iter().map(|m| m.position)),
+        listed(start.masses.iter().map(|m| m.last_position))
     );
     let mut got = start.clone();
     run_rope(&mut got, 1, &input, |r| hw.verlet(r, dt, gamma, &physics))?;
