@@ -106,7 +106,10 @@ pub fn homework(args: &HomeworkArgs) -> anyhow::Result<()> {
                 dir.display()
             )?;
         }
-        HomeworkCommand::Autograder { assignment, out: zip } => {
+        HomeworkCommand::Autograder {
+            assignment,
+            out: zip,
+        } => {
             let exe = this_springlab();
             let bytes = autograder::write(*assignment, &exe, zip)
                 .with_context(|| format!("cannot write {}", zip.display()))?;

@@ -110,8 +110,7 @@ fn read_tree(src: &Path) -> Result<Vec<(String, Vec<u8>)>, String> {
                         MAX_SOURCE_BYTES >> 20
                     ));
                 }
-                let bytes =
-                    std::fs::read(entry.path()).map_err(|e| format!("{relative}: {e}"))?;
+                let bytes = std::fs::read(entry.path()).map_err(|e| format!("{relative}: {e}"))?;
                 files.push((relative, bytes));
             }
         }
@@ -321,8 +320,18 @@ pub fn build(prepared: &Prepared, target: &Path, limit: Duration) -> Result<Path
             String::from_utf8_lossy(&bytes).into_owned()
         })
     };
-    let out = reader(child.stdout.take().map(|p| Box::new(p) as Box<dyn Read + Send>));
-    let err = reader(child.stderr.take().map(|p| Box::new(p) as Box<dyn Read + Send>));
+    let out = reader(
+        child
+            .stdout
+            .take()
+            .map(|p| Box::new(p) as Box<dyn Read + Send>),
+    );
+    let err = reader(
+        child
+            .stderr
+            .take()
+            .map(|p| Box::new(p) as Box<dyn Read + Send>),
+    );
     let start = Instant::now();
     let status = loop {
         match child.try_wait() {
@@ -352,7 +361,11 @@ pub fn build(prepared: &Prepared, target: &Path, limit: Duration) -> Result<Path
 /// system's temporary directory.
 #[must_use]
 pub fn default_target_dir() -> PathBuf {
-    let env = |k: &str| std::env::var_os(k).filter(|v| !v.is_empty()).map(PathBuf::from);
+    let env = |k: &str| {
+        std::env::var_os(k)
+            .filter(|v| !v.is_empty())
+            .map(PathBuf::from)
+    };
     if let Some(dir) = env("CARGO_TARGET_DIR") {
         return dir;
     }

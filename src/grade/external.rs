@@ -107,7 +107,9 @@ pub fn assignment_of(dir: &Path) -> Result<Assignment, GradeError> {
 /// True when `dir` looks like one submission: a Cargo.toml, `src/lib.rs` or `lib.rs` in it.
 #[must_use]
 pub fn is_submission(dir: &Path) -> bool {
-    dir.join("Cargo.toml").is_file() || dir.join("src/lib.rs").is_file() || dir.join("lib.rs").is_file()
+    dir.join("Cargo.toml").is_file()
+        || dir.join("src/lib.rs").is_file()
+        || dir.join("lib.rs").is_file()
 }
 
 /// The submissions named by `paths`: each path that is a submission, and for each other
@@ -164,7 +166,8 @@ fn grade_as(
     progress: &(dyn Fn(&str) + Sync),
 ) -> Report {
     let not_run = |reason: &str| assignment.not_run(reason, &options.grading);
-    let target = std::path::absolute(&options.target_dir).unwrap_or_else(|_| options.target_dir.clone());
+    let target =
+        std::path::absolute(&options.target_dir).unwrap_or_else(|_| options.target_dir.clone());
     let submission = match build::locate(dir) {
         Ok(s) => s,
         Err(why) => return not_run(&format!("nothing to build: {why}")),

@@ -26,14 +26,26 @@ use super::Assignment;
 pub const API_FILES: [(&str, &str); 7] = [
     ("Cargo.toml", include_str!("../../homework-api/Cargo.toml")),
     ("src/lib.rs", include_str!("../../homework-api/src/lib.rs")),
-    ("src/matrix.rs", include_str!("../../homework-api/src/matrix.rs")),
+    (
+        "src/matrix.rs",
+        include_str!("../../homework-api/src/matrix.rs"),
+    ),
     (
         "src/physics.rs",
         include_str!("../../homework-api/src/physics.rs"),
     ),
-    ("src/serve.rs", include_str!("../../homework-api/src/serve.rs")),
-    ("src/vec3.rs", include_str!("../../homework-api/src/vec3.rs")),
-    ("src/wire.rs", include_str!("../../homework-api/src/wire.rs")),
+    (
+        "src/serve.rs",
+        include_str!("../../homework-api/src/serve.rs"),
+    ),
+    (
+        "src/vec3.rs",
+        include_str!("../../homework-api/src/vec3.rs"),
+    ),
+    (
+        "src/wire.rs",
+        include_str!("../../homework-api/src/wire.rs"),
+    ),
 ];
 
 /// The directory of the API crate inside a homework crate.
@@ -97,7 +109,10 @@ pub fn files(assignment: Assignment, springlab: &Path) -> Vec<(String, String)> 
         .replace("{{TITLE}}", title)
         .replace("{{ASSIGNMENT}}", assignment.name())
         // A TOML basic string: the path with `\\` and `"` escaped.
-        .replace("{{SPRINGLAB}}", &toml::Value::String(exe.clone()).to_string());
+        .replace(
+            "{{SPRINGLAB}}",
+            &toml::Value::String(exe.clone()).to_string(),
+        );
     let mut out = vec![
         ("Cargo.toml".to_string(), cargo),
         (".gitignore".to_string(), GITIGNORE.to_string()),

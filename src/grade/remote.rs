@@ -203,7 +203,9 @@ fn read_replies(
     loop {
         // Every complete frame in the buffer; the bytes before each are stray output.
         loop {
-            let found = buf.windows(pattern.len()).position(|w| w == pattern.as_slice());
+            let found = buf
+                .windows(pattern.len())
+                .position(|w| w == pattern.as_slice());
             let Some(start) = found else {
                 // Keep a tail that may be the start of the pattern.
                 let keep = pattern.len() - 1;
@@ -402,7 +404,11 @@ impl Session {
         if let Some(mut stdin) = child.stdin.take() {
             thread::spawn(move || {
                 for frame in request_rx {
-                    if stdin.write_all(&frame).and_then(|()| stdin.flush()).is_err() {
+                    if stdin
+                        .write_all(&frame)
+                        .and_then(|()| stdin.flush())
+                        .is_err()
+                    {
                         break;
                     }
                 }
@@ -832,7 +838,10 @@ impl Remote {
     /// Programs started so far and bytes they printed.
     #[must_use]
     pub fn stats(&self) -> (u32, usize) {
-        let s = self.session.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let s = self
+            .session
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         (s.starts, s.stray_bytes())
     }
 
@@ -1025,8 +1034,7 @@ impl ClothHomework for Remote {
         restitution: f64,
     ) {
         let args = (api_body(sphere), radius, api_body(particle), restitution);
-        let (s, p): (api::Body, api::Body) =
-            self.ask(method::CLOTH_SPHERE_COLLISION, &args, None);
+        let (s, p): (api::Body, api::Body) = self.ask(method::CLOTH_SPHERE_COLLISION, &args, None);
         *sphere = local_body(&s);
         *particle = local_body(&p);
     }
