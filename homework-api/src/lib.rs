@@ -90,9 +90,10 @@ pub struct State {
 }
 
 /// The three kinds of springs of a lattice.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum SpringKind {
     /// Between axis neighbours: resists stretching.
+    #[default]
     Struct,
     /// Across a face or body diagonal: resists shearing.
     Shear,

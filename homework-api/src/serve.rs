@@ -13,8 +13,8 @@ use std::process::ExitCode;
 
 use crate::physics::Physics;
 use crate::wire::{
-    MAX_FRAME, Reader, TOKEN_LEN, VERSION, Wire, WireError, encode, method,
-    reply_frame, to_grader, to_program,
+    MAX_FRAME, Reader, TOKEN_LEN, VERSION, Wire, WireError, encode, method, reply_frame, to_grader,
+    to_program,
 };
 use crate::{
     Body, Bowl, ClothHomework, ContactCoefficients, DVec3, JellyHomework, Particle, Plane, Rope,
@@ -114,14 +114,16 @@ fn args<T: Wire>(r: &mut Reader<'_>) -> Result<T, WireError> {
 }
 
 fn unknown(m: u8, assignment: &str) -> WireError {
-    WireError(format!("method {m} is not part of the {assignment} homework"))
+    WireError(format!(
+        "method {m} is not part of the {assignment} homework"
+    ))
 }
 
+/// Runs one call: `(method, arguments) → the answer's bytes`.
+type Dispatch<'d> = dyn FnMut(u8, &mut Reader<'_>) -> Result<Vec<u8>, WireError> + 'd;
+
 /// The loop (module docs); `dispatch(method, arguments)` runs one call.
-fn serve(
-    assignment: &str,
-    dispatch: &mut dyn FnMut(u8, &mut Reader<'_>) -> Result<Vec<u8>, WireError>,
-) -> ExitCode {
+fn serve(assignment: &str, dispatch: &mut Dispatch<'_>) -> ExitCode {
     if std::io::stdin().is_terminal() {
         eprintln!(
             "This program answers springlab's grader, which runs it: use `cargo test` in this \
@@ -309,8 +311,7 @@ pub fn serve_cloth<H: ClothHomework>(homework: H) -> ExitCode {
                 encode(&hw.damper_force(xa, xb, va, vb, kd))
             }
             method::CLOTH_SPRING_ACCELERATIONS => {
-                let (x, v, w, springs): (Vec<DVec3>, Vec<DVec3>, Vec<f64>, Vec<Spring>) =
-                    args(r)?;
+                let (x, v, w, springs): (Vec<DVec3>, Vec<DVec3>, Vec<f64>, Vec<Spring>) = args(r)?;
                 encode(&hw.spring_accelerations(&x, &v, &w, &springs))
             }
             method::CLOTH_SPHERE_COLLISION => {

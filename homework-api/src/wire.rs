@@ -414,15 +414,35 @@ macro_rules! wire_struct {
     };
 }
 
-wire_struct!(Mass { position, velocity, last_position, mass, pinned });
-wire_struct!(Spring { a, b, rest_length, stiffness, damping });
+wire_struct!(Mass {
+    position,
+    velocity,
+    last_position,
+    mass,
+    pinned
+});
+wire_struct!(Spring {
+    a,
+    b,
+    rest_length,
+    stiffness,
+    damping
+});
 wire_struct!(Rope { masses, springs });
 wire_struct!(State { x, v });
 wire_struct!(SpringSetup { a, b, kind });
 wire_struct!(Particle { x, v, force });
 wire_struct!(Plane { point, normal });
-wire_struct!(Bowl { center, radius, rim_height });
-wire_struct!(ContactCoefficients { epsilon, restitution, friction });
+wire_struct!(Bowl {
+    center,
+    radius,
+    rim_height
+});
+wire_struct!(ContactCoefficients {
+    epsilon,
+    restitution,
+    friction
+});
 wire_struct!(Body { x, v, inverse_mass });
 
 impl Wire for SpringKind {
@@ -440,12 +460,6 @@ impl Wire for SpringKind {
             2 => Ok(SpringKind::Bend),
             k => Err(WireError(format!("unknown spring kind {k}"))),
         }
-    }
-}
-
-impl Default for SpringKind {
-    fn default() -> SpringKind {
-        SpringKind::Struct
     }
 }
 
