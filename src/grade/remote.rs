@@ -104,6 +104,8 @@ struct Running {
     stderr: Arc<Mutex<Vec<u8>>>,
     stderr_thread: Option<thread::JoinHandle<()>>,
     workdir: PathBuf,
+    /// The process has been waited for: its pid may belong to someone else now.
+    reaped: bool,
 }
 
 /// The student's program, started on demand and again after every crash.
@@ -262,6 +264,52 @@ fn keep_stderr(mut err: ChildStderr, tail: &Mutex<Vec<u8>>) {
             t.drain(..excess);
         }
     }
+}
+
+/// The exit status of `child` if it has ended, and its peak resident memory (KiB) where the
+/// system reports it (Linux: `wait4`). Before reaping, the rest of its process group is killed,
+/// while the ended leader still holds the group's id.
+#[cfg(unix)]
+fn reap(child: &mut Child) -> Option<(ExitStatus, Option<u64>)> {
+    use nix::libc;
+    use std::os::unix::process::ExitStatusExt;
+    let pid = libc::pid_t::try_from(child.id()).ok()?;
+    // SAFETY: an all-zero siginfo_t is a valid value of this plain C struct.
+    let mut info: libc::siginfo_t = unsafe { std::mem::zeroed() };
+    // SAFETY: waitid on our own child with a valid pointer; WNOHANG | WNOWAIT neither blocks
+    // nor reaps.
+    let polled = unsafe {
+        libc::waitid(
+            libc::P_PID,
+            pid as libc::id_t,
+            &raw mut info,
+            libc::WEXITED | libc::WNOHANG | libc::WNOWAIT,
+        )
+    };
+    // SAFETY: si_pid is set by waitid (zero while the child runs).
+    if polled != 0 || unsafe { info.si_pid() } == 0 {
+        return None;
+    }
+    let _ = nix::sys::signal::killpg(
+        nix::unistd::Pid::from_raw(pid),
+        nix::sys::signal::Signal::SIGKILL,
+    );
+    let mut status: libc::c_int = 0;
+    // SAFETY: an all-zero rusage is a valid value of this plain C struct.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    // SAFETY: wait4 on our own ended child with valid pointers to locals; it returns at once.
+    let got = unsafe { libc::wait4(pid, &raw mut status, 0, &raw mut usage) };
+    (got == pid).then(|| {
+        (
+            ExitStatus::from_raw(status),
+            u64::try_from(usage.ru_maxrss).ok(),
+        )
+    })
+}
+
+#[cfg(not(unix))]
+fn reap(child: &mut Child) -> Option<(ExitStatus, Option<u64>)> {
+    child.try_wait().ok().flatten().map(|s| (s, None))
 }
 
 /// Mebibytes, for messages.
@@ -429,6 +477,7 @@ impl Session {
             stderr,
             stderr_thread,
             workdir,
+            reaped: false,
         });
         let mut hello = vec![to_program::HELLO];
         wire::VERSION.put(&mut hello);
@@ -508,16 +557,18 @@ impl Session {
         let Some(mut run) = self.running.take() else {
             return;
         };
-        #[cfg(unix)]
-        {
-            use nix::sys::signal::{Signal, killpg};
-            use nix::unistd::Pid;
-            if let Ok(pid) = i32::try_from(run.child.id()) {
-                let _ = killpg(Pid::from_raw(pid), Signal::SIGKILL);
+        if !run.reaped {
+            #[cfg(unix)]
+            {
+                use nix::sys::signal::{Signal, killpg};
+                use nix::unistd::Pid;
+                if let Ok(pid) = i32::try_from(run.child.id()) {
+                    let _ = killpg(Pid::from_raw(pid), Signal::SIGKILL);
+                }
             }
+            let _ = run.child.kill();
+            let _ = run.child.wait();
         }
-        let _ = run.child.kill();
-        let _ = run.child.wait();
         let _ = std::fs::remove_dir_all(&run.workdir);
     }
 
@@ -527,19 +578,20 @@ impl Session {
             return "it is not running".to_string();
         };
         let start = Instant::now();
-        let mut status = None;
+        let mut end = None;
         while start.elapsed() < Duration::from_secs(2) {
-            if let Ok(Some(s)) = run.child.try_wait() {
-                status = Some(s);
+            if let Some(e) = reap(&mut run.child) {
+                end = Some(e);
                 break;
             }
-            thread::sleep(Duration::from_millis(5));
+            thread::sleep(Duration::from_millis(2));
         }
-        if status.is_none() {
+        let Some((status, peak_kib)) = end else {
             self.running = Some(run);
             self.stop();
             return "it closed its output and stopped answering".to_string();
-        }
+        };
+        run.reaped = true;
         if let Some(t) = run.stderr_thread.take() {
             let _ = t.join();
         }
@@ -550,7 +602,11 @@ impl Session {
             .unwrap_or_default();
         self.running = Some(run);
         self.stop();
-        describe_end(status, &stderr, self.limits)
+        let mut how = describe_end(Some(status), &stderr, self.limits);
+        if let Some(kib) = peak_kib.filter(|&k| k >= 64 << 10) {
+            how.push_str(&format!("; it had {} MiB in use", kib >> 10));
+        }
+        how
     }
 
     /// One call: `arguments` of `method`, answered by the program by `deadline` (module docs).
