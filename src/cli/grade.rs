@@ -216,8 +216,17 @@ pub fn grade(args: &GradeArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// "all checks passed", or the items that lost points.
+/// "all checks passed", why nothing was graded, or the items that lost points.
 fn summary(report: &Report) -> String {
+    if report
+        .items
+        .iter()
+        .all(|i| i.status == crate::grade::ItemStatus::NotRun)
+        && let Some(reason) = report.items.first().and_then(|i| i.reason.as_deref())
+    {
+        let first = reason.lines().next().unwrap_or_default();
+        return format!("not graded: {first}");
+    }
     let lost: Vec<String> = report
         .items
         .iter()

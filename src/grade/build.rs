@@ -349,10 +349,7 @@ pub fn build(prepared: &Prepared, target: &Path, limit: Duration) -> Result<Path
     let stderr = err.join().unwrap_or_default();
     match executable(&stdout, &prepared.bin) {
         Some(exe) if status.success() => Ok(exe),
-        _ => Err(BuildFailure::Compile(format!(
-            "{status}:\n{}",
-            compiler_errors(&stderr)
-        ))),
+        _ => Err(BuildFailure::Compile(compiler_errors(&stderr))),
     }
 }
 

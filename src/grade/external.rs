@@ -180,7 +180,7 @@ fn grade_as(
     let exe = match build::build(&prepared, &target, options.build_limit) {
         Ok(exe) => exe,
         Err(BuildFailure::Compile(errors)) => {
-            return not_run(&format!("the crate did not build ({errors}"));
+            return not_run(&format!("the crate did not build:\n{errors}"));
         }
         Err(BuildFailure::TimedOut(limit)) => {
             return not_run(&format!(
