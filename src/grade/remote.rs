@@ -90,6 +90,7 @@ pub enum CallFailure {
 }
 
 /// What the reader thread hands over.
+#[derive(Debug, PartialEq)]
 enum Event {
     Frame(Vec<u8>),
     Oversized(usize),
@@ -192,62 +193,92 @@ fn apply_limits(limits: Limits) -> std::io::Result<()> {
     Ok(())
 }
 
-/// Reads the program's stdout, cutting out frames that start with `pattern` (magic + token).
+/// Cuts frames that start with `pattern` (magic + token) out of the program's stdout, fed in
+/// pieces of any size; everything between frames is stray output, counted and dropped.
+struct Scanner {
+    pattern: Vec<u8>,
+    buf: Vec<u8>,
+    stray: usize,
+}
+
+impl Scanner {
+    fn new(pattern: Vec<u8>) -> Scanner {
+        Scanner {
+            pattern,
+            buf: Vec::new(),
+            stray: 0,
+        }
+    }
+
+    /// The events completed by `bytes`; after an oversized frame nothing more is read.
+    fn push(&mut self, bytes: &[u8]) -> Vec<Event> {
+        self.buf.extend_from_slice(bytes);
+        let header = self.pattern.len() + 4;
+        let mut events = Vec::new();
+        loop {
+            let found = self
+                .buf
+                .windows(self.pattern.len())
+                .position(|w| w == self.pattern.as_slice());
+            let Some(start) = found else {
+                // Keep a tail that may be the start of the pattern.
+                let keep = self.pattern.len() - 1;
+                if self.buf.len() > keep {
+                    self.stray += self.buf.len() - keep;
+                    self.buf.drain(..self.buf.len() - keep);
+                }
+                return events;
+            };
+            self.stray += start;
+            self.buf.drain(..start);
+            if self.buf.len() < header {
+                return events;
+            }
+            let at = self.pattern.len();
+            let len = u32::from_le_bytes([
+                self.buf[at],
+                self.buf[at + 1],
+                self.buf[at + 2],
+                self.buf[at + 3],
+            ]) as usize;
+            if len > MAX_FRAME {
+                events.push(Event::Oversized(len));
+                return events;
+            }
+            if self.buf.len() < header + len {
+                return events;
+            }
+            events.push(Event::Frame(self.buf[header..header + len].to_vec()));
+            self.buf.drain(..header + len);
+        }
+    }
+}
+
+/// Reads the program's stdout through a [`Scanner`] and hands the frames over.
 fn read_replies(
     mut out: ChildStdout,
     pattern: Vec<u8>,
     tx: &mpsc::Sender<Event>,
     stray: &AtomicUsize,
 ) {
-    let mut buf: Vec<u8> = Vec::new();
+    let mut scanner = Scanner::new(pattern);
     let mut chunk = vec![0u8; 64 << 10];
-    let header = pattern.len() + 4;
     loop {
-        // Every complete frame in the buffer; the bytes before each are stray output.
-        loop {
-            let found = buf
-                .windows(pattern.len())
-                .position(|w| w == pattern.as_slice());
-            let Some(start) = found else {
-                // Keep a tail that may be the start of the pattern.
-                let keep = pattern.len() - 1;
-                if buf.len() > keep {
-                    stray.fetch_add(buf.len() - keep, Ordering::Relaxed);
-                    buf.drain(..buf.len() - keep);
-                }
-                break;
-            };
-            stray.fetch_add(start, Ordering::Relaxed);
-            buf.drain(..start);
-            if buf.len() < header {
-                break;
-            }
-            let len = u32::from_le_bytes([
-                buf[pattern.len()],
-                buf[pattern.len() + 1],
-                buf[pattern.len() + 2],
-                buf[pattern.len() + 3],
-            ]) as usize;
-            if len > MAX_FRAME {
-                let _ = tx.send(Event::Oversized(len));
-                return;
-            }
-            if buf.len() < header + len {
-                break;
-            }
-            let frame = buf[header..header + len].to_vec();
-            buf.drain(..header + len);
-            if tx.send(Event::Frame(frame)).is_err() {
-                return;
-            }
-        }
-        match out.read(&mut chunk) {
+        let n = match out.read(&mut chunk) {
             Ok(0) | Err(_) => {
                 let _ = tx.send(Event::Closed);
                 return;
             }
-            Ok(n) => buf.extend_from_slice(&chunk[..n]),
+            Ok(n) => n,
+        };
+        let before = scanner.stray;
+        for event in scanner.push(&chunk[..n]) {
+            let stop = matches!(event, Event::Oversized(_));
+            if tx.send(event).is_err() || stop {
+                return;
+            }
         }
+        stray.fetch_add(scanner.stray - before, Ordering::Relaxed);
     }
 }
 
@@ -1109,5 +1140,68 @@ impl ClothHomework for Remote {
 
     fn rk4(&self, state: &mut State, dt: f64, physics: &Physics) {
         self.state_step(method::CLOTH_RK4, state, dt, physics);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Event, Limits, Scanner, describe_end};
+    use springlab_homework::wire::{MAGIC, reply_frame};
+
+    #[test]
+    fn frames_are_found_among_stray_output_in_pieces_of_any_size() {
+        let token = [7u8; 16];
+        let mut stream = b"debug: hello\n".to_vec();
+        stream.extend_from_slice(&reply_frame(&token, &[0x82, 1, 2, 3]));
+        // Printing that imitates a reply: the magic with a wrong token, a partial magic.
+        stream.extend_from_slice(&reply_frame(&[0u8; 16], &[0x82, 9, 9]));
+        stream.extend_from_slice(&MAGIC[..5]);
+        stream.extend_from_slice(&reply_frame(&token, &[]));
+        stream.extend_from_slice(&reply_frame(&token, &[0x83, 4]));
+        stream.extend_from_slice(b"trailing");
+        let want = vec![
+            Event::Frame(vec![0x82, 1, 2, 3]),
+            Event::Frame(vec![]),
+            Event::Frame(vec![0x83, 4]),
+        ];
+        let mut pattern = MAGIC.to_vec();
+        pattern.extend_from_slice(&token);
+        for piece in 1..=9 {
+            let mut scanner = Scanner::new(pattern.clone());
+            let mut got = Vec::new();
+            for chunk in stream.chunks(piece) {
+                got.extend(scanner.push(chunk));
+            }
+            assert_eq!(got, want, "pieces of {piece}");
+        }
+    }
+
+    #[test]
+    fn an_oversized_frame_is_refused_unread() {
+        let token = [1u8; 16];
+        let mut pattern = MAGIC.to_vec();
+        pattern.extend_from_slice(&token);
+        let mut header = pattern.clone();
+        header.extend_from_slice(&(64u32 << 20).to_le_bytes());
+        let mut scanner = Scanner::new(pattern);
+        assert_eq!(scanner.push(&header), vec![Event::Oversized(64 << 20)]);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn endings_are_told_apart() {
+        use std::os::unix::process::ExitStatusExt;
+        let limits = Limits::default();
+        let exit0 = std::process::ExitStatus::from_raw(0);
+        let signal = |s: i32| std::process::ExitStatus::from_raw(s);
+        assert!(describe_end(Some(exit0), "", limits).contains("exited with status 0"));
+        assert!(describe_end(Some(signal(6)), "", limits).contains("aborted"));
+        assert!(describe_end(Some(signal(24)), "", limits).contains("CPU time (600 s"));
+        assert!(describe_end(Some(signal(25)), "", limits).contains("16 MiB"));
+        let oom = "memory allocation of 1048576 bytes failed\n";
+        assert!(describe_end(Some(signal(6)), oom, limits).contains("1024 MiB of address space"));
+        let overflow =
+            "\nthread 'main' has overflowed its stack\nfatal runtime error: stack overflow\n";
+        assert!(describe_end(Some(signal(6)), overflow, limits).contains("stack overflowed"));
     }
 }
