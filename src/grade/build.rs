@@ -133,7 +133,8 @@ fn digest(parts: &[&[u8]]) -> String {
     out
 }
 
-/// Writes `contents` to `path` unless it already holds exactly that.
+/// Writes `contents` to `path` unless it already holds exactly that. The file is written beside
+/// and renamed into place, so a build reading it meanwhile sees the old or the new file whole.
 fn write_if_changed(path: &Path, contents: &[u8]) -> std::io::Result<()> {
     if std::fs::read(path).is_ok_and(|old| old == contents) {
         return Ok(());
@@ -141,11 +142,20 @@ fn write_if_changed(path: &Path, contents: &[u8]) -> std::io::Result<()> {
     if let Some(parent) = path.parent() {
         std::fs::create_dir_all(parent)?;
     }
-    std::fs::write(path, contents)
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(format!(".{}.partial", std::process::id()));
+    std::fs::write(&tmp, contents)?;
+    std::fs::rename(&tmp, path)
 }
+
+/// One writer of the API crate at a time in this process (`--jobs`).
+static API_WRITER: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 /// The API crate's directory under `root`, written from the embedded copy.
 fn write_api(root: &Path) -> std::io::Result<PathBuf> {
+    let _one = API_WRITER
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let dir = root.join(format!(
         "api-{}",
         &digest(

@@ -113,10 +113,10 @@ pub fn is_submission(dir: &Path) -> bool {
 }
 
 /// The submissions named by `paths`: each path that is a submission, and for each other
-/// directory its subdirectories that are (a class folder), sorted by name.
+/// directory its subdirectories that are (a class folder), sorted by name; each once.
 #[must_use]
 pub fn expand(paths: &[PathBuf]) -> Vec<PathBuf> {
-    let mut out = Vec::new();
+    let mut out: Vec<PathBuf> = Vec::new();
     for path in paths {
         if is_submission(path) || !path.is_dir() {
             out.push(path.clone());
@@ -138,6 +138,9 @@ pub fn expand(paths: &[PathBuf]) -> Vec<PathBuf> {
             out.extend(members);
         }
     }
+    // The same submission twice would be built twice into one directory at once.
+    let mut seen = std::collections::BTreeSet::new();
+    out.retain(|p| seen.insert(std::path::absolute(p).unwrap_or_else(|_| p.clone())));
     out
 }
 
