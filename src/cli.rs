@@ -14,7 +14,9 @@
 //! springlab study stability <scene|file.toml> [--methods a,b] [--horizon T] [--set key=value ...]
 //!               [--json]
 //! springlab homework new <DIR> --assignment rope|jelly|cloth
-//! springlab grade <DIR> [--json F] [--gradescope F] [--time-limit-ms MS] [--seed S]
+//! springlab homework autograder --assignment A --out autograder.zip
+//! springlab grade <DIR> [DIR ...] [--assignment A] [--json F] [--gradescope F] [--csv F]
+//!               [--jobs N] [--target-dir DIR] [--time-limit-ms MS] [--memory-mb MB] [--seed S]
 //! ```
 
 mod bench;
