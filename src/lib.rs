@@ -9,6 +9,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod bench;
+pub mod budget;
 pub mod cli;
 pub mod grade;
 pub mod lesson;
