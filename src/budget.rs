@@ -179,6 +179,8 @@ pub struct Estimate {
     pub frame_pixels: f64,
     /// Pixels over all frames.
     pub total_pixels: f64,
+    /// Frames drawn.
+    pub frames: f64,
     /// How the frame size comes about (`--size 8192x8192`).
     pub pixels_detail: String,
 }
@@ -220,9 +222,9 @@ pub enum BudgetError {
     },
     /// Too much work.
     #[error(
-        "{what} would take about {} particle and spring updates ({} runs, about {} at {} \
+        "{what} would take about {} particle and spring updates ({}, about {} at {} \
          updates/s); at most {} (about {}){FORCE}",
-        approx(*work), approx(*runs), duration(*work / RATE), approx(RATE), approx(*limit),
+        approx(*work), runs_text(*runs), duration(*work / RATE), approx(RATE), approx(*limit),
         duration(*limit / RATE)
     )]
     Work {
@@ -252,13 +254,15 @@ pub enum BudgetError {
     },
     /// Too many pixels over all frames.
     #[error(
-        "{what} would draw {} pixels ({detail}); at most {}{FORCE}",
-        approx(*pixels), approx(*limit)
+        "{what} would draw {} pixels ({} frames of {detail}); at most {}{FORCE}",
+        approx(*pixels), approx(*frames), approx(*limit)
     )]
     TotalPixels {
         /// The command.
         what: String,
-        /// Frames and size.
+        /// Frames.
+        frames: f64,
+        /// The size as given.
         detail: String,
         /// The estimate.
         pixels: f64,
@@ -268,6 +272,14 @@ pub enum BudgetError {
 }
 
 const FORCE: &str = " (use --force to run anyway)";
+
+fn runs_text(runs: f64) -> String {
+    if runs == 1.0 {
+        "1 run".to_string()
+    } else {
+        format!("{} runs", approx(runs))
+    }
+}
 
 fn paren(detail: &str) -> String {
     if detail.is_empty() {
@@ -293,7 +305,7 @@ impl Estimate {
         self.work / RATE
     }
 
-    /// Checks every quantity against `limits`: steps, memory, work, pixels, in that order.
+    /// Checks every quantity against `limits`: steps, memory, pixels, work, in that order.
     ///
     /// # Errors
     /// The first quantity over its limit.
@@ -316,14 +328,6 @@ impl Estimate {
                 limit: limits.memory,
             });
         }
-        if !(self.work <= limits.work) {
-            return Err(BudgetError::Work {
-                what: self.what.clone(),
-                work: self.work,
-                runs: self.runs,
-                limit: limits.work,
-            });
-        }
         if !(self.frame_pixels <= limits.frame_pixels) {
             return Err(BudgetError::FramePixels {
                 what: self.what.clone(),
@@ -335,9 +339,18 @@ impl Estimate {
         if !(self.total_pixels <= limits.total_pixels) {
             return Err(BudgetError::TotalPixels {
                 what: self.what.clone(),
+                frames: self.frames,
                 detail: self.pixels_detail.clone(),
                 pixels: self.total_pixels,
                 limit: limits.total_pixels,
+            });
+        }
+        if !(self.work <= limits.work) {
+            return Err(BudgetError::Work {
+                what: self.what.clone(),
+                work: self.work,
+                runs: self.runs,
+                limit: limits.work,
             });
         }
         Ok(())
@@ -349,11 +362,11 @@ impl Estimate {
     pub fn notice(&self) -> Option<String> {
         (self.seconds() > NOTICE_SECONDS).then(|| {
             format!(
-                "{}: about {} particle and spring updates ({} runs, {} particles, {} springs, \
+                "{}: about {} particle and spring updates ({}, {} particles, {} springs, \
                  about {} of memory): about {} at {} updates/s; Ctrl-C stops it",
                 self.what,
                 approx(self.work),
-                approx(self.runs),
+                runs_text(self.runs),
                 approx(self.particles),
                 approx(self.springs),
                 bytes(self.memory),
@@ -379,13 +392,12 @@ impl Estimate {
 // ---------------------------------------------------------------------------------------------
 // Numbers for messages.
 
-/// A user's number echoed back: its shortest exact form when that is short (`0.25`, `1000`),
-/// else scientific (`1e300`, `1e-320`, not 301 digits).
+/// A user's number echoed back: its shortest exact form (`0.25`, `1000`) between 10⁻⁴ and 10⁶,
+/// else scientific (`1e300`, `1e-320`, `1e9`: never 301 digits).
 #[must_use]
 pub fn short(x: f64) -> String {
-    let plain = format!("{x}");
-    if plain.len() <= 12 {
-        plain
+    if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&x.abs()) {
+        format!("{x}")
     } else {
         format!("{x:e}")
     }
@@ -520,7 +532,7 @@ pub fn run(what: impl Into<String>, scene: &Scene, dt: f64, steps: f64) -> Estim
     Estimate {
         what: what.into(),
         steps,
-        steps_detail: format!("{} s at dt = {} s", short(steps * dt), short(dt)),
+        steps_detail: format!("{} s at dt = {} s", approx(steps * dt), short(dt)),
         runs: 1.0,
         particles,
         springs: scene.spring_count() as f64,
@@ -659,7 +671,8 @@ pub fn add_frames(estimate: &mut Estimate, frames: f64, width: u32, height: u32,
     let pixels = f64::from(width) * f64::from(height);
     estimate.frame_pixels = pixels;
     estimate.total_pixels = frames * pixels;
-    estimate.pixels_detail = format!("{} frames of {detail}", approx(frames));
+    estimate.frames = frames;
+    estimate.pixels_detail = detail.to_string();
     estimate.memory += pixels * PIXEL_BYTES;
     // Drawing costs about as much per pixel as an update (a fill, an encode).
     estimate.work += frames * pixels;

@@ -31,6 +31,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+use crate::budget::interrupt::Interrupted;
+
 /// springlab: mass-spring systems, their integrators, and where each one fails.
 #[derive(Debug, Parser)]
 #[command(name = "springlab", version, about, long_about = None)]
@@ -95,11 +97,33 @@ pub fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         // A closed pipe (`springlab scenes | head`) is the reader's choice, not an error.
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
+        Err(e) if e.chain().any(|c| c.is::<Interrupted>()) => {
+            eprintln!("springlab: {e}");
+            ExitCode::from(130)
+        }
         Err(e) => {
-            eprintln!("springlab: {e:#}");
+            eprintln!("springlab: {}", message(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes joined by `: `, each said once: a cause whose text the message
+/// already contains (an OS error that a wrapper quoted) is not repeated.
+#[must_use]
+pub fn message(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let part = cause.to_string();
+        if text.contains(&part) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&part);
+    }
+    text
 }
 
 fn is_broken_pipe(e: &anyhow::Error) -> bool {

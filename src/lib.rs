@@ -13,6 +13,7 @@ pub mod budget;
 pub mod cli;
 pub mod grade;
 pub mod lesson;
+pub mod output;
 pub mod physics;
 pub mod render;
 

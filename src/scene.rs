@@ -14,6 +14,8 @@ pub mod rope;
 
 use std::path::Path;
 
+use crate::budget::{BudgetError, Estimate, Limits, scene_bytes};
+
 use crate::physics::{Method, MethodParams, Model, State};
 pub use params::{ParamError, ParamSpec, Params, Range, Value};
 
@@ -116,6 +118,22 @@ pub enum SceneError {
     /// A combination of values that cannot make a scene.
     #[error("{0}")]
     Invalid(String),
+    /// A scene over the memory budget (see [`crate::budget`]).
+    #[error(transparent)]
+    Budget(#[from] BudgetError),
+    /// A scene or lesson file larger than the budget allows, refused before parsing.
+    #[error(
+        "{path} is {}; scene and lesson files may be at most {} (use --force to read it anyway)",
+        crate::budget::bytes(*size as f64), crate::budget::bytes(*limit as f64)
+    )]
+    FileTooLarge {
+        /// The file.
+        path: String,
+        /// Its size (bytes).
+        size: u64,
+        /// The limit (bytes).
+        limit: u64,
+    },
 }
 
 /// A built-in scene: its name, a one-line description, its parameters and its builder.
@@ -234,11 +252,36 @@ pub fn build_builtin(name: &str, sets: &[String]) -> Result<Scene, SceneError> {
 /// # Errors
 /// As [`build_builtin`] and [`file::load`].
 pub fn load(name_or_path: &str, sets: &[String]) -> Result<Scene, SceneError> {
+    load_with(name_or_path, sets, &Limits::DEFAULT)
+}
+
+/// [`load`] within `limits`: files over `limits.file_bytes` are not read, and a scene whose
+/// model, state and integrator buffers would exceed `limits.memory` is refused (a scene file's
+/// before it is built; a built-in's parameter ranges keep it below about 1.5 GB).
+///
+/// # Errors
+/// As [`load`], and [`SceneError::Budget`] or [`SceneError::FileTooLarge`].
+pub fn load_with(name_or_path: &str, sets: &[String], limits: &Limits) -> Result<Scene, SceneError> {
     let path = Path::new(name_or_path);
     if builtin(name_or_path).is_none() && (name_or_path.ends_with(".toml") || path.is_file()) {
-        return file::load(path, sets);
+        return file::load_with(path, sets, limits);
     }
-    build_builtin(name_or_path, sets)
+    let scene = build_builtin(name_or_path, sets)?;
+    check_memory(&scene, &format!("scene `{name_or_path}`"), limits)?;
+    Ok(scene)
+}
+
+/// Refuses `scene` when stepping it with its own methods would need more than `limits.memory`.
+fn check_memory(scene: &Scene, what: &str, limits: &Limits) -> Result<(), SceneError> {
+    Estimate {
+        what: what.to_string(),
+        particles: scene.particle_count() as f64,
+        springs: scene.spring_count() as f64,
+        memory: scene_bytes(scene, None, 1.0),
+        ..Estimate::default()
+    }
+    .check(limits)?;
+    Ok(())
 }
 
 /// The parameters every scene has for its methods, with the scene's Verlet damping and
