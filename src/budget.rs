@@ -583,7 +583,7 @@ pub fn convergence(
             "the RK4 reference: {} s at dt = {} s, 1/16 of the smallest of {levels} time steps \
              from {} s",
             short(time),
-            short(dt_min / 16.0),
+            approx(dt_min / 16.0),
             short(dt)
         ),
         runs: if levels > 2000 { f64::INFINITY } else { runs },
@@ -627,6 +627,10 @@ fn theory_limit(method: Method) -> Option<f64> {
         _ => None,
     }
 }
+
+/// The fewest steps of a stability probe (the study's divergence criterion; its growth
+/// criterion, for conservative scenes like the oscillator, takes at least 10 000).
+pub const STABILITY_MIN_STEPS: f64 = 100.0;
 
 /// The estimate of a stability study over `horizon` seconds: per method one probe at
 /// `dt·ω = 100` and about 13 near the theoretical limit (or `dt·ω = 1`), each
