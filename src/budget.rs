@@ -406,8 +406,11 @@ pub fn short(x: f64) -> String {
 /// An estimate: whole numbers below 10⁷ exactly, else three significant digits (`1.84e19`).
 #[must_use]
 pub fn approx(x: f64) -> String {
-    if !x.is_finite() {
-        return format!("{x}");
+    if x.is_infinite() {
+        return format!("{}more than 1e308", if x < 0.0 { "-" } else { "" });
+    }
+    if x.is_nan() {
+        return "NaN".to_string();
     }
     if x.abs() < 1e7 && x.fract() == 0.0 {
         return format!("{x}");
