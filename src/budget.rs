@@ -383,7 +383,9 @@ impl Estimate {
     pub fn enforce(&self, limits: &Limits) -> Result<(), BudgetError> {
         self.check(limits)?;
         if let Some(line) = self.notice() {
-            eprintln!("springlab: {line}");
+            use std::io::Write;
+            // A closed standard error is no reason to stop.
+            let _ = writeln!(std::io::stderr(), "springlab: {line}");
         }
         Ok(())
     }
@@ -700,14 +702,29 @@ pub mod interrupt {
     #[error("interrupted (Ctrl-C); unfinished outputs were removed")]
     pub struct Interrupted;
 
-    /// Installs the handler (once; later calls do nothing). The first Ctrl-C sets the flag; a
-    /// second one, when a loop does not stop, exits at once with status 130.
-    pub fn install() {
+    /// What Ctrl-C does.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum Mode {
+        /// Set the flag; the command's loop stops at its next check and removes its unfinished
+        /// outputs (`run`, `render`). A second Ctrl-C exits at once.
+        Flag,
+        /// Exit at once with status 130, saying so: for commands that write nothing before
+        /// they finish (`study`, `bench`), whose runs cannot be stopped half-way.
+        Exit,
+    }
+
+    /// Installs the handler (once; later calls do nothing).
+    pub fn install(mode: Mode) {
         static ONCE: std::sync::Once = std::sync::Once::new();
         ONCE.call_once(|| {
             // Fails only when another handler is installed: then Ctrl-C keeps its default.
-            let _ = ctrlc::set_handler(|| {
-                if INTERRUPTED.swap(true, Ordering::SeqCst) {
+            let _ = ctrlc::set_handler(move || {
+                if mode == Mode::Exit || INTERRUPTED.swap(true, Ordering::SeqCst) {
+                    use std::io::{IsTerminal, Write};
+                    let mut err = std::io::stderr();
+                    // On a terminal, leave the line of the progress bar first.
+                    let newline = if err.is_terminal() { "\n" } else { "" };
+                    let _ = writeln!(err, "{newline}springlab: {Interrupted}");
                     std::process::exit(130);
                 }
             });
@@ -742,21 +759,34 @@ pub struct Progress {
 }
 
 impl Progress {
-    /// A bar of `len` units labelled `label`.
+    /// A bar of `len` units labelled `label`. On a terminal it appears after a second even
+    /// when no unit is done by then (a study's first run can be long), and then redraws twice
+    /// a second.
     #[must_use]
     pub fn new(len: u64, label: &str) -> Progress {
         let bar = ProgressBar::hidden();
         bar.set_length(len);
-        if let Ok(style) =
-            ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} {per_sec} eta {eta}")
-        {
+        if let Ok(style) = ProgressStyle::with_template(
+            "{msg} {bar:30} {pos}/{len} elapsed {elapsed} eta {eta}",
+        ) {
             bar.set_style(style);
         }
         bar.set_message(label.to_string());
+        let enabled = std::io::stderr().is_terminal();
+        if enabled {
+            let later = bar.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_secs(1));
+                if !later.is_finished() {
+                    later.set_draw_target(ProgressDrawTarget::stderr());
+                    later.enable_steady_tick(Duration::from_millis(500));
+                }
+            });
+        }
         Progress {
             bar,
             start: Instant::now(),
-            enabled: std::io::stderr().is_terminal(),
+            enabled,
             shown: false,
         }
     }
@@ -789,6 +819,14 @@ impl Progress {
     /// Removes the bar.
     pub fn finish(&self) {
         self.bar.finish_and_clear();
+    }
+}
+
+impl Drop for Progress {
+    fn drop(&mut self) {
+        if !self.bar.is_finished() {
+            self.bar.finish_and_clear();
+        }
     }
 }
 

@@ -32,6 +32,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 use crate::budget::interrupt::Interrupted;
+use crate::budget::{Estimate, Limits};
 
 /// springlab: mass-spring systems, their integrators, and where each one fails.
 #[derive(Debug, Parser)]
@@ -124,6 +125,26 @@ pub fn message(e: &anyhow::Error) -> String {
         text.push_str(&part);
     }
     text
+}
+
+/// The budget estimate of a command that runs something (`run`, `render`, `study`, `bench`)
+/// without running it; `None` for the others. Scenes are loaded without limits.
+///
+/// # Errors
+/// The command's own checks of its inputs.
+pub fn estimate(command: &Command) -> anyhow::Result<Option<Estimate>> {
+    let none = Limits::NONE;
+    Ok(match command {
+        Command::Run(args) => Some(run::prepare(args, &none)?.3),
+        Command::Render(args) => Some(render::prepare(args, &none)?.2),
+        Command::Study { command } => Some(study::estimate(command, &none)?),
+        Command::Bench(args) => Some(bench::estimate(
+            &bench::selected(&args.workloads)?,
+            args.repeats,
+            args.budget,
+        )),
+        _ => None,
+    })
 }
 
 fn is_broken_pipe(e: &anyhow::Error) -> bool {

@@ -34,7 +34,7 @@ pub struct BenchArgs {
 
 /// The estimate of a bench run: every workload `repeats` times, and the other methods for up to
 /// `budget` seconds each run (counted at [`budget::RATE`]).
-fn estimate(workloads: &[Workload], repeats: u32, seconds: f64) -> budget::Estimate {
+pub fn estimate(workloads: &[Workload], repeats: u32, seconds: f64) -> budget::Estimate {
     let mut e = budget::Estimate::new("bench");
     for &w in workloads {
         let (model, _) = bench::setup(w);
@@ -88,15 +88,11 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         );
     }
     estimate(&workloads, args.repeats, args.budget).enforce(&budget::Limits::forced(args.force))?;
-    budget::interrupt::install();
+    budget::interrupt::install(budget::interrupt::Mode::Exit);
     let progress = std::io::stderr().is_terminal();
     let mut results = Vec::with_capacity(workloads.len());
     for w in workloads {
         let result = bench::measure(w, args.repeats, |i| {
-            if budget::interrupt::requested() {
-                eprintln!("springlab: {}", budget::interrupt::Interrupted);
-                std::process::exit(130);
-            }
             if progress {
                 eprintln!(
                     "{w}: run {}/{} ({} steps of {} s)",

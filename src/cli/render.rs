@@ -210,40 +210,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             }
         }
     };
-    let mut scene = scene::load_with(&args.scene, &args.sets, &limits)?;
-    if let Some(m) = &args.method {
-        apply_methods(&mut scene, m)?;
-    }
-    let dt = check_dt(args.dt.unwrap_or(scene.dt))?;
-    if let Some(t) = args.time {
-        check_dt_within(dt, t, "--time")?;
-    }
-    // The budget, from the inputs alone: steps (--start included), memory, pixels.
-    let every = every(args, dt);
-    let start_steps = (args.start / dt).round();
-    let run_steps = match (args.frames, args.time) {
-        (Some(n), _) => n.saturating_sub(1) as f64 * every as f64,
-        (None, Some(t)) => (t / dt).round(),
-        (None, None) => (scene.duration / dt).round(),
-    };
-    let frames = args
-        .frames
-        .map_or_else(|| (run_steps / every as f64).floor() + 1.0, |n| n as f64);
-    let steps = start_steps + run_steps;
-    let mut estimate = budget::run(format!("render {}", args.scene), &scene, dt, steps);
-    let draws_frames = args.out.is_some()
-        || args.gif.is_some()
-        || args.apng.is_some()
-        || args.energy_chart.is_none();
-    if draws_frames {
-        budget::add_frames(
-            &mut estimate,
-            frames,
-            width,
-            height,
-            &format!("--size {}", args.size.trim()),
-        );
-    }
+    let (scene, dt, estimate) = prepare(args, &limits)?;
     estimate.enforce(&limits)?;
     let plan = plan(args, dt, scene.duration)?;
 
@@ -284,7 +251,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     } else {
         None
     };
-    interrupt::install();
+    interrupt::install(interrupt::Mode::Flag);
     let mut progress = Progress::new(
         if any_frames { plan.frames } else { plan.steps },
         &format!("render {}", args.scene),
@@ -293,7 +260,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     // One loop over the whole run: `--start` steps first, then the frames. Frame k is drawn at
     // step start + k·every (frame 0 before any step when there is no --start). Within the
     // budget, the step counts fit in u64.
-    let start_steps = start_steps as u64;
+    let start_steps = (args.start / dt).round() as u64;
     let total = start_steps + plan.steps;
     // Energy samples: at most about 4000 over the run, and the last step.
     let stride = total.div_ceil(4000).max(1);
@@ -339,6 +306,56 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             .with_context(|| format!("cannot write the energy chart {}", path.display()))?;
     }
     report(&sim, &plan, written, width, height)
+}
+
+/// The scene and time step (s) of `springlab render`, and its budget estimate (not yet
+/// checked): steps (`--start` included), memory, frames and pixels, from the inputs alone.
+///
+/// # Errors
+/// Bad scene, parameters, `--start`, `--size` or `--dt`.
+pub fn prepare(
+    args: &RenderArgs,
+    limits: &Limits,
+) -> anyhow::Result<(crate::scene::Scene, f64, budget::Estimate)> {
+    if !(args.start >= 0.0 && args.start.is_finite()) {
+        bail!("--start {}: expected a time in seconds >= 0", short(args.start));
+    }
+    let (width, height) = parse_size(&args.size)?;
+    let mut scene = scene::load_with(&args.scene, &args.sets, limits)?;
+    if let Some(m) = &args.method {
+        apply_methods(&mut scene, m)?;
+    }
+    let dt = check_dt(args.dt.unwrap_or(scene.dt))?;
+    if let Some(t) = args.time {
+        check_dt_within(dt, t, "--time")?;
+    }
+    // The budget, from the inputs alone: steps (--start included), memory, pixels.
+    let every = every(args, dt);
+    let start_steps = (args.start / dt).round();
+    let run_steps = match (args.frames, args.time) {
+        (Some(n), _) => n.saturating_sub(1) as f64 * every as f64,
+        (None, Some(t)) => (t / dt).round(),
+        (None, None) => (scene.duration / dt).round(),
+    };
+    let frames = args
+        .frames
+        .map_or_else(|| (run_steps / every as f64).floor() + 1.0, |n| n as f64);
+    let steps = start_steps + run_steps;
+    let mut estimate = budget::run(format!("render {}", args.scene), &scene, dt, steps);
+    let draws_frames = args.out.is_some()
+        || args.gif.is_some()
+        || args.apng.is_some()
+        || args.energy_chart.is_none();
+    if draws_frames {
+        budget::add_frames(
+            &mut estimate,
+            frames,
+            width,
+            height,
+            &format!("--size {}", args.size.trim()),
+        );
+    }
+    Ok((scene, dt, estimate))
 }
 
 /// Validates the frame counts and outputs.

@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use clap::Args;
 
-use crate::budget::{self, Limits, Progress, interrupt, short};
+use crate::budget::{self, Estimate, Limits, Progress, interrupt, short};
 use crate::output::{self, AtomicFile};
 use crate::physics::Method;
 use crate::scene::{self, Scene};
@@ -136,13 +136,13 @@ pub fn check_dt(dt: f64) -> anyhow::Result<f64> {
     }
 }
 
-/// `springlab run`.
+/// The scene, time step (s) and step count of `springlab run`, and its budget estimate (not yet
+/// checked): everything decided from the inputs before anything runs.
 ///
 /// # Errors
-/// Bad scene, parameters or options; an unwritable CSV file.
-pub fn run(args: &RunArgs) -> anyhow::Result<()> {
-    let limits = Limits::forced(args.force);
-    let mut scene = scene::load_with(&args.scene, &args.sets, &limits)?;
+/// Bad scene, parameters or options (the scene file's size and memory within `limits`).
+pub fn prepare(args: &RunArgs, limits: &Limits) -> anyhow::Result<(Scene, f64, f64, Estimate)> {
+    let mut scene = scene::load_with(&args.scene, &args.sets, limits)?;
     if let Some(m) = &args.method {
         apply_methods(&mut scene, m)?;
     }
@@ -151,13 +151,24 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     if args.csv_every == 0 {
         bail!("--csv-every 0: expected a number of steps >= 1");
     }
+    let estimate = budget::run(format!("run {}", args.scene), &scene, dt, steps);
+    Ok((scene, dt, steps, estimate))
+}
+
+/// `springlab run`.
+///
+/// # Errors
+/// Bad scene, parameters or options; an unwritable CSV file.
+pub fn run(args: &RunArgs) -> anyhow::Result<()> {
+    let limits = Limits::forced(args.force);
+    let (scene, dt, steps, estimate) = prepare(args, &limits)?;
     if let Some(path) = &args.csv {
         output::check_file(path)?;
     }
-    budget::run(format!("run {}", args.scene), &scene, dt, steps).enforce(&limits)?;
+    estimate.enforce(&limits)?;
     // Within the budget, the step count fits in u64.
     let steps = steps as u64;
-    interrupt::install();
+    interrupt::install(interrupt::Mode::Flag);
     let mut sim = Simulation::new(scene);
     sim.set_dt(dt);
 

@@ -82,6 +82,18 @@ pub struct StabilityArgs {
     pub force: bool,
 }
 
+/// The budget estimate of a study (see [`crate::budget`]), without running it.
+///
+/// # Errors
+/// As the study's checks of its inputs.
+pub fn estimate(command: &StudyCommand, limits: &Limits) -> anyhow::Result<budget::Estimate> {
+    Ok(match command {
+        StudyCommand::Stability(args) => prepare_stability(args, limits)?.3,
+        StudyCommand::Convergence(args) => prepare_convergence(args, false, limits)?.3,
+        StudyCommand::WorkPrecision(args) => prepare_convergence(args, true, limits)?.3,
+    })
+}
+
 /// `springlab study ...`.
 ///
 /// # Errors
@@ -94,18 +106,15 @@ pub fn run(command: &StudyCommand) -> anyhow::Result<()> {
     }
 }
 
-/// Called from a study's progress callback: on Ctrl-C, clears the bar and exits with status 130
-/// (a study writes nothing before it has finished, so there is nothing to remove).
-fn stop_if_interrupted(progress: &Progress) {
-    if interrupt::requested() {
-        progress.finish();
-        eprintln!("springlab: {}", interrupt::Interrupted);
-        std::process::exit(130);
-    }
-}
-
-fn run_stability(args: &StabilityArgs) -> anyhow::Result<()> {
-    let limits = Limits::forced(args.force);
+/// The scene, options and `--set` list of `study stability`, and its budget estimate (not yet
+/// checked).
+///
+/// # Errors
+/// Bad methods, horizon or scene.
+pub fn prepare_stability(
+    args: &StabilityArgs,
+    limits: &Limits,
+) -> anyhow::Result<(scene::Scene, StabilityOptions, Vec<String>, budget::Estimate)> {
     let options = StabilityOptions {
         methods: match &args.methods {
             Some(text) => stability::parse_methods(text)?,
@@ -121,16 +130,22 @@ fn run_stability(args: &StabilityArgs) -> anyhow::Result<()> {
         );
     }
     let sets = stability::scene_sets(&args.scene, &args.sets);
-    let scene = scene::load_with(&args.scene, &sets, &limits)?;
-    budget::stability(
+    let scene = scene::load_with(&args.scene, &sets, limits)?;
+    let estimate = budget::stability(
         format!("study stability {}", args.scene),
         &scene,
         &options.methods,
         options.horizon,
         budget::STABILITY_MIN_STEPS,
-    )
-    .enforce(&limits)?;
-    interrupt::install();
+    );
+    Ok((scene, options, sets, estimate))
+}
+
+fn run_stability(args: &StabilityArgs) -> anyhow::Result<()> {
+    let limits = Limits::forced(args.force);
+    interrupt::install(interrupt::Mode::Exit);
+    let (scene, options, sets, estimate) = prepare_stability(args, &limits)?;
+    estimate.enforce(&limits)?;
     let mut progress = Progress::new(
         options.methods.len() as u64,
         &format!("study stability {}", args.scene),
@@ -147,7 +162,6 @@ fn run_stability(args: &StabilityArgs) -> anyhow::Result<()> {
             "study stability: {m} dt = {:.4e} s (dt·ω = {:.4}) {verdict}",
             p.dt, p.dt_omega
         ));
-        stop_if_interrupted(&progress);
     });
     progress.finish();
     let mut report = result?;
@@ -236,8 +250,16 @@ pub fn print_table(
     )
 }
 
-fn run_convergence(args: &ConvergenceArgs, work_precision: bool) -> anyhow::Result<()> {
-    let limits = Limits::forced(args.force);
+/// The scene, options and `--set` list of `study convergence` (or `work-precision`), and its
+/// budget estimate (not yet checked).
+///
+/// # Errors
+/// Bad methods, time, time step or scene.
+pub fn prepare_convergence(
+    args: &ConvergenceArgs,
+    work_precision: bool,
+    limits: &Limits,
+) -> anyhow::Result<(scene::Scene, ConvergenceOptions, Vec<String>, budget::Estimate)> {
     let options = ConvergenceOptions {
         methods: match &args.methods {
             Some(text) => stability::parse_methods(text)?,
@@ -258,7 +280,7 @@ fn run_convergence(args: &ConvergenceArgs, work_precision: bool) -> anyhow::Resu
         .map(|s| (*s).to_string())
         .collect();
     sets.extend(args.sets.iter().cloned());
-    let scene = scene::load_with(&args.scene, &sets, &limits)?;
+    let scene = scene::load_with(&args.scene, &sets, limits)?;
     let time = options.time.unwrap_or(1.0);
     if !(time > 0.0 && time.is_finite()) {
         bail!("--time {}: expected a duration in seconds > 0", short(time));
@@ -278,10 +300,7 @@ fn run_convergence(args: &ConvergenceArgs, work_precision: bool) -> anyhow::Resu
             short(time)
         );
     }
-    if let Some(path) = &args.png {
-        output::check_file(path)?;
-    }
-    budget::convergence(
+    let estimate = budget::convergence(
         format!("study {name} {}", args.scene),
         &scene,
         &options.methods,
@@ -289,9 +308,23 @@ fn run_convergence(args: &ConvergenceArgs, work_precision: bool) -> anyhow::Resu
         dt,
         options.levels,
         options.repeats,
-    )
-    .enforce(&limits)?;
-    interrupt::install();
+    );
+    Ok((scene, options, sets, estimate))
+}
+
+fn run_convergence(args: &ConvergenceArgs, work_precision: bool) -> anyhow::Result<()> {
+    let limits = Limits::forced(args.force);
+    interrupt::install(interrupt::Mode::Exit);
+    let (scene, options, sets, estimate) = prepare_convergence(args, work_precision, &limits)?;
+    let name = if work_precision {
+        "work-precision"
+    } else {
+        "convergence"
+    };
+    if let Some(path) = &args.png {
+        output::check_file(path)?;
+    }
+    estimate.enforce(&limits)?;
     let mut progress = Progress::new(
         options.methods.len() as u64 * u64::from(options.levels),
         &format!("study {name} {}", args.scene),
@@ -303,7 +336,6 @@ fn run_convergence(args: &ConvergenceArgs, work_precision: bool) -> anyhow::Resu
             options.levels
         ));
         progress.inc(1);
-        stop_if_interrupted(&progress);
     });
     progress.finish();
     let mut report = result?;

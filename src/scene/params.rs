@@ -87,6 +87,21 @@ impl Range {
     }
 }
 
+impl Range {
+    /// The range of a whole-number parameter: its bounds as integers (`2 ..= 1000000`).
+    #[must_use]
+    pub fn integer_text(self) -> String {
+        let i = |x: f64| format!("{}", x as i64);
+        match self {
+            Range::Any => "any whole number".to_string(),
+            Range::Above(min) => format!("> {}", i(min)),
+            Range::AtLeast(min) => format!(">= {}", i(min)),
+            Range::Between(min, max) => format!("{} ..= {}", i(min), i(max)),
+            Range::From(min, max) => format!("{} ..< {}", i(min), i(max)),
+        }
+    }
+}
+
 impl fmt::Display for Range {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -184,7 +199,7 @@ impl ParamSpec {
     pub fn expected(&self) -> String {
         match &self.default {
             Value::Number(_) => format!("a number {}", self.range),
-            Value::Integer(_) => format!("a whole number {}", self.range),
+            Value::Integer(_) => format!("a whole number {}", self.range.integer_text()),
             Value::Vector(_) => format!(
                 "a vector [x, y, z] of finite numbers, each within ±{}{}",
                 short(MAX_COMPONENT),
@@ -199,7 +214,10 @@ impl ParamSpec {
             Value::Indices(_) if self.range == Range::AtLeast(0.0) => {
                 "a list of particle indices [i, j, ...]".to_string()
             }
-            Value::Indices(_) => format!("a list [i, j, ...] of whole numbers {}", self.range),
+            Value::Indices(_) => format!(
+                "a list [i, j, ...] of whole numbers {}",
+                self.range.integer_text()
+            ),
         }
     }
 
@@ -216,7 +234,10 @@ impl ParamSpec {
         let out_of_range = |got: String| ParamError::OutOfRange {
             key: self.name.to_string(),
             got,
-            range: self.range.to_string(),
+            range: match self.default {
+                Value::Integer(_) | Value::Indices(_) => self.range.integer_text(),
+                _ => self.range.to_string(),
+            },
             unit: self.unit.to_string(),
         };
         let value = match (&self.default, value) {
