@@ -63,10 +63,7 @@ impl AtomicFile {
     /// The data cannot be flushed or the rename fails.
     pub fn commit(self) -> io::Result<()> {
         self.temp.as_file().sync_all()?;
-        self.temp
-            .persist(&self.path)
-            .map(drop)
-            .map_err(|e| e.error)
+        self.temp.persist(&self.path).map(drop).map_err(|e| e.error)
     }
 }
 

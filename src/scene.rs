@@ -261,7 +261,11 @@ pub fn load(name_or_path: &str, sets: &[String]) -> Result<Scene, SceneError> {
 ///
 /// # Errors
 /// As [`load`], and [`SceneError::Budget`] or [`SceneError::FileTooLarge`].
-pub fn load_with(name_or_path: &str, sets: &[String], limits: &Limits) -> Result<Scene, SceneError> {
+pub fn load_with(
+    name_or_path: &str,
+    sets: &[String],
+    limits: &Limits,
+) -> Result<Scene, SceneError> {
     let path = Path::new(name_or_path);
     if builtin(name_or_path).is_none() && (name_or_path.ends_with(".toml") || path.is_file()) {
         return file::load_with(path, sets, limits);

@@ -66,16 +66,25 @@ fn a_run_of_too_many_steps_is_refused_naming_the_count_and_the_limit() {
     );
     let err = refusal(&["run", "rope", "--time", "1e300"]);
     // 1e300 s / (1/64 s) = 6.4e301 steps.
-    assert!(err.contains("would take 6.4e301 steps (1e300 s at dt = 0.015625 s)"), "{err}");
+    assert!(
+        err.contains("would take 6.4e301 steps (1e300 s at dt = 0.015625 s)"),
+        "{err}"
+    );
     let err = refusal(&["run", "rope", "--steps", "18446744073709551615"]);
     assert!(err.contains("would take 1.84e19 steps"), "{err}");
     assert!(err.contains("at most 1e9 steps per run"), "{err}");
 
     let dir = temp_dir("dt-file");
-    std::fs::write(dir.join("tiny.toml"), "scene = \"rope\"\n[run]\ndt = 1e-300\ntime = 1\n")
-        .expect("write");
+    std::fs::write(
+        dir.join("tiny.toml"),
+        "scene = \"rope\"\n[run]\ndt = 1e-300\ntime = 1\n",
+    )
+    .expect("write");
     let err = refusal_in(&dir, &["run", "tiny.toml"]);
-    assert!(err.contains("run tiny.toml would take 1e300 steps"), "{err}");
+    assert!(
+        err.contains("run tiny.toml would take 1e300 steps"),
+        "{err}"
+    );
 
     // The same run with --force is allowed past the budget (here: a short one to show the flag).
     let out = springlab(&["run", "rope", "--dt", "1e-3", "--time", "1", "--force"]);
@@ -107,10 +116,16 @@ fn studies_of_too_many_steps_are_refused() {
     for (args, expected) in cases {
         let err = refusal(args);
         assert!(err.contains(expected), "{args:?}: {err}");
-        assert!(err.contains("at most 1e9 steps per run (use --force"), "{err}");
+        assert!(
+            err.contains("at most 1e9 steps per run (use --force"),
+            "{err}"
+        );
     }
     let err = refusal(&["study", "stability", "rope", "--horizon", "1e300"]);
-    assert!(err.contains("would take 1.73e303 steps (the smallest probe: 1e300 s"), "{err}");
+    assert!(
+        err.contains("would take 1.73e303 steps (the smallest probe: 1e300 s"),
+        "{err}"
+    );
 }
 
 // Row 3: allowed but long studies: an estimate up front, progress on a terminal, Ctrl-C.
@@ -119,7 +134,11 @@ fn studies_of_too_many_steps_are_refused() {
 /// its stderr.
 fn first_stderr_line(
     args: &[&str],
-) -> (String, std::process::Child, BufReader<std::process::ChildStderr>) {
+) -> (
+    String,
+    std::process::Child,
+    BufReader<std::process::ChildStderr>,
+) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_springlab"))
         .args(args)
         .stdout(Stdio::null())
@@ -138,13 +157,19 @@ fn long_studies_announce_their_cost_and_stop_on_ctrl_c() {
         first_stderr_line(&["study", "stability", "rope", "--set", "nodes=1000000"]);
     let _ = child.kill();
     let _ = child.wait();
-    assert!(line.starts_with("springlab: study stability rope: about "), "{line}");
+    assert!(
+        line.starts_with("springlab: study stability rope: about "),
+        "{line}"
+    );
     assert!(line.contains("1000000 particles, 999999 springs"), "{line}");
     assert!(line.contains("Ctrl-C stops it"), "{line}");
 
     let (line, mut child, mut rest) =
         first_stderr_line(&["study", "convergence", "rope", "--set", "nodes=100000"]);
-    assert!(line.starts_with("springlab: study convergence rope: about "), "{line}");
+    assert!(
+        line.starts_with("springlab: study convergence rope: about "),
+        "{line}"
+    );
     assert!(line.contains("100000 particles, 99999 springs"), "{line}");
     // Ctrl-C: exit status 130 and one line saying so.
     let status = Command::new("kill")
@@ -155,7 +180,10 @@ fn long_studies_announce_their_cost_and_stop_on_ctrl_c() {
     let mut tail = String::new();
     std::io::Read::read_to_string(&mut rest, &mut tail).expect("read");
     assert_eq!(child.wait().expect("wait").code(), Some(130));
-    assert_eq!(tail, "springlab: interrupted (Ctrl-C); unfinished outputs were removed\n");
+    assert_eq!(
+        tail,
+        "springlab: interrupted (Ctrl-C); unfinished outputs were removed\n"
+    );
 }
 
 #[test]
@@ -176,9 +204,21 @@ fn progress_shows_on_a_terminal_and_not_in_a_pipe() {
         "no progress bar on the terminal: {screen}"
     );
     // Piped: no progress, only the result.
-    let out = springlab(&["study", "convergence", "rope", "--set", "nodes=200", "--methods", "rk4"]);
+    let out = springlab(&[
+        "study",
+        "convergence",
+        "rope",
+        "--set",
+        "nodes=200",
+        "--methods",
+        "rk4",
+    ]);
     assert!(out.status.success());
-    assert!(out.stderr.is_empty(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 // Rows 4 and 5: memory of scene files.
@@ -191,7 +231,9 @@ fn a_hundred_byte_file_of_five_million_particles_is_refused_with_its_memory() {
     std::fs::write(dir.join("five.toml"), &text).expect("write");
     let err = refusal_in(&dir, &["run", "five.toml"]);
     // 5e6 particles and 5e6 - 5 springs at the byte counts of the real structures.
-    let bytes = budget::BASE_BYTES + budget::body_bytes(5e6, 5e6 - 5.0, &springlab::Method::ALL, 1.0);
+    let bytes = budget::BASE_BYTES
+        + budget::PARSE_BYTES * text.len() as f64
+        + budget::body_bytes(5e6, 5e6 - 5.0, &springlab::Method::ALL, 1.0);
     assert!(bytes > 3.5e9 && bytes < 4e9, "{bytes}");
     let expected = format!(
         "scene file five.toml would need about {} of memory (5000000 particles, 4999995 springs); at most 2.1 GB (use --force to run anyway)",
@@ -221,13 +263,42 @@ fn a_fifty_megabyte_scene_file_is_refused_before_it_is_parsed() {
 #[test]
 fn a_render_larger_than_4k_is_refused() {
     let dir = temp_dir("size");
-    let err = refusal_in(&dir, &["render", "rope", "--frames", "3", "--size", "8192x8192", "--gif", "g.gif"]);
+    let err = refusal_in(
+        &dir,
+        &[
+            "render",
+            "rope",
+            "--frames",
+            "3",
+            "--size",
+            "8192x8192",
+            "--gif",
+            "g.gif",
+        ],
+    );
     assert!(
         err.contains("render rope: --size 8192x8192 is 6.71e7 pixels per frame; at most 8294400 (3840x2160) (use --force to run anyway)"),
         "{err}"
     );
-    let err = refusal_in(&dir, &["render", "rope", "--frames", "1000000", "--size", "3840x2160", "--gif", "g.gif"]);
-    assert!(err.contains("would draw 8.29e12 pixels (1000000 frames of --size 3840x2160); at most 1e10"), "{err}");
+    let err = refusal_in(
+        &dir,
+        &[
+            "render",
+            "rope",
+            "--frames",
+            "1000000",
+            "--size",
+            "3840x2160",
+            "--gif",
+            "g.gif",
+        ],
+    );
+    assert!(
+        err.contains(
+            "would draw 8.29e12 pixels (1000000 frames of --size 3840x2160); at most 1e10"
+        ),
+        "{err}"
+    );
     assert!(files_in(&dir).is_empty());
 }
 
@@ -235,7 +306,16 @@ fn a_render_larger_than_4k_is_refused() {
 fn a_render_killed_half_way_leaves_no_file_at_the_target_path() {
     let dir = temp_dir("kill");
     let mut child = Command::new(env!("CARGO_BIN_EXE_springlab"))
-        .args(["render", "cloth-spheres", "--frames", "5000", "--gif", "g.gif", "--apng", "a.png"])
+        .args([
+            "render",
+            "cloth-spheres",
+            "--frames",
+            "5000",
+            "--gif",
+            "g.gif",
+            "--apng",
+            "a.png",
+        ])
         .current_dir(&dir)
         .stdout(Stdio::null())
         .stderr(Stdio::null())
@@ -258,21 +338,35 @@ fn a_render_killed_half_way_leaves_no_file_at_the_target_path() {
     let names = files_in(&dir);
     assert!(!names.contains(&"g.gif".to_string()), "{names:?}");
     assert!(!names.contains(&"a.png".to_string()), "{names:?}");
-    assert!(names.iter().any(|n| n.starts_with(".g.gif.")), "it was writing: {names:?}");
+    assert!(
+        names.iter().any(|n| n.starts_with(".g.gif.")),
+        "it was writing: {names:?}"
+    );
 }
 
 #[test]
 fn a_render_stopped_by_ctrl_c_removes_every_output() {
     let dir = temp_dir("int");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_springlab"))
-        .args(["render", "cloth-spheres", "--frames", "5000", "--gif", "g.gif", "--out", "fr"])
+    let child = Command::new(env!("CARGO_BIN_EXE_springlab"))
+        .args([
+            "render",
+            "cloth-spheres",
+            "--frames",
+            "5000",
+            "--gif",
+            "g.gif",
+            "--out",
+            "fr",
+        ])
         .current_dir(&dir)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
         .expect("spawn");
     let start = Instant::now();
-    while !dir.join("fr").join("frame_00002.png").exists() && start.elapsed() < Duration::from_secs(60) {
+    while !dir.join("fr").join("frame_00002.png").exists()
+        && start.elapsed() < Duration::from_secs(60)
+    {
         std::thread::sleep(Duration::from_millis(20));
     }
     Command::new("kill")
@@ -281,7 +375,10 @@ fn a_render_stopped_by_ctrl_c_removes_every_output() {
         .expect("kill");
     let out = child.wait_with_output().expect("wait");
     assert_eq!(out.status.code(), Some(130));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("interrupted (Ctrl-C); unfinished outputs were removed"));
+    assert!(
+        String::from_utf8_lossy(&out.stderr)
+            .contains("interrupted (Ctrl-C); unfinished outputs were removed")
+    );
     assert_eq!(files_in(&dir), vec!["fr".to_string()]);
     assert!(files_in(&dir.join("fr")).is_empty());
 }
@@ -293,19 +390,47 @@ fn an_unwritable_output_fails_before_the_simulation() {
     let dir = temp_dir("paths");
     let err = refusal_in(
         &dir,
-        &["render", "cloth-spheres", "--frames", "200", "--gif", "g.gif", "--energy-chart", "/sys/kernel/e.png"],
+        &[
+            "render",
+            "cloth-spheres",
+            "--frames",
+            "200",
+            "--gif",
+            "g.gif",
+            "--energy-chart",
+            "/sys/kernel/e.png",
+        ],
     );
     assert!(err.contains("cannot write /sys/kernel/e.png"), "{err}");
-    assert!(files_in(&dir).is_empty(), "nothing written: {:?}", files_in(&dir));
-    let err = refusal_in(&dir, &["render", "rope", "--frames", "2", "--apng", "missing/a.png"]);
-    assert!(err.contains("cannot write missing/a.png: directory missing does not exist"), "{err}");
+    assert!(
+        files_in(&dir).is_empty(),
+        "nothing written: {:?}",
+        files_in(&dir)
+    );
+    let err = refusal_in(
+        &dir,
+        &["render", "rope", "--frames", "2", "--apng", "missing/a.png"],
+    );
+    assert!(
+        err.contains("cannot write missing/a.png: directory missing does not exist"),
+        "{err}"
+    );
     std::fs::write(dir.join("file"), "x").expect("write");
     let err = refusal_in(&dir, &["render", "rope", "--frames", "2", "--out", "file"]);
-    assert!(err.contains("cannot write file: it exists and is not a directory"), "{err}");
+    assert!(
+        err.contains("cannot write file: it exists and is not a directory"),
+        "{err}"
+    );
     let err = refusal_in(&dir, &["run", "rope", "--csv", "/sys/kernel/r.csv"]);
     assert!(err.contains("cannot write /sys/kernel/r.csv"), "{err}");
-    let err = refusal_in(&dir, &["study", "convergence", "oscillator", "--png", "nodir/c.png"]);
-    assert!(err.contains("cannot write nodir/c.png: directory nodir does not exist"), "{err}");
+    let err = refusal_in(
+        &dir,
+        &["study", "convergence", "oscillator", "--png", "nodir/c.png"],
+    );
+    assert!(
+        err.contains("cannot write nodir/c.png: directory nodir does not exist"),
+        "{err}"
+    );
 }
 
 // Rows 8 and 9: a time step longer than the run.
@@ -318,14 +443,22 @@ fn a_time_step_longer_than_the_run_is_refused() {
         "{err}"
     );
     let err = refusal(&["run", "rope", "--dt", "2", "--time", "1"]);
-    assert!(err.contains("--dt 2 s is longer than the run (--time 1 s)"), "{err}");
+    assert!(
+        err.contains("--dt 2 s is longer than the run (--time 1 s)"),
+        "{err}"
+    );
     let err = refusal(&["study", "convergence", "oscillator", "--dt", "1e300"]);
     assert!(
         err.contains("--dt 1e300 s is longer than the time the error is measured at (--time 1 s)"),
         "{err}"
     );
-    let err = refusal(&["render", "rope", "--time", "1", "--dt", "5", "--gif", "x.gif"]);
-    assert!(err.contains("--dt 5 s is longer than the run (--time 1 s)"), "{err}");
+    let err = refusal(&[
+        "render", "rope", "--time", "1", "--dt", "5", "--gif", "x.gif",
+    ]);
+    assert!(
+        err.contains("--dt 5 s is longer than the run (--time 1 s)"),
+        "{err}"
+    );
 }
 
 // Row 10: physically meaningless parameters.
@@ -344,13 +477,32 @@ fn denormal_masses_and_overflowing_stiffness_are_out_of_range() {
         "{err}"
     );
     let err = refusal(&["run", "rope", "--set", "stiffness=1e308"]);
-    assert!(err.contains("`stiffness` = 1e308 is out of range: allowed 0 ..= 1e9 (N/m)"), "{err}");
+    assert!(
+        err.contains("`stiffness` = 1e308 is out of range: allowed 0 ..= 1e9 (N/m)"),
+        "{err}"
+    );
     let err = refusal(&["run", "cube-plane", "--set", "mass=1e-320"]);
-    assert!(err.contains("`mass` = 1e-320 is out of range: allowed 1e-6 ..= 1e6 (kg)"), "{err}");
+    assert!(
+        err.contains("`mass` = 1e-320 is out of range: allowed 1e-6 ..= 1e6 (kg)"),
+        "{err}"
+    );
     let err = refusal(&["run", "cloth-sphere", "--set", "damping=1e300"]);
-    assert!(err.contains("`damping` = 1e300 is out of range: allowed 0 ..= 1e9 (N·s/m)"), "{err}");
+    assert!(
+        err.contains("`damping` = 1e300 is out of range: allowed 0 ..= 1e9 (N·s/m)"),
+        "{err}"
+    );
     // Inside the ranges the force stays finite: the stiffest spring on the lightest mass.
-    let out = springlab(&["run", "oscillator", "--set", "stiffness=1e9", "--set", "mass=1e-6", "--steps", "10", "--json"]);
+    let out = springlab(&[
+        "run",
+        "oscillator",
+        "--set",
+        "stiffness=1e9",
+        "--set",
+        "mass=1e-6",
+        "--steps",
+        "10",
+        "--json",
+    ]);
     assert!(out.status.success());
 }
 
@@ -368,7 +520,10 @@ fn cosmetic_messages_say_each_thing_once_and_briefly() {
     let err = refusal(&["study", "stability", "rope", "--horizon", "1e300"]);
     assert!(err.len() < 300 && err.contains("1e300"), "{err}");
     let err = refusal(&["run", "rope", "--time", "-1e300"]);
-    assert_eq!(err.trim_end(), "springlab: --time -1e300: expected a duration in seconds >= 0");
+    assert_eq!(
+        err.trim_end(),
+        "springlab: --time -1e300: expected a duration in seconds >= 0"
+    );
     // Non-finite vectors: "finite".
     let err = refusal(&["run", "rope", "--set", "start=[nan,0,0]"]);
     assert!(
@@ -380,7 +535,9 @@ fn cosmetic_messages_say_each_thing_once_and_briefly() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2));
     assert!(
-        err.contains("invalid value '-5' for '--steps <STEPS>': expected a whole number of steps >= 0"),
+        err.contains(
+            "invalid value '-5' for '--steps <STEPS>': expected a whole number of steps >= 0"
+        ),
         "{err}"
     );
 }
@@ -407,8 +564,12 @@ fn duplicate_lesson_numbers_and_slugs_are_rejected_with_file_and_line() {
     assert_eq!(
         errors,
         vec![
-            format!("{b}:2: lesson number 1 is already used by {a}:2; give each lesson its own number"),
-            format!("{c}:3: lesson slug \"one\" is already used by {a}:3; give each lesson its own slug"),
+            format!(
+                "{b}:2: lesson number 1 is already used by {a}:2; give each lesson its own number"
+            ),
+            format!(
+                "{c}:3: lesson slug \"one\" is already used by {a}:3; give each lesson its own slug"
+            ),
         ]
     );
     assert_eq!(lessons.iter().filter(|l| l.is_ok()).count(), 1);
@@ -449,7 +610,8 @@ fn readme_examples_pass_with_ten_times_room() {
             continue;
         }
         if let Some(e) = estimate_of(line) {
-            e.check(&tight(10.0)).unwrap_or_else(|err| panic!("{line}: {err}"));
+            e.check(&tight(10.0))
+                .unwrap_or_else(|err| panic!("{line}: {err}"));
             checked += 1;
         }
     }
@@ -458,24 +620,39 @@ fn readme_examples_pass_with_ten_times_room() {
 
 #[test]
 fn builtin_scenes_scene_files_and_lesson_steps_pass_with_room() {
-    let mut targets: Vec<String> = springlab::scene::BUILTIN.iter().map(|d| d.name.to_string()).collect();
+    let mut targets: Vec<String> = springlab::scene::BUILTIN
+        .iter()
+        .map(|d| d.name.to_string())
+        .collect();
     for entry in std::fs::read_dir("scenes").expect("scenes/") {
         targets.push(entry.expect("entry").path().display().to_string());
     }
     for target in &targets {
         for method in springlab::Method::ALL {
             let run = format!("springlab run {target} --method {method}");
-            estimate_of(&run).expect("run").check(&tight(10.0)).unwrap_or_else(|e| panic!("{run}: {e}"));
+            estimate_of(&run)
+                .expect("run")
+                .check(&tight(10.0))
+                .unwrap_or_else(|e| panic!("{run}: {e}"));
         }
         let render = format!("springlab render {target} --frames 100 --gif x.gif");
-        estimate_of(&render).expect("render").check(&tight(10.0)).unwrap_or_else(|e| panic!("{render}: {e}"));
+        estimate_of(&render)
+            .expect("render")
+            .check(&tight(10.0))
+            .unwrap_or_else(|e| panic!("{render}: {e}"));
         let study = format!("springlab study stability {target}");
-        estimate_of(&study).expect("study").check(&tight(5.0)).unwrap_or_else(|e| panic!("{study}: {e}"));
+        estimate_of(&study)
+            .expect("study")
+            .check(&tight(5.0))
+            .unwrap_or_else(|e| panic!("{study}: {e}"));
         if !target.ends_with(".toml") {
             // The convergence study applies `--set iterations=0`, which files without `scene =`
             // do not take.
             let study = format!("springlab study convergence {target}");
-            estimate_of(&study).expect("study").check(&tight(5.0)).unwrap_or_else(|e| panic!("{study}: {e}"));
+            estimate_of(&study)
+                .expect("study")
+                .check(&tight(5.0))
+                .unwrap_or_else(|e| panic!("{study}: {e}"));
         }
     }
     for lesson in springlab::lesson::builtin() {
@@ -484,7 +661,8 @@ fn builtin_scenes_scene_files_and_lesson_steps_pass_with_room() {
             let scene = step.build_scene().expect("step scene");
             let dt = scene.dt;
             let e = budget::run("lesson step", &scene, dt, (scene.duration / dt).round());
-            e.check(&tight(10.0)).unwrap_or_else(|err| panic!("{}: {err}", step.title));
+            e.check(&tight(10.0))
+                .unwrap_or_else(|err| panic!("{}: {err}", step.title));
         }
     }
 }

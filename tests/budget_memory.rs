@@ -31,8 +31,8 @@ unsafe impl GlobalAlloc for Counting {
         let p = unsafe { System.realloc(ptr, layout, new_size) };
         if !p.is_null() {
             if new_size >= layout.size() {
-                let live =
-                    LIVE.fetch_add(new_size - layout.size(), Ordering::SeqCst) + new_size - layout.size();
+                let live = LIVE.fetch_add(new_size - layout.size(), Ordering::SeqCst) + new_size
+                    - layout.size();
                 PEAK.fetch_max(live, Ordering::SeqCst);
             } else {
                 LIVE.fetch_sub(layout.size() - new_size, Ordering::SeqCst);
@@ -67,9 +67,16 @@ fn estimate_matches_measured_peak() {
         let estimate = budget::body_bytes(nodes as f64, (nodes - 1) as f64, &[method], 1.0);
         let ratio = estimate / measured as f64;
         eprintln!("rope, {method}: measured {measured} bytes, estimated {estimate}: {ratio:.3}");
-        assert!((0.9..1.1).contains(&ratio), "{method}: estimate/measured = {ratio}");
+        assert!(
+            (0.9..1.1).contains(&ratio),
+            "{method}: estimate/measured = {ratio}"
+        );
     }
-    for (name, set) in [("cube-plane", "n=30"), ("cloth-sphere", "n=120"), ("jelly-bowl", "n=30")] {
+    for (name, set) in [
+        ("cube-plane", "n=30"),
+        ("cloth-sphere", "n=120"),
+        ("jelly-bowl", "n=30"),
+    ] {
         for method in [Method::SemiImplicitEuler, Method::Verlet] {
             let mut counts = (0, 0);
             let measured = peak_of(|| {
@@ -81,8 +88,13 @@ fn estimate_matches_measured_peak() {
             });
             let estimate = budget::body_bytes(counts.0 as f64, counts.1 as f64, &[method], 1.0);
             let ratio = estimate / measured as f64;
-            eprintln!("{name} {set}, {method}: measured {measured} bytes, estimated {estimate}: {ratio:.3}");
-            assert!((0.8..1.2).contains(&ratio), "{name}, {method}: estimate/measured = {ratio}");
+            eprintln!(
+                "{name} {set}, {method}: measured {measured} bytes, estimated {estimate}: {ratio:.3}"
+            );
+            assert!(
+                (0.8..1.2).contains(&ratio),
+                "{name}, {method}: estimate/measured = {ratio}"
+            );
         }
     }
 }

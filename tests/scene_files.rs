@@ -104,7 +104,15 @@ fn negative_mass_is_out_of_range_with_unit() {
         3,
         8,
     );
-    assert_has(&m, &["`mass` = -1", "out of range", "allowed 1e-6 ..= 1e6", "(kg)"]);
+    assert_has(
+        &m,
+        &[
+            "`mass` = -1",
+            "out of range",
+            "allowed 1e-6 ..= 1e6",
+            "(kg)",
+        ],
+    );
 }
 
 #[test]
@@ -428,7 +436,10 @@ fn nan_and_infinity_are_rejected() {
         3,
         8,
     );
-    assert_has(&m, &["`mass` = NaN", "out of range", "allowed 1e-6 ..= 1e6 (kg)"]);
+    assert_has(
+        &m,
+        &["`mass` = NaN", "out of range", "allowed 1e-6 ..= 1e6 (kg)"],
+    );
     let m = file_error(
         "inf.toml",
         "[[particles]]\nposition = [inf, 0, 0]\nmass = 1\n",
@@ -449,7 +460,10 @@ fn nan_and_infinity_are_rejected() {
     let m = file_error("dt.toml", "scene = \"rope\"\n[run]\ndt = nan\n", 3, 6);
     assert_has(&m, &["`dt` = NaN", "allowed > 0 (s)"]);
     let m = file_error("p.toml", "scene = \"rope\"\n[params]\nmass = inf\n", 3, 8);
-    assert_has(&m, &["`mass` = inf", "out of range", "allowed 1e-6 ..= 1e6 (kg)"]);
+    assert_has(
+        &m,
+        &["`mass` = inf", "out of range", "allowed 1e-6 ..= 1e6 (kg)"],
+    );
 }
 
 #[test]

@@ -50,7 +50,8 @@ pub fn estimate(workloads: &[Workload], repeats: u32, seconds: f64) -> budget::E
                 + others * seconds * budget::RATE);
         e.runs += f64::from(repeats) * (1.0 + if seconds > 0.0 { others } else { 0.0 });
     }
-    e.memory = budget::BASE_BYTES + 2.0 * budget::body_bytes(e.particles, e.springs, &Method::ALL, 1.0);
+    e.memory =
+        budget::BASE_BYTES + 2.0 * budget::body_bytes(e.particles, e.springs, &Method::ALL, 1.0);
     e
 }
 

@@ -186,7 +186,10 @@ struct Plan {
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let limits = Limits::forced(args.force);
     if !(args.start >= 0.0 && args.start.is_finite()) {
-        bail!("--start {}: expected a time in seconds >= 0", short(args.start));
+        bail!(
+            "--start {}: expected a time in seconds >= 0",
+            short(args.start)
+        );
     }
     let (width, height) = parse_size(&args.size)?;
     let toggles = parse_kinds(&args.springs)?;
@@ -318,7 +321,10 @@ pub fn prepare(
     limits: &Limits,
 ) -> anyhow::Result<(crate::scene::Scene, f64, budget::Estimate)> {
     if !(args.start >= 0.0 && args.start.is_finite()) {
-        bail!("--start {}: expected a time in seconds >= 0", short(args.start));
+        bail!(
+            "--start {}: expected a time in seconds >= 0",
+            short(args.start)
+        );
     }
     let (width, height) = parse_size(&args.size)?;
     let mut scene = scene::load_with(&args.scene, &args.sets, limits)?;

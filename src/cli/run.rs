@@ -103,7 +103,15 @@ pub fn step_count(
     if !(t.is_finite() && t >= 0.0) {
         bail!("--time {}: expected a duration in seconds >= 0", short(t));
     }
-    check_dt_within(dt, t, if time.is_some() { "--time" } else { "the scene's duration" })?;
+    check_dt_within(
+        dt,
+        t,
+        if time.is_some() {
+            "--time"
+        } else {
+            "the scene's duration"
+        },
+    )?;
     Ok((t / dt).round())
 }
 
@@ -198,7 +206,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         sim.step();
         if let Some((w, _)) = csv.as_mut()
             && csv_error.is_none()
-            && (sim.steps % args.csv_every == 0 || sim.diverged.is_some())
+            && (sim.steps.is_multiple_of(args.csv_every) || sim.diverged.is_some())
             && let Err(e) = write_csv_row(w, &sim)
         {
             csv_error = Some(e);

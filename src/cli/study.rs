@@ -10,9 +10,9 @@ use crate::budget::{self, Limits, Progress, interrupt, short};
 use crate::output;
 use crate::physics::Method;
 use crate::scene;
+use crate::study::Stability;
 use crate::study::convergence::{self, ConvergenceOptions, ConvergenceReport};
 use crate::study::stability::{self, DEFAULT_HORIZON, StabilityOptions, StabilityReport};
-use crate::study::Stability;
 
 /// The studies.
 #[derive(Debug, Subcommand)]
@@ -114,7 +114,12 @@ pub fn run(command: &StudyCommand) -> anyhow::Result<()> {
 pub fn prepare_stability(
     args: &StabilityArgs,
     limits: &Limits,
-) -> anyhow::Result<(scene::Scene, StabilityOptions, Vec<String>, budget::Estimate)> {
+) -> anyhow::Result<(
+    scene::Scene,
+    StabilityOptions,
+    Vec<String>,
+    budget::Estimate,
+)> {
     let options = StabilityOptions {
         methods: match &args.methods {
             Some(text) => stability::parse_methods(text)?,
@@ -259,7 +264,12 @@ pub fn prepare_convergence(
     args: &ConvergenceArgs,
     work_precision: bool,
     limits: &Limits,
-) -> anyhow::Result<(scene::Scene, ConvergenceOptions, Vec<String>, budget::Estimate)> {
+) -> anyhow::Result<(
+    scene::Scene,
+    ConvergenceOptions,
+    Vec<String>,
+    budget::Estimate,
+)> {
     let options = ConvergenceOptions {
         methods: match &args.methods {
             Some(text) => stability::parse_methods(text)?,
@@ -286,9 +296,11 @@ pub fn prepare_convergence(
         bail!("--time {}: expected a duration in seconds > 0", short(time));
     }
     // The study's largest dt: --dt, else 0.005 s for the oscillator, else the scene's.
-    let dt = options
-        .dt
-        .unwrap_or(if scene.name == "oscillator" { 0.005 } else { scene.dt });
+    let dt = options.dt.unwrap_or(if scene.name == "oscillator" {
+        0.005
+    } else {
+        scene.dt
+    });
     if !(dt > 0.0 && dt.is_finite()) {
         bail!("--dt {}: expected a time step in seconds > 0", short(dt));
     }

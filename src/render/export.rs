@@ -275,8 +275,7 @@ fn encode_frames(
             .into_inner()
             .map_err(|e| io_error(&apng_path, e.into_error()))?;
         if encoded.frames < outputs.expected_frames {
-            set_apng_frame_count(&mut file, encoded.frames)
-                .map_err(|e| io_error(&apng_path, e))?;
+            set_apng_frame_count(&mut file, encoded.frames).map_err(|e| io_error(&apng_path, e))?;
         }
         encoded.pending.push(file);
     }

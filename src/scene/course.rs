@@ -237,20 +237,8 @@ fn lattice_specs(offset: DVec3, friction: f64) -> Vec<ParamSpec> {
             Range::Between(2.0, MAX_CUBE_N as f64),
             "particles along each edge (n³ per cube)",
         ),
-        ParamSpec::number(
-            "edge",
-            "m",
-            4.0,
-            LENGTH,
-            "edge length L of the cube",
-        ),
-        ParamSpec::number(
-            "mass",
-            "kg",
-            1.0,
-            MASS,
-            "mass of each particle",
-        ),
+        ParamSpec::number("edge", "m", 4.0, LENGTH, "edge length L of the cube"),
+        ParamSpec::number("mass", "kg", 1.0, MASS, "mass of each particle"),
     ];
     p.extend(coefficient_specs(2000.0, 60.0));
     p.extend([
@@ -434,13 +422,7 @@ fn cloth_specs(stiffness: f64) -> Vec<ParamSpec> {
             Range::Between(2.0, MAX_CLOTH_N as f64),
             "particles along each side (n² in all) over x, z in [-2, 2] m",
         ),
-        ParamSpec::number(
-            "mass",
-            "kg",
-            1.0,
-            MASS,
-            "mass of each particle",
-        ),
+        ParamSpec::number("mass", "kg", 1.0, MASS, "mass of each particle"),
     ];
     p.extend(coefficient_specs(stiffness, 750.0));
     p.extend([

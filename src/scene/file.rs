@@ -102,11 +102,11 @@ use toml::Spanned;
 
 use super::builder::{Builder, RopeSpec, rope};
 use super::params::{
-    DAMPING, MASS, MAX_COMPONENT, MAX_LENGTH, ParamError, ParamSpec, Params, Range,
-    STIFFNESS, Value,
+    DAMPING, MASS, MAX_COMPONENT, MAX_LENGTH, ParamError, ParamSpec, Params, Range, STIFFNESS,
+    Value,
 };
-use crate::budget::{BASE_BYTES, Estimate, Limits, body_bytes, short};
 use super::{BUILTIN, Body, Scene, SceneError, builtin, method_param_specs, method_params};
+use crate::budget::{BASE_BYTES, Estimate, Limits, PARSE_BYTES, body_bytes, short};
 use crate::physics::integrators::method_names;
 use crate::physics::{Method, MethodParams, Spring, SpringKind};
 
@@ -174,8 +174,12 @@ pub fn read_bounded(path: &Path, max: u64) -> Result<String, SceneError> {
             limit: max,
         });
     }
-    String::from_utf8(bytes)
-        .map_err(|e| io(std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error())))
+    String::from_utf8(bytes).map_err(|e| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            e.utf8_error(),
+        ))
+    })
 }
 
 /// Builds a scene from TOML `text` as if it had been read from `path` (which names the scene and
@@ -707,7 +711,9 @@ fn load_explicit(
         what: format!("scene file {}", source.path),
         particles: total as f64,
         springs: springs as f64,
-        memory: BASE_BYTES + body_bytes(total as f64, springs as f64, &Method::ALL, 1.0),
+        memory: BASE_BYTES
+            + PARSE_BYTES * source.text.len() as f64
+            + body_bytes(total as f64, springs as f64, &Method::ALL, 1.0),
         ..Estimate::default()
     };
     estimate.check(limits)?;
@@ -726,8 +732,7 @@ fn load_explicit(
 
     // Springs.
     let count = b.len();
-    let stiffness_spec =
-        ParamSpec::number("stiffness", "N/m", 0.0, STIFFNESS, "stiffness");
+    let stiffness_spec = ParamSpec::number("stiffness", "N/m", 0.0, STIFFNESS, "stiffness");
     let damping_spec = ParamSpec::number("damping", "N·s/m", 0.0, DAMPING, "damping");
     let rest_spec = ParamSpec::number(
         "rest_length",

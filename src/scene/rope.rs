@@ -8,7 +8,8 @@ use glam::DVec3;
 
 use super::builder::{Builder, RopeSpec, rope};
 use super::params::{
-    ACCELERATION, DAMPING, DISPLACEMENT, LENGTH, MASS, MAX_LENGTH, ParamSpec, Params, Range, STIFFNESS,
+    ACCELERATION, DAMPING, DISPLACEMENT, LENGTH, MASS, MAX_LENGTH, ParamSpec, Params, Range,
+    STIFFNESS,
 };
 use super::{Body, Scene, SceneError, method_param_specs, method_params};
 use crate::physics::{Method, SpringKind};
@@ -16,34 +17,10 @@ use crate::physics::{Method, SpringKind};
 /// Parameters of `oscillator`.
 pub fn oscillator_params() -> Vec<ParamSpec> {
     let mut p = vec![
-        ParamSpec::number(
-            "mass",
-            "kg",
-            1.0,
-            MASS,
-            "mass of the moving particle",
-        ),
-        ParamSpec::number(
-            "stiffness",
-            "N/m",
-            100.0,
-            STIFFNESS,
-            "spring stiffness k",
-        ),
-        ParamSpec::number(
-            "damping",
-            "N·s/m",
-            0.0,
-            DAMPING,
-            "damper along the spring",
-        ),
-        ParamSpec::number(
-            "rest_length",
-            "m",
-            1.0,
-            LENGTH,
-            "spring rest length L0",
-        ),
+        ParamSpec::number("mass", "kg", 1.0, MASS, "mass of the moving particle"),
+        ParamSpec::number("stiffness", "N/m", 100.0, STIFFNESS, "spring stiffness k"),
+        ParamSpec::number("damping", "N·s/m", 0.0, DAMPING, "damper along the spring"),
+        ParamSpec::number("rest_length", "m", 1.0, LENGTH, "spring rest length L0"),
         ParamSpec::number(
             "amplitude",
             "m",
@@ -100,27 +77,9 @@ fn rope_specs(separation: bool) -> Vec<ParamSpec> {
             "number of nodes",
         ),
         ParamSpec::number("mass", "kg", 1.0, MASS, "mass of each node"),
-        ParamSpec::number(
-            "stiffness",
-            "N/m",
-            100.0,
-            STIFFNESS,
-            "spring stiffness k",
-        ),
-        ParamSpec::number(
-            "damping",
-            "N·s/m",
-            0.0,
-            DAMPING,
-            "damper along each spring",
-        ),
-        ParamSpec::number(
-            "drag",
-            "N·s/m",
-            0.0,
-            DAMPING,
-            "viscous drag on each node",
-        ),
+        ParamSpec::number("stiffness", "N/m", 100.0, STIFFNESS, "spring stiffness k"),
+        ParamSpec::number("damping", "N·s/m", 0.0, DAMPING, "damper along each spring"),
+        ParamSpec::number("drag", "N·s/m", 0.0, DAMPING, "viscous drag on each node"),
         ParamSpec::number(
             "gravity",
             "m/s²",
