@@ -168,7 +168,7 @@ fn bad_input_gets_a_clear_message() {
         ),
         (
             &["run", "rope", "--set", "mass=heavy"],
-            "`mass` = heavy: expected a number > 0",
+            "`mass` = heavy: expected a number 1e-6 ..= 1e6",
         ),
         (
             &["run", "rope", "--set", "pinned=[0, 3]"],

@@ -1,6 +1,6 @@
 //! `springlab bench`: the peer-benchmark workloads (`WORKLOADS.md`), timed, with checksums.
 
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 
 use anyhow::bail;
 use clap::Args;
@@ -90,33 +90,43 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     }
     estimate(&workloads, args.repeats, args.budget).enforce(&budget::Limits::forced(args.force))?;
     budget::interrupt::install(budget::interrupt::Mode::Exit);
-    let progress = std::io::stderr().is_terminal();
+    let runs: usize = workloads
+        .iter()
+        .map(|&w| {
+            1 + if args.budget > 0.0 {
+                bench::methods_for(w).len().saturating_sub(1)
+            } else {
+                0
+            }
+        })
+        .sum();
+    let mut progress = budget::Progress::new(runs as u64, "bench");
     let mut results = Vec::with_capacity(workloads.len());
     for w in workloads {
-        let result = bench::measure(w, args.repeats, |i| {
-            if progress {
-                eprintln!(
-                    "{w}: run {}/{} ({} steps of {} s)",
-                    i + 1,
-                    args.repeats,
-                    w.steps(),
-                    w.dt()
-                );
-            }
-        });
+        progress.label(format!(
+            "bench {w}: {} runs of {} steps of {} s",
+            args.repeats,
+            w.steps(),
+            w.dt()
+        ));
+        let result = bench::measure(w, args.repeats, |_| {});
         results.push(result);
+        progress.inc(1);
         if args.budget > 0.0 {
             for m in bench::methods_for(w)
                 .into_iter()
                 .filter(|&m| m != w.method())
             {
-                if progress {
-                    eprintln!("{w}: {m} for up to {} s per run", args.budget);
-                }
+                progress.label(format!(
+                    "bench {w}: {m} for up to {} s per run",
+                    args.budget
+                ));
                 results.push(bench::measure_method(w, m, args.repeats, args.budget));
+                progress.inc(1);
             }
         }
     }
+    progress.finish();
     let mut out = std::io::stdout().lock();
     if args.json {
         serde_json::to_writer(

@@ -29,33 +29,33 @@
 //! ```toml
 //! [world]
 //! gravity = [0.0, -9.8, 0.0]  # m/s², optional, default [0, -9.8, 0]
-//! drag = 0.0                  # N·s/m, >= 0, optional, default 0
+//! drag = 0.0                  # N·s/m, 0 ..= 1e9, optional, default 0
 //!
 //! [[particles]]               # particle 0
 //! position = [0.0, 0.0, 0.0]  # m
-//! mass = 1.0                  # kg, > 0
+//! mass = 1.0                  # kg, 1e-6 ..= 1e6
 //! pinned = true               # optional, default false
 //!
 //! [[particles]]               # particle 1
 //! position = [1.0, 0.0, 0.0]  # m
 //! velocity = [0.0, 0.5, 0.0]  # m/s, optional, default at rest
-//! mass = 1.0                  # kg, > 0
+//! mass = 1.0                  # kg, 1e-6 ..= 1e6
 //!
 //! [[springs]]
 //! a = 0                       # particle index
 //! b = 1                       # particle index, not a
-//! stiffness = 100.0           # N/m, >= 0
-//! damping = 0.0               # N·s/m, >= 0, optional, default 0
-//! rest_length = 1.0           # m, >= 0, optional, default: the initial distance of a and b
+//! stiffness = 100.0           # N/m, 0 ..= 1e9
+//! damping = 0.0               # N·s/m, 0 ..= 1e9, optional, default 0
+//! rest_length = 1.0           # m, 0 ..= 1e6, optional, default: the initial distance of a and b
 //! kind = "struct"             # struct | shear | bend, optional, default struct
 //!
 //! [[ropes]]                   # optional: a rope, as in the built-in `rope` scene
 //! start = [0.0, 2.0, 0.0]     # m, first node
 //! end = [-4.0, 2.0, 0.0]      # m, last node (not start)
 //! nodes = 8                   # 2 ..= 1000000
-//! mass = 1.0                  # kg per node, > 0
-//! stiffness = 100.0           # N/m, >= 0
-//! damping = 0.0               # N·s/m, >= 0
+//! mass = 1.0                  # kg per node, 1e-6 ..= 1e6
+//! stiffness = 100.0           # N/m, 0 ..= 1e9
+//! damping = 0.0               # N·s/m, 0 ..= 1e9
 //! pinned = [0]                # node indices within this rope
 //!
 //! [run]
@@ -70,7 +70,10 @@
 //!
 //! Particle indices: the `[[particles]]` come first in file order, then the nodes of each
 //! `[[ropes]]` block in file order, so springs can join a rope to a particle. A file builds at
-//! most [`MAX_PARTICLES`] particles. Every key of a rope
+//! most [`MAX_PARTICLES`] particles, and a file is refused before it is read when it is larger
+//! than the budget's 16 MiB, or before it is built when its particles and springs would need more
+//! memory than the budget allows ([`crate::budget`]; `--force` lifts both). Vectors (positions,
+//! velocities, gravity) must be finite, each component within ±1e6. Every key of a rope
 //! block is optional and defaults to the built-in `rope` scene's value (3 nodes of 1 kg from
 //! [0, 2, 0] to [-4, 2, 0], k = 100 N/m, node 0 pinned). `[run]` works in both forms; in Form 1 the method settings (`verlet_damping`,
 //! `iterations`, `substeps`, `cg_tolerance`) are parameters of the built-in scene and belong in
