@@ -452,6 +452,17 @@ fn a_time_step_longer_than_the_run_is_refused() {
         err.contains("--dt 1e300 s is longer than the time the error is measured at (--time 1 s)"),
         "{err}"
     );
+    let dir = temp_dir("long-dt");
+    std::fs::write(
+        dir.join("s.toml"),
+        "scene = \"rope\"\n[run]\ntime = 2\ndt = 1e300\n",
+    )
+    .expect("write");
+    let err = refusal_in(&dir, &["run", "s.toml"]);
+    assert!(
+        err.contains("s.toml:4:6: `dt` = 1e300 s is longer than the run (`time` = 2 s)"),
+        "{err}"
+    );
     let err = refusal(&[
         "render", "rope", "--time", "1", "--dt", "5", "--gif", "x.gif",
     ]);

@@ -628,6 +628,20 @@ fn run_settings(source: &Source<'_>, run: &RunSpec) -> Result<RunSettings, Scene
         .as_ref()
         .map(|x| source.number(&time_spec, x))
         .transpose()?;
+    if let (Some(d), Some(t), Some(span)) = (dt, time, run.dt.as_ref().map(Spanned::span))
+        && t > 0.0
+        && d > t
+    {
+        return Err(source.error(
+            span,
+            format!(
+                "`dt` = {} s is longer than the run (`time` = {} s): expected a time step at \
+                 most the simulated time",
+                short(d),
+                short(t)
+            ),
+        ));
+    }
     Ok(RunSettings { method, dt, time })
 }
 
