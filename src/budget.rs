@@ -535,6 +535,51 @@ pub fn scene_bytes(scene: &Scene, methods: Option<&[Method]>, copies: f64) -> f6
             .sum::<f64>()
 }
 
+/// Particles and springs the built-in scene `name` builds from `params`, before it is built (so
+/// that a scene over the memory budget is refused without being allocated); `None` for a scene
+/// this table does not know. Exact when every spring kind is active (tested against the
+/// builders in `tests/budget_memory.rs`), an upper bound otherwise:
+///
+/// ```text
+/// rope        N = nodes                  S = nodes - 1             (ropes: twice)
+/// cube        N = bodies · n³            S = bodies · (3n²(n-1) + 6n(n-1)² + 4(n-1)³ + 3n²(n-2))
+/// cloth       N = n²                     S = 2n(n-1) + 2(n-1)² + 2n(n-2)
+/// ```
+/// where the cube's springs are struct (edges), shear (face and body diagonals) and bend (two
+/// apart along an axis), and the cloth's the same in two dimensions.
+#[must_use]
+pub fn builtin_size(name: &str, params: &crate::scene::Params) -> Option<(f64, f64)> {
+    let integer = |key: &str| {
+        params
+            .iter()
+            .find(|(k, _)| *k == key)
+            .and_then(|(_, v)| match v {
+                crate::scene::Value::Integer(i) => Some(*i as f64),
+                _ => None,
+            })
+    };
+    match name {
+        "oscillator" => Some((2.0, 1.0)),
+        "rope" => integer("nodes").map(|n| (n, n - 1.0)),
+        "ropes" => integer("nodes").map(|n| (2.0 * n, 2.0 * (n - 1.0))),
+        "cube-plane" | "cube-tilted" | "cube-sphere" | "cube-bowl" | "jelly-bowl" => {
+            let (bodies, n) = (integer("bodies")?, integer("n")?);
+            let m = n - 1.0;
+            let springs =
+                3.0 * n * n * m + 6.0 * n * m * m + 4.0 * m * m * m + 3.0 * n * n * (n - 2.0);
+            Some((bodies * n * n * n, bodies * springs))
+        }
+        "cloth-spheres" | "cloth-sphere" => {
+            let n = integer("n")?;
+            Some((
+                n * n,
+                2.0 * n * (n - 1.0) + 2.0 * (n - 1.0) * (n - 1.0) + 2.0 * n * (n - 2.0),
+            ))
+        }
+        _ => None,
+    }
+}
+
 /// The estimate of one run of `scene` for `steps` steps at `dt` (s) (`springlab run`).
 #[must_use]
 pub fn run(what: impl Into<String>, scene: &Scene, dt: f64, steps: f64) -> Estimate {

@@ -231,6 +231,19 @@ pub fn builtin(name: &str) -> Option<&'static SceneDef> {
 /// # Errors
 /// Unknown scene, unknown key, bad value, or values that make no scene.
 pub fn build_builtin(name: &str, sets: &[String]) -> Result<Scene, SceneError> {
+    build_builtin_with(name, sets, &Limits::DEFAULT)
+}
+
+/// [`build_builtin`] within `limits`: a scene whose particles and springs would need more memory
+/// than `limits.memory` is refused before it is built ([`crate::budget::builtin_size`]).
+///
+/// # Errors
+/// As [`build_builtin`], and [`SceneError::Budget`].
+pub fn build_builtin_with(
+    name: &str,
+    sets: &[String],
+    limits: &Limits,
+) -> Result<Scene, SceneError> {
     let def = builtin(name).ok_or_else(|| SceneError::UnknownScene {
         name: name.to_string(),
         known: BUILTIN
@@ -243,7 +256,33 @@ pub fn build_builtin(name: &str, sets: &[String]) -> Result<Scene, SceneError> {
     for s in sets {
         params.set_text(s)?;
     }
+    check_size(def, &params, &format!("scene `{name}`"), limits)?;
     (def.build)(&params)
+}
+
+/// Refuses the built-in `def` with `params` before it is built when its particles and springs
+/// would need more than `limits.memory` (every method's buffers counted).
+///
+/// # Errors
+/// [`SceneError::Budget`].
+pub fn check_size(
+    def: &SceneDef,
+    params: &Params,
+    what: &str,
+    limits: &Limits,
+) -> Result<(), SceneError> {
+    if let Some((particles, springs)) = crate::budget::builtin_size(def.name, params) {
+        Estimate {
+            what: what.to_string(),
+            particles,
+            springs,
+            memory: crate::budget::BASE_BYTES
+                + crate::budget::body_bytes(particles, springs, &Method::ALL, 1.0),
+            ..Estimate::default()
+        }
+        .check(limits)?;
+    }
+    Ok(())
 }
 
 /// Loads a built-in scene by name or a scene file by path (anything ending in `.toml` or that
@@ -256,8 +295,8 @@ pub fn load(name_or_path: &str, sets: &[String]) -> Result<Scene, SceneError> {
 }
 
 /// [`load`] within `limits`: files over `limits.file_bytes` are not read, and a scene whose
-/// model, state and integrator buffers would exceed `limits.memory` is refused (a scene file's
-/// before it is built; a built-in's parameter ranges keep it below about 1.5 GB).
+/// model, state and integrator buffers would exceed `limits.memory` is refused before it is
+/// built (from the counts of a scene file, or [`crate::budget::builtin_size`] of a built-in).
 ///
 /// # Errors
 /// As [`load`], and [`SceneError::Budget`] or [`SceneError::FileTooLarge`].
@@ -270,7 +309,7 @@ pub fn load_with(
     if builtin(name_or_path).is_none() && (name_or_path.ends_with(".toml") || path.is_file()) {
         return file::load_with(path, sets, limits);
     }
-    let scene = build_builtin(name_or_path, sets)?;
+    let scene = build_builtin_with(name_or_path, sets, limits)?;
     check_memory(&scene, &format!("scene `{name_or_path}`"), limits)?;
     Ok(scene)
 }

@@ -45,8 +45,14 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
+/// One measurement at a time (the harness runs tests on several threads).
+static MEASURE: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 /// Peak live bytes above the level at the start of `f`.
 fn peak_of(f: impl FnOnce()) -> usize {
+    let _guard = MEASURE
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let base = LIVE.load(Ordering::SeqCst);
     PEAK.store(base, Ordering::SeqCst);
     f();
@@ -97,4 +103,83 @@ fn estimate_matches_measured_peak() {
             );
         }
     }
+}
+
+#[test]
+fn builtin_sizes_are_the_exact_counts_of_the_builders() {
+    // Its allocations would count in another test's measurement.
+    let _guard = MEASURE
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let cases: &[(&str, &[&str])] = &[
+        ("oscillator", &[]),
+        ("rope", &[]),
+        ("rope", &["nodes=1000"]),
+        ("ropes", &["nodes=37"]),
+        ("cube-plane", &[]),
+        ("cube-tilted", &["n=7", "bodies=3"]),
+        ("cube-sphere", &["n=2"]),
+        ("cube-bowl", &["n=13"]),
+        ("jelly-bowl", &["n=5", "bodies=2"]),
+        ("cloth-spheres", &[]),
+        ("cloth-sphere", &["n=60"]),
+        ("cloth-sphere", &["n=2"]),
+    ];
+    for def in scene::BUILTIN {
+        assert!(
+            cases.iter().any(|(name, _)| *name == def.name),
+            "{} has no case",
+            def.name
+        );
+    }
+    for (name, sets) in cases {
+        let sets: Vec<String> = sets.iter().map(|s| (*s).to_string()).collect();
+        let def = scene::builtin(name).expect("built-in");
+        let mut params = def.default_params();
+        for s in &sets {
+            params.set_text(s).expect("valid");
+        }
+        let (particles, springs) = budget::builtin_size(name, &params).expect("known scene");
+        let built = scene::load(name, &sets).expect("builds");
+        assert_eq!(particles, built.particle_count() as f64, "{name} {sets:?}");
+        assert_eq!(springs, built.spring_count() as f64, "{name} {sets:?}");
+    }
+    // With a spring kind switched off the count is an upper bound.
+    let sets = vec!["bend_stiffness=0".to_string(), "bend_damping=0".to_string()];
+    let def = scene::builtin("cube-plane").expect("built-in");
+    let mut params = def.default_params();
+    for s in &sets {
+        params.set_text(s).expect("valid");
+    }
+    let (_, springs) = budget::builtin_size("cube-plane", &params).expect("known");
+    assert!(
+        springs
+            > scene::load("cube-plane", &sets)
+                .expect("builds")
+                .spring_count() as f64
+    );
+}
+
+#[test]
+fn a_builtin_over_the_memory_budget_is_refused_before_it_is_built() {
+    let limits = budget::Limits {
+        memory: 64e6,
+        ..budget::Limits::DEFAULT
+    };
+    let measured = peak_of(|| {
+        let e = scene::load_with("ropes", &["nodes=1000000".to_string()], &limits).unwrap_err();
+        assert!(
+            e.to_string().contains("scene `ropes` would need about"),
+            "{e}"
+        );
+        assert!(
+            e.to_string()
+                .contains("(2000000 particles, 1999998 springs)"),
+            "{e}"
+        );
+    });
+    assert!(
+        measured < 1_000_000,
+        "{measured} bytes allocated before the refusal"
+    );
 }

@@ -202,3 +202,34 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+    /// `--set` of any size on a built-in scene: refused before it is built when over the budget.
+    #[test]
+    fn set_never_allocates_beyond_the_budget(
+        case in prop_oneof![
+            (1i64..=1_000_000).prop_map(|n| ("rope", format!("nodes={n}"))),
+            (1i64..=1_000_000).prop_map(|n| ("ropes", format!("nodes={n}"))),
+            (2i64..=40).prop_map(|n| ("cube-plane", format!("n={n}"))),
+            (2i64..=200).prop_map(|n| ("cloth-sphere", format!("n={n}"))),
+        ],
+    ) {
+        let _guard = MEASURE.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let budget = 32.0 * 1024.0 * 1024.0;
+        let limits = Limits { memory: budget, ..Limits::DEFAULT };
+        let (name, set) = case;
+        let base = LIVE.load(Ordering::SeqCst);
+        PEAK.store(base, Ordering::SeqCst);
+        let result = scene::load_with(name, &[set.clone()], &limits);
+        let peak = PEAK.load(Ordering::SeqCst) - base;
+        prop_assert!(peak as f64 <= budget, "{name} {set}: peak {peak} bytes over {budget}");
+        if let Err(e) = result {
+            prop_assert!(
+                matches!(e, SceneError::Budget(_)) || e.to_string().contains("out of range"),
+                "{e}"
+            );
+        }
+    }
+}

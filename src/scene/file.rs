@@ -214,7 +214,7 @@ pub fn from_str_with(
         .map_or_else(|| source.path.clone(), |n| n.to_string_lossy().into_owned());
     match &file.scene {
         Some(name) => {
-            let scene = load_builtin(&source, &file, name, &file_name, sets)?;
+            let scene = load_builtin(&source, &file, name, &file_name, sets, limits)?;
             super::check_memory(&scene, &source.path, limits)?;
             Ok(scene)
         }
@@ -449,6 +449,7 @@ fn load_builtin(
     name: &Spanned<String>,
     file_name: &str,
     sets: &[String],
+    limits: &Limits,
 ) -> Result<Scene, SceneError> {
     // Form 2 sections make no sense next to `scene = ...`.
     let form2 = [
@@ -526,6 +527,7 @@ fn load_builtin(
             .find(|(k, _)| k.get_ref() == key)
             .map(|(_, v)| v.span())
     };
+    super::check_size(def, &params, &format!("scene file {}", source.path), limits)?;
     let mut scene = (def.build)(&params).map_err(|e| match e {
         SceneError::Param(
             ref p @ (ParamError::OutOfRange { ref key, .. } | ParamError::BadValue { ref key, .. }),
