@@ -222,7 +222,7 @@ proptest! {
         let (name, set) = case;
         let base = LIVE.load(Ordering::SeqCst);
         PEAK.store(base, Ordering::SeqCst);
-        let result = scene::load_with(name, &[set.clone()], &limits);
+        let result = scene::load_with(name, std::slice::from_ref(&set), &limits);
         let peak = PEAK.load(Ordering::SeqCst) - base;
         prop_assert!(peak as f64 <= budget, "{name} {set}: peak {peak} bytes over {budget}");
         if let Err(e) = result {
