@@ -31,7 +31,9 @@
 
 use crate::physics::constraints::{prepare_rods, project_distances};
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{MethodParams, Workspace};
+use glam::DVec3;
+
+use crate::physics::integrators::{MethodParams, Workspace, power_if};
 use crate::physics::particles::State;
 
 pub(super) fn step(
@@ -41,7 +43,15 @@ pub(super) fn step(
     params: &MethodParams,
     work: &mut Workspace,
 ) -> u64 {
-    let a = &mut work.a;
+    let Workspace {
+        a,
+        rods,
+        account,
+        dissipated,
+        power_f,
+        ..
+    } = work;
+    let account = *account;
     accelerations(model, &state.x, &state.v, a);
     let dt2 = dt * dt;
     if !state.history_valid {
@@ -50,16 +60,47 @@ pub(super) fn step(
             state.x_prev[i] = state.x[i] - dt * state.v[i] + 0.5 * dt2 * a[i];
         }
     }
+    // The dampers and drag saw v_n = (x_n - x_{n-1})/dt: D += dt P(x_n, v_n), when accounting.
+    dissipated.add_power(dt, power_if(account, model, &state.x, &state.v, power_f));
     let keep = 1.0 - params.verlet_damping;
+    let rate = params.verlet_damping_rate;
+    let inv_dt2 = 1.0 / dt2;
     for i in 0..state.x.len() {
         let x_n = state.x[i];
-        // x_{n+1} = x_n + (1 - γ)(x_n - x_{n-1}) + a_n dt²
-        state.x[i] = x_n + keep * (x_n - state.x_prev[i]) + dt2 * a[i];
+        let d_n = x_n - state.x_prev[i];
+        if rate == 0.0 {
+            // x_{n+1} = x_n + (1 - γ)(x_n - x_{n-1}) + a_n dt²
+            state.x[i] = x_n + keep * d_n + dt2 * a[i];
+        } else {
+            // Centred rate damping, h = r dt / 2:
+            // x_{n+1} = x_n + (1 - γ) (1 - h)/(1 + h) (x_n - x_{n-1}) + a_n dt² / (1 + h)
+            let h = 0.5 * rate * dt;
+            state.x[i] = x_n + keep * ((1.0 - h) / (1.0 + h)) * d_n + dt2 * a[i] / (1.0 + h);
+            if account && model.inv_mass[i] != 0.0 {
+                // Power r m |v_c|², v_c = (x_{n+1} - x_{n-1}) / (2 dt), over dt.
+                let v_c = (state.x[i] - state.x_prev[i]) / (2.0 * dt);
+                dissipated.method += dt * rate * model.mass[i] * v_c.length_squared();
+            }
+        }
+        if account && keep != 1.0 && model.inv_mass[i] != 0.0 {
+            // γ removes ½ m (1 - (1 - γ)²) |d_n / dt|² of the remembered motion.
+            dissipated.method +=
+                0.5 * model.mass[i] * (1.0 - keep * keep) * d_n.length_squared() * inv_dt2;
+        }
         state.x_prev[i] = x_n;
     }
     if params.iterations > 0 {
-        prepare_rods(model, &mut work.rods);
-        project_distances(&work.rods, &mut state.x, params.iterations);
+        let before = if account {
+            mechanical_energy(model, &state.x, &state.x_prev, dt)
+        } else {
+            0.0
+        };
+        prepare_rods(model, rods);
+        project_distances(rods, &mut state.x, params.iterations);
+        if account {
+            // Projection is inelastic: what it takes out (or, rarely, puts in).
+            dissipated.method += before - mechanical_energy(model, &state.x, &state.x_prev, dt);
+        }
     }
     let inv_dt = 1.0 / dt;
     for i in 0..state.x.len() {
@@ -68,4 +109,14 @@ pub(super) fn step(
     }
     state.history_valid = true;
     1
+}
+
+/// Kinetic (with the implied velocities `(x - x_prev)/dt`), gravitational and elastic energy (J).
+fn mechanical_energy(model: &Model, x: &[DVec3], x_prev: &[DVec3], dt: f64) -> f64 {
+    let mut e = 0.0;
+    for i in 0..x.len() {
+        let v = (x[i] - x_prev[i]) / dt;
+        e += 0.5 * model.mass[i] * v.length_squared() - model.mass[i] * model.gravity.dot(x[i]);
+    }
+    e + model.springs.iter().map(|s| s.energy(x)).sum::<f64>()
 }
