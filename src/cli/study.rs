@@ -61,9 +61,13 @@ pub struct StabilityArgs {
     /// Methods to study, comma separated (default: all), for example `rk4,verlet`.
     #[arg(long, value_name = "A,B")]
     pub methods: Option<String>,
-    /// Horizon T in seconds: each probe runs max(T/dt, N_min) steps.
+    /// Horizon T in seconds: each linear probe takes max(T/dt, 10 000) steps, each
+    /// confirmation run min(50 T/dt, 20 000).
     #[arg(long, value_name = "T", default_value_t = DEFAULT_HORIZON, allow_negative_numbers = true)]
     pub horizon: f64,
+    /// Report the linear limit without the confirmation runs (faster).
+    #[arg(long)]
+    pub no_confirm: bool,
     /// Set a scene parameter, for example `--set stiffness=500` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
@@ -127,7 +131,7 @@ fn run_stability(args: &StabilityArgs) -> anyhow::Result<()> {
             None => Method::ALL.to_vec(),
         },
         horizon: args.horizon,
-        criterion: None,
+        confirm: !args.no_confirm,
     };
     if !(options.horizon > 0.0 && options.horizon.is_finite()) {
         return Err(crate::study::StudyError::Horizon(options.horizon).into());
@@ -161,13 +165,8 @@ pub fn print_table(
 ) -> std::io::Result<()> {
     writeln!(
         out,
-        "study stability · scene {} · horizon {} s · criterion {}",
-        r.scene,
-        r.horizon,
-        match r.criterion {
-            stability::Criterion::Growth => "growth",
-            stability::Criterion::Divergence => "divergence",
-        }
+        "study stability · scene {} · horizon {} s · criterion: {}",
+        r.scene, r.horizon, r.criterion
     )?;
     if !r.sets.is_empty() {
         writeln!(out, "set: {}", r.sets.join(" "))?;
@@ -178,6 +177,7 @@ pub fn print_table(
         r.omega_max, r.omega_method, r.omega_iterations, r.omega_gershgorin
     )?;
     writeln!(out, "stable means: {}", r.definition)?;
+    writeln!(out, "damped theory: {}", r.theory_spectrum)?;
     writeln!(
         out,
         "search: dt·ω_max from {} to {}, bisection in log dt to {:e} relative\n",
@@ -187,38 +187,70 @@ pub fn print_table(
     )?;
     writeln!(
         out,
-        "{:<21} {:<14} {:>14} {:>11} {:>13} {:>7}",
-        "method", "stability", "max stable dt", "dt·ω limit", "theory dt·ω", "probes"
+        "{:<21} {:<14} {:>14} {:>9} {:>11} {:>13} {:>14} {:>9}  binding mode (theory)",
+        "method",
+        "stability",
+        "max stable dt",
+        "dt·ω",
+        "linear dt·ω",
+        "theory dt",
+        "theory dt·ω",
+        "vs theory"
     )?;
+    let limit = |class: Stability, z: Option<f64>| match (class, z) {
+        (_, Some(z)) => format!("{z:.4}"),
+        (Stability::Unconditional, None) => format!("> {}", r.dt_omega_range[1]),
+        (_, None) => "none".to_string(),
+    };
     for m in &r.methods {
         let dt = m
             .max_stable_dt
             .map_or_else(|| "—".to_string(), |dt| format!("{dt:.4e} s"));
-        let limit = match (m.stability, m.limit_dt_omega) {
-            (_, Some(z)) => format!("{z:.4}"),
-            (Stability::Unconditional, None) => format!("> {}", r.dt_omega_range[1]),
-            (_, None) => format!("< {}", r.dt_omega_range[0]),
+        let t = &m.damped_theory;
+        let (theory_dt, theory_z) = match (t.dt, t.dt_omega) {
+            (Some(dt), Some(z)) => (format!("{dt:.4e} s"), format!("{z:.4}")),
+            _ => (t.stability.to_string(), "—".to_string()),
         };
-        let theory = match (m.theory, m.theory_dt_omega) {
-            (_, Some(z)) => format!("{z:.4}"),
-            (t, None) => t.name().to_string(),
+        let versus = match (m.linear_max_dt, t.dt) {
+            (Some(a), Some(b)) => format!("{:+.2} %", 100.0 * (a / b - 1.0)),
+            _ => "—".to_string(),
         };
+        let binding = t.binding.map_or_else(String::new, |b| {
+            let which = if b.stiffest { "ω_max" } else { "ω" };
+            let kind = if b.lambda_im == 0.0 {
+                format!("decay λ = {:.4e} 1/s", b.lambda_re)
+            } else {
+                format!("λ = {:.3e} ± {:.3e} i 1/s", b.lambda_re, b.lambda_im)
+            };
+            format!("{which} = {:.4} rad/s, μ = {:.4e} 1/s, {kind}", b.omega, b.mu)
+        });
         writeln!(
             out,
-            "{:<21} {:<14} {:>14} {:>11} {:>13} {:>7}",
+            "{:<21} {:<14} {:>14} {:>9} {:>11} {:>13} {:>14} {:>9}  {binding}",
             m.method.name(),
             m.stability.name(),
             dt,
-            limit,
-            theory,
-            m.probes.len()
+            limit(m.stability, m.limit_dt_omega),
+            limit(m.linear_stability, m.linear_dt_omega),
+            theory_dt,
+            theory_z,
+            versus
         )?;
+        for c in m.confirmations.iter().filter(|c| !c.passed) {
+            writeln!(
+                out,
+                "    confirmation at dt·ω = {:.4} failed after {} steps: {}",
+                c.dt_omega,
+                c.steps,
+                c.reason.as_deref().unwrap_or("")
+            )?;
+        }
     }
     writeln!(
         out,
-        "\ntheory: the undamped harmonic oscillator (Verlet without damping or projection); \
-         damping, gravity, contact, projection and large motions move the measured limit \
-         ({:.2} s wall)",
+        "\nmax stable dt: linear limit confirmed by a run (halved and bisected when the run \
+         fails); linear dt·ω: perturbation growth alone; theory: the damped linear theory; \
+         vs theory: linear against theory ({:.2} s wall)",
         wall_seconds
     )
 }

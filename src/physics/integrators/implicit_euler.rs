@@ -353,7 +353,9 @@ impl System<'_> {
         if !b_norm2.is_finite() {
             return (0, f64::NAN, false);
         }
-        let tol2 = params.cg_tolerance * params.cg_tolerance * b_norm2;
+        // Relative to |b|, but never below the smallest normal number: a state so close to rest
+        // that |b|² underflows has nothing left to solve for.
+        let tol2 = (params.cg_tolerance * params.cg_tolerance * b_norm2).max(f64::MIN_POSITIVE);
         // z = S P⁻¹ r, stored in p as the first search direction.
         let mut rz = 0.0;
         for i in 0..n {
@@ -397,7 +399,7 @@ impl System<'_> {
         } else {
             0.0
         };
-        let converged = r_norm2.is_finite() && (r_norm2 <= tol2 || b_norm2 == 0.0);
+        let converged = r_norm2.is_finite() && r_norm2 <= tol2;
         (iterations, residual, converged)
     }
 }
