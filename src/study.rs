@@ -22,8 +22,8 @@ pub mod theory;
 
 pub use modes::{OmegaEstimate, omega_max};
 pub use stability::{
-    Confirmation, MethodLimit, Probe, Stability, StabilityOptions, StabilityReport,
-    max_stable_dt, stability,
+    Confirmation, MethodLimit, Probe, Stability, StabilityOptions, StabilityReport, max_stable_dt,
+    stability,
 };
 
 use crate::physics::UnknownMethod;
@@ -59,12 +59,6 @@ pub enum StudyError {
          is undefined; give its springs a stiffness > 0"
     )]
     NoStiffness(String),
-    /// A conservative scene that starts at rest: nothing moves, so nothing can grow.
-    #[error(
-        "scene `{0}` has no gravity, damping or contact and starts at rest: nothing moves, so no \
-         method can be seen to grow; start it away from rest (for example --set amplitude=0.1)"
-    )]
-    AtRest(String),
     /// A horizon so long that one probe would take more than [`stability::MAX_STEPS`] steps.
     #[error(
         "--horizon {horizon}: at the smallest probed dt ({dt:.3e} s) a run would take {steps:.3e} \

@@ -161,7 +161,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
 }
 
 fn write_csv_header(w: &mut impl Write, sim: &Simulation) -> std::io::Result<()> {
-    write!(w, "step,time,kinetic,gravity,elastic,total,dissipated,residual")?;
+    write!(
+        w,
+        "step,time,kinetic,gravity,elastic,total,dissipated,residual"
+    )?;
     for i in 0..sim.scene.particle_count() {
         write!(w, ",x{i},y{i},z{i}")?;
     }

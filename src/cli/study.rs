@@ -222,7 +222,10 @@ pub fn print_table(
             } else {
                 format!("λ = {:.3e} ± {:.3e} i 1/s", b.lambda_re, b.lambda_im)
             };
-            format!("{which} = {:.4} rad/s, μ = {:.4e} 1/s, {kind}", b.omega, b.mu)
+            format!(
+                "{which} = {:.4} rad/s, μ = {:.4e} 1/s, {kind}",
+                b.omega, b.mu
+            )
         });
         writeln!(
             out,

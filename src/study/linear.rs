@@ -231,7 +231,12 @@ impl Linearisation {
             // s such that the largest position (or velocity / ω) component is FD_SIZE L.
             let scale = (0..n)
                 .filter(|&i| self.free[i])
-                .map(|i| dx[i].abs().max_element().max(dv[i].abs().max_element() / self.omega))
+                .map(|i| {
+                    dx[i]
+                        .abs()
+                        .max_element()
+                        .max(dv[i].abs().max_element() / self.omega)
+                })
                 .fold(0.0, f64::max);
             if !(scale > 0.0 && scale.is_finite()) {
                 return stop(k, log_e, false, "not finite");

@@ -166,7 +166,9 @@ pub fn spectrum(model: &Model, state: &State, omega_max: f64) -> Spectrum {
     let (beta_lo, beta_hi) = if model.drag == 0.0 {
         (0.0, 0.0)
     } else {
-        let lo = masses.iter().fold(f64::INFINITY, |a, m| a.min(model.drag / m));
+        let lo = masses
+            .iter()
+            .fold(f64::INFINITY, |a, m| a.min(model.drag / m));
         let hi = masses.iter().fold(0.0f64, |a, m| a.max(model.drag / m));
         (lo, hi)
     };
@@ -180,7 +182,10 @@ pub fn spectrum(model: &Model, state: &State, omega_max: f64) -> Spectrum {
             .collect()
     };
     let mut modes = Vec::new();
-    for &w2 in omegas2.iter().filter(|w2| **w2 > 1e-12 * omega_max * omega_max) {
+    for &w2 in omegas2
+        .iter()
+        .filter(|w2| **w2 > 1e-12 * omega_max * omega_max)
+    {
         let omega = w2.sqrt();
         match rayleigh {
             Some((alpha, beta)) => modes.push(Mode {

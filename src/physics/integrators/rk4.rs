@@ -23,8 +23,8 @@
 //! Differentialgleichungen", Z. Math. Phys. 46 (1901); E. Hairer, S. P. Nørsett, G. Wanner,
 //! *Solving Ordinary Differential Equations I*, 2nd ed., Springer 1993, §II.1, Table 1.2.
 
-use crate::physics::forces::{Model, accelerations};
 use crate::physics::energy::Power;
+use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::{Workspace, power_if};
 use crate::physics::particles::State;
 
