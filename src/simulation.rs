@@ -61,6 +61,8 @@ pub struct Simulation {
     dissipated: Dissipated,
     /// Implicit Euler's linear solves.
     solver: SolverTally,
+    /// Implicit Euler's energy guard on (module docs).
+    guard: bool,
 }
 
 /// Running totals of implicit Euler's solves.
@@ -101,6 +103,7 @@ impl Simulation {
             energy_initial: 0.0,
             dissipated: Dissipated::default(),
             solver: SolverTally::default(),
+            guard: true,
         };
         sim.rebase_energy();
         sim
@@ -114,6 +117,13 @@ impl Simulation {
             w.account = on;
         }
         self.rebase_energy();
+    }
+
+    /// Turns implicit Euler's energy guard (module docs) on or off (on by default). Off, a
+    /// step is one solve however the energy moves: cheaper, for runs that judge boundedness
+    /// rather than every step (the stability study's confirmation runs).
+    pub fn set_energy_guard(&mut self, on: bool) {
+        self.guard = on;
     }
 
     /// True when the energy accounting is on.
@@ -187,7 +197,8 @@ impl Simulation {
         let mut failed_solve = None;
         for (body, work) in self.scene.bodies.iter_mut().zip(&mut self.work) {
             let outcome = if body.method == Method::ImplicitEuler {
-                implicit_step(body, work, self.dt, 0, &mut self.solver)
+                let depth = if self.guard { 0 } else { MAX_HALVINGS };
+                implicit_step(body, work, self.dt, depth, &mut self.solver)
             } else {
                 let evals = plain_step(body, work, self.dt);
                 StepOutcome {

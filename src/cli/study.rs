@@ -61,8 +61,8 @@ pub struct StabilityArgs {
     /// Methods to study, comma separated (default: all), for example `rk4,verlet`.
     #[arg(long, value_name = "A,B")]
     pub methods: Option<String>,
-    /// Horizon T in seconds: each linear probe takes max(T/dt, 10 000) steps, each
-    /// confirmation run min(50 T/dt, 20 000).
+    /// Horizon T in seconds: each linear probe takes max(T/dt, 4 000) steps, each
+    /// confirmation run min(50 T/dt, 10 000).
     #[arg(long, value_name = "T", default_value_t = DEFAULT_HORIZON, allow_negative_numbers = true)]
     pub horizon: f64,
     /// Report the linear limit without the confirmation runs (faster).

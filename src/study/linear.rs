@@ -45,7 +45,7 @@
 //! Ē_early = Σ_j w_j E_{1+j} / Σ w_j,   Ē_late = Σ_j w_j E_{W+1+j} / Σ w_j
 //! stable ⇔ Ē_late ≤ (1 + 10⁻⁶) Ē_early,              ρ ≈ (Ē_late / Ē_early)^(1/(2W))
 //! ```
-//! so a perturbation growing by `ρ = 1 + 10⁻¹⁰` per step over `W = 5000` steps is caught (the
+//! so a perturbation growing by `ρ = 1 + 3·10⁻¹⁰` per step over `W = 2000` steps is caught (the
 //! window cancels the bounded oscillation of symplectic methods, whose `E` is not exactly
 //! conserved). A perturbation that grows 10⁶⁰-fold stops the run as unstable; one that decays
 //! 10¹²-fold stops it as stable.

@@ -196,7 +196,8 @@ pub(super) fn step(
     constraints.clear();
     let mut stats = SolveStats::default();
     loop {
-        let (iterations, residual, converged) = system.solve(constraints, params, cg);
+        let (iterations, residual, converged) =
+            system.solve(constraints, params, cg, stats.passes > 0);
         stats.iterations += iterations;
         stats.relative_residual = residual;
         stats.converged = converged;
@@ -319,6 +320,7 @@ impl System<'_> {
         constraints: &[Constraint],
         params: &MethodParams,
         cg: &mut [Vec<DVec3>; 4],
+        warm: bool,
     ) -> (u32, f64, bool) {
         let n = self.rhs.len();
         let [dv, r, p, ap] = cg;
@@ -328,10 +330,14 @@ impl System<'_> {
                 v[c.i] -= v[c.i].dot(c.normal) * c.normal;
             }
         };
-        // Δv starts at z: the prescribed normal velocity changes, zero elsewhere.
-        dv.fill(DVec3::ZERO);
+        // Δv starts at z: the prescribed normal velocity changes, and elsewhere zero (first
+        // pass) or the previous pass's solution (a warm start: it changed only near contacts).
+        if !warm {
+            dv.fill(DVec3::ZERO);
+        }
         for c in constraints {
-            dv[c.i] = c.dv_n * c.normal;
+            let along = dv[c.i].dot(c.normal);
+            dv[c.i] += (c.dv_n - along) * c.normal;
         }
         // r = S (b - A z), pinned rows zero.
         self.apply(dv, ap);
