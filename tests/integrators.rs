@@ -342,3 +342,50 @@ fn energy_residual_shrinks_with_the_methods_order() {
         );
     }
 }
+
+/// Verlet's error at t = 1 s on the oscillator damped at the rate `mu` (1/s), against
+/// u(t) = u0 e^{-γt}(cos ω_d t + γ/ω_d sin ω_d t), γ = μ/2, ω_d = √(ω² - γ²); the damping
+/// comes from `sets(dt)`.
+fn verlet_damped_error(mu: f64, sets: impl Fn(f64) -> Vec<String>) -> Vec<(f64, f64)> {
+    let gamma = 0.5 * mu;
+    let wd = (OMEGA * OMEGA - gamma * gamma).sqrt();
+    let exact = 1.0 + 0.1 * (-gamma).exp() * (wd.cos() + gamma / wd * wd.sin());
+    [0.005, 0.0025, 0.00125, 0.000625]
+        .iter()
+        .map(|&dt| {
+            let owned = sets(dt);
+            let sets: Vec<&str> = owned.iter().map(String::as_str).collect();
+            let mut sim = oscillator(Method::Verlet, &sets);
+            sim.set_dt(dt);
+            sim.run((1.0 / dt).round() as u64, |_| {});
+            (dt, (oscillator_x(&sim) - exact).abs())
+        })
+        .collect()
+}
+
+#[test]
+fn verlet_order_with_dampers_and_with_its_damping_rate() {
+    let base = |extra: String| vec!["iterations=0".to_string(), "verlet_damping=0".into(), extra];
+    // A spring damper k_d = 2 N·s/m (μ = k_d/m = 2 1/s): the damper sees (x_n - x_{n-1})/dt,
+    // half a step late: first order.
+    let damper = fitted_order(&verlet_damped_error(2.0, |_| base("damping=2".into())));
+    assert!((damper - 1.0).abs() < 0.15, "with a damper: order {damper}");
+    // The same damping as Verlet's rate r = 2 1/s, applied with the centred velocity: second
+    // order, and the same motion at every dt.
+    let rate = fitted_order(&verlet_damped_error(2.0, |_| {
+        base("verlet_damping_rate=2".into())
+    }));
+    assert!((rate - 2.0).abs() < 0.15, "with the rate: order {rate}");
+    // GAMES101's factor γ per step, chosen as γ = r dt at each dt to give the same decay
+    // rate: first order again.
+    let per_step = fitted_order(&verlet_damped_error(2.0, |dt| {
+        vec![
+            "iterations=0".to_string(),
+            format!("verlet_damping={}", 2.0 * dt),
+        ]
+    }));
+    assert!(
+        (per_step - 1.0).abs() < 0.15,
+        "with γ = r dt: order {per_step}"
+    );
+}

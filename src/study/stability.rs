@@ -23,7 +23,7 @@
 //!    used here: a cube resting on a plane under explicit Euler gains a little energy every step
 //!    that the contact response takes away again, so its residual grows steadily while nothing
 //!    is unstable.) A failed confirmation lowers `dt` by 5 % (three times, then
-//!    halves it) until one passes, then bisects to 2 %. The result must also pass at 95 % of itself (nonlinear resonances come
+//!    halves it) until one passes, then bisects to 0.5 %. The result must also pass at 95 % of itself (nonlinear resonances come
 //!    and go with `dt`); if not, the search goes on below.
 //!
 //! The reported `max_stable_dt` is the confirmed one; the linear limit, the damped theory
@@ -98,7 +98,7 @@ pub const CONFIRM_MARGIN: f64 = 0.95;
 /// ... searched again at most this many times.
 pub const CONFIRM_ROUNDS: u32 = 4;
 /// Confirmation bisection stops within this relative width.
-pub const CONFIRM_TOLERANCE: f64 = 0.02;
+pub const CONFIRM_TOLERANCE: f64 = 0.005;
 /// No probe may take more steps than this (see [`StudyError::TooManySteps`]).
 pub const MAX_STEPS: f64 = 1e9;
 
@@ -626,7 +626,7 @@ impl Context<'_> {
         (Stability::Conditional, Some(stable))
     }
 
-    /// Step 4: confirm `z`, else halve until a run passes and bisect to 2 %; then check that a
+    /// Step 4: confirm `z`, else lower it until a run passes and bisect to 0.5 %; then check that a
     /// run at 95 % of the result passes too (nonlinear resonances are not monotone in `dt`),
     /// and search below it when it does not.
     fn confirm_search(

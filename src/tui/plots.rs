@@ -170,6 +170,10 @@ pub struct Sample {
     pub elastic: f64,
     /// Total energy (J).
     pub total: f64,
+    /// Total plus the energy dissipated since the start (J); NaN without accounting.
+    pub total_dissipated: f64,
+    /// The method's energy error `E + D - E_0` (J); NaN without accounting.
+    pub residual: f64,
     /// Largest particle speed (m/s).
     pub max_speed: f64,
     /// `|x_sim - x_exact|` for the oscillator (m); NaN otherwise.
@@ -249,6 +253,12 @@ impl History {
             gravity: e.gravity,
             elastic: e.elastic,
             total: e.total,
+            total_dissipated: if sim.accounting() {
+                e.total + sim.dissipated().total
+            } else {
+                f64::NAN
+            },
+            residual: sim.energy_residual(),
             max_speed,
             error,
         });
@@ -389,6 +399,20 @@ fn render_one(
                     short: "tot",
                     color: Color::White,
                     points: column(|s| s.total),
+                },
+                // The dissipated energy stacked on the total (flat at E0 for an exact
+                // integrator) and the method's own energy error.
+                Series {
+                    name: "total + dissipated",
+                    short: "+D",
+                    color: Color::LightBlue,
+                    points: column(|s| s.total_dissipated),
+                },
+                Series {
+                    name: "residual E + D - E0",
+                    short: "res",
+                    color: Color::LightRed,
+                    points: column(|s| s.residual),
                 },
             ],
             [0.0, now.max(1.0)],
