@@ -12,7 +12,7 @@
 //! | RK4 | 4 | 4 | dt·ω < 2√2 ≈ 2.828 |
 //! | implicit (backward) Euler | 1 + a linear solve | 1 | unconditional |
 //! | predictor–corrector | 2 | 1 | dt·ω ≤ 1 (undamped); on pure damping dt·λ ≤ 1, half of explicit Euler's 2 |
-//! | position Verlet | 1 | 2 | dt·ω < 2 |
+//! | position Verlet | 1 | 2 (1 with dampers or drag) | dt·ω < 2 |
 //! | XPBD | 1 per substep | 1 | unconditional (dissipative) |
 //!
 //! **Energy accounting.** With [`Workspace::account`] set, a step also integrates the power of

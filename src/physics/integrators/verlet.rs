@@ -1,37 +1,58 @@
 //! Position Verlet (Störmer–Verlet) with damping and distance-constraint projection.
 //!
 //! ```text
-//! x_{n+1} = x_n + (1 - γ) (x_n - x_{n-1}) + a(x_n, v_n) dt²
+//! x_{n+1} = x_n + (1 - γ) (x_n - x_{n-1}) + a(x_n, v_n) dt²           (r = 0)
+//! x_{n+1} = x_n + (1 - γ) (1 - h)/(1 + h) (x_n - x_{n-1}) + a(x_n, v_n) dt² / (1 + h)
+//!                                                          h = r dt / 2   (r > 0)
 //! then, `iterations` times, project every spring back to its rest length
 //! v_{n+1} = (x_{n+1} - x_n) / dt
 //! ```
-//! where `x` is position (m), `a` acceleration (m/s²), `dt` the step (s) and `γ` the
-//! dimensionless damping factor (GAMES101 uses 0.00005).
+//! where `x` is position (m), `a` acceleration (m/s²), `dt` the step (s), `γ` the dimensionless
+//! damping factor per step (GAMES101 uses 0.00005) and `r` the damping rate (1/s).
 //!
 //! The velocity is not a state variable: the last displacement `x_n - x_{n-1}` plays its part.
 //! Global error O(dt²): **second order** (the GAMES101 sheet's "fourth order" is the local error
-//! of the position in one step; errors accumulate over 1/dt steps). The velocity reported is the
-//! backward difference, a first-order estimate of `v(t_{n+1})`.
+//! of the position in one step; errors accumulate over 1/dt steps) — **while the forces do not
+//! depend on the velocity**. The velocity `v_n = (x_n - x_{n-1})/dt` that dampers and drag see is
+//! `v(t_n - dt/2)` to second order: half a step late, an O(dt) error in the force, and the
+//! method becomes **first order** with spring dampers or drag (measured on the oscillator with
+//! k_d = 2 N·s/m: order 1.02; undamped 2.00; `study convergence` shows both rows).
+//!
+//! **Damping.** GAMES101's factor `(1 - γ)` shrinks the remembered displacement every step: a
+//! drag of rate `≈ γ/dt`, so its strength changes with `dt` (γ = 5e-5 is 0.05 1/s at dt = 1 ms
+//! and 0.003 1/s at 1/64 s), and it is first order. The rate `r` is the same drag `-r v` at every
+//! `dt`, applied with the centred velocity `(x_{n+1} - x_{n-1})/(2 dt)`, which solves for
+//! `x_{n+1}` in closed form (the second line): second order. The rope scenes keep GAMES101's
+//! `γ = 5e-5` and `r = 0`; the course cubes and cloths have spring dampers and use neither
+//! (`γ = 0`, `r = 0`). Both are scene parameters (`verlet_damping`, `verlet_damping_rate`).
 //!
 //! **Start-up.** The first step needs `x_{-1}`. Taking `x_{-1} = x_0` would be a velocity error
 //! of O(dt) and make the method first order; instead, when the state holds no history,
 //! `x_{-1} = x_0 - dt v_0 + ½ dt² a_0` (Taylor, error O(dt³)).
 //!
-//! **Stability on the harmonic oscillator** (γ = 0, no projection): the same recurrence as
-//! semi-implicit Euler, `x_{n+1} - (2 - dt²ω²) x_n + x_{n-1} = 0`, stable while **dt·ω ≤ 2**.
+//! **Stability on the harmonic oscillator** (γ = 0, r = 0, no projection): the same recurrence
+//! as semi-implicit Euler, `x_{n+1} - (2 - dt²ω²) x_n + x_{n-1} = 0`, stable while **dt·ω ≤ 2**.
+//! With a damper (rate μ on the mode), `x_{n+1} = (1 + c - dt²ω²/(1 + h)) x_n - c x_{n-1}`,
+//! `c = (1 - γ)(1 - h)/(1 + h) - dt μ/(1 + h)`: stable while both roots lie in the unit circle
+//! (see `study::theory`).
 //!
 //! **Projection** ([`project_distances`]) with `iterations > 0` turns every spring into a rigid
 //! rod (an infinitely stiff spring, GAMES101 §1.3): each end moves half the error, a pinned end
 //! none. The spring forces still enter `a`, but after projection they are nearly zero.
+//!
+//! **Energy accounting**: the dampers' power at `(x_n, v_n)` times `dt` (what the force saw),
+//! `½ m (1 - (1 - γ)²) |x_n - x_{n-1}|²/dt²` for the factor, `dt r m |v_centred|²` for the rate,
+//! and the drop of the energy across the projection.
 //!
 //! Reference: L. Verlet, "Computer 'Experiments' on Classical Fluids", Phys. Rev. 159 (1967);
 //! E. Hairer, C. Lubich, G. Wanner, "Geometric numerical integration illustrated by the
 //! Störmer–Verlet method", Acta Numerica 12 (2003), §1; T. Jakobsen, "Advanced Character
 //! Physics", GDC 2001; GAMES101 assignment 8 (2020), §1.3–1.4.
 
+use glam::DVec3;
+
 use crate::physics::constraints::{prepare_rods, project_distances};
 use crate::physics::forces::{Model, accelerations};
-use glam::DVec3;
 
 use crate::physics::integrators::{MethodParams, Workspace, power_if};
 use crate::physics::particles::State;
