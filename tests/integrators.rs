@@ -330,17 +330,15 @@ fn energy_residual_shrinks_with_the_methods_order() {
     let (r, e0) = largest_residual(Method::Rk4, 1.0 / 512.0, 10.0);
     assert!(r < 1e-6 * e0, "RK4 residual {r} J, E0 {e0} J");
     // ... and grows with dt like dt⁴: the dissipated power is integrated with RK4's own stages.
-    for (method, order, steps) in [(Method::Rk4, 4.0, [64.0, 128.0, 256.0])] {
-        let points: Vec<(f64, f64)> = steps
-            .iter()
-            .map(|n| (1.0 / n, largest_residual(method, 1.0 / n, 10.0).0))
-            .collect();
-        let fitted = fitted_order(&points);
-        assert!(
-            (fitted - order).abs() < 0.3,
-            "{method}: residual {points:?}, order {fitted}"
-        );
-    }
+    let points: Vec<(f64, f64)> = [64.0, 128.0, 256.0]
+        .iter()
+        .map(|n| (1.0 / n, largest_residual(Method::Rk4, 1.0 / n, 10.0).0))
+        .collect();
+    let fitted = fitted_order(&points);
+    assert!(
+        (fitted - 4.0).abs() < 0.3,
+        "RK4: residual {points:?}, order {fitted}"
+    );
 }
 
 /// Verlet's error at t = 1 s on the oscillator damped at the rate `mu` (1/s), against

@@ -201,7 +201,7 @@ impl Linearisation {
         self.stiffness_times(&mut dv);
         self.remove_rigid(&mut dx, &mut dv);
         let e = self.energy(&dx, &dv);
-        if !(e > 0.0) {
+        if e.is_nan() || e <= 0.0 {
             return Growth {
                 steps: 0,
                 stable: true,

@@ -766,7 +766,7 @@ pub fn confirm_steps(
                 let r = sim.energy().total - e0;
                 let q = (4 * k / steps) as usize;
                 quarters[q] = quarters[q].max(r);
-                if !(r <= explosion) {
+                if r.is_nan() || r > explosion {
                     reason = Some(format!(
                         "energy rose {r:.4e} J above its start, more than {explosion:.4e} J \
                          (10⁴ S), at t = {:.4e} s",

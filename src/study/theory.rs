@@ -162,7 +162,7 @@ pub fn spectrum(model: &Model, state: &State, omega_max: f64) -> Spectrum {
     let equal_masses = masses.windows(2).all(|w| w[0] == w[1]);
     let beta = masses.first().map_or(0.0, |m| model.drag / m);
     let rayleigh = (rayleigh_springs && (equal_masses || model.drag == 0.0))
-        .then(|| (ratios.0, if model.drag == 0.0 { 0.0 } else { beta }));
+        .then_some((ratios.0, if model.drag == 0.0 { 0.0 } else { beta }));
     let (beta_lo, beta_hi) = if model.drag == 0.0 {
         (0.0, 0.0)
     } else {
@@ -470,7 +470,7 @@ pub fn limit(method: Method, params: &MethodParams, spectrum: &Spectrum) -> Theo
             binding: None,
             how,
         },
-        Some((dt, _)) if dt == 0.0 => TheoryLimit {
+        Some((0.0, _)) => TheoryLimit {
             stability: "none",
             dt: None,
             dt_omega: None,

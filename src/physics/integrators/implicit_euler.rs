@@ -377,7 +377,7 @@ impl System<'_> {
             self.apply(p, ap);
             filter(ap);
             let p_ap: f64 = p.iter().zip(ap.iter()).map(|(p, q)| p.dot(*q)).sum();
-            if !(p_ap > 0.0) {
+            if p_ap.is_nan() || p_ap <= 0.0 {
                 break;
             }
             let alpha = rz / p_ap;
