@@ -35,7 +35,11 @@ fn main() {
     let scale = energy_scale(&scene);
     for m in &report.methods {
         let Some(limit) = m.max_stable_dt else {
-            println!("{:<21} {} (nothing to check)", m.method.name(), m.stability.name());
+            println!(
+                "{:<21} {} (nothing to check)",
+                m.method.name(),
+                m.stability.name()
+            );
             continue;
         };
         let dt = 0.95 * limit;

@@ -714,9 +714,11 @@ fn render_stability(report: Option<&StabilityReport>, theme: Theme, area: Rect, 
             (Stability::Unconditional, None) => "any".to_string(),
             (_, None) => "none".to_string(),
         };
-        let theory = m
-            .theory_dt_omega
-            .map_or_else(|| m.theory.name().to_string(), |z| format!("{z:.3}"));
+        // The damped theory of the scene (on the undamped oscillator: |R| ≤ 1).
+        let theory = m.damped_theory.dt_omega.map_or_else(
+            || m.damped_theory.stability.to_string(),
+            |z| format!("{z:.3}"),
+        );
         lines.push(Line::from(vec![
             Span::styled(format!("{:<20} ", m.method.name()), theme.fg(color)),
             Span::raw(format!("{measured:>10} {theory:>10}")),
