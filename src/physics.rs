@@ -29,8 +29,8 @@ pub mod springs;
 pub mod stencil;
 
 pub use diverge::Divergence;
-pub use energy::{Energy, energy};
+pub use energy::{Dissipated, Energy, Power, dissipated_power, energy};
 pub use forces::{Model, accelerations, forces};
-pub use integrators::{Method, MethodParams, UnknownMethod, Workspace};
+pub use integrators::{Method, MethodParams, SolveStats, UnknownMethod, Workspace};
 pub use particles::State;
 pub use springs::{Spring, SpringKind};

@@ -338,7 +338,15 @@ pub fn method_param_specs(verlet_damping: f64, iterations: i64) -> Vec<ParamSpec
             "",
             verlet_damping,
             Range::From(0.0, 1.0),
-            "Verlet damping factor γ in x + (1 - γ)(x - x_prev)",
+            "Verlet damping factor γ per step in x + (1 - γ)(x - x_prev) (GAMES101; its decay \
+             rate γ/dt changes with dt)",
+        ),
+        ParamSpec::number(
+            "verlet_damping_rate",
+            "1/s",
+            0.0,
+            Range::AtLeast(0.0),
+            "Verlet damping rate r, the same at every dt, centred so Verlet stays second order",
         ),
         ParamSpec::integer(
             "iterations",
@@ -367,6 +375,7 @@ pub fn method_param_specs(verlet_damping: f64, iterations: i64) -> Vec<ParamSpec
 pub fn method_params(params: &Params) -> MethodParams {
     MethodParams {
         verlet_damping: params.number("verlet_damping"),
+        verlet_damping_rate: params.number("verlet_damping_rate"),
         iterations: params.integer("iterations") as u32,
         substeps: params.integer("substeps") as u32,
         cg_tolerance: params.number("cg_tolerance"),

@@ -1,11 +1,43 @@
-//! Running a scene: stepping every body, counting force evaluations, detecting divergence, and
-//! the report `springlab run` prints.
+//! Running a scene: stepping every body, counting force evaluations, detecting divergence,
+//! accounting for the energy that leaves, and the report `springlab run` prints.
+//!
+//! # Energy accounting
+//!
+//! ```text
+//! E(t) + D(t) = E_0 + residual(t)
+//! ```
+//! where `E = E_kinetic + E_gravity + E_elastic` (J, [`crate::physics::energy`]) and `D` (J) is
+//! the energy taken out: the power of dampers, drag and contact forces integrated with the
+//! method's own stages ([`crate::physics::integrators`]), what each collision response removes
+//! (measured as the drop of `E` across it), and Verlet's damping and projection. For an exact
+//! integrator the residual is 0; otherwise it is the method's own energy error, visible on
+//! damped scenes too. Accounting is on by default ([`Simulation::set_accounting`] turns it off
+//! for speed); [`Simulation::rebase_energy`] restarts it after an edit from outside (a changed
+//! stiffness, a dragged particle).
+//!
+//! # Implicit Euler's energy guard
+//!
+//! Backward Euler on springs, gravity and dampers removes energy; one Newton step with a
+//! contact response after it can still add some when a step deforms the body far beyond the
+//! linearisation (measured: `jelly-bowl` at dt = 0.1 s, the lattice squeezed by more than its
+//! spacing in one step). A body stepped by implicit Euler therefore checks that the step and its
+//! collision response did not raise `E` (beyond 10⁻¹² relative); if they did, the step is
+//! taken again as two half steps, each checked the same way, at most [`MAX_HALVINGS`] times
+//! deep, and only while halving at least halves the rise per second (a linearisation error
+//! shrinks with the step; the small up-and-down of a contact resting under a large step does
+//! not, and is accepted). The report counts these steps (`solver.halved_steps`). A driven (kinematic) sphere that
+//! moves does work on the cloth, so bodies with one are not guarded.
 
 use glam::DVec3;
 use serde::Serialize;
 
-use crate::physics::{Divergence, Energy, Method, State, Workspace, collide, diverge, energy};
-use crate::scene::Scene;
+use crate::physics::{
+    Dissipated, Divergence, Energy, Method, SolveStats, State, Workspace, collide, diverge, energy,
+};
+use crate::scene::{Body, Scene};
+
+/// How many times implicit Euler's energy guard may halve one step (2⁵ = 32 substeps).
+pub const MAX_HALVINGS: u32 = 5;
 
 /// A scene in motion.
 #[derive(Clone, Debug)]
@@ -23,6 +55,29 @@ pub struct Simulation {
     pub diverged: Option<Divergence>,
     /// Simulated time when `dt` last changed (s), and the step count then.
     time_base: (f64, u64),
+    /// Energy accounting on.
+    accounting: bool,
+    /// Energy at the start of the accounting (J).
+    energy_initial: f64,
+    /// Energy taken out since then (J).
+    dissipated: Dissipated,
+    /// Implicit Euler's linear solves.
+    solver: SolverTally,
+    /// Implicit Euler's energy guard on (module docs).
+    guard: bool,
+}
+
+/// Running totals of implicit Euler's solves.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct SolverTally {
+    solves: u64,
+    iterations_sum: u64,
+    iterations_max: u32,
+    residual_sum: f64,
+    residual_max: f64,
+    passes_max: u32,
+    constrained_max: u32,
+    halved_steps: u64,
 }
 
 impl Simulation {
@@ -30,8 +85,15 @@ impl Simulation {
     #[must_use]
     pub fn new(scene: Scene) -> Simulation {
         let dt = scene.dt;
-        let work = scene.bodies.iter().map(|_| Workspace::new()).collect();
-        Simulation {
+        let work = scene
+            .bodies
+            .iter()
+            .map(|_| Workspace {
+                account: true,
+                ..Workspace::new()
+            })
+            .collect();
+        let mut sim = Simulation {
             scene,
             dt,
             work,
@@ -39,7 +101,66 @@ impl Simulation {
             force_evals: 0,
             diverged: None,
             time_base: (0.0, 0),
+            accounting: true,
+            energy_initial: 0.0,
+            dissipated: Dissipated::default(),
+            solver: SolverTally::default(),
+            guard: true,
+        };
+        sim.rebase_energy();
+        sim
+    }
+
+    /// Turns the energy accounting on or off (on by default); either way it restarts from the
+    /// present energy. Off, a step costs no more than the method's own work.
+    pub fn set_accounting(&mut self, on: bool) {
+        self.accounting = on;
+        for w in &mut self.work {
+            w.account = on;
         }
+        self.rebase_energy();
+    }
+
+    /// Turns implicit Euler's energy guard (module docs) on or off (on by default). Off, a
+    /// step is one solve however the energy moves: cheaper, for runs that judge boundedness
+    /// rather than every step (the stability study's confirmation runs).
+    pub fn set_energy_guard(&mut self, on: bool) {
+        self.guard = on;
+    }
+
+    /// True when the energy accounting is on.
+    #[must_use]
+    pub fn accounting(&self) -> bool {
+        self.accounting
+    }
+
+    /// Restarts the energy accounting from the present state: `E_0` = the energy now, nothing
+    /// dissipated. Call it after changing the scene from outside the physics.
+    pub fn rebase_energy(&mut self) {
+        self.energy_initial = self.energy().total;
+        self.dissipated = Dissipated::default();
+    }
+
+    /// The energy at the start of the accounting (J).
+    #[must_use]
+    pub fn energy_initial(&self) -> f64 {
+        self.energy_initial
+    }
+
+    /// The energy taken out since the start of the accounting (J), by where it went.
+    #[must_use]
+    pub fn dissipated(&self) -> Dissipated {
+        self.dissipated
+    }
+
+    /// The method's energy error (J): `E + D - E_0`, zero for an exact integrator (module docs);
+    /// NaN when accounting is off.
+    #[must_use]
+    pub fn energy_residual(&self) -> f64 {
+        if !self.accounting {
+            return f64::NAN;
+        }
+        self.energy().total + self.dissipated.total - self.energy_initial
     }
 
     /// The time step (s).
@@ -75,15 +196,46 @@ impl Simulation {
         if self.diverged.is_some() {
             return None;
         }
+        let mut failed_solve = None;
         for (body, work) in self.scene.bodies.iter_mut().zip(&mut self.work) {
-            self.force_evals +=
-                body.method
-                    .step(&body.model, &mut body.state, self.dt, &body.params, work);
-            // Colliders and dynamic spheres (returns at once when the body has neither).
-            collide::after_step(&body.model, &mut body.state, self.dt);
+            let outcome = if body.method == Method::ImplicitEuler {
+                let depth = if self.guard { 0 } else { MAX_HALVINGS };
+                implicit_step(body, work, self.dt, depth, f64::INFINITY, &mut self.solver)
+            } else {
+                let evals = plain_step(body, work, self.dt);
+                StepOutcome {
+                    evals,
+                    dissipated: work.dissipated,
+                    solve: None,
+                }
+            };
+            self.force_evals += outcome.evals;
+            if self.accounting {
+                self.dissipated = self.dissipated.plus(outcome.dissipated);
+            }
+            if let Some(stats) = outcome.solve
+                && failed_solve.is_none()
+            {
+                failed_solve = stats.failure(body.params.cg_tolerance);
+            }
         }
         self.steps += 1;
         let time = self.time();
+        if let Some(reason) = failed_solve {
+            let max_speed = self
+                .scene
+                .bodies
+                .iter()
+                .map(|b| diverge::max_speed(&b.state))
+                .fold(0.0, f64::max);
+            self.diverged = Some(Divergence {
+                step: self.steps,
+                time,
+                max_speed,
+                reason,
+            });
+            return self.diverged.as_ref();
+        }
         for body in &self.scene.bodies {
             if let Some(d) = diverge::check(&body.state, self.steps, time) {
                 self.diverged = Some(d);
@@ -155,6 +307,10 @@ impl Simulation {
             wall_seconds,
             diverged: self.diverged.clone(),
             energy: self.energy(),
+            energy_initial: self.energy_initial,
+            dissipated: self.accounting.then_some(self.dissipated),
+            residual: self.accounting.then(|| self.energy_residual()),
+            solver: (self.solver.solves > 0).then(|| self.solver_report()),
             bodies: self
                 .scene
                 .bodies
@@ -178,6 +334,146 @@ impl Simulation {
                 .collect(),
         }
     }
+}
+
+impl Simulation {
+    /// Implicit Euler's solves so far, or `None` when no body uses it.
+    #[must_use]
+    pub fn solver_report(&self) -> SolverReport {
+        let t = &self.solver;
+        let n = t.solves.max(1) as f64;
+        SolverReport {
+            solves: t.solves,
+            iterations_max: t.iterations_max,
+            iterations_mean: t.iterations_sum as f64 / n,
+            residual_max: t.residual_max,
+            residual_mean: t.residual_sum / n,
+            contact_passes_max: t.passes_max,
+            constrained_max: t.constrained_max,
+            halved_steps: t.halved_steps,
+        }
+    }
+}
+
+/// What one body's step did.
+struct StepOutcome {
+    evals: u64,
+    dissipated: Dissipated,
+    /// Implicit Euler: the worst solve of the step.
+    solve: Option<SolveStats>,
+}
+
+/// A step of a body's method and the collision response after it; the energy the response
+/// removes goes into `work.dissipated.contacts` when accounting.
+fn plain_step(body: &mut Body, work: &mut Workspace, dt: f64) -> u64 {
+    let evals = body
+        .method
+        .step(&body.model, &mut body.state, dt, &body.params, work);
+    let has_contacts = !body.model.colliders.is_empty() || !body.state.spheres.is_empty();
+    if !has_contacts {
+        return evals;
+    }
+    // Colliders and dynamic spheres: the spheres move, then every response happens.
+    collide::advance_spheres(&body.model, &mut body.state, dt);
+    let before = work.account.then(|| energy(&body.model, &body.state).total);
+    collide::collide_spheres(&body.model, &mut body.state, dt);
+    collide::resolve(&body.model, &mut body.state, dt);
+    if let Some(before) = before {
+        work.dissipated.contacts += before - energy(&body.model, &body.state).total;
+        work.dissipated = work.dissipated.summed();
+    }
+    evals
+}
+
+/// An implicit Euler step with the energy guard of the module docs, `depth` halvings deep.
+fn implicit_step(
+    body: &mut Body,
+    work: &mut Workspace,
+    dt: f64,
+    depth: u32,
+    parent_rate: f64,
+    tally: &mut SolverTally,
+) -> StepOutcome {
+    let driven = body
+        .state
+        .spheres
+        .iter()
+        .any(|s| s.kinematic && s.velocity != DVec3::ZERO);
+    let guard = !driven && depth < MAX_HALVINGS;
+    let saved = guard.then(|| body.state.clone());
+    let e0 = guard.then(|| energy(&body.model, &body.state));
+    let evals = plain_step(body, work, dt);
+    let stats = work.last_solve;
+    tally.solves += 1;
+    tally.iterations_sum += u64::from(stats.iterations);
+    tally.iterations_max = tally.iterations_max.max(stats.iterations);
+    if stats.relative_residual.is_finite() {
+        tally.residual_sum += stats.relative_residual;
+        tally.residual_max = tally.residual_max.max(stats.relative_residual);
+    }
+    tally.passes_max = tally.passes_max.max(stats.passes);
+    tally.constrained_max = tally.constrained_max.max(stats.constrained);
+    if !stats.converged {
+        return StepOutcome {
+            evals,
+            dissipated: work.dissipated,
+            solve: Some(stats),
+        };
+    }
+    if let (Some(saved), Some(e0)) = (saved, e0) {
+        let e1 = energy(&body.model, &body.state).total;
+        let scale = e0.kinetic.abs() + e0.gravity.abs() + e0.elastic.abs();
+        // The rise per second of this attempt; halving is worth it only while it shrinks the
+        // rate (a linearisation error does, by dt; an oscillation of a resting contact does not).
+        let rate = (e1 - e0.total) / dt;
+        if e1 > e0.total + 1e-12 * scale && rate < 0.5 * parent_rate {
+            if depth == 0 {
+                tally.halved_steps += 1;
+            }
+            body.state = saved;
+            let a = implicit_step(body, work, 0.5 * dt, depth + 1, rate, tally);
+            let b = implicit_step(body, work, 0.5 * dt, depth + 1, rate, tally);
+            return StepOutcome {
+                evals: evals + a.evals + b.evals,
+                dissipated: a.dissipated.plus(b.dissipated),
+                solve: worse(a.solve, b.solve),
+            };
+        }
+    }
+    StepOutcome {
+        evals,
+        dissipated: work.dissipated,
+        solve: Some(stats),
+    }
+}
+
+/// The failed one of two solves, else the second.
+fn worse(a: Option<SolveStats>, b: Option<SolveStats>) -> Option<SolveStats> {
+    match (a, b) {
+        (Some(a), _) if !a.converged => Some(a),
+        (_, b) => b,
+    }
+}
+
+/// Implicit Euler's linear solves over a run, in a [`RunReport`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SolverReport {
+    /// Linear solves (steps, plus the halves of halved steps).
+    pub solves: u64,
+    /// Most conjugate-gradient iterations of one solve (all its contact passes).
+    pub iterations_max: u32,
+    /// Mean iterations per solve.
+    pub iterations_mean: f64,
+    /// Largest final relative residual `|r|/|b|` (of the solves whose residual was finite).
+    pub residual_max: f64,
+    /// Mean final relative residual.
+    pub residual_mean: f64,
+    /// Most solves of one step (1 + contact passes).
+    pub contact_passes_max: u32,
+    /// Most particles held by contact constraints in one step.
+    pub constrained_max: u32,
+    /// Steps the energy guard took again as halves (module docs).
+    pub halved_steps: u64,
 }
 
 /// One body in a [`RunReport`].
@@ -227,6 +523,17 @@ pub struct RunReport {
     pub diverged: Option<Divergence>,
     /// Energy at the end (J).
     pub energy: Energy,
+    /// Total energy at the start of the accounting (J).
+    pub energy_initial: f64,
+    /// Energy taken out by dampers, drag, contacts and the method (J); null when accounting is
+    /// off.
+    pub dissipated: Option<Dissipated>,
+    /// `energy.total + dissipated.total - energy_initial` (J): the method's own energy error;
+    /// null when accounting is off.
+    pub residual: Option<f64>,
+    /// Implicit Euler's linear solves; the key is left out when no body uses it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub solver: Option<SolverReport>,
     /// The bodies and their methods.
     pub bodies: Vec<BodyReport>,
     /// Final positions (m).

@@ -3,8 +3,8 @@
 //! A study runs a scene many times under the library's own integrators and measures one property
 //! of each method:
 //!
-//! - [`stability`](mod@stability): the largest stable time step of each method, found by bisection on
-//!   `dt·ω_max`, beside the theoretical limit on the harmonic oscillator;
+//! - [`stability`](mod@stability): the largest stable time step of each method, by the growth
+//!   of perturbations ([`linear`]) confirmed by a run, beside the damped theory ([`theory`]);
 //! - [`modes`]: the stiffest mode `ω_max` of a scene, which turns a time step into the
 //!   dimensionless `dt·ω_max` that the stability limits are stated in.
 //!
@@ -15,12 +15,15 @@
 //! Every study is deterministic: the same scene and options give the same numbers, run to run.
 
 pub mod convergence;
+pub mod linear;
 pub mod modes;
 pub mod stability;
+pub mod theory;
 
 pub use modes::{OmegaEstimate, omega_max};
 pub use stability::{
-    Criterion, MethodLimit, Probe, Stability, StabilityOptions, StabilityReport, stability,
+    Confirmation, MethodLimit, Probe, Stability, StabilityOptions, StabilityReport, max_stable_dt,
+    stability,
 };
 
 use crate::physics::UnknownMethod;
@@ -56,12 +59,6 @@ pub enum StudyError {
          is undefined; give its springs a stiffness > 0"
     )]
     NoStiffness(String),
-    /// A conservative scene that starts at rest: nothing moves, so nothing can grow.
-    #[error(
-        "scene `{0}` has no gravity, damping or contact and starts at rest: nothing moves, so no \
-         method can be seen to grow; start it away from rest (for example --set amplitude=0.1)"
-    )]
-    AtRest(String),
     /// A horizon so long that one probe would take more than [`stability::MAX_STEPS`] steps.
     #[error(
         "--horizon {horizon}: at the smallest probed dt ({dt:.3e} s) a run would take {steps:.3e} \

@@ -116,7 +116,7 @@ fn csv_has_a_header_and_one_row_per_recorded_step() {
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(
         lines[0],
-        "step,time,kinetic,gravity,elastic,total,x0,y0,z0,x1,y1,z1"
+        "step,time,kinetic,gravity,elastic,total,dissipated,residual,x0,y0,z0,x1,y1,z1"
     );
     assert_eq!(lines.len(), 1 + 11, "header, step 0 and every 10th step");
     let last: Vec<f64> = lines[11].split(',').map(|c| c.parse().unwrap()).collect();
@@ -124,6 +124,18 @@ fn csv_has_a_header_and_one_row_per_recorded_step() {
     assert!((last[1] - 1.0).abs() < 1e-12);
     // total = kinetic + gravity + elastic on every row
     assert!((last[2] + last[3] + last[4] - last[5]).abs() < 1e-12);
+    // The undamped oscillator dissipates nothing; the residual is RK4's energy error,
+    // E_n - E_0 = (|R(0.1 i)|^(2n) - 1) E_0 with |R|² = 1 - z⁶/72 + z⁸/576, z = 0.1.
+    let first: Vec<f64> = lines[1].split(',').map(|c| c.parse().unwrap()).collect();
+    assert_eq!(last[6], 0.0);
+    let z: f64 = 0.1;
+    let r2 = 1.0 - z.powi(6) / 72.0 + z.powi(8) / 576.0;
+    let expected = (r2.powi(100) - 1.0) * first[5];
+    assert!(
+        (last[7] - expected).abs() < 1e-6 * expected.abs(),
+        "residual {} expected {expected}",
+        last[7]
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

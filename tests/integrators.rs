@@ -195,3 +195,195 @@ fn rk4_matches_its_amplification_factor_on_the_oscillator() {
     let exact = 1.0 + 0.1 * 100f64.cos();
     assert!((x - exact).abs() < 5e-6, "RK4 error {}", (x - exact).abs());
 }
+
+// ---------------------------------------------------------------------------------------------
+// Implicit Euler and contacts; the energy accounting
+
+fn run_scene(
+    name: &str,
+    sets: &[&str],
+    method: Method,
+    dt: f64,
+) -> springlab::simulation::Simulation {
+    let sets: Vec<String> = sets.iter().map(|s| (*s).to_string()).collect();
+    let mut scene = springlab::scene::load(name, &sets).expect("scene");
+    scene.set_method(method);
+    let mut sim = springlab::simulation::Simulation::new(scene);
+    sim.set_dt(dt);
+    sim
+}
+
+/// Runs `sim` for `time` s and asserts that the total energy never rises from one step to the
+/// next (beyond rounding, 1e-12 of its terms); returns the lowest particle height reached.
+fn assert_energy_never_rises(sim: &mut springlab::simulation::Simulation, time: f64) -> f64 {
+    let steps = (time / sim.dt()).round() as u64;
+    let mut last = sim.energy();
+    let mut lowest = f64::INFINITY;
+    for _ in 0..steps {
+        assert!(sim.step().is_none(), "diverged: {:?}", sim.diverged);
+        let e = sim.energy();
+        let scale = last.kinetic.abs() + last.gravity.abs() + last.elastic.abs();
+        assert!(
+            e.total <= last.total + 1e-12 * scale,
+            "energy rose from {} J to {} J at t = {} s (dt = {} s)",
+            last.total,
+            e.total,
+            sim.time(),
+            sim.dt()
+        );
+        last = e;
+        lowest = sim.positions().map(|p| p.y).fold(lowest, f64::min);
+    }
+    lowest
+}
+
+#[test]
+fn implicit_euler_adds_no_energy_over_impacts() {
+    // The jelly lands on the edge of the floor's hole at t ≈ 1.5 s and falls into the bowl; at
+    // dt = 0.04 s the old post-step projection squeezed its springs and added 65 kJ.
+    for dt in [0.01, 0.04, 0.1] {
+        let mut sim = run_scene(
+            "jelly-bowl",
+            &["cg_tolerance=1e-8"],
+            Method::ImplicitEuler,
+            dt,
+        );
+        let lowest = assert_energy_never_rises(&mut sim, 2.4);
+        assert!(
+            lowest < 0.0,
+            "dt {dt}: the jelly never went into the hole ({lowest})"
+        );
+        let solver = sim.solver_report();
+        assert!(
+            solver.iterations_max > 0 && solver.residual_max <= 1e-8,
+            "{solver:?}"
+        );
+        assert!(
+            solver.constrained_max > 0,
+            "dt {dt}: no contact reached the solve"
+        );
+    }
+    // The four spheres fall into the cloth (they reach it at t ≈ 0.3 s).
+    for dt in [0.005, 0.02] {
+        let mut sim = run_scene(
+            "cloth-spheres",
+            &["cg_tolerance=1e-8"],
+            Method::ImplicitEuler,
+            dt,
+        );
+        assert_energy_never_rises(&mut sim, 1.0);
+        let sphere = sim.scene.bodies[0].state.spheres[0];
+        assert!(
+            sphere.center.y < 0.0,
+            "dt {dt}: the spheres did not sink into the cloth"
+        );
+    }
+}
+
+#[test]
+fn failed_implicit_solves_are_divergences() {
+    // An overflowing stiffness (outside the range a user may set, so set in code): the solve
+    // is not finite.
+    let mut sim = run_scene("rope", &[], Method::ImplicitEuler, 1.0 / 64.0);
+    let damping = sim.scene.bodies[0].model.springs[0].damping;
+    sim.scene.bodies[0]
+        .model
+        .set_spring_coefficients(1e308, damping);
+    sim.run(10, |_| {});
+    let d = sim.diverged.as_ref().expect("reported");
+    assert_eq!(d.step, 1);
+    assert!(d.reason.contains("overflowed"), "{}", d.reason);
+    // Too few iterations for a 40-node rope hanging straight down (gravity along it).
+    let mut sim = run_scene(
+        "rope",
+        &["nodes=40", "end=[0,-2,0]"],
+        Method::ImplicitEuler,
+        0.5,
+    );
+    sim.scene.bodies[0].params.cg_max_iterations = 20;
+    sim.step();
+    let d = sim.diverged.as_ref().expect("reported");
+    assert!(d.reason.contains("did not converge"), "{}", d.reason);
+    let report = sim.report(0.0);
+    let solver = report.solver.expect("solver statistics");
+    assert_eq!(solver.iterations_max, 20);
+    assert!(solver.residual_max > 1e-10);
+}
+
+/// The largest |E + D - E_0| (J) over `time` s of the damped rope under `method` at `dt`.
+fn largest_residual(method: Method, dt: f64, time: f64) -> (f64, f64) {
+    let mut sim = run_scene("rope", &["damping=2", "drag=0.1"], method, dt);
+    let e0 = sim.energy().total;
+    let mut largest = 0.0f64;
+    sim.run((time / dt).round() as u64, |s| {
+        largest = largest.max(s.energy_residual().abs())
+    });
+    assert!(sim.diverged.is_none());
+    // Something was dissipated: the accounting is not trivially zero.
+    assert!(sim.dissipated().dampers_and_drag > 0.1 * e0.abs());
+    (largest, e0)
+}
+
+#[test]
+fn energy_residual_shrinks_with_the_methods_order() {
+    // RK4 at a small dt: the residual stays below 1e-6 of E0 over 10 s ...
+    let (r, e0) = largest_residual(Method::Rk4, 1.0 / 512.0, 10.0);
+    assert!(r < 1e-6 * e0, "RK4 residual {r} J, E0 {e0} J");
+    // ... and grows with dt like dt⁴: the dissipated power is integrated with RK4's own stages.
+    let points: Vec<(f64, f64)> = [64.0, 128.0, 256.0]
+        .iter()
+        .map(|n| (1.0 / n, largest_residual(Method::Rk4, 1.0 / n, 10.0).0))
+        .collect();
+    let fitted = fitted_order(&points);
+    assert!(
+        (fitted - 4.0).abs() < 0.3,
+        "RK4: residual {points:?}, order {fitted}"
+    );
+}
+
+/// Verlet's error at t = 1 s on the oscillator damped at the rate `mu` (1/s), against
+/// u(t) = u0 e^{-γt}(cos ω_d t + γ/ω_d sin ω_d t), γ = μ/2, ω_d = √(ω² - γ²); the damping
+/// comes from `sets(dt)`.
+fn verlet_damped_error(mu: f64, sets: impl Fn(f64) -> Vec<String>) -> Vec<(f64, f64)> {
+    let gamma = 0.5 * mu;
+    let wd = (OMEGA * OMEGA - gamma * gamma).sqrt();
+    let exact = 1.0 + 0.1 * (-gamma).exp() * (wd.cos() + gamma / wd * wd.sin());
+    [0.005, 0.0025, 0.00125, 0.000625]
+        .iter()
+        .map(|&dt| {
+            let owned = sets(dt);
+            let sets: Vec<&str> = owned.iter().map(String::as_str).collect();
+            let mut sim = oscillator(Method::Verlet, &sets);
+            sim.set_dt(dt);
+            sim.run((1.0 / dt).round() as u64, |_| {});
+            (dt, (oscillator_x(&sim) - exact).abs())
+        })
+        .collect()
+}
+
+#[test]
+fn verlet_order_with_dampers_and_with_its_damping_rate() {
+    let base = |extra: String| vec!["iterations=0".to_string(), "verlet_damping=0".into(), extra];
+    // A spring damper k_d = 2 N·s/m (μ = k_d/m = 2 1/s): the damper sees (x_n - x_{n-1})/dt,
+    // half a step late: first order.
+    let damper = fitted_order(&verlet_damped_error(2.0, |_| base("damping=2".into())));
+    assert!((damper - 1.0).abs() < 0.15, "with a damper: order {damper}");
+    // The same damping as Verlet's rate r = 2 1/s, applied with the centred velocity: second
+    // order, and the same motion at every dt.
+    let rate = fitted_order(&verlet_damped_error(2.0, |_| {
+        base("verlet_damping_rate=2".into())
+    }));
+    assert!((rate - 2.0).abs() < 0.15, "with the rate: order {rate}");
+    // GAMES101's factor γ per step, chosen as γ = r dt at each dt to give the same decay
+    // rate: first order again.
+    let per_step = fitted_order(&verlet_damped_error(2.0, |dt| {
+        vec![
+            "iterations=0".to_string(),
+            format!("verlet_damping={}", 2.0 * dt),
+        ]
+    }));
+    assert!(
+        (per_step - 1.0).abs() < 0.15,
+        "with γ = r dt: order {per_step}"
+    );
+}

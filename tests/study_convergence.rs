@@ -101,6 +101,12 @@ fn the_same_study_twice_gives_the_same_errors() {
                 p["wall_seconds"] = 0.into();
             }
         }
+        for p in v["verlet_companion"]["verlet"]["points"]
+            .as_array_mut()
+            .unwrap()
+        {
+            p["wall_seconds"] = 0.into();
+        }
         v
     };
     let args = ["study", "convergence", "rope", "--json"];
@@ -137,4 +143,51 @@ fn bad_study_input_gets_a_message() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(message), "{args:?}: {err}");
     }
+}
+
+#[test]
+fn verlet_is_second_order_without_dampers_and_first_order_with_them() {
+    let v = json(&["study", "convergence", "oscillator", "--json"]);
+    let verlet = orders(&v)
+        .into_iter()
+        .find(|(m, _)| m == "verlet")
+        .and_then(|(_, o)| o)
+        .unwrap();
+    assert!((verlet - 2.0).abs() <= 0.15, "undamped: {verlet}");
+    // The companion row: the same oscillator with a damper k_d = 0.2 √(k m) = 2 N·s/m, against
+    // the exact damped solution.
+    let c = &v["verlet_companion"];
+    assert_eq!(c["damped"], true);
+    assert_eq!(c["sets"][0], "damping=2");
+    assert_eq!(c["reference"], "exact");
+    let damped = c["verlet"]["order"].as_f64().unwrap();
+    assert!((damped - 1.0).abs() <= 0.15, "damped: {damped}");
+    // Starting from the damped oscillator, the companion switches the damper off.
+    let v = json(&[
+        "study",
+        "convergence",
+        "oscillator",
+        "--set",
+        "damping=2",
+        "--methods",
+        "verlet,rk4",
+        "--json",
+    ]);
+    assert_eq!(v["verlet_companion"]["damped"], false);
+    assert_eq!(v["verlet_companion"]["sets"][0], "damping=0");
+    let rk4 = orders(&v)[1].1.unwrap();
+    assert!(
+        (rk4 - 4.0).abs() <= 0.15,
+        "RK4 on the damped oscillator: {rk4}"
+    );
+    // No Verlet, no companion.
+    let v = json(&[
+        "study",
+        "convergence",
+        "oscillator",
+        "--methods",
+        "rk4",
+        "--json",
+    ]);
+    assert!(v.get("verlet_companion").is_none());
 }

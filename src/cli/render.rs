@@ -267,7 +267,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let total = start_steps + plan.steps;
     // Energy samples: at most about 4000 over the run, and the last step.
     let stride = total.div_ceil(4000).max(1);
-    let mut energies: Vec<(f64, crate::physics::Energy)> = Vec::new();
+    let mut energies: Vec<EnergySample> = Vec::new();
     let mut drawn = 0u64;
     for step in 0..=total {
         if interrupt::requested() {
@@ -282,7 +282,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             break;
         }
         if plan.chart.is_some() && (step.is_multiple_of(stride) || step == total) {
-            energies.push((sim.time(), sim.energy()));
+            energies.push(EnergySample {
+                t: sim.time(),
+                energy: sim.energy(),
+                dissipated: sim.dissipated().total,
+            });
         }
         if step >= start_steps
             && (step - start_steps).is_multiple_of(plan.every)
@@ -447,11 +451,24 @@ fn finite_degrees(flag: &str, degrees: f64) -> anyhow::Result<f64> {
     }
 }
 
-/// The energy chart of a run: kinetic, gravitational, elastic and total energy against time.
+/// One sample of the energy chart.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EnergySample {
+    /// Simulated time (s).
+    pub t: f64,
+    /// The energy terms (J).
+    pub energy: crate::physics::Energy,
+    /// Energy dissipated since the start (J).
+    pub dissipated: f64,
+}
+
+/// The energy chart of a run: kinetic, gravitational, elastic and total energy against time,
+/// the dissipated energy as a band on top of the total (total + dissipated stays at `E_0` for an
+/// exact integrator), and the residual `E + D - E_0`, the method's own energy error.
 #[must_use]
-pub fn energy_chart(sim: &Simulation, samples: &[(f64, crate::physics::Energy)]) -> Chart {
-    let series = |name: &str, c: Colour, f: fn(&crate::physics::Energy) -> f64| {
-        Series::line(name, samples.iter().map(|(t, e)| (*t, f(e))).collect()).with_colour(c)
+pub fn energy_chart(sim: &Simulation, samples: &[EnergySample]) -> Chart {
+    let series = |name: &str, c: Colour, f: &dyn Fn(&EnergySample) -> f64| {
+        Series::line(name, samples.iter().map(|s| (s.t, f(s))).collect()).with_colour(c)
     };
     let mut title = format!(
         "Energy: {} ({}, dt = {} s)",
@@ -462,11 +479,31 @@ pub fn energy_chart(sim: &Simulation, samples: &[(f64, crate::physics::Energy)])
     if let Some(d) = &sim.diverged {
         title.push_str(&format!(", diverged at t = {:.3} s", d.time));
     }
-    Chart::new(title, "time t (s)", "energy E (J)")
-        .with(series("kinetic", colour::SERIES[1], |e| e.kinetic))
-        .with(series("gravitational", colour::SERIES[2], |e| e.gravity))
-        .with(series("elastic", colour::SERIES[4], |e| e.elastic))
-        .with(series("total", Colour::rgb(30, 30, 30), |e| e.total))
+    let e0 = sim.energy_initial();
+    let total: Vec<(f64, f64)> = samples.iter().map(|s| (s.t, s.energy.total)).collect();
+    let mut chart = Chart::new(title, "time t (s)", "energy E (J)")
+        .with(series("kinetic", colour::SERIES[1], &|s| s.energy.kinetic))
+        .with(series("gravitational", colour::SERIES[2], &|s| {
+            s.energy.gravity
+        }))
+        .with(series("elastic", colour::SERIES[4], &|s| s.energy.elastic));
+    if sim.accounting() {
+        chart = chart
+            .with(
+                series("total + dissipated", Colour::rgb(70, 110, 200), &|s| {
+                    s.energy.total + s.dissipated
+                })
+                .with_band(total),
+            )
+            .with(series(
+                "residual E + D - E0",
+                Colour::rgb(200, 30, 30),
+                &|s| s.energy.total + s.dissipated - e0,
+            ));
+    }
+    chart.with(series("total", Colour::rgb(30, 30, 30), &|s| {
+        s.energy.total
+    }))
 }
 
 /// One line per output, and the divergence if any.

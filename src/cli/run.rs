@@ -235,7 +235,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
 }
 
 fn write_csv_header(w: &mut impl Write, sim: &Simulation) -> std::io::Result<()> {
-    write!(w, "step,time,kinetic,gravity,elastic,total")?;
+    write!(
+        w,
+        "step,time,kinetic,gravity,elastic,total,dissipated,residual"
+    )?;
     for i in 0..sim.scene.particle_count() {
         write!(w, ",x{i},y{i},z{i}")?;
     }
@@ -246,13 +249,15 @@ fn write_csv_row(w: &mut impl Write, sim: &Simulation) -> std::io::Result<()> {
     let e = sim.energy();
     write!(
         w,
-        "{},{},{},{},{},{}",
+        "{},{},{},{},{},{},{},{}",
         sim.steps,
         sim.time(),
         e.kinetic,
         e.gravity,
         e.elastic,
-        e.total
+        e.total,
+        sim.dissipated().total,
+        sim.energy_residual()
     )?;
     for p in sim.positions() {
         write!(w, ",{},{},{}", p.x, p.y, p.z)?;
@@ -290,6 +295,34 @@ pub fn print_summary(out: &mut impl Write, r: &RunReport) -> std::io::Result<()>
         "energy: kinetic {:.6e} J · gravity {:.6e} J · elastic {:.6e} J · total {:.6e} J",
         e.kinetic, e.gravity, e.elastic, e.total
     )?;
+    if let (Some(d), Some(residual)) = (&r.dissipated, r.residual) {
+        writeln!(
+            out,
+            "energy accounting: start {:.6e} J · dissipated {:.6e} J (dampers and drag {:.3e}, \
+             contact forces {:.3e}, contacts {:.3e}, method {:.3e}) · residual {:.3e} J",
+            r.energy_initial,
+            d.total,
+            d.dampers_and_drag,
+            d.contact_forces,
+            d.contacts,
+            d.method,
+            residual
+        )?;
+    }
+    if let Some(s) = &r.solver {
+        writeln!(
+            out,
+            "implicit solves: {} · CG iterations max {} mean {:.1} · relative residual max {:.2e} \
+             mean {:.2e} · contact passes max {} · steps halved by the energy guard {}",
+            s.solves,
+            s.iterations_max,
+            s.iterations_mean,
+            s.residual_max,
+            s.residual_mean,
+            s.contact_passes_max,
+            s.halved_steps
+        )?;
+    }
     match &r.diverged {
         None => writeln!(out, "stable: no divergence"),
         Some(d) => writeln!(

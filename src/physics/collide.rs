@@ -482,29 +482,63 @@ impl DynamicSphere {
 /// documentation for the formulas. Called by [`super::forces()`] after the springs, only when
 /// the model has colliders. Pure and allocation-free.
 pub fn contact_forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
-    let params = &model.contact;
     for i in 0..model.particle_count() {
         if model.inv_mass[i] == 0.0 {
             continue;
         }
-        for collider in &model.colliders {
-            let Some(Contact { phi, normal }) = collider.contact(x[i]) else {
-                continue;
-            };
-            let push = normal.dot(f[i]);
-            let v_n = normal.dot(v[i]);
-            if phi >= params.epsilon || push >= 0.0 || v_n > ROUNDING_SPEED {
-                continue;
-            }
-            // λ = -N·f > 0; f_T = f - (N·f) N; v_T = v - (v·N) N.
-            let load = -push;
-            let f_t = f[i] - push * normal;
-            let v_t = v[i] - v_n * normal;
-            // f_c = λ N cancels the push; f_f resists sliding.
-            f[i] +=
-                load * normal + friction_force(params.friction * load, f_t, v_t, params.rest_speed);
+        if let Some(total) = with_contact(model, x[i], v[i], f[i]) {
+            f[i] = total;
         }
     }
+}
+
+/// The power the contact forces and friction take out of the particles (W, ≥ 0):
+///
+/// ```text
+/// P_contact = -Σ_i f_contact,i · v_i = -Σ_i (λ N + f_f) · v_i
+/// ```
+/// where `f_applied` are the forces on the particles before contact (N): weight, drag and
+/// springs, as [`super::forces::applied_forces`] computes them. Each term is ≥ 0 by
+/// construction (`f_c·v = λ N·v ≤ 0`, `f_f·v_T ≤ 0`, module docs).
+#[must_use]
+pub fn contact_power(model: &Model, x: &[DVec3], v: &[DVec3], f_applied: &[DVec3]) -> f64 {
+    let mut power = 0.0;
+    for i in 0..model.particle_count() {
+        if model.inv_mass[i] == 0.0 {
+            continue;
+        }
+        if let Some(total) = with_contact(model, x[i], v[i], f_applied[i]) {
+            power -= (total - f_applied[i]).dot(v[i]);
+        }
+    }
+    power
+}
+
+/// The force on particle `i` at `x` moving at `v` after the colliders added their contact force
+/// and friction to the applied force `f` (N), each collider in order seeing what the previous
+/// ones left (module docs); `None` when no collider pushes it.
+fn with_contact(model: &Model, x: DVec3, v: DVec3, f: DVec3) -> Option<DVec3> {
+    let params = &model.contact;
+    let mut f = f;
+    let mut touched = false;
+    for collider in &model.colliders {
+        let Some(Contact { phi, normal }) = collider.contact(x) else {
+            continue;
+        };
+        let push = normal.dot(f);
+        let v_n = normal.dot(v);
+        if phi >= params.epsilon || push >= 0.0 || v_n > ROUNDING_SPEED {
+            continue;
+        }
+        // λ = -N·f > 0; f_T = f - (N·f) N; v_T = v - (v·N) N.
+        let load = -push;
+        let f_t = f - push * normal;
+        let v_t = v - v_n * normal;
+        // f_c = λ N cancels the push; f_f resists sliding.
+        f += load * normal + friction_force(params.friction * load, f_t, v_t, params.rest_speed);
+        touched = true;
+    }
+    touched.then_some(f)
 }
 
 /// Coulomb friction (N) with limit `limit = k_f λ` (N), for tangential force `f_t` (N) and
@@ -648,6 +682,25 @@ fn keep_verlet_history(history_valid: bool, x_prev: &mut DVec3, x: DVec3, v: DVe
 /// 4. sphere–particle impulses and separation (restitution `sphere_particle_restitution`); a
 ///    pinned particle counts as infinitely heavy.
 pub fn step_spheres(model: &Model, state: &mut State, dt: f64) {
+    advance_spheres(model, state, dt);
+    collide_spheres(model, state, dt);
+}
+
+/// Step 1 of [`step_spheres`]: moves every dynamic sphere by `dt` seconds (semi-implicit Euler
+/// under gravity; a kinematic sphere at its set velocity).
+pub fn advance_spheres(model: &Model, state: &mut State, dt: f64) {
+    for s in &mut state.spheres {
+        if !s.kinematic {
+            // Semi-implicit Euler: velocity first, then position with the new velocity.
+            s.velocity += dt * model.gravity;
+        }
+        s.center += dt * s.velocity;
+    }
+}
+
+/// Steps 2–4 of [`step_spheres`]: the impulses and separations between spheres, colliders and
+/// particles after the spheres moved. `dt` (s) keeps Verlet's history consistent.
+pub fn collide_spheres(model: &Model, state: &mut State, dt: f64) {
     if state.spheres.is_empty() {
         return;
     }
@@ -659,13 +712,6 @@ pub fn step_spheres(model: &Model, state: &mut State, dt: f64) {
         history_valid,
         spheres,
     } = state;
-    for s in spheres.iter_mut() {
-        if !s.kinematic {
-            // Semi-implicit Euler: velocity first, then position with the new velocity.
-            s.velocity += dt * model.gravity;
-        }
-        s.center += dt * s.velocity;
-    }
     for b in 1..spheres.len() {
         let (before, rest) = spheres.split_at_mut(b);
         let sb = &mut rest[0];

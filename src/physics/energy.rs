@@ -16,7 +16,10 @@
 
 use serde::Serialize;
 
-use super::forces::Model;
+use glam::DVec3;
+
+use super::collide::contact_power;
+use super::forces::{Model, applied_forces};
 use super::particles::State;
 
 /// Kinetic, gravitational and elastic energy (J).
@@ -64,5 +67,119 @@ pub fn energy(model: &Model, state: &State) -> Energy {
         gravity,
         elastic,
         total: kinetic + gravity + elastic,
+    }
+}
+
+/// The power that the dissipative forces take out of the particles at positions `x` (m) and
+/// velocities `v` (m/s), split by source (W, each ≥ 0):
+///
+/// ```text
+/// P_dampers = Σ_springs k_d ((v_b - v_a)·n)²          the damper force times the stretch rate
+/// P_drag    = Σ_free c |v_i|²
+/// P_contact = -Σ_i f_contact,i · v_i                  normal force and friction, see collide
+/// ```
+/// where `k_d` is a damper coefficient (N·s/m), `n` its spring's unit direction, `c` the viscous
+/// drag (N·s/m). `scratch` (one entry per particle) receives the forces before contact; it is
+/// used only when the model has colliders.
+///
+/// Integrated over a step with the method's own stages (see [`crate::physics::integrators`]),
+/// these powers give the energy dissipated, so that
+/// `E_kinetic + E_gravity + E_elastic + dissipated = E_0` for an exact integrator.
+#[must_use]
+pub fn dissipated_power(model: &Model, x: &[DVec3], v: &[DVec3], scratch: &mut [DVec3]) -> Power {
+    let mut dampers = 0.0;
+    for s in model.springs.iter().filter(|s| s.damping != 0.0) {
+        let (a, b) = (s.a as usize, s.b as usize);
+        let d = x[b] - x[a];
+        let length = d.length();
+        if length == 0.0 {
+            continue;
+        }
+        let rate = (v[b] - v[a]).dot(d) / length;
+        dampers += s.damping * rate * rate;
+    }
+    let mut drag = 0.0;
+    if model.drag != 0.0 {
+        for (v, &w) in v.iter().zip(&model.inv_mass) {
+            if w != 0.0 {
+                drag += model.drag * v.length_squared();
+            }
+        }
+    }
+    let contact = if model.colliders.is_empty() {
+        0.0
+    } else {
+        applied_forces(model, x, v, scratch);
+        contact_power(model, x, v, scratch)
+    };
+    Power {
+        dampers_and_drag: dampers + drag,
+        contact,
+    }
+}
+
+/// Dissipated power by source (W); see [`dissipated_power`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Power {
+    /// Spring dampers and viscous drag (W).
+    pub dampers_and_drag: f64,
+    /// Contact forces and friction of the colliders (W).
+    pub contact: f64,
+}
+
+impl Power {
+    /// `self + w p`: one term of a quadrature.
+    #[must_use]
+    pub fn plus(self, w: f64, p: Power) -> Power {
+        Power {
+            dampers_and_drag: self.dampers_and_drag + w * p.dampers_and_drag,
+            contact: self.contact + w * p.contact,
+        }
+    }
+}
+
+/// Energy taken out of a system (J), by where it went. Positive: removed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Dissipated {
+    /// By spring dampers and viscous drag: their power integrated with the method's stages (J).
+    pub dampers_and_drag: f64,
+    /// By the colliders' contact forces and friction during the steps (J).
+    pub contact_forces: f64,
+    /// By what happens between steps: collision responses (bounces, projection), sphere
+    /// impulses, and implicit Euler's contact constraints (J). Work done on the system by a
+    /// driven (kinematic) sphere counts negative.
+    pub contacts: f64,
+    /// By the method itself on purpose: Verlet's damping factor and its constraint projection
+    /// (J).
+    pub method: f64,
+    /// The sum (J).
+    pub total: f64,
+}
+
+impl Dissipated {
+    /// The sum of two (of two steps, or of two bodies), with `total` recomputed.
+    #[must_use]
+    pub fn plus(self, o: Dissipated) -> Dissipated {
+        Dissipated {
+            dampers_and_drag: self.dampers_and_drag + o.dampers_and_drag,
+            contact_forces: self.contact_forces + o.contact_forces,
+            contacts: self.contacts + o.contacts,
+            method: self.method + o.method,
+            total: 0.0,
+        }
+        .summed()
+    }
+
+    /// The same with `total` set to the sum of the parts.
+    #[must_use]
+    pub fn summed(mut self) -> Dissipated {
+        self.total = self.dampers_and_drag + self.contact_forces + self.contacts + self.method;
+        self
+    }
+
+    /// Adds `dt · p` (one step's quadrature of the powers `p`, W) to the force parts.
+    pub fn add_power(&mut self, dt: f64, p: Power) {
+        self.dampers_and_drag += dt * p.dampers_and_drag;
+        self.contact_forces += dt * p.contact;
     }
 }

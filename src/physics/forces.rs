@@ -243,6 +243,19 @@ fn colour_springs(particles: usize, springs: &[Spring]) -> (Vec<u32>, Vec<usize>
 /// # Panics
 /// If `x`, `v` or `f` is shorter than the model's particle count.
 pub fn forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
+    applied_forces(model, x, v, f);
+    // Contact: it cancels what pushes into a surface, so it comes after everything else.
+    if !model.colliders.is_empty() {
+        contact_forces(model, x, v, f);
+    }
+}
+
+/// The forces before contact (N): weight, drag and springs, `f_i = m_i g - c v_i + Σ f_spring→i`.
+/// [`forces`] adds the contact forces to these. Pure and allocation-free.
+///
+/// # Panics
+/// If `x`, `v` or `f` is shorter than the model's particle count.
+pub fn applied_forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
     let n = model.particle_count();
     let (v, f) = (&v[..n], &mut f[..n]);
     if let Some(stencil) = &model.stencil {
@@ -262,10 +275,6 @@ pub fn forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
                 f[s.b as usize] -= f_a;
             }
         }
-    }
-    // Contact: it cancels what pushes into a surface, so it comes after everything else.
-    if !model.colliders.is_empty() {
-        contact_forces(model, x, v, f);
     }
 }
 

@@ -12,8 +12,16 @@
 //! | RK4 | 4 | 4 | dt·ω < 2√2 ≈ 2.828 |
 //! | implicit (backward) Euler | 1 + a linear solve | 1 | unconditional |
 //! | predictor–corrector | 2 | 1 | dt·ω ≤ 1 (undamped); on pure damping dt·λ ≤ 1, half of explicit Euler's 2 |
-//! | position Verlet | 1 | 2 | dt·ω < 2 |
+//! | position Verlet | 1 | 2 (1 with dampers or drag) | dt·ω < 2 |
 //! | XPBD | 1 per substep | 1 | unconditional (dissipative) |
+//!
+//! **Energy accounting.** With [`Workspace::account`] set, a step also integrates the power of
+//! the dissipative forces (dampers, drag, contact forces and friction,
+//! [`dissipated_power`]) as one more equation `D' = P(x, v)`, stepped with the method's own
+//! stages and weights (RK4: `dt/6 (P1 + 2 P2 + 2 P3 + P4)`; midpoint: `dt P(mid)`;
+//! predictor–corrector: `dt P(predicted)`; the Euler methods and Verlet: `dt P(x_n, v_n)`;
+//! implicit Euler: `dt P(x_{n+1}, v_{n+1})`), so that the residual
+//! `E + D - E_0` shrinks with the method's order. [`Workspace::dissipated`] holds the result.
 
 mod explicit_euler;
 mod implicit_euler;
@@ -30,10 +38,11 @@ use std::str::FromStr;
 use glam::{DMat3, DVec3};
 use serde::{Serialize, Serializer};
 
+use super::energy::{Dissipated, Power, dissipated_power};
 use super::forces::Model;
 use super::particles::State;
 
-pub use implicit_euler::SolveStats;
+pub use implicit_euler::{MAX_CONTACT_PASSES, SolveStats};
 
 /// An integration method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -104,7 +113,8 @@ impl Method {
         work: &mut Workspace,
     ) -> u64 {
         work.resize(model.particle_count(), model.springs.len());
-        match self {
+        work.dissipated = Dissipated::default();
+        let evals = match self {
             Method::ExplicitEuler => explicit_euler::step(model, state, dt, work),
             Method::SemiImplicitEuler => semi_implicit_euler::step(model, state, dt, work),
             Method::Midpoint => midpoint::step(model, state, dt, work),
@@ -113,7 +123,9 @@ impl Method {
             Method::PredictorCorrector => predictor_corrector::step(model, state, dt, work),
             Method::Verlet => verlet::step(model, state, dt, params, work),
             Method::Xpbd => xpbd::step(model, state, dt, params, work),
-        }
+        };
+        work.dissipated = work.dissipated.summed();
+        evals
     }
 }
 
@@ -154,8 +166,12 @@ impl FromStr for Method {
 /// Settings of the methods that have any; each scene supplies its defaults.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct MethodParams {
-    /// Verlet's damping factor γ in `x + (1 - γ)(x - x_prev)` (dimensionless, 0 ≤ γ < 1).
+    /// Verlet's damping factor γ per step in `x + (1 - γ)(x - x_prev)` (dimensionless,
+    /// 0 ≤ γ < 1): GAMES101's form, whose decay rate `≈ γ/dt` changes with the step.
     pub verlet_damping: f64,
+    /// Verlet's damping rate `r` (1/s), the same at every dt, applied with the centred velocity
+    /// so that Verlet stays second order (see `verlet.rs`).
+    pub verlet_damping_rate: f64,
     /// Verlet: constraint-projection passes per step (0 = plain position Verlet).
     /// XPBD: solver passes per substep (at least 1).
     pub iterations: u32,
@@ -172,6 +188,7 @@ impl Default for MethodParams {
     fn default() -> MethodParams {
         MethodParams {
             verlet_damping: 0.00005,
+            verlet_damping_rate: 0.0,
             iterations: 1,
             substeps: 10,
             cg_tolerance: 1e-10,
@@ -196,6 +213,17 @@ pub struct Workspace {
     pub(crate) rods: Vec<crate::physics::constraints::Rod>,
     /// Statistics of the last implicit solve.
     pub last_solve: SolveStats,
+    /// Implicit Euler: the contact constraints of the current step.
+    pub(crate) constraints: Vec<implicit_euler::Constraint>,
+    /// When true, every step also integrates the dissipated power with the method's own stages
+    /// (energy accounting, [`crate::physics::energy::dissipated_power`]); costs about one more
+    /// pass over the springs per stage, and one more force evaluation with colliders.
+    pub account: bool,
+    /// The energy the last step dissipated (J), when `account` is set; contact responses after
+    /// the step are not in it (the simulation adds them).
+    pub dissipated: Dissipated,
+    /// Scratch forces of the dissipated power.
+    pub(crate) power_f: Vec<DVec3>,
 }
 
 impl Workspace {
@@ -221,8 +249,25 @@ impl Workspace {
         {
             buf.clone_from(&zeros);
         }
+        self.power_f.clone_from(&zeros);
         self.diag_inv = vec![DMat3::ZERO; particles];
         self.blocks = vec![DMat3::ZERO; springs];
         self.lambda = vec![0.0; springs];
+    }
+}
+
+/// The dissipated power at `(x, v)` when `account` is set, else zero (see
+/// [`dissipated_power`]).
+fn power_if(
+    account: bool,
+    model: &Model,
+    x: &[DVec3],
+    v: &[DVec3],
+    scratch: &mut [DVec3],
+) -> Power {
+    if account {
+        dissipated_power(model, x, v, scratch)
+    } else {
+        Power::default()
     }
 }

@@ -76,6 +76,9 @@ pub struct Series {
     pub style: SeriesStyle,
     /// Colour; `None` takes the next colour of [`colour::SERIES`].
     pub colour: Option<Colour>,
+    /// A band: the area between `points` and these lower points (same x values) is filled in
+    /// the series' colour, translucent, under the line (the energy chart's dissipated energy).
+    pub band: Option<Vec<(f64, f64)>>,
 }
 
 impl Series {
@@ -87,6 +90,7 @@ impl Series {
             points,
             style: SeriesStyle::Line,
             colour: None,
+            band: None,
         }
     }
 
@@ -103,6 +107,13 @@ impl Series {
     #[must_use]
     pub fn with_style(mut self, style: SeriesStyle) -> Series {
         self.style = style;
+        self
+    }
+
+    /// The same series drawn as a band down to `lower` (the same x values).
+    #[must_use]
+    pub fn with_band(mut self, lower: Vec<(f64, f64)>) -> Series {
+        self.band = Some(lower);
         self
     }
 
@@ -318,7 +329,7 @@ fn power_of_ten(k: i32) -> String {
 fn data_range(chart: &Chart, first: bool, scale: Scale) -> Option<(f64, f64)> {
     let mut range: Option<(f64, f64)> = None;
     for s in &chart.series {
-        for &(x, y) in &s.points {
+        for &(x, y) in s.points.iter().chain(s.band.iter().flatten()) {
             let v = if first { x } else { y };
             let other = if first { y } else { x };
             let other_scale = if first { chart.y_scale } else { chart.x_scale };
@@ -666,6 +677,37 @@ pub fn draw_with(chart: &Chart, width: u32, height: u32, quality: Quality) -> Pi
         );
     }
     for (series, &c) in chart.series.iter().zip(&colours) {
+        if let Some(lower) = &series.band {
+            // The polygon along the upper points and back along the lower ones.
+            let mut pb = PathBuilder::new();
+            let mut started = false;
+            for &(x, y) in series.points.iter().chain(lower.iter().rev()) {
+                if let Some((u, v)) = to_px(x, y)
+                    && u.is_finite()
+                    && v.is_finite()
+                {
+                    if started {
+                        pb.line_to(u, v);
+                    } else {
+                        pb.move_to(u, v);
+                        started = true;
+                    }
+                }
+            }
+            pb.close();
+            if let Some(path) = pb.finish() {
+                let mut fill = c.to_skia();
+                fill.set_alpha(0.25);
+                paint.set_color(fill);
+                pixmap.fill_path(
+                    &path,
+                    &paint,
+                    FillRule::Winding,
+                    Transform::identity(),
+                    Some(&mask),
+                );
+            }
+        }
         if matches!(series.style, SeriesStyle::Line | SeriesStyle::LineAndPoints) {
             let mut pb = PathBuilder::new();
             let mut pen_down = false;

@@ -302,6 +302,7 @@ struct RunSpec {
     dt: Option<Spanned<f64>>,
     time: Option<Spanned<f64>>,
     verlet_damping: Option<Spanned<f64>>,
+    verlet_damping_rate: Option<Spanned<f64>>,
     iterations: Option<Spanned<i64>>,
     substeps: Option<Spanned<i64>>,
     cg_tolerance: Option<Spanned<f64>>,
@@ -313,6 +314,9 @@ impl RunSpec {
         let mut out = Vec::new();
         if let Some(x) = &self.verlet_damping {
             out.push(("verlet_damping", Value::Number(*x.get_ref()), x.span()));
+        }
+        if let Some(x) = &self.verlet_damping_rate {
+            out.push(("verlet_damping_rate", Value::Number(*x.get_ref()), x.span()));
         }
         if let Some(i) = &self.iterations {
             out.push(("iterations", Value::Integer(*i.get_ref()), i.span()));

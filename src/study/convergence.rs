@@ -14,7 +14,8 @@
 //! norm is the largest distance over the particles (m).
 //!
 //! **The reference.** Where the scene has an exact solution it is used:
-//! - the undamped `oscillator`: `x_1(t) = L0 + A cos(√(k/m) t)` along x;
+//! - the `oscillator`, damped or not: `x_1(t) = L0 + u(t)` along x, `u` the damped harmonic
+//!   motion from rest (see [`damped_oscillator`]);
 //! - free fall (no springs, no colliders, no drag): `x(t) = x_0 + v_0 t + ½ g t²`.
 //!
 //! Otherwise the reference is RK4 at `dt_ref = dt_min / 16`, whose own error is estimated by
@@ -32,7 +33,17 @@
 //!
 //! **Same equations for every method.** Position Verlet's constraint projection and its `(1 - γ)`
 //! damping change the equations being solved (a rope of rods instead of springs), so the study
-//! runs Verlet with `iterations = 0` and `verlet_damping = 0`, and says so.
+//! runs Verlet with `iterations = 0`, `verlet_damping = 0` and `verlet_damping_rate = 0`, and says
+//! so.
+//!
+//! **Verlet with and without dampers.** Position Verlet is second order only while the forces do
+//! not depend on the velocity: a damper or drag sees Verlet's velocity `(x_n - x_{n-1})/dt`,
+//! which is `v(t_n - dt/2)` to second order, half a step late, an `O(dt)` error in the force and
+//! so a first-order method. The study therefore adds a row for Verlet on the same scene with the
+//! dampers switched the other way ([`verlet_companion`]): on the undamped oscillator with
+//! `damping = 2` N·s/m (damping ratio 0.1), on a damped scene with `damping = 0` (and `drag = 0`).
+//! Verlet's own damping rate (`verlet_damping_rate`) is applied with the centred velocity and
+//! keeps it second order; GAMES101's per-step factor `γ` does not.
 //!
 //! Reference: E. Hairer, S. P. Nørsett, G. Wanner, *Solving Ordinary Differential Equations I*,
 //! 2nd ed., Springer 1993, §II.4 (order and error estimation, Richardson extrapolation) and
@@ -49,7 +60,7 @@ use crate::scene::{self, Scene};
 use crate::simulation::Simulation;
 
 /// Scene parameters every convergence study applies first (see the module docs).
-pub const SAME_EQUATIONS: [&str; 2] = ["iterations=0", "verlet_damping=0"];
+pub const SAME_EQUATIONS: [&str; 3] = ["iterations=0", "verlet_damping=0", "verlet_damping_rate=0"];
 
 /// Options of [`convergence`].
 #[derive(Clone, Debug, PartialEq)]
@@ -120,6 +131,55 @@ pub struct ConvergenceReport {
     pub reference_error: f64,
     /// One entry per method.
     pub methods: Vec<MethodConvergence>,
+    /// Verlet on the same scene with the dampers switched the other way (module docs), when
+    /// Verlet is studied and the scene has a `damping` parameter.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub verlet_companion: Option<Companion>,
+}
+
+/// Verlet's convergence on the scene with the dampers switched.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Companion {
+    /// The parameters applied on top of the study's.
+    pub sets: Vec<String>,
+    /// True when the companion has dampers (the study's scene has none).
+    pub damped: bool,
+    /// `exact` or `rk4 dt=…`.
+    pub reference: String,
+    /// Verlet's points and fitted order.
+    pub verlet: MethodConvergence,
+}
+
+/// The parameters that switch a built-in scene's dampers the other way for the Verlet row
+/// (module docs): `None` for scene files and scenes without a `damping` parameter. Returns the
+/// assignments and whether the result is damped.
+#[must_use]
+pub fn verlet_companion(name: &str, sets: &[String]) -> Option<(Vec<String>, bool)> {
+    let def = scene::builtin(name)?;
+    let specs = (def.params)();
+    let has = |key: &str| specs.iter().any(|p| p.name == key);
+    if !has("damping") {
+        return None;
+    }
+    let mut params = def.default_params();
+    for s in sets {
+        params.set_text(s).ok()?;
+    }
+    let damped = params.number("damping") > 0.0 || (has("drag") && params.number("drag") > 0.0);
+    let mut extra = Vec::new();
+    if damped {
+        extra.push("damping=0".to_string());
+        if has("drag") {
+            extra.push("drag=0".to_string());
+        }
+    } else {
+        // Damping ratio 0.1 for the first spring: k_d = 0.2 √(k m).
+        let k = params.number("stiffness");
+        let m = params.number("mass");
+        let kd = 0.2 * (k * m).sqrt();
+        extra.push(format!("damping={kd}"));
+    }
+    Some((extra, !damped))
 }
 
 /// The exact positions at time `t`, when the scene has a closed-form solution.
@@ -160,23 +220,42 @@ fn exact_solution(scene: &Scene, t: f64) -> Option<Vec<DVec3>> {
         .chain(&state.v)
         .all(|p| p.y == 0.0 && p.z == 0.0);
     let pinned_origin = model.inv_mass[0] == 0.0 && state.x[0] == DVec3::ZERO;
-    if model.particle_count() != 2
-        || s.damping != 0.0
-        || model.gravity != DVec3::ZERO
-        || !along_x
-        || !pinned_origin
-    {
+    if model.particle_count() != 2 || model.gravity != DVec3::ZERO || !along_x || !pinned_origin {
         return None;
     }
     if state.v[1] != DVec3::ZERO || state.x[1].x <= 0.0 {
         return None;
     }
-    let omega = (s.stiffness * model.inv_mass[1]).sqrt();
-    let amplitude = state.x[1].x - s.rest_length;
-    Some(vec![
-        DVec3::ZERO,
-        DVec3::new(s.rest_length + amplitude * (omega * t).cos(), 0.0, 0.0),
-    ])
+    let u = damped_oscillator(
+        s.stiffness * model.inv_mass[1],
+        s.damping * model.inv_mass[1],
+        state.x[1].x - s.rest_length,
+        t,
+    );
+    Some(vec![DVec3::ZERO, DVec3::new(s.rest_length + u, 0.0, 0.0)])
+}
+
+/// The stretch `u(t)` (m) of `u'' + 2γ u' + ω0² u = 0` from `u(0) = u0` at rest, with
+/// `ω0² = k/m` (`omega2`, 1/s²) and `2γ = k_d/m` (`mu`, 1/s):
+///
+/// ```text
+/// γ < ω0:  u = u0 e^{-γt} (cos ω_d t + γ/ω_d sin ω_d t),      ω_d = √(ω0² - γ²)
+/// γ = ω0:  u = u0 e^{-γt} (1 + γ t)
+/// γ > ω0:  u = u0 (r2 e^{r1 t} - r1 e^{r2 t}) / (r2 - r1),    r1,2 = -γ ± √(γ² - ω0²)
+/// ```
+fn damped_oscillator(omega2: f64, mu: f64, u0: f64, t: f64) -> f64 {
+    let gamma = 0.5 * mu;
+    let disc = gamma * gamma - omega2;
+    if disc < 0.0 {
+        let wd = (-disc).sqrt();
+        u0 * (-gamma * t).exp() * ((wd * t).cos() + gamma / wd * (wd * t).sin())
+    } else if disc == 0.0 {
+        u0 * (-gamma * t).exp() * (1.0 + gamma * t)
+    } else {
+        let root = disc.sqrt();
+        let (r1, r2) = (-gamma + root, -gamma - root);
+        u0 * (r2 * (r1 * t).exp() - r1 * (r2 * t).exp()) / (r2 - r1)
+    }
 }
 
 /// Positions after running `scene` with `method` at `dt` for `steps` steps, the force evaluations,
@@ -186,6 +265,8 @@ fn run(scene: &Scene, method: Method, dt: f64, steps: u64) -> (Vec<DVec3>, u64, 
     scene.set_method(method);
     let mut sim = Simulation::new(scene);
     sim.set_dt(dt);
+    // Timing measures the method, not the energy accounting.
+    sim.set_accounting(false);
     let start = Instant::now();
     sim.run(steps, |_| {});
     let wall = start.elapsed().as_secs_f64();
@@ -331,5 +412,46 @@ pub fn convergence(
         reference,
         reference_error,
         methods,
+        verlet_companion: None,
     })
+}
+
+/// [`convergence`] of `name_or_path` with `user_sets`, plus the Verlet row with the dampers
+/// switched (module docs) when Verlet is among the methods and the scene allows it.
+///
+/// # Errors
+/// As [`load_scene`] and [`convergence`].
+pub fn convergence_with_companion(
+    name_or_path: &str,
+    user_sets: &[String],
+    options: &ConvergenceOptions,
+    limits: &crate::budget::Limits,
+    progress: &mut dyn FnMut(Method, u32),
+) -> Result<ConvergenceReport, StudyError> {
+    let mut sets: Vec<String> = SAME_EQUATIONS.iter().map(|s| (*s).to_string()).collect();
+    sets.extend(user_sets.iter().cloned());
+    let scene = scene::load_with(name_or_path, &sets, limits)?;
+    let mut report = convergence(&scene, options, progress)?;
+    report.sets = sets.clone();
+    if options.methods.contains(&Method::Verlet)
+        && let Some((extra, damped)) = verlet_companion(name_or_path, &sets)
+    {
+        let mut all = sets;
+        all.extend(extra.iter().cloned());
+        let companion = scene::load_with(name_or_path, &all, limits)?;
+        let only = ConvergenceOptions {
+            methods: vec![Method::Verlet],
+            ..options.clone()
+        };
+        let r = convergence(&companion, &only, progress)?;
+        if let Some(verlet) = r.methods.into_iter().next() {
+            report.verlet_companion = Some(Companion {
+                sets: extra,
+                damped,
+                reference: r.reference,
+                verlet,
+            });
+        }
+    }
+    Ok(report)
 }

@@ -171,7 +171,7 @@ pub fn omega_max(model: &Model, state: &State) -> OmegaEstimate {
 }
 
 /// `K_s = k [n nᵀ + max(0, 1 - L0/L)(I - n nᵀ)]` for every spring (zero for a zero length).
-fn stiffness_blocks(model: &Model, x: &[DVec3]) -> Vec<DMat3> {
+pub(crate) fn stiffness_blocks(model: &Model, x: &[DVec3]) -> Vec<DMat3> {
     model
         .springs
         .iter()

@@ -1,98 +1,70 @@
 //! The largest stable time step of each method: `springlab study stability`.
 //!
-//! # Theory
-//!
-//! On the undamped harmonic oscillator `x'' = -ω² x` every one-step method multiplies the state
-//! by the same amplification per step, a function of `z = dt·ω` alone; the method is stable
-//! while its modulus stays ≤ 1 (Hairer & Wanner, *Solving Ordinary Differential Equations II*,
-//! 2nd ed., Springer 1996, §IV.2). For the Runge–Kutta type methods it is a scalar `R(i z)`:
-//!
-//! ```text
-//! explicit Euler        |R|² = 1 + z²                    grows at every dt        none
-//! midpoint (RK2)        |R|² = 1 + z⁴/4                  grows at every dt        none
-//! RK4                   |R|² = 1 - z⁶/72 + z⁸/576        ≤ 1 while z ≤ 2√2        2.828
-//! predictor–corrector   |R|² = 1 - z² + z⁴               ≤ 1 while z ≤ 1          1
-//! implicit Euler        |R|² = 1 / (1 + z²)              < 1 at every dt          unconditional
-//! ```
-//! Semi-implicit Euler and position Verlet share the recurrence
-//! `x_{n+1} - (2 - z²) x_n + x_{n-1} = 0`, whose roots have modulus 1 while `z < 2` (at `z = 2`
-//! a double root -1: linear growth). XPBD is unconditionally stable and dissipative. See
-//! [`crate::physics::integrators`] for the derivations.
-//!
-//! A mass-spring system has many modes; linearised, each mode `i` is an oscillator of angular
-//! frequency `ω_i`, and the stiffest one fails first:
-//!
-//! ```text
-//! dt_max = z_limit / ω_max
-//! ```
-//! where `z_limit` is the dimensionless limit above, `ω_max` (rad/s) comes from
-//! [`super::modes::omega_max`] and `dt_max` is in seconds. Damping, drag, gravity, contact and
-//! large motions move the real limit away from this; the study measures it.
-//!
 //! # What "stable" means here
 //!
-//! A *probe* runs the scene with one method at one `dt` for
-//! `N = max(⌈T/dt⌉, N_min)` steps, `T` being the horizon (s, default 2). Two criteria:
+//! Two tests, both stated in the output:
 //!
-//! **Growth** ([`Criterion::Growth`]), for a conservative scene — no gravity, no spring damping,
-//! no drag, no colliders, no dynamic spheres (the oscillator). Its energy
-//! `E = E_kinetic + E_elastic ≥ 0` is constant along the exact motion, so any sustained rise
-//! is the method's instability. With `N_min = 10 000`, `N` rounded up to an even `2W` and
-//! `E_n` the energy after `n` steps:
+//! 1. **Linear stability** ([`super::linear`]): a small perturbation of the scene's initial
+//!    positions at rest, stepped by the method's own code (central finite differences of
+//!    [`crate::physics::Method::step`], power iteration), must not grow: the windowed growth of
+//!    its energy over `N = max(⌈T/dt⌉, 4 000)` steps stays below `10⁻⁶`, that is the spectral
+//!    radius of the step map `ρ ≤ 1 + 10⁻¹⁰` or so. Gravity (a constant force) is left out of
+//!    the linearisation and rigid motions are Jordan blocks that never grow exponentially: free
+//!    fall is never instability. Contacts are excluded from the linearisation.
+//! 2. **Confirmation**: the whole scene (contacts, spheres, large motions) runs at the largest
+//!    linearly stable `dt` for `min(⌈50 T/dt⌉, 10 000)` steps (at least 100), and must not
+//!    diverge (NaN, `|v| > 1000` m/s, a failed implicit solve) nor let its energy `E` rise: it
+//!    fails when `E - E_0` passes `10⁴ S`, or ends the run above `10 S` and 1.5 times its
+//!    largest value in the run's second quarter (still growing), or stays above `10 S` through
+//!    the whole last quarter (pumped up: Verlet with one projection pass on the rope at
+//!    `dt·ω = 52` keeps 1000 times its energy). `S = Σ m |g| ℓ + E_kinetic,0 + E_elastic,0` is the scene's
+//!    energy scale (J; `ℓ`: the diagonal of a body's bounding box, m). A level alone would not
+//!    do: near its limit semi-implicit Euler's energy swings far from `E_0` without growing
+//!    (between `E_0/(1 + dt ω/2)` and `E_0/(1 - dt ω/2)` on the oscillator, up to 700-fold at
+//!    `dt·ω = 1.997`, and back every period), while an unstable run's energy keeps rising or
+//!    stays up. (The energy residual `E + D - E_0` of the accounting is not
+//!    used here: a cube resting on a plane under explicit Euler gains a little energy every step
+//!    that the contact response takes away again, so its residual grows steadily while nothing
+//!    is unstable.) A failed confirmation lowers `dt` by 5 % (three times, then
+//!    halves it) until one passes, then bisects to 0.5 %. The result must also pass at 95 % of itself (nonlinear resonances come
+//!    and go with `dt`); if not, the search goes on below.
 //!
-//! ```text
-//! w_j      = sin⁴(π (j + ½) / W),                  j = 0 .. W-1
-//! Ē_early  = Σ_j w_j E_{1+j}   / Σ_j w_j            first half of the run
-//! Ē_late   = Σ_j w_j E_{W+1+j} / Σ_j w_j            second half
-//! stable  ⇔  no divergence  and  Ē_late ≤ (1 + 10⁻⁶) Ē_early
-//! ```
-//! where the energies are in J and the window `w` is dimensionless. For a Runge–Kutta type
-//! method on the oscillator, `y = v + iω (x - L0)` obeys `y' = iω y` and `y_{n+1} = R(i z) y_n`,
-//! so `E_n = ½ m |y_n|² = |R|^{2n} E_0`, so `Ē_late / Ē_early = |R|^{2W}` exactly, whatever the
-//! window: the test sees a growth of `10⁻⁶` over `W ≥ 5000` steps, which is how midpoint's
-//! `|R|² - 1 = z⁴/4 = 2.5·10⁻⁹` per step at `z = 0.01` is still caught. Semi-implicit Euler and
-//! Verlet do not conserve `E` but a nearby quadratic form, so their `E_n` oscillates without
-//! growing (`E_n = a + Re(b e^{2iθn})`, `θ` the discrete rotation per step); the smooth window
-//! cancels that oscillation up to a leakage of order `|b| (W |sin θ|)^-5`, far below `10⁻⁶`
-//! except within about `10⁻⁴` of `z = 2`. A run whose energy rises beyond `10⁶ E_0` stops as
-//! unstable; one that decays below `10⁻³⁰ E_0` stops as stable. The oscillator's motion along
-//! its spring is exactly linear as long as the particle stays clear of the pin; the study starts
-//! it `10⁻⁶` m from rest length, so that even a growth by `10³` in amplitude keeps it there (see
-//! [`scene_sets`]).
+//! The reported `max_stable_dt` is the confirmed one; the linear limit, the damped theory
+//! ([`super::theory`]) and every probe and confirmation run are in the report beside it.
 //!
-//! **Divergence** ([`Criterion::Divergence`]), for every other scene (gravity, damping,
-//! collisions: the rope, the cubes, the cloths): with `N_min = 100`,
-//! stable ⇔ the run never diverges (NaN, or `|v|² > 10⁶` m²/s², [`crate::physics::diverge`]).
-//! `N_min` keeps a huge `dt` from passing after one or two steps. A mode that the motion never
-//! excites grows only from round-off, so an unstable `dt` may pass a short horizon.
+//! # Why both
+//!
+//! The linear test is exact for the linearised system and matches the damped theory (within
+//! 0.1 % on the course scenes), but a nonlinear motion can break a method below that limit. On
+//! the undamped `rope` swinging from horizontal, semi-implicit Euler is linearly stable up to
+//! `dt·ω_max = 2`, yet at 1.9 its energy grows from 59 J to 2·10⁵ J within 100 s: the stiff mode
+//! is pumped by the swing (the nonlinear resonances of leapfrog-type methods; Schlick, Mandziuk,
+//! Skeel & Srinivas 1998). Verlet with one projection pass is linearly stable at every `dt`
+//! (projection removes the stiff modes), yet at `dt·ω_max = 100` (6 s steps) one pass cannot
+//! pull a rope that fell 350 m in a step back together. The confirmation run finds these.
 //!
 //! # The search
 //!
 //! For each method, with `z = dt·ω_max`:
-//! 1. probe `z = 100`: stable there → **unconditional**;
-//! 2. probe the theoretical limit (or `z = 1` when there is none); stable → double `z` until a
-//!    probe fails; unstable → divide by 4 until one passes, down to `z = 0.01`: failing there
-//!    too → **none**;
-//! 3. bisect `[z_stable, z_unstable]` at the geometric mean (bisection in `log dt`) until the two
-//!    are within `10⁻³` relatively (at most 20 probes): **conditional**, `max_stable_dt` being the
-//!    largest stable probe.
+//! 1. probe `z = 100`: linearly stable there → linearly **unconditional**;
+//! 2. probe the damped theory's limit (or the oscillator's, or `z = 1`); stable → raise `z` by
+//!    5 % (then double) until a probe fails; unstable → lower it by 5 % (then divide by 4) until
+//!    one passes, down to `z = 0.01`: failing there too → **none**;
+//! 3. bisect `[z_stable, z_unstable]` at the geometric mean until within `10⁻³` relatively;
+//! 4. confirm (above).
 //!
-//! Stability is not always monotone in `dt`: a nonlinear scene or a collision can be stable at
-//! one `dt`, unstable at a smaller one and stable again at a smaller one still, and a mode can
-//! be excited at one `dt` and missed at another. The bisection finds *a* boundary between a
-//! stable and an unstable probe, and every probe is listed with the result.
-//!
-//! Cost: a probe takes `max(⌈T/dt⌉, N_min)` steps, fewer when it diverges early; stable probes at
-//! small `dt` dominate. The study is sequential and deterministic.
-
-use std::f64::consts::PI;
+//! References: T. Schlick, M. Mandziuk, R. D. Skeel, K. Srinivas, "Nonlinear Resonance Artifacts
+//! in Molecular Dynamics Simulations", J. Comput. Phys. 140 (1998); E. Hairer, G. Wanner,
+//! *Solving Ordinary Differential Equations II*, 2nd ed., Springer 1996, §IV.2.
 
 use glam::DVec3;
 use serde::Serialize;
 
 use super::StudyError;
+use super::linear::{self, Linearisation};
 use super::modes::omega_max;
-use crate::physics::Method;
+use super::theory::{self, TheoryLimit};
+use crate::physics::{Method, energy};
 use crate::scene::{self, Scene};
 use crate::simulation::Simulation;
 
@@ -106,80 +78,33 @@ pub const DT_OMEGA_CEILING: f64 = 100.0;
 pub const BISECTION_TOLERANCE: f64 = 1e-3;
 /// At most this many bisection probes per method.
 pub const MAX_BISECTIONS: u32 = 20;
-/// Growth criterion: the fewest steps of a probe.
-pub const GROWTH_MIN_STEPS: u64 = 10_000;
-/// Growth criterion: `Ē_late / Ē_early` above `1 +` this is growth.
-pub const GROWTH_TOLERANCE: f64 = 1e-6;
-/// Growth criterion: an energy above this multiple of the initial one stops the run (unstable).
-pub const GROWTH_STOP: f64 = 1e6;
-/// Growth criterion: an energy below this multiple of the initial one stops the run (stable).
-pub const DECAY_STOP: f64 = 1e-30;
-/// Divergence criterion: the fewest steps of a probe.
-pub const DIVERGENCE_MIN_STEPS: u64 = 100;
+/// Linear probes: the fewest power steps.
+pub const GROWTH_MIN_STEPS: u64 = 4_000;
+/// Confirmation: the run lasts this many horizons ...
+pub const CONFIRM_HORIZONS: f64 = 50.0;
+/// ... but at most this many steps ...
+pub const CONFIRM_MAX_STEPS: u64 = 10_000;
+/// ... and at least this many.
+pub const CONFIRM_MIN_STEPS: u64 = 100;
+/// Confirmation: a residual above this many energy scales `S` counts only while it grows ...
+pub const CONFIRM_ENERGY_SCALES: f64 = 10.0;
+/// ... by this factor from the second quarter of the run to the last;
+pub const CONFIRM_GROWTH: f64 = 1.5;
+/// ... and above this many it fails at once.
+pub const CONFIRM_EXPLOSION_SCALES: f64 = 1e4;
+/// The oscillator's initial stretch set by the study (m).
+pub const OSCILLATOR_AMPLITUDE: &str = "amplitude=1e-6";
+/// Confirmation: on scenes of 2 000 springs or more the energy is checked every this many
+/// steps (and after the last); every step on smaller ones.
+pub const CONFIRM_ENERGY_EVERY: u64 = 10;
+/// Confirmation: a limit must also pass at this fraction of itself ...
+pub const CONFIRM_MARGIN: f64 = 0.95;
+/// ... searched again at most this many times.
+pub const CONFIRM_ROUNDS: u32 = 4;
+/// Confirmation bisection stops within this relative width.
+pub const CONFIRM_TOLERANCE: f64 = 0.005;
 /// No probe may take more steps than this (see [`StudyError::TooManySteps`]).
 pub const MAX_STEPS: f64 = 1e9;
-/// The oscillator's initial stretch set by the study (m): small, so that a growth by 10³ in
-/// amplitude still leaves the particle far from the pin and the motion linear.
-pub const OSCILLATOR_AMPLITUDE: &str = "amplitude=1e-6";
-
-/// What "stable" means for a probe (see the module documentation).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Criterion {
-    /// No divergence and no growth of the energy (conservative scenes).
-    Growth,
-    /// No divergence (scenes with gravity, damping, drag or contact).
-    Divergence,
-}
-
-impl Criterion {
-    /// [`Criterion::Growth`] when every body of `scene` is conservative and free — no gravity,
-    /// no spring damping, no drag, no colliders, no dynamic spheres — else
-    /// [`Criterion::Divergence`].
-    #[must_use]
-    pub fn for_scene(scene: &Scene) -> Criterion {
-        let conservative = scene.bodies.iter().all(|b| {
-            b.model.gravity == DVec3::ZERO
-                && b.model.drag == 0.0
-                && b.model.springs.iter().all(|s| s.damping == 0.0)
-                && b.model.colliders.is_empty()
-                && b.state.spheres.is_empty()
-        });
-        if conservative {
-            Criterion::Growth
-        } else {
-            Criterion::Divergence
-        }
-    }
-
-    /// The fewest steps of a probe under this criterion.
-    #[must_use]
-    pub fn min_steps(self) -> u64 {
-        match self {
-            Criterion::Growth => GROWTH_MIN_STEPS,
-            Criterion::Divergence => DIVERGENCE_MIN_STEPS,
-        }
-    }
-
-    /// The definition of "stable", in words, for horizon `horizon` (s).
-    #[must_use]
-    pub fn definition(self, horizon: f64) -> String {
-        match self {
-            Criterion::Growth => format!(
-                "no divergence (NaN, or |v|² > 10⁶ m²/s²) and no growth: over \
-                 N = max(⌈T/dt⌉, {GROWTH_MIN_STEPS}) steps, T = {horizon} s, the energy \
-                 (kinetic + elastic) averaged with a sin⁴ window over the second half of the \
-                 run exceeds its average over the first half by at most {GROWTH_TOLERANCE:e} \
-                 (relative)"
-            ),
-            Criterion::Divergence => format!(
-                "no divergence over N = max(⌈T/dt⌉, {DIVERGENCE_MIN_STEPS}) steps, T = {horizon} \
-                 s: every position and velocity finite and |v|² ≤ 10⁶ m²/s² (1000 m/s) after \
-                 every step"
-            ),
-        }
-    }
-}
 
 /// The stability class of a method on a scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -206,8 +131,7 @@ impl Stability {
 }
 
 /// The stability of `method` on the undamped harmonic oscillator, and its limit `dt·ω` when
-/// conditional (see the module documentation). The predictor–corrector's 1 follows from
-/// `|R|² = 1 - z² + z⁴` and is confirmed by measurement (`tests/integrators.rs`).
+/// conditional (see [`super::theory`] for the damped, scene-specific theory).
 #[must_use]
 pub fn theory(method: Method) -> (Stability, Option<f64>) {
     match method {
@@ -219,21 +143,43 @@ pub fn theory(method: Method) -> (Stability, Option<f64>) {
     }
 }
 
-/// One run of the scene at one time step.
+/// One linear probe: the perturbation growth at one time step.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Probe {
     /// Time step (s).
     pub dt: f64,
     /// `dt·ω_max` (dimensionless).
     pub dt_omega: f64,
-    /// Steps taken (fewer than planned when the run stopped early).
+    /// Power steps taken (fewer than planned when the growth or decay was decisive).
     pub steps: u64,
     /// The verdict.
     pub stable: bool,
-    /// Growth criterion: `Ē_late / Ē_early` when the run went to the end, else null.
+    /// `Ē_late / Ē_early` when the probe went to the end, else null.
     pub growth: Option<f64>,
-    /// Simulated time at which the run diverged (s), or null.
-    pub diverged_time: Option<f64>,
+    /// The estimated spectral radius of the step map (per step).
+    pub rho: f64,
+    /// Why the probe stopped: `window`, `grew`, `decayed`, `not finite`.
+    pub stopped: &'static str,
+}
+
+/// One confirmation run of the whole scene.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Confirmation {
+    /// Time step (s).
+    pub dt: f64,
+    /// `dt·ω_max`.
+    pub dt_omega: f64,
+    /// Steps taken.
+    pub steps: u64,
+    /// The verdict.
+    pub passed: bool,
+    /// Why it failed, or null.
+    pub reason: Option<String>,
+    /// The largest rise of the energy above its start, `E - E_0` (J); null when the energy is
+    /// not checked (a driven sphere does work).
+    pub rise_max: Option<f64>,
+    /// The rise that counts when it keeps growing, `10 S` (J); null when not checked.
+    pub rise_allowed: Option<f64>,
 }
 
 /// The result for one method.
@@ -241,21 +187,33 @@ pub struct Probe {
 pub struct MethodLimit {
     /// The method.
     pub method: Method,
-    /// Measured stability class.
+    /// Stability class after confirmation.
     pub stability: Stability,
-    /// Largest stable time step found (s); null when none or unconditional.
+    /// Largest stable time step, confirmed (s); null when none or unconditional.
     pub max_stable_dt: Option<f64>,
-    /// `max_stable_dt · ω_max` (dimensionless); null when none or unconditional.
+    /// `max_stable_dt · ω_max`; null when none or unconditional.
     pub limit_dt_omega: Option<f64>,
+    /// Stability class by the linear criterion alone.
+    pub linear_stability: Stability,
+    /// Largest linearly stable time step (s); null when none or unconditional.
+    pub linear_max_dt: Option<f64>,
+    /// `linear_max_dt · ω_max`.
+    pub linear_dt_omega: Option<f64>,
+    /// The damped theory's limit (s); null unless conditional.
+    pub theory_dt: Option<f64>,
+    /// The damped theory for this scene: class, limit, binding mode and how it was obtained.
+    pub damped_theory: TheoryLimit,
     /// The limit `dt·ω` on the undamped oscillator; null when none or unconditional.
     pub theory_dt_omega: Option<f64>,
     /// The stability class on the undamped oscillator.
     pub theory: Stability,
-    /// Every probe, in the order taken.
+    /// Every linear probe, in the order taken.
     pub probes: Vec<Probe>,
+    /// Every confirmation run, in the order taken.
+    pub confirmations: Vec<Confirmation>,
 }
 
-/// What `springlab study stability --json` prints (DESIGN.md, more fields welcome).
+/// What `springlab study stability --json` prints.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StabilityReport {
     /// Scene name.
@@ -272,10 +230,14 @@ pub struct StabilityReport {
     pub omega_iterations: u32,
     /// Horizon `T` (s).
     pub horizon: f64,
-    /// The criterion used.
-    pub criterion: Criterion,
+    /// The criterion, by name.
+    pub criterion: &'static str,
     /// What "stable" means, in words.
     pub definition: String,
+    /// The energy scale `S` of the confirmation (J).
+    pub energy_scale: f64,
+    /// How the damped theory's spectrum was obtained.
+    pub theory_spectrum: String,
     /// The range of `dt·ω_max` probed, `[floor, ceiling]`.
     pub dt_omega_range: [f64; 2],
     /// One entry per method, in the order asked for.
@@ -289,24 +251,46 @@ pub struct StabilityOptions {
     pub methods: Vec<Method>,
     /// Horizon `T` (s), > 0.
     pub horizon: f64,
-    /// The criterion; `None` chooses with [`Criterion::for_scene`].
-    pub criterion: Option<Criterion>,
+    /// Run the confirmation (default true); without it the linear limit is reported.
+    pub confirm: bool,
 }
 
 impl Default for StabilityOptions {
-    /// Every method, a 2 s horizon, the criterion chosen by the scene.
+    /// Every method, a 2 s horizon, with confirmation.
     fn default() -> StabilityOptions {
         StabilityOptions {
             methods: Method::ALL.to_vec(),
             horizon: DEFAULT_HORIZON,
-            criterion: None,
+            confirm: true,
         }
     }
 }
 
+/// The definition of "stable", in words, for horizon `horizon` (s) and energy scale `scale`.
+#[must_use]
+pub fn definition(horizon: f64, scale: f64) -> String {
+    format!(
+        "(1) linear: a perturbation of the initial positions at rest, stepped by the method's own \
+         code (central finite differences; gravity and contacts excluded, rigid motions \
+         removed), does not grow: \
+         its energy averaged with a sin⁴ window over the second half of max(⌈T/dt⌉, \
+         {GROWTH_MIN_STEPS}) steps, T = {horizon} s, exceeds the first half's by at most \
+         {:e}, i.e. spectral radius ρ ≤ 1 + ~1e-10 (free fall and rigid motion never count); \
+         (2) confirmed: the whole scene, contacts included, runs min(⌈{CONFIRM_HORIZONS} T/dt⌉, \
+         {CONFIRM_MAX_STEPS}) steps (at least {CONFIRM_MIN_STEPS}) without divergence (NaN, \
+         |v| > 1000 m/s, a failed implicit solve), with an energy rise E - E0 that never \
+         exceeds {CONFIRM_EXPLOSION_SCALES} S and does not end above {CONFIRM_ENERGY_SCALES} S = \
+         {:.4e} J while still growing ({CONFIRM_GROWTH}× from the run's second quarter to its \
+         last) or stay above it through the last quarter",
+        linear::TOLERANCE,
+        CONFIRM_ENERGY_SCALES * scale
+    )
+}
+
 /// The `--set` assignments the study applies before the user's: `amplitude=1e-6` for the
-/// built-in oscillator (so that its spring stays linear however much a method lets it grow),
-/// none for other scenes.
+/// built-in oscillator, so that the linearisation about its initial state is the linear
+/// oscillator (a spring stretched by 0.1 m has a transverse stiffness, and the motion of the
+/// state it is linearised about would enter the Jacobian); none for other scenes.
 #[must_use]
 pub fn scene_sets(name_or_path: &str, user_sets: &[String]) -> Vec<String> {
     let mut sets = Vec::with_capacity(user_sets.len() + 1);
@@ -350,12 +334,65 @@ pub fn parse_methods(text: &str) -> Result<Vec<Method>, StudyError> {
     Ok(methods)
 }
 
-/// Measures the largest stable `dt` of each method of `options` on `scene` (see the module
-/// documentation). Calls `progress` after every probe.
+/// The energy scale `S` of `scene` (J): `Σ m |g| ℓ + E_kinetic + E_elastic` at the start, `ℓ`
+/// the diagonal of each body's bounding box (module docs).
+#[must_use]
+pub fn energy_scale(scene: &Scene) -> f64 {
+    let mut scale = 0.0;
+    for b in &scene.bodies {
+        let (lo, hi) = b.state.x.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), x| (lo.min(*x), hi.max(*x)),
+        );
+        let extent = if b.state.x.is_empty() {
+            0.0
+        } else {
+            (hi - lo).length()
+        };
+        let g = b.model.gravity.length();
+        let free_mass: f64 = (0..b.model.particle_count())
+            .filter(|&i| !b.model.is_pinned(i))
+            .map(|i| b.model.mass[i])
+            .sum();
+        let spheres: f64 = b
+            .state
+            .spheres
+            .iter()
+            .filter(|s| !s.kinematic)
+            .map(|s| s.mass)
+            .sum();
+        let e = energy(&b.model, &b.state);
+        scale += (free_mass + spheres) * g * extent + e.kinetic + e.elastic;
+    }
+    scale
+}
+
+/// The largest stable `dt` of one method on a scene, for library callers: the study of
+/// [`stability`] for that method alone, with the default horizon and confirmation.
+/// `Ok(None)` when the method is stable at every `dt` probed (unconditional).
 ///
 /// # Errors
-/// A horizon that is not positive and finite, no method, a scene without stiffness, a
-/// conservative scene at rest, or a horizon so long that a probe would exceed [`MAX_STEPS`].
+/// As [`stability`]; a method with no stable `dt` gives `Ok(Some(0.0))`.
+pub fn max_stable_dt(scene: &Scene, method: Method) -> Result<Option<f64>, StudyError> {
+    let options = StabilityOptions {
+        methods: vec![method],
+        ..StabilityOptions::default()
+    };
+    let report = stability(scene, &options, &mut |_, _| {})?;
+    let m = &report.methods[0];
+    Ok(match m.stability {
+        Stability::Unconditional => None,
+        Stability::None => Some(0.0),
+        Stability::Conditional => m.max_stable_dt,
+    })
+}
+
+/// Measures the largest stable `dt` of each method of `options` on `scene` (see the module
+/// documentation). Calls `progress` after every linear probe.
+///
+/// # Errors
+/// A horizon that is not positive and finite, no method, a scene without stiffness, or a
+/// horizon so long that a probe would exceed [`MAX_STEPS`].
 pub fn stability(
     scene: &Scene,
     options: &StabilityOptions,
@@ -368,22 +405,21 @@ pub fn stability(
     if options.methods.is_empty() {
         return Err(StudyError::NoMethods);
     }
-    let criterion = options
-        .criterion
-        .unwrap_or_else(|| Criterion::for_scene(scene));
     // The stiffest body sets ω_max.
-    let estimate = scene
+    let estimates: Vec<_> = scene
         .bodies
         .iter()
         .map(|b| omega_max(&b.model, &b.state))
-        .max_by(|a, b| a.omega.total_cmp(&b.omega));
-    let Some(estimate) = estimate.filter(|e| e.omega > 0.0 && e.omega.is_finite()) else {
+        .collect();
+    let Some((stiffest, estimate)) = estimates
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.omega.total_cmp(&b.1.omega))
+        .filter(|(_, e)| e.omega > 0.0 && e.omega.is_finite())
+    else {
         return Err(StudyError::NoStiffness(scene.name.clone()));
     };
     let omega = estimate.omega;
-    if criterion == Criterion::Growth && Simulation::new(scene.clone()).energy().total <= 0.0 {
-        return Err(StudyError::AtRest(scene.name.clone()));
-    }
     let dt_floor = DT_OMEGA_FLOOR / omega;
     let steps = (horizon / dt_floor).ceil();
     if steps > MAX_STEPS {
@@ -394,17 +430,29 @@ pub fn stability(
             max: MAX_STEPS,
         });
     }
-
+    let body = &scene.bodies[stiffest];
+    let spectrum = theory::spectrum(&body.model, &body.state, omega);
+    let scale = energy_scale(scene);
     let context = Context {
         scene,
         omega,
         horizon,
-        criterion,
+        scale,
+        confirm: options.confirm,
+        linear: scene
+            .bodies
+            .iter()
+            .zip(&estimates)
+            .map(|(b, e)| Linearisation::new(&b.model, &b.state, e.omega.max(omega * 1e-9)))
+            .collect(),
     };
     let methods = options
         .methods
         .iter()
-        .map(|&m| context.search(m, progress))
+        .map(|&m| {
+            let damped = theory::limit(m, &body.params, &spectrum);
+            context.search(m, damped, progress)
+        })
         .collect();
     Ok(StabilityReport {
         scene: scene.name.clone(),
@@ -414,11 +462,44 @@ pub fn stability(
         omega_gershgorin: estimate.gershgorin_omega,
         omega_iterations: estimate.iterations,
         horizon,
-        criterion,
-        definition: criterion.definition(horizon),
+        criterion: "linear growth, confirmed by a run",
+        definition: definition(horizon, scale),
+        energy_scale: scale,
+        theory_spectrum: spectrum.how,
         dt_omega_range: [DT_OMEGA_FLOOR, DT_OMEGA_CEILING],
         methods,
     })
+}
+
+/// Below a failed `z`: lower it by 5 % three times, then halve, until a run passes (none below
+/// the floor); then bisect to [`CONFIRM_TOLERANCE`]. `failed` ends as the smallest failing `z`.
+fn below(run: &mut dyn FnMut(f64) -> bool, failed: &mut f64) -> Option<f64> {
+    let mut tries = 0;
+    let mut passed = loop {
+        // 5 % steps first (contacts and large motions usually cost a few per cent), then halve.
+        tries += 1;
+        let z = if tries <= 3 {
+            *failed * 0.95
+        } else {
+            *failed / 2.0
+        };
+        if z < DT_OMEGA_FLOOR {
+            return None;
+        }
+        if run(z) {
+            break z;
+        }
+        *failed = z;
+    };
+    while *failed > passed * (1.0 + CONFIRM_TOLERANCE) {
+        let z = (passed * *failed).sqrt();
+        if run(z) {
+            passed = z;
+        } else {
+            *failed = z;
+        }
+    }
+    Some(passed)
 }
 
 /// What every probe of one study shares.
@@ -426,13 +507,20 @@ struct Context<'a> {
     scene: &'a Scene,
     omega: f64,
     horizon: f64,
-    criterion: Criterion,
+    scale: f64,
+    confirm: bool,
+    linear: Vec<Linearisation>,
 }
 
 impl Context<'_> {
     /// The search of the module documentation for one method.
-    fn search(&self, method: Method, progress: &mut dyn FnMut(Method, &Probe)) -> MethodLimit {
-        let (theory, theory_dt_omega) = theory(method);
+    fn search(
+        &self,
+        method: Method,
+        damped: TheoryLimit,
+        progress: &mut dyn FnMut(Method, &Probe),
+    ) -> MethodLimit {
+        let (theory_class, theory_dt_omega) = theory(method);
         let mut probes = Vec::new();
         let mut stable_at = |z: f64| {
             let p = self.probe(method, z / self.omega);
@@ -441,35 +529,68 @@ impl Context<'_> {
             probes.push(p);
             stable
         };
-        let result = |stability, z: Option<f64>, probes| {
-            let max_stable_dt = z.map(|z| z / self.omega);
-            MethodLimit {
-                method,
-                stability,
-                max_stable_dt,
-                limit_dt_omega: max_stable_dt.map(|dt| dt * self.omega),
-                theory_dt_omega,
-                theory,
-                probes,
-            }
+        let (linear_stability, linear_z) = self.linear_search(&mut stable_at, &damped, method);
+        let mut result = MethodLimit {
+            method,
+            stability: linear_stability,
+            max_stable_dt: None,
+            limit_dt_omega: None,
+            linear_stability,
+            linear_max_dt: linear_z.map(|z| z / self.omega),
+            linear_dt_omega: linear_z,
+            theory_dt: damped.dt,
+            damped_theory: damped,
+            theory_dt_omega,
+            theory: theory_class,
+            probes,
+            confirmations: Vec::new(),
         };
-
-        // 1. Unconditional?
-        if stable_at(DT_OMEGA_CEILING) {
-            return result(Stability::Unconditional, None, probes);
+        let candidate = match linear_stability {
+            Stability::None => return result,
+            Stability::Conditional => linear_z.unwrap_or(DT_OMEGA_FLOOR),
+            Stability::Unconditional => DT_OMEGA_CEILING,
+        };
+        if !self.confirm {
+            result.max_stable_dt = linear_z.map(|z| z / self.omega);
+            result.limit_dt_omega = linear_z;
+            return result;
         }
-        // 2. Bracket [stable, unstable], starting from the theoretical limit.
-        let mut unstable = DT_OMEGA_CEILING;
-        let start = theory_dt_omega
+        let (stability, z) = self.confirm_search(method, candidate, linear_stability, &mut result);
+        result.stability = stability;
+        result.limit_dt_omega = z;
+        result.max_stable_dt = z.map(|z| z / self.omega);
+        result
+    }
+
+    /// Steps 1–3 of the search: the linear class and limit `z`.
+    fn linear_search(
+        &self,
+        stable_at: &mut dyn FnMut(f64) -> bool,
+        damped: &TheoryLimit,
+        method: Method,
+    ) -> (Stability, Option<f64>) {
+        if stable_at(DT_OMEGA_CEILING) {
+            return (Stability::Unconditional, None);
+        }
+        let start = damped
+            .dt_omega
+            .or(theory(method).1)
             .unwrap_or(1.0)
             .clamp(DT_OMEGA_FLOOR, DT_OMEGA_CEILING);
+        let mut unstable = DT_OMEGA_CEILING;
         let mut stable;
         if stable_at(start) {
             stable = start;
-            while 2.0 * stable < unstable {
-                let z = 2.0 * stable;
+            let mut factor = 1.05;
+            let mut tries = 0;
+            while stable * factor < unstable {
+                let z = stable * factor;
                 if stable_at(z) {
                     stable = z;
+                    tries += 1;
+                    if tries >= 2 {
+                        factor = 2.0;
+                    }
                 } else {
                     unstable = z;
                     break;
@@ -477,19 +598,24 @@ impl Context<'_> {
             }
         } else {
             unstable = start;
+            let mut factor = 1.05;
+            let mut tries = 0;
             loop {
                 if unstable <= DT_OMEGA_FLOOR {
-                    return result(Stability::None, None, probes);
+                    return (Stability::None, None);
                 }
-                let z = (unstable / 4.0).max(DT_OMEGA_FLOOR);
+                let z = (unstable / factor).max(DT_OMEGA_FLOOR);
                 if stable_at(z) {
                     stable = z;
                     break;
                 }
                 unstable = z;
+                tries += 1;
+                if tries >= 2 {
+                    factor = 4.0;
+                }
             }
         }
-        // 3. Bisection in log dt.
         for _ in 0..MAX_BISECTIONS {
             if unstable <= stable * (1.0 + BISECTION_TOLERANCE) {
                 break;
@@ -501,75 +627,187 @@ impl Context<'_> {
                 unstable = z;
             }
         }
-        result(Stability::Conditional, Some(stable), probes)
+        (Stability::Conditional, Some(stable))
     }
 
-    /// One run of `method` at `dt` (s).
+    /// Step 4: confirm `z`, else lower it until a run passes and bisect to 0.5 %; then check that a
+    /// run at 95 % of the result passes too (nonlinear resonances are not monotone in `dt`),
+    /// and search below it when it does not.
+    fn confirm_search(
+        &self,
+        method: Method,
+        candidate: f64,
+        linear: Stability,
+        result: &mut MethodLimit,
+    ) -> (Stability, Option<f64>) {
+        let mut run = |z: f64| {
+            let c = self.confirmation(method, z / self.omega);
+            let passed = c.passed;
+            result.confirmations.push(c);
+            passed
+        };
+        let mut failed = candidate;
+        let mut passed = if run(candidate) {
+            candidate
+        } else {
+            let Some(z) = below(&mut run, &mut failed) else {
+                return (Stability::None, None);
+            };
+            z
+        };
+        for _ in 0..CONFIRM_ROUNDS {
+            if run(CONFIRM_MARGIN * passed) {
+                break;
+            }
+            failed = CONFIRM_MARGIN * passed;
+            let Some(z) = below(&mut run, &mut failed) else {
+                return (Stability::None, None);
+            };
+            passed = z;
+        }
+        if passed == candidate && linear == Stability::Unconditional {
+            return (Stability::Unconditional, None);
+        }
+        (Stability::Conditional, Some(passed))
+    }
+
+    /// One linear probe of `method` at `dt` (s): the worst body.
     fn probe(&self, method: Method, dt: f64) -> Probe {
-        let mut scene = self.scene.clone();
-        scene.set_method(method);
-        let mut sim = Simulation::new(scene);
-        sim.set_dt(dt);
-        // ⌈T/dt⌉ fits in u64: T·ω/DT_OMEGA_FLOOR ≤ MAX_STEPS was checked.
-        let planned = ((self.horizon / dt).ceil() as u64).max(self.criterion.min_steps());
-        let mut probe = Probe {
-            dt,
-            dt_omega: dt * self.omega,
+        let planned = ((self.horizon / dt).ceil() as u64).max(GROWTH_MIN_STEPS);
+        let mut worst: Option<linear::Growth> = None;
+        for (lin, body) in self.linear.iter().zip(&self.scene.bodies) {
+            let g = lin.growth(method, &body.params, dt, planned);
+            if worst
+                .is_none_or(|w| (w.stable && !g.stable) || (w.stable == g.stable && g.rho > w.rho))
+            {
+                worst = Some(g);
+            }
+        }
+        let g = worst.unwrap_or(linear::Growth {
             steps: 0,
             stable: true,
-            growth: None,
-            diverged_time: None,
-        };
-        match self.criterion {
-            Criterion::Divergence => {
-                for _ in 0..planned {
-                    if let Some(d) = sim.step() {
-                        probe.diverged_time = Some(d.time);
-                        probe.stable = false;
-                        break;
-                    }
-                }
-            }
-            Criterion::Growth => growth_run(&mut sim, planned, &mut probe),
+            rho: 1.0,
+            ratio: None,
+            stopped: "decayed",
+        });
+        Probe {
+            dt,
+            dt_omega: dt * self.omega,
+            steps: g.steps,
+            stable: g.stable,
+            growth: g.ratio,
+            rho: g.rho,
+            stopped: g.stopped,
         }
-        probe.steps = sim.steps;
-        probe
+    }
+
+    /// One confirmation run of the whole scene with `method` at `dt` (s).
+    fn confirmation(&self, method: Method, dt: f64) -> Confirmation {
+        let mut c = confirm_run(self.scene, method, dt, self.horizon, self.scale);
+        c.dt_omega = dt * self.omega;
+        c
     }
 }
 
-/// The growth criterion: `2W ≥ planned` steps and their energies `E_1 .. E_{2W}` (module
-/// documentation), with the early stops.
-fn growth_run(sim: &mut Simulation, planned: u64, probe: &mut Probe) {
-    let w = planned.div_ceil(2).max(1);
-    let e0 = sim.energy().total;
-    let (mut early, mut late) = (0.0, 0.0);
-    for i in 0..2 * w {
-        if let Some(d) = sim.step() {
-            probe.diverged_time = Some(d.time);
-            probe.stable = false;
-            return;
-        }
-        let e = sim.energy().total;
-        if e.is_nan() || e > GROWTH_STOP * e0 {
-            probe.stable = false;
-            return;
-        }
-        if e <= DECAY_STOP * e0 {
-            probe.stable = true;
-            return;
-        }
-        let j = i % w;
-        // w_j = sin⁴(π (j + ½) / W)
-        let s = (PI * (j as f64 + 0.5) / w as f64).sin();
-        let weight = (s * s) * (s * s);
-        if i < w {
-            early += weight * e;
+/// One confirmation run (module docs): `scene` with `method` at `dt` (s) for
+/// `min(⌈50 horizon/dt⌉, 20 000)` steps (at least 100), judged against the energy scale `scale`
+/// (J, [`energy_scale`]). Library callers can use it to check a `dt` of their own.
+#[must_use]
+pub fn confirm_run(
+    scene: &Scene,
+    method: Method,
+    dt: f64,
+    horizon: f64,
+    scale: f64,
+) -> Confirmation {
+    let steps = ((CONFIRM_HORIZONS * horizon / dt).ceil() as u64)
+        .clamp(CONFIRM_MIN_STEPS, CONFIRM_MAX_STEPS);
+    confirm_steps(scene, method, dt, steps, scale)
+}
+
+/// [`confirm_run`] for a given number of steps.
+#[must_use]
+pub fn confirm_steps(
+    scene: &Scene,
+    method: Method,
+    dt: f64,
+    steps: u64,
+    scale: f64,
+) -> Confirmation {
+    let omega = 0.0;
+    {
+        let mut scene = scene.clone();
+        scene.set_method(method);
+        let driven = scene.bodies.iter().any(|b| {
+            b.state
+                .spheres
+                .iter()
+                .any(|s| s.kinematic && s.velocity != DVec3::ZERO)
+        });
+        let mut sim = Simulation::new(scene);
+        sim.set_dt(dt);
+        sim.set_accounting(false);
+        let e0 = sim.energy().total;
+        let level = (!driven && scale > 0.0).then_some(CONFIRM_ENERGY_SCALES * scale);
+        // Every step on small scenes (a sampled oscillating energy would alias), every 10 on
+        // large ones, where the energy is a noticeable share of a step's cost.
+        let every = if sim.scene.spring_count() < 2_000 {
+            1
         } else {
-            late += weight * e;
+            CONFIRM_ENERGY_EVERY
+        };
+        let explosion = CONFIRM_EXPLOSION_SCALES * scale;
+        // The largest and the smallest rise E - E_0 of each quarter of the run.
+        let mut quarters = [f64::NEG_INFINITY; 4];
+        let mut lowest = [f64::INFINITY; 4];
+        let mut reason = None;
+        for k in 0..steps {
+            if let Some(d) = sim.step() {
+                reason = Some(format!("diverged at t = {:.4e} s: {}", d.time, d.reason));
+                break;
+            }
+            if level.is_some() && (k % every == 0 || k + 1 == steps) {
+                let r = sim.energy().total - e0;
+                let q = (4 * k / steps) as usize;
+                quarters[q] = quarters[q].max(r);
+                lowest[q] = lowest[q].min(r);
+                if r.is_nan() || r > explosion {
+                    reason = Some(format!(
+                        "energy rose {r:.4e} J above its start, more than {explosion:.4e} J \
+                         (10⁴ S), at t = {:.4e} s",
+                        sim.time()
+                    ));
+                    break;
+                }
+            }
+        }
+        let residual_max = quarters.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if reason.is_none()
+            && let Some(level) = level
+        {
+            if quarters[3] > level && quarters[3] > CONFIRM_GROWTH * quarters[1] {
+                reason = Some(format!(
+                    "energy still rising: {:.4e} J above its start in the last quarter of the \
+                     run, {:.4e} J in the second, above {level:.4e} J (10 S)",
+                    quarters[3], quarters[1]
+                ));
+            } else if lowest[3] > level {
+                reason = Some(format!(
+                    "energy pumped up: never below {:.4e} J above its start in the last quarter \
+                     of the run, more than {level:.4e} J (10 S)",
+                    lowest[3]
+                ));
+            }
+        }
+        let allowed = level;
+        Confirmation {
+            dt,
+            dt_omega: dt * omega,
+            steps: sim.steps,
+            passed: reason.is_none(),
+            reason,
+            rise_max: allowed.map(|_| residual_max),
+            rise_allowed: allowed,
         }
     }
-    // The two windows have the same weights, so their sums compare directly.
-    let ratio = late / early;
-    probe.growth = Some(ratio);
-    probe.stable = ratio <= 1.0 + GROWTH_TOLERANCE;
 }

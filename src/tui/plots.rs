@@ -170,6 +170,10 @@ pub struct Sample {
     pub elastic: f64,
     /// Total energy (J).
     pub total: f64,
+    /// Total plus the energy dissipated since the start (J); NaN without accounting.
+    pub total_dissipated: f64,
+    /// The method's energy error `E + D - E_0` (J); NaN without accounting.
+    pub residual: f64,
     /// Largest particle speed (m/s).
     pub max_speed: f64,
     /// `|x_sim - x_exact|` for the oscillator (m); NaN otherwise.
@@ -249,6 +253,12 @@ impl History {
             gravity: e.gravity,
             elastic: e.elastic,
             total: e.total,
+            total_dissipated: if sim.accounting() {
+                e.total + sim.dissipated().total
+            } else {
+                f64::NAN
+            },
+            residual: sim.energy_residual(),
             max_speed,
             error,
         });
@@ -389,6 +399,20 @@ fn render_one(
                     short: "tot",
                     color: Color::White,
                     points: column(|s| s.total),
+                },
+                // The dissipated energy stacked on the total (flat at E0 for an exact
+                // integrator) and the method's own energy error.
+                Series {
+                    name: "total + dissipated",
+                    short: "+D",
+                    color: Color::LightBlue,
+                    points: column(|s| s.total_dissipated),
+                },
+                Series {
+                    name: "residual E + D - E0",
+                    short: "res",
+                    color: Color::LightRed,
+                    points: column(|s| s.residual),
                 },
             ],
             [0.0, now.max(1.0)],
@@ -690,9 +714,11 @@ fn render_stability(report: Option<&StabilityReport>, theme: Theme, area: Rect, 
             (Stability::Unconditional, None) => "any".to_string(),
             (_, None) => "none".to_string(),
         };
-        let theory = m
-            .theory_dt_omega
-            .map_or_else(|| m.theory.name().to_string(), |z| format!("{z:.3}"));
+        // The damped theory of the scene (on the undamped oscillator: |R| ≤ 1).
+        let theory = m.damped_theory.dt_omega.map_or_else(
+            || m.damped_theory.stability.to_string(),
+            |z| format!("{z:.3}"),
+        );
         lines.push(Line::from(vec![
             Span::styled(format!("{:<20} ", m.method.name()), theme.fg(color)),
             Span::raw(format!("{measured:>10} {theory:>10}")),

@@ -17,10 +17,13 @@
 //! 2nd ed., Springer 1993, §I.7 and §II.1; GAMES101 assignment 8 (2020), §1.2.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::Workspace;
+use crate::physics::integrators::{Workspace, power_if};
 use crate::physics::particles::State;
 
 pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
+    // D_{n+1} = D_n + dt P(x_n, v_n), when accounting.
+    let p = power_if(work.account, model, &state.x, &state.v, &mut work.power_f);
+    work.dissipated.add_power(dt, p);
     let a = &mut work.a;
     accelerations(model, &state.x, &state.v, a);
     for ((x, v), a) in state.x.iter_mut().zip(state.v.iter_mut()).zip(a.iter()) {

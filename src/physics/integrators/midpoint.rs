@@ -19,7 +19,7 @@
 //! 2nd ed., Springer 1993, §II.1 (eq. 1.7); NYCU Computer Animation HW1 (2021–2023).
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::Workspace;
+use crate::physics::integrators::{Workspace, power_if};
 use crate::physics::particles::State;
 
 pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
@@ -28,6 +28,9 @@ pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspa
         a,
         x_stage,
         v_stage,
+        account,
+        dissipated,
+        power_f,
         ..
     } = work;
     // First slope at the start: a(x_n, v_n).
@@ -37,6 +40,8 @@ pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspa
         x_stage[i] = state.x[i] + half * state.v[i];
         v_stage[i] = state.v[i] + half * a[i];
     }
+    // D_{n+1} = D_n + dt P(x_mid, v_mid), when accounting.
+    dissipated.add_power(dt, power_if(*account, model, x_stage, v_stage, power_f));
     // Second slope at the midpoint: a(x_mid, v_mid).
     accelerations(model, x_stage, v_stage, a);
     // The full step with the midpoint slopes.

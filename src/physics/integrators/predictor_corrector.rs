@@ -26,7 +26,7 @@
 //! (2021–2024), `integrator.cpp`.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::Workspace;
+use crate::physics::integrators::{Workspace, power_if};
 use crate::physics::particles::State;
 
 pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
@@ -34,6 +34,9 @@ pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspa
         a,
         x_stage,
         v_stage,
+        account,
+        dissipated,
+        power_f,
         ..
     } = work;
     accelerations(model, &state.x, &state.v, a);
@@ -42,6 +45,8 @@ pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspa
         x_stage[i] = state.x[i] + dt * state.v[i];
         v_stage[i] = state.v[i] + dt * a[i];
     }
+    // D_{n+1} = D_n + dt P(x̃, ṽ), when accounting (the corrector's stage).
+    dissipated.add_power(dt, power_if(*account, model, x_stage, v_stage, power_f));
     // Corrector: the slope at the predicted state, applied from the old state.
     accelerations(model, x_stage, v_stage, a);
     for i in 0..state.x.len() {

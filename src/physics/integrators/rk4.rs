@@ -23,8 +23,9 @@
 //! Differentialgleichungen", Z. Math. Phys. 46 (1901); E. Hairer, S. P. Nørsett, G. Wanner,
 //! *Solving Ordinary Differential Equations I*, 2nd ed., Springer 1993, §II.1, Table 1.2.
 
+use crate::physics::energy::Power;
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::Workspace;
+use crate::physics::integrators::{Workspace, power_if};
 use crate::physics::particles::State;
 
 pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
@@ -35,8 +36,12 @@ pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspa
         v_stage,
         k,
         kx,
+        account,
+        dissipated,
+        power_f,
         ..
     } = work;
+    let account = *account;
     let [k1v, k2v, k3v, k4v] = k;
     let [k1x, k2x, k3x, k4x] = kx;
     let (x, v) = (&state.x, &state.v);
@@ -44,6 +49,8 @@ pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspa
     // Stage 1: the slope at the start.
     k1x[..n].copy_from_slice(v);
     accelerations(model, x, v, k1v);
+    // The dissipated power at each stage, weighted like the slopes: D' = P(x, v).
+    let mut power = Power::default().plus(1.0, power_if(account, model, x, v, power_f));
     // Stage 2: the slope at a half step along stage 1.
     for i in 0..n {
         x_stage[i] = x[i] + half * k1x[i];
@@ -51,6 +58,7 @@ pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspa
         k2x[i] = v_stage[i];
     }
     accelerations(model, x_stage, v_stage, k2v);
+    power = power.plus(2.0, power_if(account, model, x_stage, v_stage, power_f));
     // Stage 3: the slope at a half step along stage 2.
     for i in 0..n {
         x_stage[i] = x[i] + half * k2x[i];
@@ -58,6 +66,7 @@ pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspa
         k3x[i] = v_stage[i];
     }
     accelerations(model, x_stage, v_stage, k3v);
+    power = power.plus(2.0, power_if(account, model, x_stage, v_stage, power_f));
     // Stage 4: the slope at a full step along stage 3.
     for i in 0..n {
         x_stage[i] = x[i] + dt * k3x[i];
@@ -65,8 +74,10 @@ pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspa
         k4x[i] = v_stage[i];
     }
     accelerations(model, x_stage, v_stage, k4v);
+    power = power.plus(1.0, power_if(account, model, x_stage, v_stage, power_f));
     // Weighted mean of the four slopes (Simpson's rule weights 1, 2, 2, 1).
     let sixth = dt / 6.0;
+    dissipated.add_power(sixth, power);
     for i in 0..n {
         state.x[i] += sixth * (k1x[i] + 2.0 * k2x[i] + 2.0 * k3x[i] + k4x[i]);
         state.v[i] += sixth * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i]);

@@ -18,11 +18,14 @@
 //! Springer 2006, §I.1.2 and §VI.3; GAMES101 assignment 8 (2020), §1.2.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::Workspace;
+use crate::physics::integrators::{Workspace, power_if};
 use crate::physics::particles::State;
 use crate::physics::stencil::Output;
 
 pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
+    // D_{n+1} = D_n + dt P(x_n, v_n), when accounting.
+    let p = power_if(work.account, model, &state.x, &state.v, &mut work.power_f);
+    work.dissipated.add_power(dt, p);
     if let Some(stencil) = model.stencil()
         && model.colliders.is_empty()
     {

@@ -1,37 +1,60 @@
 //! Position Verlet (Störmer–Verlet) with damping and distance-constraint projection.
 //!
 //! ```text
-//! x_{n+1} = x_n + (1 - γ) (x_n - x_{n-1}) + a(x_n, v_n) dt²
+//! x_{n+1} = x_n + (1 - γ) (x_n - x_{n-1}) + a(x_n, v_n) dt²           (r = 0)
+//! x_{n+1} = x_n + (1 - γ) (1 - h)/(1 + h) (x_n - x_{n-1}) + a(x_n, v_n) dt² / (1 + h)
+//!                                                          h = r dt / 2   (r > 0)
 //! then, `iterations` times, project every spring back to its rest length
 //! v_{n+1} = (x_{n+1} - x_n) / dt
 //! ```
-//! where `x` is position (m), `a` acceleration (m/s²), `dt` the step (s) and `γ` the
-//! dimensionless damping factor (GAMES101 uses 0.00005).
+//! where `x` is position (m), `a` acceleration (m/s²), `dt` the step (s), `γ` the dimensionless
+//! damping factor per step (GAMES101 uses 0.00005) and `r` the damping rate (1/s).
 //!
 //! The velocity is not a state variable: the last displacement `x_n - x_{n-1}` plays its part.
 //! Global error O(dt²): **second order** (the GAMES101 sheet's "fourth order" is the local error
-//! of the position in one step; errors accumulate over 1/dt steps). The velocity reported is the
-//! backward difference, a first-order estimate of `v(t_{n+1})`.
+//! of the position in one step; errors accumulate over 1/dt steps) — **while the forces do not
+//! depend on the velocity**. The velocity `v_n = (x_n - x_{n-1})/dt` that dampers and drag see is
+//! `v(t_n - dt/2)` to second order: half a step late, an O(dt) error in the force, and the
+//! method becomes **first order** with spring dampers or drag (measured on the oscillator with
+//! k_d = 2 N·s/m: order 1.02; undamped 2.00; `study convergence` shows both rows).
+//!
+//! **Damping.** GAMES101's factor `(1 - γ)` shrinks the remembered displacement every step: a
+//! drag of rate `≈ γ/dt`, so its strength changes with `dt` (γ = 5e-5 is 0.05 1/s at dt = 1 ms
+//! and 0.003 1/s at 1/64 s), and it is first order. The rate `r` is the same drag `-r v` at every
+//! `dt`, applied with the centred velocity `(x_{n+1} - x_{n-1})/(2 dt)`, which solves for
+//! `x_{n+1}` in closed form (the second line): second order. The rope scenes keep GAMES101's
+//! `γ = 5e-5` and `r = 0`; the course cubes and cloths have spring dampers and use neither
+//! (`γ = 0`, `r = 0`). Both are scene parameters (`verlet_damping`, `verlet_damping_rate`).
 //!
 //! **Start-up.** The first step needs `x_{-1}`. Taking `x_{-1} = x_0` would be a velocity error
 //! of O(dt) and make the method first order; instead, when the state holds no history,
 //! `x_{-1} = x_0 - dt v_0 + ½ dt² a_0` (Taylor, error O(dt³)).
 //!
-//! **Stability on the harmonic oscillator** (γ = 0, no projection): the same recurrence as
-//! semi-implicit Euler, `x_{n+1} - (2 - dt²ω²) x_n + x_{n-1} = 0`, stable while **dt·ω ≤ 2**.
+//! **Stability on the harmonic oscillator** (γ = 0, r = 0, no projection): the same recurrence
+//! as semi-implicit Euler, `x_{n+1} - (2 - dt²ω²) x_n + x_{n-1} = 0`, stable while **dt·ω ≤ 2**.
+//! With a damper (rate μ on the mode), `x_{n+1} = (1 + c - dt²ω²/(1 + h)) x_n - c x_{n-1}`,
+//! `c = (1 - γ)(1 - h)/(1 + h) - dt μ/(1 + h)`: stable while both roots lie in the unit circle
+//! (see `study::theory`).
 //!
 //! **Projection** ([`project_distances`]) with `iterations > 0` turns every spring into a rigid
 //! rod (an infinitely stiff spring, GAMES101 §1.3): each end moves half the error, a pinned end
 //! none. The spring forces still enter `a`, but after projection they are nearly zero.
+//!
+//! **Energy accounting**: the dampers' power at `(x_n, v_n)` times `dt` (what the force saw),
+//! `½ m (1 - (1 - γ)²) |x_n - x_{n-1}|²/dt²` for the factor, `dt r m |v_centred|²` for the rate,
+//! and the drop of the energy across the projection.
 //!
 //! Reference: L. Verlet, "Computer 'Experiments' on Classical Fluids", Phys. Rev. 159 (1967);
 //! E. Hairer, C. Lubich, G. Wanner, "Geometric numerical integration illustrated by the
 //! Störmer–Verlet method", Acta Numerica 12 (2003), §1; T. Jakobsen, "Advanced Character
 //! Physics", GDC 2001; GAMES101 assignment 8 (2020), §1.3–1.4.
 
+use glam::DVec3;
+
 use crate::physics::constraints::{prepare_rods, project_distances};
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{MethodParams, Workspace};
+
+use crate::physics::integrators::{MethodParams, Workspace, power_if};
 use crate::physics::particles::State;
 
 pub(super) fn step(
@@ -41,7 +64,15 @@ pub(super) fn step(
     params: &MethodParams,
     work: &mut Workspace,
 ) -> u64 {
-    let a = &mut work.a;
+    let Workspace {
+        a,
+        rods,
+        account,
+        dissipated,
+        power_f,
+        ..
+    } = work;
+    let account = *account;
     accelerations(model, &state.x, &state.v, a);
     let dt2 = dt * dt;
     if !state.history_valid {
@@ -50,16 +81,47 @@ pub(super) fn step(
             state.x_prev[i] = state.x[i] - dt * state.v[i] + 0.5 * dt2 * a[i];
         }
     }
+    // The dampers and drag saw v_n = (x_n - x_{n-1})/dt: D += dt P(x_n, v_n), when accounting.
+    dissipated.add_power(dt, power_if(account, model, &state.x, &state.v, power_f));
     let keep = 1.0 - params.verlet_damping;
+    let rate = params.verlet_damping_rate;
+    let inv_dt2 = 1.0 / dt2;
     for i in 0..state.x.len() {
         let x_n = state.x[i];
-        // x_{n+1} = x_n + (1 - γ)(x_n - x_{n-1}) + a_n dt²
-        state.x[i] = x_n + keep * (x_n - state.x_prev[i]) + dt2 * a[i];
+        let d_n = x_n - state.x_prev[i];
+        if rate == 0.0 {
+            // x_{n+1} = x_n + (1 - γ)(x_n - x_{n-1}) + a_n dt²
+            state.x[i] = x_n + keep * d_n + dt2 * a[i];
+        } else {
+            // Centred rate damping, h = r dt / 2:
+            // x_{n+1} = x_n + (1 - γ) (1 - h)/(1 + h) (x_n - x_{n-1}) + a_n dt² / (1 + h)
+            let h = 0.5 * rate * dt;
+            state.x[i] = x_n + keep * ((1.0 - h) / (1.0 + h)) * d_n + dt2 * a[i] / (1.0 + h);
+            if account && model.inv_mass[i] != 0.0 {
+                // Power r m |v_c|², v_c = (x_{n+1} - x_{n-1}) / (2 dt), over dt.
+                let v_c = (state.x[i] - state.x_prev[i]) / (2.0 * dt);
+                dissipated.method += dt * rate * model.mass[i] * v_c.length_squared();
+            }
+        }
+        if account && keep != 1.0 && model.inv_mass[i] != 0.0 {
+            // γ removes ½ m (1 - (1 - γ)²) |d_n / dt|² of the remembered motion.
+            dissipated.method +=
+                0.5 * model.mass[i] * (1.0 - keep * keep) * d_n.length_squared() * inv_dt2;
+        }
         state.x_prev[i] = x_n;
     }
     if params.iterations > 0 {
-        prepare_rods(model, &mut work.rods);
-        project_distances(&work.rods, &mut state.x, params.iterations);
+        let before = if account {
+            mechanical_energy(model, &state.x, &state.x_prev, dt)
+        } else {
+            0.0
+        };
+        prepare_rods(model, rods);
+        project_distances(rods, &mut state.x, params.iterations);
+        if account {
+            // Projection is inelastic: what it takes out (or, rarely, puts in).
+            dissipated.method += before - mechanical_energy(model, &state.x, &state.x_prev, dt);
+        }
     }
     let inv_dt = 1.0 / dt;
     for i in 0..state.x.len() {
@@ -68,4 +130,14 @@ pub(super) fn step(
     }
     state.history_valid = true;
     1
+}
+
+/// Kinetic (with the implied velocities `(x - x_prev)/dt`), gravitational and elastic energy (J).
+fn mechanical_energy(model: &Model, x: &[DVec3], x_prev: &[DVec3], dt: f64) -> f64 {
+    let mut e = 0.0;
+    for i in 0..x.len() {
+        let v = (x[i] - x_prev[i]) / dt;
+        e += 0.5 * model.mass[i] * v.length_squared() - model.mass[i] * model.gravity.dot(x[i]);
+    }
+    e + model.springs.iter().map(|s| s.energy(x)).sum::<f64>()
 }

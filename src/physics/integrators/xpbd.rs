@@ -27,7 +27,7 @@
 
 use crate::physics::constraints::xpbd_solve;
 use crate::physics::forces::Model;
-use crate::physics::integrators::{MethodParams, Workspace};
+use crate::physics::integrators::{MethodParams, Workspace, power_if};
 use crate::physics::particles::State;
 
 pub(super) fn step(
@@ -42,6 +42,9 @@ pub(super) fn step(
     let Workspace {
         x_stage: x_start,
         lambda,
+        account,
+        dissipated,
+        power_f,
         ..
     } = work;
     for _ in 0..substeps {
@@ -62,6 +65,8 @@ pub(super) fn step(
         for i in 0..state.x.len() {
             state.v[i] = (state.x[i] - x_start[i]) * inv_h;
         }
+        // Dampers and drag at the end of the substep, when accounting.
+        dissipated.add_power(h, power_if(*account, model, &state.x, &state.v, power_f));
     }
     state.history_valid = false;
     u64::from(substeps)
