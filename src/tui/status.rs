@@ -2,8 +2,9 @@
 //!
 //! ```text
 //!  rk4 · dt 0.010 s · dt·ω 0.100 · k 100 N/m · k_d 0 N·s/m
-//!  ‖ paused · t = 0.00 s · step 0 · 0/4096 steps/frame · ×— real time · — steps/s · — fps
+//!  ‖ paused · t = 0.00 s · step 0 · 0/4096 steps/frame · ×— real time · — steps/s · — fps · halfblocks
 //! ```
+//! The last word names the scene pane's view (`raster (sixel)`, `halfblocks`, `braille`).
 //! `ω` is the upper bound of [`LessonRun::omega_max`]: exact for one spring, `2√(k/m)` for a
 //! chain. Times are simulated times; the real-time factor, steps per second and frames per
 //! second are measured (a dash until measured).
@@ -19,7 +20,14 @@ use super::plots::number;
 use super::sim_view::time_text;
 
 /// Draws the status lines of `run` into the two rows of `area`.
-pub fn render(run: &LessonRun, fps: Option<f64>, theme: Theme, area: Rect, buf: &mut Buffer) {
+pub fn render(
+    run: &LessonRun,
+    fps: Option<f64>,
+    view: &str,
+    theme: Theme,
+    area: Rect,
+    buf: &mut Buffer,
+) {
     let sim = run.sim();
     let dt = sim.dt();
     let sep = || Span::styled(" · ", theme.dim());
@@ -104,6 +112,8 @@ pub fn render(run: &LessonRun, fps: Option<f64>, theme: Theme, area: Rect, buf: 
                 "{} fps",
                 fps.map_or_else(|| "—".to_string(), |f| format!("{f:.0}"))
             )),
+            sep(),
+            Span::styled(view.to_string(), theme.fg(Color::Cyan)),
         ]
     };
     buf.set_line(area.x, area.y, &Line::from(first), area.width);
