@@ -13,7 +13,7 @@ use ratatui::style::Color;
 use springlab::lesson;
 use springlab::physics::Method;
 use springlab::simulation::Simulation;
-use springlab::tui::{App, LessonRun, Screen, Theme};
+use springlab::tui::{App, LessonRun, Screen, Theme, sim_view};
 
 fn app() -> App {
     App::new(lesson::builtin(), Theme { color: false })
@@ -569,10 +569,14 @@ fn mouse_grabs_drags_and_releases_a_particle() {
     let camera = *run_ref.camera();
     let inner = canvas_inner(&app);
     // The cell of particle 1 (the free end).
-    let p = camera.project(run_ref.sim().scene.bodies[0].state.x[1]);
-    let ([x0, x1], [y0, y1]) = camera.bounds(inner.width, inner.height);
-    let column = inner.x + ((p.x - x0) / (x1 - x0) * f64::from(inner.width)) as u16;
-    let row = inner.y + ((y1 - p.y) / (y1 - y0) * f64::from(inner.height)) as u16;
+    // The cell of particle 1 (the free end): its pixel on the pane's braille dots (2 × 4 a
+    // cell).
+    let view = sim_view::dot_view(&camera, inner);
+    let p = view
+        .project(run_ref.sim().scene.bodies[0].state.x[1])
+        .expect("in front of the camera");
+    let column = inner.x + (p.x / 2.0) as u16;
+    let row = inner.y + (p.y / 4.0) as u16;
     let mouse = |kind, column, row| MouseEvent {
         kind,
         column,
@@ -592,9 +596,11 @@ fn mouse_grabs_drags_and_releases_a_particle() {
         row + 5
     )));
     let state = &run(&app).sim().scene.bodies[0].state;
-    let (vx, vy) = camera.cell_to_view(inner, column, row + 5);
-    let q = camera.project(state.x[1]);
-    assert!((q.x - vx).abs() < 1e-9 && (q.y - vy).abs() < 1e-9);
+    // It sits under the centre of the cell, in the view plane of its grab (same depth).
+    let q = view.project(state.x[1]).expect("in front");
+    assert!((f64::from(q.x) - (f64::from(column - inner.x) + 0.5) * 2.0).abs() < 1e-3);
+    assert!((f64::from(q.y) - (f64::from(row + 5 - inner.y) + 0.5) * 4.0).abs() < 1e-3);
+    assert!((q.depth - p.depth).abs() < 1e-9);
     assert_eq!(state.v[1], glam::DVec3::ZERO);
     // Stepping while held keeps it there.
     let held = state.x[1];
@@ -647,9 +653,11 @@ fn arrows_orbit_the_camera() {
         "elevation stops at 89°"
     );
     // Projection and its inverse agree.
-    let camera = run(&app).camera();
+    let view = springlab::render::View::new(run(&app).camera(), 160, 96);
     let p = glam::DVec3::new(0.3, -1.2, 2.5);
-    assert!((camera.unproject(camera.project(p)) - p).length() < 1e-12);
+    let q = view.project(p).expect("in front");
+    let back = view.unproject(f64::from(q.x), f64::from(q.y), q.depth);
+    assert!((back - p).length() < 1e-5, "{back} vs {p}");
 }
 
 #[test]
