@@ -45,10 +45,7 @@ fn bench_views(c: &mut Criterion) {
         f64::from(inner.width) * f64::from(CELL.0) / (f64::from(inner.height) * f64::from(CELL.1)),
     );
     let cells = Size::new(inner.width, inner.height);
-    let mut group = c.benchmark_group(format!(
-        "pane/{}x{}-cells",
-        inner.width, inner.height
-    ));
+    let mut group = c.benchmark_group(format!("pane/{}x{}-cells", inner.width, inner.height));
     let mut buf = Buffer::empty(screen);
     group.bench_function("braille", |b| {
         b.iter(|| sim_view::Braille.paint(&run, Theme { color: true }, inner, &mut buf));

@@ -59,6 +59,10 @@ pub const MIN_SIZE: (u16, u16) = (80, 24);
 /// Frames are drawn at most this often while something animates.
 const FRAME: Duration = Duration::from_micros(16_667);
 
+/// The raster view sends a new image at most this often while the simulation runs (30 a
+/// second); paused, every change is sent at once.
+const RASTER_FRAME: Duration = Duration::from_micros(33_333);
+
 /// Wall time a frame may spend stepping before the rest of its steps are dropped.
 const STEP_BUDGET: Duration = Duration::from_millis(20);
 
@@ -145,6 +149,10 @@ pub struct App {
     submitted: Option<(u64, Rect)>,
     /// The whole screen must be cleared before the next draw (images left behind).
     clear: bool,
+    /// When the last raster job was sent.
+    last_raster: Option<Instant>,
+    /// Raster images shown per second (measured by [`App::run`]).
+    raster_fps: Option<f64>,
 }
 
 impl App {
@@ -173,6 +181,8 @@ impl App {
             encoder: None,
             submitted: None,
             clear: false,
+            last_raster: None,
+            raster_fps: None,
         }
     }
 
@@ -201,7 +211,10 @@ impl App {
     #[must_use]
     pub fn view_label(&self) -> String {
         match (self.view, self.graphics.protocol) {
-            (ViewMode::Raster, Some(p)) => format!("raster ({})", p.name()),
+            (ViewMode::Raster, Some(p)) => match self.raster_fps {
+                Some(f) if self.is_animating() => format!("raster ({}, {f:.0} images/s)", p.name()),
+                _ => format!("raster ({})", p.name()),
+            },
             (v, _) => v.name().to_string(),
         }
     }
@@ -231,6 +244,11 @@ impl App {
         self.encoder.as_ref()
     }
 
+    /// Takes a finished raster frame from the encoder, if one is ready; true when one was.
+    pub fn poll_raster(&mut self) -> bool {
+        self.encoder.as_mut().is_some_and(Encoder::poll)
+    }
+
     /// Sends the open lesson's current frame to the raster encoder when the raster view shows
     /// something new and the encoder is free; true when a job was sent.
     pub fn submit_raster(&mut self) -> bool {
@@ -252,6 +270,11 @@ impl App {
         if self.submitted == Some(key) || inner.width < 4 || inner.height < 2 {
             return false;
         }
+        let now = Instant::now();
+        if run.is_running() && self.last_raster.is_some_and(|t| now - t < RASTER_FRAME) {
+            return false;
+        }
+        self.last_raster = Some(now);
         self.submitted = Some(key);
         encoder.submit(Job {
             scene: run.sim().scene.clone(),
@@ -494,14 +517,18 @@ impl App {
         let mut last_tick = Instant::now();
         let mut next_frame = Instant::now();
         let mut fps_window = (Instant::now(), 0u32);
+        let mut images = 0u32;
         let mut dirty = true;
         if let Ok(size) = terminal.size() {
             self.resize(size.width, size.height);
         }
         while !self.quit {
             self.submit_raster();
-            if let Some(encoder) = &mut self.encoder {
-                dirty |= encoder.poll();
+            if let Some(encoder) = &mut self.encoder
+                && encoder.poll()
+            {
+                dirty = true;
+                images += 1;
             }
             if dirty {
                 if std::mem::take(&mut self.clear) {
@@ -555,12 +582,16 @@ impl App {
                 let elapsed = now - fps_window.0;
                 if elapsed >= Duration::from_millis(500) {
                     self.fps = Some(f64::from(fps_window.1) / elapsed.as_secs_f64());
+                    self.raster_fps = Some(f64::from(images) / elapsed.as_secs_f64());
                     fps_window = (now, 0);
+                    images = 0;
                 }
             } else {
                 fps_window = (now, 0);
+                images = 0;
                 next_frame = now;
                 self.fps = None;
+                self.raster_fps = None;
             }
         }
         Ok(())

@@ -726,3 +726,85 @@ fn no_color_draws_without_colours() {
             .any(|c| c.fg != Color::Reset)
     );
 }
+
+#[test]
+fn v_cycles_the_views_and_the_status_line_names_the_view() {
+    use springlab::tui::{ColourDepth, Graphics, Protocol, ViewMode};
+    let mut plain = app();
+    plain.open_lesson(0).expect("opens");
+    assert_eq!(
+        plain.view(),
+        ViewMode::HalfBlocks,
+        "no protocol: half-blocks"
+    );
+    assert!(screen_text(&plain, 100, 32).contains("view: halfblocks (v)"));
+    key(&mut plain, KeyCode::Char('v'));
+    assert_eq!(plain.view(), ViewMode::Braille);
+    assert!(screen_text(&plain, 100, 32).contains("view: braille (v)"));
+    key(&mut plain, KeyCode::Char('v'));
+    assert_eq!(
+        plain.view(),
+        ViewMode::HalfBlocks,
+        "no raster view to go to"
+    );
+    // With a protocol the raster view is in the cycle (and asked for, it is the start).
+    let sixel = Graphics {
+        protocol: Some(Protocol::Sixel),
+        ..Graphics::NONE
+    };
+    let mut raster = App::new(lesson::builtin(), Theme { color: true }).with_display(
+        ViewMode::Raster,
+        sixel,
+        ColourDepth::TrueColour,
+    );
+    raster.open_lesson(0).expect("opens");
+    assert!(screen_text(&raster, 100, 32).contains("view: raster (sixel) (v)"));
+    for want in [ViewMode::HalfBlocks, ViewMode::Braille, ViewMode::Raster] {
+        key(&mut raster, KeyCode::Char('v'));
+        assert_eq!(raster.view(), want);
+    }
+    // Asking for the raster view without a protocol gives half-blocks.
+    let fallback = App::new(lesson::builtin(), Theme { color: true }).with_display(
+        ViewMode::Raster,
+        Graphics::NONE,
+        ColourDepth::Palette256,
+    );
+    assert_eq!(fallback.view(), ViewMode::HalfBlocks);
+}
+
+#[test]
+fn the_raster_view_shows_the_encoded_frame() {
+    use springlab::tui::{ColourDepth, Graphics, Protocol, ViewMode};
+    let kitty = Graphics {
+        protocol: Some(Protocol::Kitty),
+        ..Graphics::NONE
+    };
+    let mut app = App::new(lesson::builtin(), Theme { color: true }).with_display(
+        ViewMode::Raster,
+        kitty,
+        ColourDepth::TrueColour,
+    );
+    app.resize(100, 32);
+    app.open_lesson(0).expect("opens");
+    assert!(app.submit_raster(), "a frame is sent to the encoder");
+    assert!(!app.submit_raster(), "nothing new to send");
+    assert!(app.encoder().is_some(), "an encoder thread");
+    let mut waited = 0;
+    while app.encoder().is_some_and(|e| e.busy()) && waited < 2000 {
+        std::thread::sleep(std::time::Duration::from_millis(1));
+        waited += 1;
+        if app.poll_raster() {
+            break;
+        }
+    }
+    let frame = app.encoder().and_then(|e| e.latest()).expect("a frame");
+    let inner = canvas_inner(&app);
+    assert_eq!(
+        (frame.cells.width, frame.cells.height),
+        (inner.width, inner.height)
+    );
+    // The pane now holds kitty's placeholders, not half blocks.
+    let terminal = draw(&app, 100, 32);
+    let cell = &terminal.backend().buffer()[(inner.x + 3, inner.y + 3)];
+    assert!(cell.symbol().contains('\u{10EEEE}'), "{:?}", cell.symbol());
+}

@@ -1255,8 +1255,8 @@ fn render_hints(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
     let line = match run.message() {
         Some(m) => Line::from(Span::styled(format!(" {m}"), theme.fg(Color::Yellow))),
         None => Line::from(Span::styled(
-            " space run · s step · r reset · m method · +/- dt · k/K d/D · n/p step · ? help · \
-             q menu",
+            " space run · s step · r reset · m method · +/- dt · k/K d/D · v view · n/p step · \
+             ? help · q menu",
             theme.dim(),
         )),
     };

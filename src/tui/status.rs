@@ -2,9 +2,10 @@
 //!
 //! ```text
 //!  rk4 · dt 0.010 s · dt·ω 0.100 · k 100 N/m · k_d 0 N·s/m
-//!  ‖ paused · t = 0.00 s · step 0 · 0/4096 steps/frame · ×— real time · — steps/s · — fps · halfblocks
+//!  ‖ paused · t = 0.00 s · step 0 · 0/4096 steps/frame · ×— real time · — steps/s · — fps
 //! ```
-//! The last word names the scene pane's view (`raster (sixel)`, `halfblocks`, `braille`).
+//! The first line ends with the scene pane's view (`view: raster (sixel, 30 images/s) (v)`,
+//! `view: halfblocks (v)`, `view: braille (v)`).
 //! `ω` is the upper bound of [`LessonRun::omega_max`]: exact for one spring, `2√(k/m)` for a
 //! chain. Times are simulated times; the real-time factor, steps per second and frames per
 //! second are measured (a dash until measured).
@@ -112,11 +113,20 @@ pub fn render(
                 "{} fps",
                 fps.map_or_else(|| "—".to_string(), |f| format!("{f:.0}"))
             )),
-            sep(),
-            Span::styled(view.to_string(), theme.fg(Color::Cyan)),
         ]
     };
     buf.set_line(area.x, area.y, &Line::from(first), area.width);
+    // The view, right-aligned on the first line (over its end when the line is too long).
+    let label = format!(" view: {view} (v) ");
+    let width = label.chars().count() as u16;
+    if area.width > width {
+        buf.set_string(
+            area.x + area.width - width,
+            area.y,
+            label,
+            theme.fg(Color::Cyan),
+        );
+    }
     if area.height > 1 {
         buf.set_line(area.x, area.y + 1, &Line::from(second), area.width);
     }
