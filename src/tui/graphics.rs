@@ -20,10 +20,11 @@
 //!
 //! **tmux** passes escape sequences to the outer terminal only inside its passthrough wrapper
 //! (`ESC Ptmux; … ESC \`, escapes doubled), and only when its option `allow-passthrough` is on.
-//! The app asks tmux for that option (`tmux show -pv allow-passthrough`) and does not change it:
-//! with passthrough the queries and the images are wrapped; without it only the device
-//! attributes are asked of tmux itself (a tmux built with sixel support draws sixel), and
-//! otherwise the pane falls back to half-blocks.
+//! The app asks tmux for that option (`tmux show -Apv allow-passthrough`) and does not change it:
+//! with passthrough the queries and the images are wrapped, and only kitty's protocol is used
+//! (its Unicode placeholders are text that tmux keeps; a sixel or iTerm2 image passed through is
+//! wiped by tmux's next redraw); without it only the device attributes are asked of tmux itself
+//! (a tmux built with sixel support draws sixel). Otherwise the pane falls back to half-blocks.
 
 use std::io::Write;
 use std::time::{Duration, Instant};
@@ -99,7 +100,11 @@ impl Graphics {
             &env("TERM_PROGRAM"),
             &env("LC_TERMINAL"),
             !env("KONSOLE_VERSION").is_empty(),
-            tmux && !passthrough,
+            match (tmux, passthrough) {
+                (false, _) => Tmux::No,
+                (true, true) => Tmux::Passthrough,
+                (true, false) => Tmux::Alone,
+            },
         );
         match (protocol, cell) {
             (Some(p), Some(cell)) if cell.0 > 0 && cell.1 > 0 => Graphics {
@@ -130,20 +135,38 @@ pub fn wrap(s: &str, wrap: bool) -> String {
     }
 }
 
-/// The protocol for the terminal's answers and environment (module docs): `tmux_only` means
-/// only tmux itself answered (no passthrough), so only its own sixel counts.
+/// Where the app runs, as far as tmux goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tmux {
+    /// Not in tmux.
+    No,
+    /// In tmux with `allow-passthrough`: the outer terminal answered.
+    Passthrough,
+    /// In tmux without passthrough: tmux itself answered.
+    Alone,
+}
+
+/// The protocol for the terminal's answers and environment (module docs). Inside tmux only
+/// images that tmux keeps on screen count: kitty's, whose Unicode placeholders are text tmux
+/// redraws like any other, through passthrough; or sixel drawn by tmux itself. A sixel or
+/// iTerm2 image passed through to the outer terminal is wiped by tmux's next redraw of the
+/// pane, so there the pane uses half-blocks.
 #[must_use]
 pub fn choose(
     answers: &Answers,
     term_program: &str,
     lc_terminal: &str,
     konsole: bool,
-    tmux_only: bool,
+    tmux: Tmux,
 ) -> Option<Protocol> {
     let wezterm = term_program.contains("WezTerm");
     let iterm = term_program.contains("iTerm") || lc_terminal.contains("iTerm");
-    if tmux_only {
-        return answers.sixel.then_some(Protocol::Sixel);
+    match tmux {
+        Tmux::Alone => return answers.sixel.then_some(Protocol::Sixel),
+        Tmux::Passthrough => {
+            return (answers.kitty && !wezterm && !konsole).then_some(Protocol::Kitty);
+        }
+        Tmux::No => {}
     }
     if answers.kitty && !wezterm && !konsole {
         Some(Protocol::Kitty)
@@ -159,7 +182,7 @@ pub fn choose(
 /// True when tmux's `allow-passthrough` is `on` or `all` for this pane.
 fn tmux_passthrough() -> bool {
     std::process::Command::new("tmux")
-        .args(["show", "-pv", "allow-passthrough"])
+        .args(["show", "-Apv", "allow-passthrough"])
         .stdin(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
         .output()
@@ -381,24 +404,44 @@ mod tests {
             sixel: true,
             ..Answers::default()
         };
-        assert_eq!(choose(&kitty, "", "", false, false), Some(Protocol::Kitty));
+        let none = Answers::default();
         assert_eq!(
-            choose(&kitty, "WezTerm", "", false, false),
+            choose(&kitty, "", "", false, Tmux::No),
+            Some(Protocol::Kitty)
+        );
+        assert_eq!(
+            choose(&kitty, "WezTerm", "", false, Tmux::No),
             Some(Protocol::Iterm2)
         );
-        assert_eq!(choose(&kitty, "", "", true, false), Some(Protocol::Sixel));
-        assert_eq!(choose(&sixel, "", "", false, false), Some(Protocol::Sixel));
         assert_eq!(
-            choose(&Answers::default(), "iTerm.app", "", false, false),
+            choose(&kitty, "", "", true, Tmux::No),
+            Some(Protocol::Sixel)
+        );
+        assert_eq!(
+            choose(&sixel, "", "", false, Tmux::No),
+            Some(Protocol::Sixel)
+        );
+        assert_eq!(
+            choose(&none, "iTerm.app", "", false, Tmux::No),
             Some(Protocol::Iterm2)
         );
-        assert_eq!(choose(&Answers::default(), "", "", false, false), None);
+        assert_eq!(choose(&none, "", "", false, Tmux::No), None);
         // tmux without passthrough: the outer terminal's environment does not count.
+        assert_eq!(choose(&none, "iTerm.app", "", false, Tmux::Alone), None);
         assert_eq!(
-            choose(&Answers::default(), "iTerm.app", "", false, true),
+            choose(&sixel, "", "", false, Tmux::Alone),
+            Some(Protocol::Sixel)
+        );
+        // tmux with passthrough: kitty only.
+        assert_eq!(
+            choose(&kitty, "", "", false, Tmux::Passthrough),
+            Some(Protocol::Kitty)
+        );
+        assert_eq!(choose(&sixel, "", "", false, Tmux::Passthrough), None);
+        assert_eq!(
+            choose(&none, "iTerm.app", "", false, Tmux::Passthrough),
             None
         );
-        assert_eq!(choose(&sixel, "", "", false, true), Some(Protocol::Sixel));
     }
 
     #[test]
