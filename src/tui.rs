@@ -284,6 +284,7 @@ impl App {
             cells: ratatui::layout::Size::new(inner.width, inner.height),
             graphics: self.graphics,
             stamp: run.version(),
+            full: !run.is_running(),
         });
         true
     }

@@ -158,6 +158,8 @@ pub struct Job {
     pub graphics: Graphics,
     /// Increases with every job; the frame carries it back.
     pub stamp: u64,
+    /// Draw at full resolution whatever the last frames took (the simulation is paused).
+    pub full: bool,
 }
 
 /// A drawn and encoded frame.
@@ -329,6 +331,7 @@ fn encode_job(
     scale: f64,
 ) -> Result<(Encoded, f64), String> {
     let protocol = job.graphics.protocol.ok_or("no graphics protocol")?;
+    let scale = if job.full { 1.0 } else { scale };
     let full = pixel_size(job.cells, job.graphics.cell, 1.0);
     let size = pixel_size(job.cells, job.graphics.cell, scale);
     let pixmap = renderer.draw(
