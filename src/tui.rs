@@ -225,14 +225,24 @@ impl App {
         self.report_aspect();
     }
 
+    /// Tells the open lesson the pixel grid of the view shown (the font cell for raster, braille
+    /// dots otherwise) and the pane's aspect ratio in it.
     fn report_aspect(&mut self) {
         let (w, h) = self.size;
-        let (cw, ch) = self.graphics.cell;
+        let grid = if self.view == ViewMode::Raster {
+            (
+                u32::from(self.graphics.cell.0),
+                u32::from(self.graphics.cell.1),
+            )
+        } else {
+            sim_view::DOTS
+        };
         if let Screen::Lesson(run) = &mut self.screen {
+            run.set_grid(grid);
             let inner = lesson_view::scene_inner(run, Rect::new(0, 0, w, h));
             if inner.width > 0 && inner.height > 0 {
-                let aspect = (f64::from(inner.width) * f64::from(cw))
-                    / (f64::from(inner.height) * f64::from(ch));
+                let aspect = (f64::from(inner.width) * f64::from(grid.0))
+                    / (f64::from(inner.height) * f64::from(grid.1));
                 run.set_aspect(aspect);
             }
         }
@@ -440,6 +450,10 @@ impl App {
                     self.clear = true;
                 } else if key.code == KeyCode::Char('v') {
                     self.view = self.view.next(raster);
+                    self.report_aspect();
+                    let Screen::Lesson(run) = &mut self.screen else {
+                        return;
+                    };
                     self.clear = true;
                     self.submitted = None;
                     let note = if raster {

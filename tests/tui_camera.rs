@@ -163,3 +163,39 @@ fn following_never_moves_a_camera_whose_bodies_are_in_view() {
         assert_eq!(*run.camera(), first);
     }
 }
+
+#[test]
+fn the_mouse_picks_through_the_grid_of_the_view_shown() {
+    use ratatui::crossterm::event::MouseButton;
+    use springlab::tui::sim_view;
+    // A raster view on 9 × 17-pixel cells: the particle is found where the image shows it.
+    let mut run = lesson_run("rope", 0);
+    let pane = Rect::new(40, 2, 58, 18);
+    let grid = (9, 17);
+    run.set_grid(grid);
+    let target = run.sim().scene.bodies[0].state.x[1];
+    let view = sim_view::grid_view(run.camera(), pane, grid);
+    let q = view.project(target).expect("in front");
+    let column = pane.x + (q.x / 9.0) as u16;
+    let row = pane.y + (q.y / 17.0) as u16;
+    let down = MouseEvent {
+        kind: MouseEventKind::Down(MouseButton::Left),
+        column,
+        row,
+        modifiers: KeyModifiers::NONE,
+    };
+    assert!(run.handle_mouse(down, pane));
+    assert_eq!(run.dragged(), Some((0, 1)));
+    // Dragged one row down, it sits under that cell's centre in the same grid.
+    let drag = MouseEvent {
+        kind: MouseEventKind::Drag(MouseButton::Left),
+        row: row + 1,
+        ..down
+    };
+    assert!(run.handle_mouse(drag, pane));
+    let moved = view
+        .project(run.sim().scene.bodies[0].state.x[1])
+        .expect("in front");
+    assert!((f64::from(moved.y) - (f64::from(row + 1 - pane.y) + 0.5) * 17.0).abs() < 1e-2);
+    assert!((moved.depth - q.depth).abs() < 1e-9);
+}

@@ -183,6 +183,9 @@ pub struct LessonRun {
     pan_drag: Option<(u16, u16)>,
     /// Changes whenever what the pane shows may have changed (a key, the mouse, a step).
     version: u64,
+    /// Pixels of a cell in the view shown (dots for braille and half-blocks, the font cell for
+    /// raster): the mouse maps cells to the scene through it.
+    grid: (u32, u32),
     filter: SpringFilter,
     history: History,
     oscillator: Option<Oscillator>,
@@ -214,6 +217,7 @@ impl LessonRun {
             generation: 0,
             pan_drag: None,
             version: 0,
+            grid: sim_view::DOTS,
             history: History::new(sim.dt(), None),
             sim,
             lesson,
@@ -384,6 +388,11 @@ impl LessonRun {
     #[must_use]
     pub fn version(&self) -> u64 {
         self.version
+    }
+
+    /// Tells the run the pixel size of a cell in the view shown (see [`sim_view::grid_view`]).
+    pub fn set_grid(&mut self, grid: (u32, u32)) {
+        self.grid = (grid.0.max(1), grid.1.max(1));
     }
 
     /// Shows `message` on the hint line.
@@ -951,9 +960,14 @@ impl LessonRun {
                 if self.sim.diverged.is_some() {
                     return false;
                 }
-                let Some((body, index, depth)) =
-                    sim_view::pick(&self.camera, &self.sim, canvas, mouse.column, mouse.row)
-                else {
+                let Some((body, index, depth)) = sim_view::pick(
+                    &self.camera,
+                    &self.sim,
+                    canvas,
+                    self.grid,
+                    mouse.column,
+                    mouse.row,
+                ) else {
                     // Empty space: the drag pans the view.
                     if contains(canvas, mouse.column, mouse.row) {
                         self.pan_drag = Some((mouse.column, mouse.row));
@@ -991,6 +1005,7 @@ impl LessonRun {
                 let p = sim_view::cell_to_world(
                     &self.camera,
                     canvas,
+                    self.grid,
                     mouse.column,
                     mouse.row,
                     drag.depth,

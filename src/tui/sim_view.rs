@@ -30,47 +30,63 @@ use crate::simulation::Simulation;
 /// Degrees the arrow keys turn the camera.
 pub const ORBIT_STEP_DEGREES: f64 = 15.0;
 
-/// Braille dots per cell across and down.
+/// Braille dots per cell across and down (the grid of the braille and half-block views: a
+/// half-block pixel is two dots square).
 pub const DOTS: (u32, u32) = (2, 4);
+
+/// The view of `camera` on a pane with inner area `inner` whose cells are `grid` pixels (dots)
+/// across and down: [`DOTS`] for the braille and half-block views, the font cell for raster.
+#[must_use]
+pub fn grid_view(camera: &Camera, inner: Rect, grid: (u32, u32)) -> View {
+    View::new(
+        camera,
+        u32::from(inner.width.max(1)) * grid.0.max(1),
+        u32::from(inner.height.max(1)) * grid.1.max(1),
+    )
+}
 
 /// The view of `camera` on the braille dots of a pane with inner area `inner`.
 #[must_use]
 pub fn dot_view(camera: &Camera, inner: Rect) -> View {
-    View::new(
-        camera,
-        u32::from(inner.width.max(1)) * DOTS.0,
-        u32::from(inner.height.max(1)) * DOTS.1,
-    )
+    grid_view(camera, inner, DOTS)
 }
 
-/// The world point (m) under the centre of cell `(column, row)` of the pane `inner`, at depth
-/// `depth` (m) from the eye.
+/// The world point (m) under the centre of cell `(column, row)` of the pane `inner` (cells of
+/// `grid` pixels), at depth `depth` (m) from the eye.
 #[must_use]
-pub fn cell_to_world(camera: &Camera, inner: Rect, column: u16, row: u16, depth: f64) -> DVec3 {
-    let view = dot_view(camera, inner);
-    let x = (f64::from(column) - f64::from(inner.x) + 0.5) * f64::from(DOTS.0);
-    let y = (f64::from(row) - f64::from(inner.y) + 0.5) * f64::from(DOTS.1);
+pub fn cell_to_world(
+    camera: &Camera,
+    inner: Rect,
+    grid: (u32, u32),
+    column: u16,
+    row: u16,
+    depth: f64,
+) -> DVec3 {
+    let view = grid_view(camera, inner, grid);
+    let x = (f64::from(column) - f64::from(inner.x) + 0.5) * f64::from(grid.0);
+    let y = (f64::from(row) - f64::from(inner.y) + 0.5) * f64::from(grid.1);
     view.unproject(x, y, depth)
 }
 
-/// The particle nearest to cell `(column, row)`, within 3 columns (rows count double, being
-/// twice as tall): `(body, particle, depth)`; the nearest to the eye wins a tie.
+/// The particle nearest to cell `(column, row)` of the pane `inner` (cells of `grid` pixels),
+/// within 3 columns (distances measured in pixels, so rows count by their height):
+/// `(body, particle, depth)`; the nearest to the eye wins a tie.
 #[must_use]
 pub fn pick(
     camera: &Camera,
     sim: &Simulation,
     inner: Rect,
+    grid: (u32, u32),
     column: u16,
     row: u16,
 ) -> Option<(usize, usize, f64)> {
     if !inner_contains(inner, column, row) {
         return None;
     }
-    let view = dot_view(camera, inner);
-    let cx = (f64::from(column - inner.x) + 0.5) * f64::from(DOTS.0);
-    let cy = (f64::from(row - inner.y) + 0.5) * f64::from(DOTS.1);
-    // 3 columns = 6 dots.
-    let reach2 = (3.0 * f64::from(DOTS.0)).powi(2);
+    let view = grid_view(camera, inner, grid);
+    let cx = (f64::from(column - inner.x) + 0.5) * f64::from(grid.0);
+    let cy = (f64::from(row - inner.y) + 0.5) * f64::from(grid.1);
+    let reach2 = (3.0 * f64::from(grid.0)).powi(2);
     let mut best: Option<(usize, usize, f64, f64)> = None;
     for (b, body) in sim.scene.bodies.iter().enumerate() {
         for (i, p) in body.state.x.iter().enumerate() {
