@@ -798,6 +798,10 @@ pub fn run(
         .map_err(anyhow::Error::from)
         .and_then(|()| app.run(&mut terminal));
     let _ = execute!(stdout(), DisableMouseCapture);
+    if graphics.protocol == Some(Protocol::Kitty) {
+        use std::io::Write as _;
+        let _ = write!(stdout(), "{}", raster::kitty_delete(graphics.tmux_wrap));
+    }
     ratatui::restore();
     result
 }

@@ -213,6 +213,15 @@ fn kitty_transmits_the_exact_pixels_and_places_them_with_placeholders() {
         assert!(first.contains(&key), "{key} in {first:?}");
     }
     assert!(controls.last().expect("chunks").contains("m=0"));
+    // On exit the app deletes that image by its id.
+    let id = first
+        .iter()
+        .find(|k| k.starts_with("i="))
+        .expect("an image id");
+    assert_eq!(
+        springlab::tui::raster::kitty_delete(false),
+        format!("\x1b_Ga=d,d=I,{id}\x1b\\")
+    );
     let rgba = base64_decode(&payload);
     assert_eq!(rgba, known_image().into_raw(), "the pixels, bit for bit");
     // Every cell of the 2 × 2 placement holds the placeholder U+10EEEE in the id's colour.

@@ -136,6 +136,13 @@ pub fn encode(
     .map_err(|e| e.to_string())
 }
 
+/// The kitty command that deletes the pane's image and frees its memory in the terminal (sent
+/// on exit), wrapped for tmux when `tmux_wrap`.
+#[must_use]
+pub fn kitty_delete(tmux_wrap: bool) -> String {
+    super::graphics::wrap(&format!("\x1b_Ga=d,d=I,i={KITTY_ID}\x1b\\"), tmux_wrap)
+}
+
 /// Draws an encoded frame into `area` (its top-left corner; the frame covers its own cells).
 pub fn show(frame: &Encoded, area: Rect, buf: &mut Buffer) {
     Image::new(frame).allow_clipping(true).render(area, buf);
