@@ -758,11 +758,7 @@ pub fn run(
     let theme = Theme::from_env();
     let mut terminal = ratatui::try_init().context("cannot set up the terminal")?;
     // Ask the terminal before anything else reads its input (raw mode is on).
-    let graphics = if view.is_none_or(|v| v == ViewMode::Raster) {
-        Graphics::detect()
-    } else {
-        Graphics::NONE
-    };
+    let graphics = Graphics::detect();
     let default = if graphics.protocol.is_some() {
         ViewMode::Raster
     } else {
