@@ -127,13 +127,56 @@ pub fn encode(
     cells: Size,
     tmux_wrap: bool,
 ) -> Result<Encoded, String> {
-    let image = DynamicImage::ImageRgba8(image);
     match protocol {
-        Protocol::Sixel => Sixel::new(image, cells, tmux_wrap).map(Encoded::Sixel),
-        Protocol::Kitty => Kitty::new(image, cells, KITTY_ID, tmux_wrap, false).map(Encoded::Kitty),
-        Protocol::Iterm2 => Iterm2::new(image, cells, tmux_wrap).map(Encoded::ITerm2),
+        Protocol::Sixel => sixel(&image, cells, tmux_wrap).map(|data| {
+            Encoded::Sixel(Sixel {
+                data,
+                size: cells,
+                is_tmux: tmux_wrap,
+            })
+        }),
+        Protocol::Kitty => Kitty::new(
+            DynamicImage::ImageRgba8(image),
+            cells,
+            KITTY_ID,
+            tmux_wrap,
+            false,
+        )
+        .map(Encoded::Kitty)
+        .map_err(|e| e.to_string()),
+        Protocol::Iterm2 => Iterm2::new(DynamicImage::ImageRgba8(image), cells, tmux_wrap)
+            .map(Encoded::ITerm2)
+            .map_err(|e| e.to_string()),
     }
-    .map_err(|e| e.to_string())
+}
+
+/// `image` as a sixel sequence for `cells`, preceded by erasing those cells (so that nothing of
+/// the text under the image shows where it is transparent), wrapped for tmux when asked.
+///
+/// icy_sixel quantises the colours to 256 (Wu's method) without error diffusion: the frames are
+/// flat-shaded drawings, for which dithering only adds noise, and it halves both the encoding
+/// time and the size of the sequence (measured: 7 ms and 27 kB instead of 15 ms and 70 kB for
+/// the cloth of lesson 6 at 560 × 320 pixels).
+fn sixel(image: &RgbaImage, cells: Size, tmux_wrap: bool) -> Result<String, String> {
+    let options = icy_sixel::EncodeOptions {
+        diffusion: 0.0,
+        ..icy_sixel::EncodeOptions::default()
+    };
+    let encoded = icy_sixel::sixel_encode(
+        image.as_raw(),
+        image.width() as usize,
+        image.height() as usize,
+        &options,
+    )
+    .map_err(|e| format!("sixel encoding: {e}"))?;
+    let mut data = String::with_capacity(encoded.len() + 16 * usize::from(cells.height));
+    // ECH (erase w characters), then down a line; back up at the end.
+    for _ in 0..cells.height {
+        data.push_str(&format!("\x1b[{}X\x1b[1B", cells.width));
+    }
+    data.push_str(&format!("\x1b[{}A", cells.height));
+    data.push_str(&encoded);
+    Ok(super::graphics::wrap(&data, tmux_wrap))
 }
 
 /// The kitty command that deletes the pane's image and frees its memory in the terminal (sent
