@@ -199,3 +199,24 @@ fn the_mouse_picks_through_the_grid_of_the_view_shown() {
     assert!((f64::from(moved.y) - (f64::from(row + 1 - pane.y) + 0.5) * 17.0).abs() < 1e-2);
     assert!((moved.depth - q.depth).abs() < 1e-9);
 }
+
+#[test]
+fn no_step_starts_with_the_camera_moving() {
+    // The first view frames the step; following moves it only once a body nears the edge.
+    for l in lesson::builtin().into_iter().flatten() {
+        for step in 0..l.steps.len() {
+            let mut run = LessonRun::new(l.clone(), step).expect("step");
+            run.set_aspect(1.75);
+            let first = *run.camera();
+            run.handle_key(KeyCode::Char(' '));
+            run.tick(0.02);
+            assert_eq!(
+                *run.camera(),
+                first,
+                "lesson {} step {}",
+                l.number,
+                step + 1
+            );
+        }
+    }
+}

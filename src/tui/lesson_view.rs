@@ -45,8 +45,10 @@ pub const FIRST_DAMPING: f64 = 0.01;
 /// Fraction of the visible height one press of Shift + arrow moves the view.
 pub const PAN_STEP: f64 = 0.1;
 
-/// Following keeps every body within this fraction of the view's half-width and half-height.
-pub const FOLLOW_ZONE: f64 = 0.9;
+/// Following keeps every body within this fraction of the view's half-width and half-height:
+/// more than the `1/1.08` that the step's first framing leaves the framed region, so a step
+/// never starts with the camera moving.
+pub const FOLLOW_ZONE: f64 = 0.95;
 
 /// Following moves the eye back at most this many times the step's initial distance.
 pub const FOLLOW_MAX_ZOOM_OUT: f64 = 10.0;
