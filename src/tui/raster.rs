@@ -32,8 +32,9 @@ use crate::physics::SpringKind;
 use crate::render::{Camera, KindToggles, MAX_SIDE, Renderer, Style};
 use crate::scene::Scene;
 
-/// Time the encoder may spend on one frame (draw + encode) before it lowers the resolution.
-pub const FRAME_BUDGET: Duration = Duration::from_millis(45);
+/// Time the encoder may spend on one frame (draw + encode) before it lowers the resolution: a
+/// thirtieth of a second, the rate the app sends frames at while the simulation runs.
+pub const FRAME_BUDGET: Duration = Duration::from_millis(33);
 
 /// The kitty image id of the pane (one image, replaced by every frame).
 const KITTY_ID: u32 = 0x0053_4c42;
