@@ -190,10 +190,18 @@ impl App {
     /// needs one; without it the half-block view is used) and the half-block colours.
     #[must_use]
     pub fn with_display(mut self, view: ViewMode, graphics: Graphics, colour: ColourDepth) -> App {
-        self.graphics = graphics;
         self.colour = colour;
-        self.encoder = graphics.protocol.map(|_| Encoder::new());
-        self.view = if view == ViewMode::Raster && graphics.protocol.is_none() {
+        self.encoder = graphics.protocol.and_then(|_| Encoder::new());
+        // Without an encoder thread there is no raster view.
+        self.graphics = if self.encoder.is_some() {
+            graphics
+        } else {
+            Graphics {
+                protocol: None,
+                ..graphics
+            }
+        };
+        self.view = if view == ViewMode::Raster && self.graphics.protocol.is_none() {
             ViewMode::HalfBlocks
         } else {
             view

@@ -251,16 +251,11 @@ pub struct Encoder {
     error: Option<String>,
 }
 
-impl Default for Encoder {
-    fn default() -> Encoder {
-        Encoder::new()
-    }
-}
-
 impl Encoder {
-    /// Starts the encoder thread; it ends when the encoder is dropped.
+    /// Starts the encoder thread (it ends when the encoder is dropped); `None` when the system
+    /// cannot start a thread.
     #[must_use]
-    pub fn new() -> Encoder {
+    pub fn new() -> Option<Encoder> {
         let (jobs, job_rx) = sync_channel::<Job>(1);
         let (frame_tx, frames) = sync_channel(1);
         std::thread::Builder::new()
@@ -285,15 +280,15 @@ impl Encoder {
                     }
                 }
             })
-            .expect("cannot start the raster encoder thread");
-        Encoder {
+            .ok()?;
+        Some(Encoder {
             jobs,
             frames,
             pending: None,
             busy: false,
             latest: None,
             error: None,
-        }
+        })
     }
 
     /// Queues `job`: sent at once when the encoder is free, else kept (replacing an older one).
