@@ -1,6 +1,6 @@
 //! The command line: clap definitions, validation into options, and dispatch.
 //!
-//! The contract (DESIGN.md) is:
+//! The command-line contract:
 //! ```text
 //! springlab [--lessons DIR] [--view raster|halfblocks|braille]   the lesson menu (terminal app)
 //! springlab lesson <N|slug> [--view …]                            one lesson
