@@ -14,7 +14,9 @@
 //! springlab study stability <scene|file.toml> [--methods a,b] [--horizon T] [--set key=value ...]
 //!               [--json]
 //! springlab homework new <DIR> --assignment rope|jelly|cloth
-//! springlab grade <DIR> [--json F] [--gradescope F] [--time-limit-ms MS] [--seed S]
+//! springlab homework autograder --assignment A --out autograder.zip
+//! springlab grade <DIR> [DIR ...] [--assignment A] [--json F] [--gradescope F] [--csv F]
+//!               [--jobs N] [--target-dir DIR] [--time-limit-ms MS] [--memory-mb MB] [--seed S]
 //! ```
 
 mod bench;
@@ -30,6 +32,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+
+use crate::budget::interrupt::Interrupted;
+use crate::budget::{Estimate, Limits};
 
 /// springlab: mass-spring systems, their integrators, and where each one fails.
 #[derive(Debug, Parser)]
@@ -104,11 +109,53 @@ pub fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         // A closed pipe (`springlab scenes | head`) is the reader's choice, not an error.
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
+        Err(e) if e.chain().any(|c| c.is::<Interrupted>()) => {
+            eprintln!("springlab: {e}");
+            ExitCode::from(130)
+        }
         Err(e) => {
-            eprintln!("springlab: {e:#}");
+            eprintln!("springlab: {}", message(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes joined by `: `, each said once: a cause whose text the message
+/// already contains (an OS error that a wrapper quoted) is not repeated.
+#[must_use]
+pub fn message(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let part = cause.to_string();
+        if text.contains(&part) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&part);
+    }
+    text
+}
+
+/// The budget estimate of a command that runs something (`run`, `render`, `study`, `bench`)
+/// without running it; `None` for the others. Scenes are loaded without limits.
+///
+/// # Errors
+/// The command's own checks of its inputs.
+pub fn estimate(command: &Command) -> anyhow::Result<Option<Estimate>> {
+    let none = Limits::NONE;
+    Ok(match command {
+        Command::Run(args) => Some(run::prepare(args, &none)?.3),
+        Command::Render(args) => Some(render::prepare(args, &none)?.2),
+        Command::Study { command } => Some(study::estimate(command, &none)?),
+        Command::Bench(args) => Some(bench::estimate(
+            &bench::selected(&args.workloads)?,
+            args.repeats,
+            args.budget,
+        )),
+        _ => None,
+    })
 }
 
 fn is_broken_pipe(e: &anyhow::Error) -> bool {

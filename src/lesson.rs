@@ -42,6 +42,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use crate::budget::Limits;
 use crate::physics::Method;
 use crate::scene::{self, Scene, SceneError};
 
@@ -222,6 +223,8 @@ pub struct Lesson {
     pub steps: Vec<Step>,
     /// The file it came from.
     pub source: String,
+    /// Lines of `number = ` and `slug = ` in the header (for duplicate errors).
+    header_lines: (usize, usize),
 }
 
 /// A lesson file that cannot be used.
@@ -251,8 +254,8 @@ impl fmt::Display for Lesson {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct HeaderToml {
-    number: u32,
-    slug: String,
+    number: toml::Spanned<u32>,
+    slug: toml::Spanned<String>,
     title: String,
     summary: String,
 }
@@ -416,14 +419,63 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
             "a lesson needs at least one `+++ step`".into(),
         ));
     }
+    let header_lines = (
+        position(*hstart, htext, header.number.span().start).0,
+        position(*hstart, htext, header.slug.span().start).0,
+    );
     Ok(Lesson {
-        number: header.number,
-        slug: header.slug,
+        number: header.number.into_inner(),
+        slug: header.slug.into_inner(),
+        header_lines,
         title: header.title,
         summary: header.summary,
         steps,
         source: file.to_string(),
     })
+}
+
+/// Turns every lesson whose number or slug an earlier one (in number order, then file order)
+/// already has into an error at the line of its `number` or `slug`, naming the other file: two
+/// lessons with one number would make `springlab lesson 3` ambiguous.
+fn reject_duplicates(lessons: &mut [Result<Lesson, LessonError>]) {
+    // (number, slug, file:line of its number, file:line of its slug)
+    let mut seen: Vec<(u32, String, String, String)> = Vec::new();
+    for entry in lessons.iter_mut() {
+        let Ok(lesson) = entry else { continue };
+        let by_number = seen.iter().find(|(n, ..)| *n == lesson.number);
+        let by_slug = seen.iter().find(|(_, s, ..)| *s == lesson.slug);
+        let error = match (by_number, by_slug) {
+            (Some((n, _, at, _)), _) => Some((
+                lesson.header_lines.0,
+                format!(
+                    "lesson number {n} is already used by {at}; give each lesson its own number"
+                ),
+            )),
+            (None, Some((_, slug, _, at))) => Some((
+                lesson.header_lines.1,
+                format!(
+                    "lesson slug \"{slug}\" is already used by {at}; give each lesson its own slug"
+                ),
+            )),
+            (None, None) => None,
+        };
+        match error {
+            Some((line, message)) => {
+                *entry = Err(LessonError {
+                    file: lesson.source.clone(),
+                    line,
+                    column: None,
+                    message,
+                });
+            }
+            None => seen.push((
+                lesson.number,
+                lesson.slug.clone(),
+                format!("{}:{}", lesson.source, lesson.header_lines.0),
+                format!("{}:{}", lesson.source, lesson.header_lines.1),
+            )),
+        }
+    }
 }
 
 /// TOML value → the text `--set` accepts (`3`, `0.5`, `[0, 1]`, `[0.0, 2.0, 0.0]`).
@@ -464,13 +516,16 @@ pub fn load_dir(dir: &Path) -> std::io::Result<Vec<Result<Lesson, LessonError>>>
         .iter()
         .map(|path| {
             let name = path.display().to_string();
-            match std::fs::read_to_string(path) {
+            match scene::file::read_bounded(path, Limits::DEFAULT.file_bytes) {
                 Ok(text) => parse(&text, &name, path.parent()),
                 Err(e) => Err(LessonError {
                     file: name,
                     line: 1,
                     column: None,
-                    message: format!("cannot read: {e}"),
+                    message: match e {
+                        SceneError::Io { source, .. } => format!("cannot read: {source}"),
+                        other => other.to_string(),
+                    },
                 }),
             }
         })
@@ -480,6 +535,12 @@ pub fn load_dir(dir: &Path) -> std::io::Result<Vec<Result<Lesson, LessonError>>>
 }
 
 fn sort(lessons: &mut [Result<Lesson, LessonError>]) {
+    lessons.sort_by_key(|l| match l {
+        Ok(l) => (l.number, String::new()),
+        Err(e) => (u32::MAX, e.file.clone()),
+    });
+    reject_duplicates(lessons);
+    // Rejected duplicates go to the end with the other errors.
     lessons.sort_by_key(|l| match l {
         Ok(l) => (l.number, String::new()),
         Err(e) => (u32::MAX, e.file.clone()),

@@ -9,9 +9,11 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod bench;
+pub mod budget;
 pub mod cli;
 pub mod grade;
 pub mod lesson;
+pub mod output;
 pub mod physics;
 pub mod render;
 

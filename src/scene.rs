@@ -14,6 +14,8 @@ pub mod rope;
 
 use std::path::Path;
 
+use crate::budget::{BudgetError, Estimate, Limits, scene_bytes};
+
 use crate::physics::{Method, MethodParams, Model, State};
 pub use params::{ParamError, ParamSpec, Params, Range, Value};
 
@@ -116,6 +118,22 @@ pub enum SceneError {
     /// A combination of values that cannot make a scene.
     #[error("{0}")]
     Invalid(String),
+    /// A scene over the memory budget (see [`crate::budget`]).
+    #[error(transparent)]
+    Budget(#[from] BudgetError),
+    /// A scene or lesson file larger than the budget allows, refused before parsing.
+    #[error(
+        "{path} is {}; scene and lesson files may be at most {} (use --force to read it anyway)",
+        crate::budget::bytes(*size as f64), crate::budget::bytes(*limit as f64)
+    )]
+    FileTooLarge {
+        /// The file.
+        path: String,
+        /// Its size (bytes).
+        size: u64,
+        /// The limit (bytes).
+        limit: u64,
+    },
 }
 
 /// A built-in scene: its name, a one-line description, its parameters and its builder.
@@ -213,6 +231,19 @@ pub fn builtin(name: &str) -> Option<&'static SceneDef> {
 /// # Errors
 /// Unknown scene, unknown key, bad value, or values that make no scene.
 pub fn build_builtin(name: &str, sets: &[String]) -> Result<Scene, SceneError> {
+    build_builtin_with(name, sets, &Limits::DEFAULT)
+}
+
+/// [`build_builtin`] within `limits`: a scene whose particles and springs would need more memory
+/// than `limits.memory` is refused before it is built ([`crate::budget::builtin_size`]).
+///
+/// # Errors
+/// As [`build_builtin`], and [`SceneError::Budget`].
+pub fn build_builtin_with(
+    name: &str,
+    sets: &[String],
+    limits: &Limits,
+) -> Result<Scene, SceneError> {
     let def = builtin(name).ok_or_else(|| SceneError::UnknownScene {
         name: name.to_string(),
         known: BUILTIN
@@ -225,7 +256,33 @@ pub fn build_builtin(name: &str, sets: &[String]) -> Result<Scene, SceneError> {
     for s in sets {
         params.set_text(s)?;
     }
+    check_size(def, &params, &format!("scene `{name}`"), limits)?;
     (def.build)(&params)
+}
+
+/// Refuses the built-in `def` with `params` before it is built when its particles and springs
+/// would need more than `limits.memory` (every method's buffers counted).
+///
+/// # Errors
+/// [`SceneError::Budget`].
+pub fn check_size(
+    def: &SceneDef,
+    params: &Params,
+    what: &str,
+    limits: &Limits,
+) -> Result<(), SceneError> {
+    if let Some((particles, springs)) = crate::budget::builtin_size(def.name, params) {
+        Estimate {
+            what: what.to_string(),
+            particles,
+            springs,
+            memory: crate::budget::BASE_BYTES
+                + crate::budget::body_bytes(particles, springs, &Method::ALL, 1.0),
+            ..Estimate::default()
+        }
+        .check(limits)?;
+    }
+    Ok(())
 }
 
 /// Loads a built-in scene by name or a scene file by path (anything ending in `.toml` or that
@@ -234,11 +291,40 @@ pub fn build_builtin(name: &str, sets: &[String]) -> Result<Scene, SceneError> {
 /// # Errors
 /// As [`build_builtin`] and [`file::load`].
 pub fn load(name_or_path: &str, sets: &[String]) -> Result<Scene, SceneError> {
+    load_with(name_or_path, sets, &Limits::DEFAULT)
+}
+
+/// [`load`] within `limits`: files over `limits.file_bytes` are not read, and a scene whose
+/// model, state and integrator buffers would exceed `limits.memory` is refused before it is
+/// built (from the counts of a scene file, or [`crate::budget::builtin_size`] of a built-in).
+///
+/// # Errors
+/// As [`load`], and [`SceneError::Budget`] or [`SceneError::FileTooLarge`].
+pub fn load_with(
+    name_or_path: &str,
+    sets: &[String],
+    limits: &Limits,
+) -> Result<Scene, SceneError> {
     let path = Path::new(name_or_path);
     if builtin(name_or_path).is_none() && (name_or_path.ends_with(".toml") || path.is_file()) {
-        return file::load(path, sets);
+        return file::load_with(path, sets, limits);
     }
-    build_builtin(name_or_path, sets)
+    let scene = build_builtin_with(name_or_path, sets, limits)?;
+    check_memory(&scene, &format!("scene `{name_or_path}`"), limits)?;
+    Ok(scene)
+}
+
+/// Refuses `scene` when stepping it with its own methods would need more than `limits.memory`.
+fn check_memory(scene: &Scene, what: &str, limits: &Limits) -> Result<(), SceneError> {
+    Estimate {
+        what: what.to_string(),
+        particles: scene.particle_count() as f64,
+        springs: scene.spring_count() as f64,
+        memory: scene_bytes(scene, None, 1.0),
+        ..Estimate::default()
+    }
+    .check(limits)?;
+    Ok(())
 }
 
 /// The parameters every scene has for its methods, with the scene's Verlet damping and

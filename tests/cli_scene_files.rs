@@ -41,7 +41,7 @@ fn bad_scene_file_prints_file_line_column_and_fails() {
     assert_ne!(out.status.code(), Some(0));
     assert!(
         stderr.contains(&format!(
-            "{p}:4:8: `mass` = -1 is out of range: allowed > 0 (kg)"
+            "{p}:4:8: `mass` = -1 is out of range: allowed 1e-6 ..= 1e6 (kg)"
         )),
         "stderr: {stderr}"
     );

@@ -340,12 +340,12 @@ fn bad_settings_give_their_messages() {
         (
             "cube-plane",
             "edge=0",
-            "`edge` = 0 is out of range: allowed > 0 (m)",
+            "`edge` = 0 is out of range: allowed 1e-6 ..= 1e6 (m)",
         ),
         (
             "cube-plane",
             "struct_stiffness=-2",
-            "`struct_stiffness` = -2 is out of range: allowed >= -1 (N/m)",
+            "`struct_stiffness` = -2 is out of range: allowed -1 ..= 1e9 (N/m)",
         ),
         (
             "cube-plane",
@@ -365,7 +365,7 @@ fn bad_settings_give_their_messages() {
         (
             "cloth-spheres",
             "sphere_radius=0",
-            "`sphere_radius` = 0 is out of range: allowed > 0 (m)",
+            "`sphere_radius` = 0 is out of range: allowed 1e-6 ..= 1e6 (m)",
         ),
         (
             "cloth-spheres",

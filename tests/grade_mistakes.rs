@@ -60,6 +60,10 @@ enum JellyMistake {
     ImplicitIsPredictorCorrector,
     MidpointPanics,
     Rk4ReturnsNaN,
+    /// The collision handlers without the bounce: projection and contact force are right.
+    NoBounce,
+    /// A midpoint step that returns NaN below dt = 0.01 s (only the order check goes there).
+    MidpointNaNAtSmallSteps,
 }
 
 struct Jelly(JellyMistake);
@@ -101,11 +105,20 @@ impl JellyHomework for Jelly {
     }
 
     fn plane_collision(&self, plane: &Plane, p: &mut Particle, c: &ContactCoefficients) {
+        let v = p.v;
         Reference.plane_collision(plane, p, c);
+        if self.0 == JellyMistake::NoBounce {
+            // Position and force as the reference; the velocity as it came in.
+            p.v = v;
+        }
     }
 
     fn bowl_collision(&self, bowl: &Bowl, p: &mut Particle, c: &ContactCoefficients) {
+        let v = p.v;
         Reference.bowl_collision(bowl, p, c);
+        if self.0 == JellyMistake::NoBounce {
+            p.v = v;
+        }
     }
 
     fn explicit_euler(&self, s: &mut State, dt: f64, physics: &Physics) {
@@ -145,6 +158,9 @@ impl JellyHomework for Jelly {
             let _ = s.x[n];
         }
         JellyHomework::midpoint(&Reference, s, dt, physics);
+        if self.0 == JellyMistake::MidpointNaNAtSmallSteps && dt < 0.01 {
+            s.x[0] = DVec3::NAN;
+        }
     }
 
     fn rk4(&self, s: &mut State, dt: f64, physics: &Physics) {
@@ -176,6 +192,45 @@ impl JellyHomework for Jelly {
             _ => JellyHomework::rk4(&Reference, s, dt, physics),
         }
     }
+}
+
+#[test]
+fn a_missing_bounce_costs_the_bounce_checks_only() {
+    let report = grade_jelly(Jelly(JellyMistake::NoBounce), &Options::default());
+    // Bounce is 4 of each obstacle's 10; projection (3) and contact force (3) compare x' and
+    // force', which the bounce does not change.
+    for id in ["plane", "bowl"] {
+        let it = item(&report, id);
+        assert_eq!(it.score, 6.0, "{}", it.feedback_text());
+        let failed: Vec<&str> = it
+            .checks
+            .iter()
+            .filter(|c| c.score < c.max_score)
+            .map(|c| c.name.as_str())
+            .collect();
+        assert_eq!(failed.len(), 1, "{failed:?}");
+        assert!(failed[0].starts_with("bounce"), "{failed:?}");
+        assert!(
+            it.feedback_text().contains("v did not change"),
+            "{}",
+            it.feedback_text()
+        );
+    }
+    assert_eq!(report.score, 72.0, "{}", report.table());
+}
+
+#[test]
+fn a_check_that_fails_late_keeps_the_items_passed_checks() {
+    let report = grade_jelly(
+        Jelly(JellyMistake::MidpointNaNAtSmallSteps),
+        &Options::default(),
+    );
+    let midpoint = item(&report, "midpoint");
+    // One step (1) and 100 oscillator steps (0.5) at dt = 0.01 s pass; the order check, at
+    // smaller steps, gets NaN.
+    assert_eq!(midpoint.score, 1.5, "{}", midpoint.feedback_text());
+    assert_eq!(midpoint.status, ItemStatus::NotFinite);
+    assert_eq!(report.score, 79.0);
 }
 
 #[test]
@@ -445,4 +500,13 @@ fn explicit_euler_adding_acceleration_to_position_loses_explicit_euler() {
         &Options::default(),
     );
     assert_loses(&report, &["explicit"], 0.0);
+    // The hint says what the step did: the errors stay the same size as dt shrinks, and the
+    // position moved by dt·a.
+    let feedback = item(&report, "explicit").feedback_text();
+    assert!(!feedback.contains("not advanced"), "{feedback}");
+    assert!(
+        feedback.contains("moved by dt·a(t), the acceleration"),
+        "{feedback}"
+    );
+    assert!(feedback.contains("error stays the same size"), "{feedback}");
 }

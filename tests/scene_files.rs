@@ -104,7 +104,15 @@ fn negative_mass_is_out_of_range_with_unit() {
         3,
         8,
     );
-    assert_has(&m, &["`mass` = -1", "out of range", "allowed > 0", "(kg)"]);
+    assert_has(
+        &m,
+        &[
+            "`mass` = -1",
+            "out of range",
+            "allowed 1e-6 ..= 1e6",
+            "(kg)",
+        ],
+    );
 }
 
 #[test]
@@ -227,13 +235,13 @@ fn spring_joining_a_particle_to_itself() {
 fn negative_spring_values_are_out_of_range() {
     let text = format!("{TWO}[[springs]]\na = 0\nb = 1\nstiffness = -10\n");
     let m = file_error("k.toml", &text, 10, 13);
-    assert_has(&m, &["`stiffness` = -10", "allowed >= 0", "(N/m)"]);
+    assert_has(&m, &["`stiffness` = -10", "allowed 0 ..= 1e9", "(N/m)"]);
     let text = format!("{TWO}[[springs]]\na = 0\nb = 1\nstiffness = 10\ndamping = -1\n");
     let m = file_error("kd.toml", &text, 11, 11);
-    assert_has(&m, &["`damping` = -1", "allowed >= 0", "(N·s/m)"]);
+    assert_has(&m, &["`damping` = -1", "allowed 0 ..= 1e9", "(N·s/m)"]);
     let text = format!("{TWO}[[springs]]\na = 0\nb = 1\nstiffness = 10\nrest_length = -2\n");
     let m = file_error("l0.toml", &text, 11, 15);
-    assert_has(&m, &["`rest_length` = -2", "allowed >= 0", "(m)"]);
+    assert_has(&m, &["`rest_length` = -2", "allowed 0 ..= 1e6", "(m)"]);
 }
 
 #[test]
@@ -428,7 +436,10 @@ fn nan_and_infinity_are_rejected() {
         3,
         8,
     );
-    assert_has(&m, &["`mass` = NaN", "out of range", "allowed > 0 (kg)"]);
+    assert_has(
+        &m,
+        &["`mass` = NaN", "out of range", "allowed 1e-6 ..= 1e6 (kg)"],
+    );
     let m = file_error(
         "inf.toml",
         "[[particles]]\nposition = [inf, 0, 0]\nmass = 1\n",
@@ -449,7 +460,10 @@ fn nan_and_infinity_are_rejected() {
     let m = file_error("dt.toml", "scene = \"rope\"\n[run]\ndt = nan\n", 3, 6);
     assert_has(&m, &["`dt` = NaN", "allowed > 0 (s)"]);
     let m = file_error("p.toml", "scene = \"rope\"\n[params]\nmass = inf\n", 3, 8);
-    assert_has(&m, &["`mass` = inf", "out of range", "allowed > 0 (kg)"]);
+    assert_has(
+        &m,
+        &["`mass` = inf", "out of range", "allowed 1e-6 ..= 1e6 (kg)"],
+    );
 }
 
 #[test]

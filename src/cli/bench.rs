@@ -1,12 +1,14 @@
 //! `springlab bench`: the peer-benchmark workloads (`WORKLOADS.md`), timed, with checksums.
 
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 
 use anyhow::bail;
 use clap::Args;
 use serde::Serialize;
 
 use crate::bench::{self, BenchResult, Workload};
+use crate::budget;
+use crate::physics::Method;
 
 /// Options of `springlab bench`.
 #[derive(Debug, Args)]
@@ -25,6 +27,32 @@ pub struct BenchArgs {
     /// 0 times only the workloads' own methods).
     #[arg(long, value_name = "S", default_value_t = 0.2)]
     pub budget: f64,
+    /// Run even when the estimated time is over the limit (see README).
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// The estimate of a bench run: every workload `repeats` times, and the other methods for up to
+/// `budget` seconds each run (counted at [`budget::RATE`]).
+pub fn estimate(workloads: &[Workload], repeats: u32, seconds: f64) -> budget::Estimate {
+    let mut e = budget::Estimate::new("bench");
+    for &w in workloads {
+        let (model, _) = bench::setup(w);
+        let size = model.particle_count() as f64 + model.springs.len() as f64 + budget::OVERHEAD;
+        let steps = w.steps() as f64;
+        e.steps = e.steps.max(steps);
+        e.steps_detail = format!("{} steps of the workload {w}", budget::approx(e.steps));
+        e.particles = e.particles.max(model.particle_count() as f64);
+        e.springs = e.springs.max(model.springs.len() as f64);
+        let others = bench::methods_for(w).len().saturating_sub(1) as f64;
+        e.work += f64::from(repeats)
+            * (steps * budget::evaluations_per_step(w.method(), &w.params()) * size
+                + others * seconds * budget::RATE);
+        e.runs += f64::from(repeats) * (1.0 + if seconds > 0.0 { others } else { 0.0 });
+    }
+    e.memory =
+        budget::BASE_BYTES + 2.0 * budget::body_bytes(e.particles, e.springs, &Method::ALL, 1.0);
+    e
 }
 
 /// The JSON document of `springlab bench --json` (DESIGN.md), fields in declaration order.
@@ -57,36 +85,48 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if !(args.budget >= 0.0 && args.budget.is_finite()) {
         bail!(
             "--budget {}: expected a wall time in seconds >= 0",
-            args.budget
+            budget::short(args.budget)
         );
     }
-    let progress = std::io::stderr().is_terminal();
+    estimate(&workloads, args.repeats, args.budget).enforce(&budget::Limits::forced(args.force))?;
+    budget::interrupt::install(budget::interrupt::Mode::Exit);
+    let runs: usize = workloads
+        .iter()
+        .map(|&w| {
+            1 + if args.budget > 0.0 {
+                bench::methods_for(w).len().saturating_sub(1)
+            } else {
+                0
+            }
+        })
+        .sum();
+    let mut progress = budget::Progress::new(runs as u64, "bench");
     let mut results = Vec::with_capacity(workloads.len());
     for w in workloads {
-        let result = bench::measure(w, args.repeats, |i| {
-            if progress {
-                eprintln!(
-                    "{w}: run {}/{} ({} steps of {} s)",
-                    i + 1,
-                    args.repeats,
-                    w.steps(),
-                    w.dt()
-                );
-            }
-        });
+        progress.label(format!(
+            "bench {w}: {} runs of {} steps of {} s",
+            args.repeats,
+            w.steps(),
+            w.dt()
+        ));
+        let result = bench::measure(w, args.repeats, |_| {});
         results.push(result);
+        progress.inc(1);
         if args.budget > 0.0 {
             for m in bench::methods_for(w)
                 .into_iter()
                 .filter(|&m| m != w.method())
             {
-                if progress {
-                    eprintln!("{w}: {m} for up to {} s per run", args.budget);
-                }
+                progress.label(format!(
+                    "bench {w}: {m} for up to {} s per run",
+                    args.budget
+                ));
                 results.push(bench::measure_method(w, m, args.repeats, args.budget));
+                progress.inc(1);
             }
         }
     }
+    progress.finish();
     let mut out = std::io::stdout().lock();
     if args.json {
         serde_json::to_writer(

@@ -1,15 +1,18 @@
-//! `springlab homework new` and `springlab grade`: student crates and their grading.
+//! `springlab homework new|autograder` and `springlab grade`: student crates, the Gradescope
+//! autograder, and grading one submission or a whole class.
 
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use anyhow::Context;
+use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
 
-use crate::grade::external::{ExternalOptions, grade_crate};
-use crate::grade::homework::{new_homework, springlab_source_dir};
-use crate::grade::{Assignment, Options};
+use crate::grade::build::default_target_dir;
+use crate::grade::external::{ExternalOptions, GradeError, expand, grade_all};
+use crate::grade::homework::{new_homework, this_springlab};
+use crate::grade::remote::Limits;
+use crate::grade::{Assignment, Options, Report, autograder, points};
 
 /// Options of `springlab homework`.
 #[derive(Debug, Args)]
@@ -30,91 +33,266 @@ pub enum HomeworkCommand {
         #[arg(long, value_enum)]
         assignment: Assignment,
     },
+    /// Write the zip a Gradescope course uploads as the assignment's autograder.
+    Autograder {
+        /// The assignment: rope, jelly or cloth.
+        #[arg(long, value_enum)]
+        assignment: Assignment,
+        /// The zip file to write.
+        #[arg(long, value_name = "FILE", default_value = "autograder.zip")]
+        out: PathBuf,
+    },
 }
 
 /// Options of `springlab grade`.
 #[derive(Debug, Args)]
 pub struct GradeArgs {
-    /// A crate made by `springlab homework new`.
-    pub dir: PathBuf,
-    /// Also write the report as JSON to this file.
+    /// Homework crates (made by `springlab homework new`), or folders of them (a class).
+    #[arg(required = true, value_name = "DIR")]
+    pub dirs: Vec<PathBuf>,
+    /// The assignment, for submissions without springlab's Cargo.toml (just src/ or lib.rs).
+    #[arg(long, value_enum)]
+    pub assignment: Option<Assignment>,
+    /// Write the report as JSON to this file (a list of reports for several submissions).
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
-    /// Also write Gradescope's results.json to this file.
+    /// Write Gradescope's results.json to this file (one submission only).
     #[arg(long, value_name = "FILE")]
     pub gradescope: Option<PathBuf>,
+    /// Write one line per submission (score and points per item) to this CSV file.
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// Submissions graded at the same time.
+    #[arg(long, value_name = "N", default_value_t = 1,
+          value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub jobs: u32,
+    /// Cargo's target directory for the builds, shared by every submission
+    /// [default: $CARGO_TARGET_DIR, else ~/.cache/springlab/grade].
+    #[arg(long, value_name = "DIR")]
+    pub target_dir: Option<PathBuf>,
     /// Time limit of one check, in milliseconds.
     #[arg(long, value_name = "MS", default_value_t = 10_000,
           value_parser = clap::value_parser!(u64).range(1..))]
     pub time_limit_ms: u64,
+    /// Address space of the student's program, in MiB.
+    #[arg(long, value_name = "MB", default_value_t = 1024,
+          value_parser = clap::value_parser!(u64).range(64..=1 << 20))]
+    pub memory_mb: u64,
     /// Seed of the random cases.
     #[arg(long, default_value_t = crate::grade::DEFAULT_SEED)]
     pub seed: u64,
 }
 
-/// `springlab homework new DIR --assignment A`.
+/// `springlab homework new DIR --assignment A` and `springlab homework autograder`.
 ///
 /// # Errors
-/// When DIR is not empty or cannot be written.
+/// When DIR is not empty or a file cannot be written.
 pub fn homework(args: &HomeworkArgs) -> anyhow::Result<()> {
-    let HomeworkCommand::New { dir, assignment } = &args.command;
-    let written = new_homework(dir, *assignment)?;
     let mut out = std::io::stdout().lock();
-    writeln!(
-        out,
-        "wrote the {} homework crate to {}:",
-        assignment.name(),
-        dir.display()
-    )?;
-    for path in &written {
-        writeln!(out, "  {}", path.display())?;
+    match &args.command {
+        HomeworkCommand::New { dir, assignment } => {
+            new_homework(dir, *assignment)?;
+            writeln!(
+                out,
+                "wrote the {} homework crate to {}: src/lib.rs (your code), README.md (the \
+                 tasks), tests/grade.rs (cargo test grades it)",
+                assignment.name(),
+                dir.display()
+            )?;
+            writeln!(
+                out,
+                "next: cd {} && cargo test   (or: springlab grade {})",
+                dir.display(),
+                dir.display()
+            )?;
+        }
+        HomeworkCommand::Autograder {
+            assignment,
+            out: zip,
+        } => {
+            let exe = this_springlab();
+            let bytes = autograder::write(*assignment, &exe, zip)
+                .with_context(|| format!("cannot write {}", zip.display()))?;
+            writeln!(
+                out,
+                "wrote {} ({} MiB): setup.sh, run_autograder, springlab, README.txt; upload it \
+                 as the autograder of a Gradescope programming assignment",
+                zip.display(),
+                bytes >> 20
+            )?;
+        }
     }
-    let source = springlab_source_dir();
-    if !source.join("Cargo.toml").is_file() {
-        eprintln!(
-            "springlab: warning: springlab's source is no longer at {}; edit the springlab path \
-             in {} before building",
-            source.display(),
-            dir.join("Cargo.toml").display()
-        );
-    }
-    writeln!(
-        out,
-        "next: cd {} && cargo test   (the first build compiles springlab, a few minutes)",
-        dir.display()
-    )?;
     Ok(())
 }
 
-/// `springlab grade DIR [--json F] [--gradescope F]`: prints the rubric; exit code 0 whatever
-/// the score.
+/// `springlab grade DIR…`: prints the rubric (one submission) or one line per submission
+/// (several); writes the files asked for; exit code 0 whatever the scores.
 ///
 /// # Errors
-/// When DIR is not a homework crate, cargo cannot be run, or an output file cannot be written.
+/// When an output option does not fit the submissions, a submission's assignment cannot be
+/// told, or an output file cannot be written.
 pub fn grade(args: &GradeArgs) -> anyhow::Result<()> {
+    // With --gradescope the one path is one submission, wherever its code sits inside it.
+    let dirs = if args.gradescope.is_some() {
+        if args.dirs.len() != 1 {
+            bail!("--gradescope writes the results of one submission; give one DIR");
+        }
+        args.dirs.clone()
+    } else {
+        expand(&args.dirs)
+    };
     let options = ExternalOptions {
         grading: Options {
             time_limit: Duration::from_millis(args.time_limit_ms),
             seed: args.seed,
         },
+        limits: Limits {
+            memory_bytes: args.memory_mb << 20,
+            ..Limits::default()
+        },
+        target_dir: args.target_dir.clone().unwrap_or_else(default_target_dir),
+        assignment: args.assignment,
         ..ExternalOptions::default()
     };
     let show_progress = std::io::stderr().is_terminal();
-    let mut progress = |line: &str| {
+    let progress = move |line: &str| {
         if show_progress {
             eprintln!("springlab grade: {line}");
         }
     };
-    let report = grade_crate(&args.dir, &options, &mut progress)?;
-    if let Some(path) = &args.json {
-        write_file(path, &report.to_json()?)?;
+    let results = grade_all(&dirs, &options, args.jobs as usize, &progress);
+    let mut graded: Vec<(&Path, Report)> = Vec::new();
+    let mut errors: Vec<GradeError> = Vec::new();
+    for (dir, result) in dirs.iter().zip(results) {
+        match result {
+            Ok(report) => graded.push((dir, report)),
+            Err(e) => errors.push(e),
+        }
     }
-    if let Some(path) = &args.gradescope {
+    // Every file is written before any error is reported.
+    if let Some(path) = &args.gradescope
+        && let Some((_, report)) = graded.first()
+    {
         write_file(path, &serde_json::to_string_pretty(&report.gradescope())?)?;
     }
+    if let Some(path) = &args.json {
+        let json = if dirs.len() == 1 && graded.len() == 1 {
+            graded[0].1.to_json()?
+        } else {
+            let reports: Vec<&Report> = graded.iter().map(|(_, r)| r).collect();
+            serde_json::to_string_pretty(&reports)?
+        };
+        write_file(path, &json)?;
+    }
+    if let Some(path) = &args.csv {
+        write_file(path, &csv(&graded))?;
+    }
     let mut out = std::io::stdout().lock();
-    out.write_all(report.table().as_bytes())?;
+    if dirs.len() == 1 {
+        if let Some((_, report)) = graded.first() {
+            out.write_all(report.table().as_bytes())?;
+        }
+    } else {
+        let width = graded
+            .iter()
+            .map(|(d, _)| d.display().to_string().chars().count())
+            .max()
+            .unwrap_or(10);
+        for (dir, report) in &graded {
+            writeln!(
+                out,
+                "{:<width$}  {:>7} / {:<4}  {}",
+                dir.display(),
+                points(report.score),
+                points(report.max_score),
+                summary(report)
+            )?;
+        }
+        writeln!(out, "{} submissions graded", graded.len())?;
+    }
+    if let Some(first) = errors.into_iter().next() {
+        return Err(first.into());
+    }
     Ok(())
+}
+
+/// "all checks passed", why nothing was graded, or the items that lost points.
+fn summary(report: &Report) -> String {
+    if report
+        .items
+        .iter()
+        .all(|i| i.status == crate::grade::ItemStatus::NotRun)
+        && let Some(reason) = report.items.first().and_then(|i| i.reason.as_deref())
+    {
+        let first = reason.lines().next().unwrap_or_default();
+        return format!("not graded: {first}");
+    }
+    let lost: Vec<String> = report
+        .items
+        .iter()
+        .filter(|i| i.score < i.max_score)
+        .map(|i| format!("{} {}", i.id, i.status.label()))
+        .collect();
+    if lost.is_empty() {
+        "all checks passed".to_string()
+    } else {
+        format!("lost: {}", lost.join(", "))
+    }
+}
+
+/// A CSV field, quoted when it needs to be.
+fn field(text: &str) -> String {
+    if text.contains([',', '"', '\n']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
+    }
+}
+
+/// One line per submission: `submission,assignment,score,max_score`, then the points of every
+/// item (columns named by item id, `assignment.id` when the class mixes assignments).
+fn csv(graded: &[(&Path, Report)]) -> String {
+    let mut columns: Vec<(String, String)> = Vec::new();
+    for (_, report) in graded {
+        for item in &report.items {
+            let key = (report.assignment.clone(), item.id.clone());
+            if !columns.contains(&key) {
+                columns.push(key);
+            }
+        }
+    }
+    let mixed = graded
+        .iter()
+        .any(|(_, r)| r.assignment != graded[0].1.assignment);
+    let mut out = String::from("submission,assignment,score,max_score");
+    for (assignment, id) in &columns {
+        out.push(',');
+        out.push_str(&field(&if mixed {
+            format!("{assignment}.{id}")
+        } else {
+            id.clone()
+        }));
+    }
+    out.push('\n');
+    for (dir, report) in graded {
+        out.push_str(&format!(
+            "{},{},{},{}",
+            field(&dir.display().to_string()),
+            report.assignment,
+            points(report.score),
+            points(report.max_score)
+        ));
+        for (assignment, id) in &columns {
+            out.push(',');
+            if *assignment == report.assignment
+                && let Some(item) = report.items.iter().find(|i| &i.id == id)
+            {
+                out.push_str(&points(item.score));
+            }
+        }
+        out.push('\n');
+    }
+    out
 }
 
 fn write_file(path: &Path, text: &str) -> anyhow::Result<()> {

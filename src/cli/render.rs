@@ -16,14 +16,14 @@
 //! The run is `--frames N` frames `--every K` steps apart, or `--time T` seconds (then
 //! `N = steps / K + 1`), or the scene's duration when only a chart is asked for.
 
-use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use super::run::{apply_methods, check_dt};
+use super::run::{apply_methods, check_dt, check_dt_within};
+use crate::budget::{self, Limits, Progress, interrupt, short};
+use crate::output;
 use crate::physics::SpringKind;
 use crate::render::chart::{self, Chart, Series};
 use crate::render::colour::{self, Colour};
@@ -112,6 +112,9 @@ pub struct RenderArgs {
     /// Orthographic instead of perspective projection.
     #[arg(long)]
     pub ortho: bool,
+    /// Render even when the estimated steps, memory, pixels or time are over the limits.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// `--colour` values.
@@ -181,13 +184,20 @@ struct Plan {
 /// # Errors
 /// Bad scene, parameters or options; an unwritable output.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
+    let limits = Limits::forced(args.force);
     if !(args.start >= 0.0 && args.start.is_finite()) {
-        bail!("--start {}: expected a time in seconds >= 0", args.start);
+        bail!(
+            "--start {}: expected a time in seconds >= 0",
+            short(args.start)
+        );
     }
     let (width, height) = parse_size(&args.size)?;
     let toggles = parse_kinds(&args.springs)?;
     if !(args.fps.is_finite() && (0.1..=100.0).contains(&args.fps)) {
-        bail!("--fps {}: expected a frame rate from 0.1 to 100", args.fps);
+        bail!(
+            "--fps {}: expected a frame rate from 0.1 to 100",
+            short(args.fps)
+        );
     }
     let colouring = match args.colour {
         ColourBy::Kind => Colouring::ByKind,
@@ -195,7 +205,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             if !(args.max_strain.is_finite() && args.max_strain > 0.0) {
                 bail!(
                     "--max-strain {}: expected a strain > 0 (0.1 = 10 %)",
-                    args.max_strain
+                    short(args.max_strain)
                 );
             }
             Colouring::ByStrain {
@@ -203,11 +213,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             }
         }
     };
-    let mut scene = scene::load(&args.scene, &args.sets)?;
-    if let Some(m) = &args.method {
-        apply_methods(&mut scene, m)?;
-    }
-    let dt = check_dt(args.dt.unwrap_or(scene.dt))?;
+    let (scene, dt, estimate) = prepare(args, &limits)?;
+    estimate.enforce(&limits)?;
     let plan = plan(args, dt, scene.duration)?;
 
     let style = Style {
@@ -247,10 +254,15 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     } else {
         None
     };
-    let progress = progress_bar(if any_frames { plan.frames } else { plan.steps });
+    interrupt::install(interrupt::Mode::Flag);
+    let mut progress = Progress::new(
+        if any_frames { plan.frames } else { plan.steps },
+        &format!("render {}", args.scene),
+    );
 
     // One loop over the whole run: `--start` steps first, then the frames. Frame k is drawn at
-    // step start + k·every (frame 0 before any step when there is no --start).
+    // step start + k·every (frame 0 before any step when there is no --start). Within the
+    // budget, the step counts fit in u64.
     let start_steps = (args.start / dt).round() as u64;
     let total = start_steps + plan.steps;
     // Energy samples: at most about 4000 over the run, and the last step.
@@ -258,6 +270,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let mut energies: Vec<(f64, crate::physics::Energy)> = Vec::new();
     let mut drawn = 0u64;
     for step in 0..=total {
+        if interrupt::requested() {
+            // Ctrl-C: no output is kept (frames of this run, the animations' temporary files).
+            progress.finish();
+            if let Some(enc) = encoder {
+                enc.abort();
+            }
+            return Err(interrupt::Interrupted.into());
+        }
         if step > 0 && sim.step().is_some() {
             break;
         }
@@ -273,10 +293,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             progress.inc(1);
         }
         if !any_frames && step.is_multiple_of(1000) {
-            progress.set_position(step.saturating_sub(start_steps));
+            progress.set(step.saturating_sub(start_steps));
         }
     }
-    progress.finish_and_clear();
+    progress.finish();
     let written = match encoder {
         Some(enc) => enc.finish()?.frames,
         None => 0,
@@ -291,6 +311,59 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     report(&sim, &plan, written, width, height)
 }
 
+/// The scene and time step (s) of `springlab render`, and its budget estimate (not yet
+/// checked): steps (`--start` included), memory, frames and pixels, from the inputs alone.
+///
+/// # Errors
+/// Bad scene, parameters, `--start`, `--size` or `--dt`.
+pub fn prepare(
+    args: &RenderArgs,
+    limits: &Limits,
+) -> anyhow::Result<(crate::scene::Scene, f64, budget::Estimate)> {
+    if !(args.start >= 0.0 && args.start.is_finite()) {
+        bail!(
+            "--start {}: expected a time in seconds >= 0",
+            short(args.start)
+        );
+    }
+    let (width, height) = parse_size(&args.size)?;
+    let mut scene = scene::load_with(&args.scene, &args.sets, limits)?;
+    if let Some(m) = &args.method {
+        apply_methods(&mut scene, m)?;
+    }
+    let dt = check_dt(args.dt.unwrap_or(scene.dt))?;
+    if let Some(t) = args.time {
+        check_dt_within(dt, t, "--time")?;
+    }
+    // The budget, from the inputs alone: steps (--start included), memory, pixels.
+    let every = every(args, dt);
+    let start_steps = (args.start / dt).round();
+    let run_steps = match (args.frames, args.time) {
+        (Some(n), _) => n.saturating_sub(1) as f64 * every as f64,
+        (None, Some(t)) => (t / dt).round(),
+        (None, None) => (scene.duration / dt).round(),
+    };
+    let frames = args
+        .frames
+        .map_or_else(|| (run_steps / every as f64).floor() + 1.0, |n| n as f64);
+    let steps = start_steps + run_steps;
+    let mut estimate = budget::run(format!("render {}", args.scene), &scene, dt, steps);
+    let draws_frames = args.out.is_some()
+        || args.gif.is_some()
+        || args.apng.is_some()
+        || args.energy_chart.is_none();
+    if draws_frames {
+        budget::add_frames(
+            &mut estimate,
+            frames,
+            width,
+            height,
+            &format!("--size {}", args.size.trim()),
+        );
+    }
+    Ok((scene, dt, estimate))
+}
+
 /// Validates the frame counts and outputs.
 fn plan(args: &RenderArgs, dt: f64, duration: f64) -> anyhow::Result<Plan> {
     if args.frames == Some(0) {
@@ -299,10 +372,7 @@ fn plan(args: &RenderArgs, dt: f64, duration: f64) -> anyhow::Result<Plan> {
     if args.every == Some(0) {
         bail!("--every 0: expected a number of steps >= 1");
     }
-    // Default: 1/fps seconds of simulated time per frame (real-time playback).
-    let every = args
-        .every
-        .unwrap_or_else(|| ((1.0 / args.fps) / dt).round().max(1.0) as u64);
+    let every = every(args, dt);
     let (frames, steps) = match (args.frames, args.time) {
         (Some(n), _) => (
             n,
@@ -312,7 +382,7 @@ fn plan(args: &RenderArgs, dt: f64, duration: f64) -> anyhow::Result<Plan> {
         ),
         (None, Some(t)) => {
             if !(t.is_finite() && t >= 0.0) {
-                bail!("--time {t}: expected a duration in seconds >= 0");
+                bail!("--time {}: expected a duration in seconds >= 0", short(t));
             }
             let steps = (t / dt).round() as u64;
             (steps / every + 1, steps)
@@ -337,12 +407,15 @@ fn plan(args: &RenderArgs, dt: f64, duration: f64) -> anyhow::Result<Plan> {
         .ok()
         .filter(|&f| f <= 1_000_000)
         .with_context(|| format!("{frames} frames: at most 1000000 frames are allowed"))?;
-    // Fail before the simulation when an output file cannot be created.
+    // Fail before the simulation when any output cannot be written.
     for file in [&args.gif, &args.apng, &args.energy_chart]
         .into_iter()
         .flatten()
     {
-        check_parent(file)?;
+        output::check_file(file)?;
+    }
+    if let Some(dir) = &frames_dir {
+        output::check_dir(dir)?;
     }
     Ok(Plan {
         frames,
@@ -359,40 +432,19 @@ fn plan(args: &RenderArgs, dt: f64, duration: f64) -> anyhow::Result<Plan> {
     })
 }
 
-fn check_parent(file: &Path) -> anyhow::Result<()> {
-    if let Some(parent) = file.parent().filter(|p| !p.as_os_str().is_empty())
-        && !parent.is_dir()
-    {
-        bail!(
-            "cannot write {}: directory {} does not exist",
-            file.display(),
-            parent.display()
-        );
-    }
-    if file.is_dir() {
-        bail!("cannot write {}: it is a directory", file.display());
-    }
-    Ok(())
+/// Steps between frames: `--every`, or the steps of 1/fps seconds of simulated time (real-time
+/// playback), at least 1.
+fn every(args: &RenderArgs, dt: f64) -> u64 {
+    args.every
+        .unwrap_or_else(|| ((1.0 / args.fps) / dt).round().clamp(1.0, 1e18) as u64)
 }
 
 fn finite_degrees(flag: &str, degrees: f64) -> anyhow::Result<f64> {
     if degrees.is_finite() {
         Ok(degrees.to_radians())
     } else {
-        bail!("{flag} {degrees}: expected an angle in degrees")
+        bail!("{flag} {}: expected an angle in degrees", short(degrees))
     }
-}
-
-/// A progress bar on standard error when it is a terminal; hidden otherwise.
-fn progress_bar(len: u64) -> ProgressBar {
-    if !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
-    if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} {per_sec} eta {eta}") {
-        bar.set_style(style);
-    }
-    bar
 }
 
 /// The energy chart of a run: kinetic, gravitational, elastic and total energy against time.

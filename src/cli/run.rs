@@ -1,6 +1,5 @@
 //! `springlab run`: a headless run with a summary, JSON or CSV.
 
-use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -8,6 +7,8 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use clap::Args;
 
+use crate::budget::{self, Estimate, Limits, Progress, interrupt, short};
+use crate::output::{self, AtomicFile};
 use crate::physics::Method;
 use crate::scene::{self, Scene};
 use crate::simulation::{RunReport, Simulation};
@@ -24,7 +25,8 @@ pub struct RunArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub dt: Option<f64>,
     /// Number of steps.
-    #[arg(long, conflicts_with = "time")]
+    #[arg(long, conflicts_with = "time", allow_negative_numbers = true,
+          value_parser = parse_steps)]
     pub steps: Option<u64>,
     /// Simulated time in seconds (rounded to whole steps).
     #[arg(long, allow_negative_numbers = true)]
@@ -41,6 +43,19 @@ pub struct RunArgs {
     /// Write a CSV row every this many steps.
     #[arg(long, value_name = "K", default_value_t = 1)]
     pub csv_every: u64,
+    /// Run even when the estimated steps, memory or time are over the limits (see README).
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Parses `--steps`: a whole number >= 0, with a message that says so (`--steps -5` included).
+///
+/// # Errors
+/// Anything else, as text for clap.
+pub fn parse_steps(text: &str) -> Result<u64, String> {
+    text.trim()
+        .parse::<u64>()
+        .map_err(|_| "expected a whole number of steps >= 0, for example 1000".to_string())
 }
 
 /// Applies `--method` to the scene: one name for all bodies, or one per body.
@@ -70,24 +85,51 @@ pub fn apply_methods(scene: &mut Scene, text: &str) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Number of steps for `--steps` or `--time` (default: the scene's duration).
+/// Number of steps for `--steps` or `--time` (default: the scene's duration), as a real number
+/// so that `--time 1 --dt 1e-300` can be refused by the budget rather than saturate.
 ///
 /// # Errors
-/// A duration that is not positive and finite.
+/// A duration that is not positive and finite, or shorter than one time step.
 pub fn step_count(
     steps: Option<u64>,
     time: Option<f64>,
     default_time: f64,
     dt: f64,
-) -> anyhow::Result<u64> {
+) -> anyhow::Result<f64> {
     if let Some(n) = steps {
-        return Ok(n);
+        return Ok(n as f64);
     }
     let t = time.unwrap_or(default_time);
     if !(t.is_finite() && t >= 0.0) {
-        bail!("--time {t}: expected a duration in seconds >= 0");
+        bail!("--time {}: expected a duration in seconds >= 0", short(t));
     }
-    Ok((t / dt).round() as u64)
+    check_dt_within(
+        dt,
+        t,
+        if time.is_some() {
+            "--time"
+        } else {
+            "the scene's duration"
+        },
+    )?;
+    Ok((t / dt).round())
+}
+
+/// Refuses a time step longer than a run of `time` seconds (which would take no step, or one
+/// step past the end): `dt` must be at most `time` when `time > 0`.
+///
+/// # Errors
+/// `dt > time > 0`.
+pub fn check_dt_within(dt: f64, time: f64, what: &str) -> anyhow::Result<()> {
+    if time > 0.0 && dt > time {
+        bail!(
+            "--dt {} s is longer than the run ({what} {} s): expected a time step at most the \
+             simulated time",
+            short(dt),
+            short(time)
+        );
+    }
+    Ok(())
 }
 
 /// Validates a time step given on the command line.
@@ -98,16 +140,17 @@ pub fn check_dt(dt: f64) -> anyhow::Result<f64> {
     if dt > 0.0 && dt.is_finite() {
         Ok(dt)
     } else {
-        bail!("--dt {dt}: expected a time step in seconds > 0")
+        bail!("--dt {}: expected a time step in seconds > 0", short(dt))
     }
 }
 
-/// `springlab run`.
+/// The scene, time step (s) and step count of `springlab run`, and its budget estimate (not yet
+/// checked): everything decided from the inputs before anything runs.
 ///
 /// # Errors
-/// Bad scene, parameters or options; an unwritable CSV file.
-pub fn run(args: &RunArgs) -> anyhow::Result<()> {
-    let mut scene = scene::load(&args.scene, &args.sets)?;
+/// Bad scene, parameters or options (the scene file's size and memory within `limits`).
+pub fn prepare(args: &RunArgs, limits: &Limits) -> anyhow::Result<(Scene, f64, f64, Estimate)> {
+    let mut scene = scene::load_with(&args.scene, &args.sets, limits)?;
     if let Some(m) = &args.method {
         apply_methods(&mut scene, m)?;
     }
@@ -116,12 +159,30 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     if args.csv_every == 0 {
         bail!("--csv-every 0: expected a number of steps >= 1");
     }
+    let estimate = budget::run(format!("run {}", args.scene), &scene, dt, steps);
+    Ok((scene, dt, steps, estimate))
+}
+
+/// `springlab run`.
+///
+/// # Errors
+/// Bad scene, parameters or options; an unwritable CSV file.
+pub fn run(args: &RunArgs) -> anyhow::Result<()> {
+    let limits = Limits::forced(args.force);
+    let (scene, dt, steps, estimate) = prepare(args, &limits)?;
+    if let Some(path) = &args.csv {
+        output::check_file(path)?;
+    }
+    estimate.enforce(&limits)?;
+    // Within the budget, the step count fits in u64.
+    let steps = steps as u64;
+    interrupt::install(interrupt::Mode::Flag);
     let mut sim = Simulation::new(scene);
     sim.set_dt(dt);
 
     let mut csv = match &args.csv {
         Some(path) => {
-            let file = File::create(path)
+            let file = AtomicFile::create(path)
                 .with_context(|| format!("cannot write CSV file {}", path.display()))?;
             let mut w = BufWriter::new(file);
             write_csv_header(&mut w, &sim)?;
@@ -131,22 +192,35 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         None => None,
     };
     let start = Instant::now();
+    let mut progress = Progress::new(steps, &format!("run {}", args.scene));
     let mut csv_error = None;
-    sim.run(steps, |s| {
+    for i in 0..steps {
+        if sim.diverged.is_some() {
+            break;
+        }
+        if i % 256 == 0 {
+            // Ctrl-C: stop between steps; the CSV's temporary file is removed when dropped.
+            interrupt::check()?;
+            progress.set(i);
+        }
+        sim.step();
         if let Some((w, _)) = csv.as_mut()
             && csv_error.is_none()
-            && (s.steps % args.csv_every == 0 || s.diverged.is_some())
-            && let Err(e) = write_csv_row(w, s)
+            && (sim.steps.is_multiple_of(args.csv_every) || sim.diverged.is_some())
+            && let Err(e) = write_csv_row(w, &sim)
         {
             csv_error = Some(e);
         }
-    });
+    }
+    progress.finish();
     let wall = start.elapsed().as_secs_f64();
-    if let Some((mut w, path)) = csv {
+    if let Some((w, path)) = csv {
         if let Some(e) = csv_error {
             return Err(e).with_context(|| format!("cannot write CSV file {}", path.display()));
         }
-        w.flush()
+        w.into_inner()
+            .map_err(std::io::IntoInnerError::into_error)
+            .and_then(AtomicFile::commit)
             .with_context(|| format!("cannot write CSV file {}", path.display()))?;
     }
     let report = sim.report(wall);

@@ -1,14 +1,18 @@
 //! `springlab study`: stability limits (convergence and work-precision to come).
 
-use std::io::{IsTerminal, Write};
-use std::time::{Duration, Instant};
+use std::io::Write;
+use std::time::Instant;
 
+use anyhow::bail;
 use clap::{Args, Subcommand};
 
+use crate::budget::{self, Limits, Progress, interrupt, short};
+use crate::output;
 use crate::physics::Method;
+use crate::scene;
+use crate::study::Stability;
 use crate::study::convergence::{self, ConvergenceOptions, ConvergenceReport};
 use crate::study::stability::{self, DEFAULT_HORIZON, StabilityOptions, StabilityReport};
-use crate::study::{Probe, Stability};
 
 /// The studies.
 #[derive(Debug, Subcommand)]
@@ -51,6 +55,9 @@ pub struct ConvergenceArgs {
     /// Also draw the log-log chart into this PNG file.
     #[arg(long, value_name = "FILE")]
     pub png: Option<std::path::PathBuf>,
+    /// Run even when the estimated steps, memory or time are over the limits (see README).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Options of `springlab study stability`.
@@ -70,6 +77,21 @@ pub struct StabilityArgs {
     /// Print the result as one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Run even when the estimated steps, memory or time are over the limits (see README).
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// The budget estimate of a study (see [`crate::budget`]), without running it.
+///
+/// # Errors
+/// As the study's checks of its inputs.
+pub fn estimate(command: &StudyCommand, limits: &Limits) -> anyhow::Result<budget::Estimate> {
+    Ok(match command {
+        StudyCommand::Stability(args) => prepare_stability(args, limits)?.3,
+        StudyCommand::Convergence(args) => prepare_convergence(args, false, limits)?.3,
+        StudyCommand::WorkPrecision(args) => prepare_convergence(args, true, limits)?.3,
+    })
 }
 
 /// `springlab study ...`.
@@ -84,43 +106,20 @@ pub fn run(command: &StudyCommand) -> anyhow::Result<()> {
     }
 }
 
-/// Progress on standard error, only on a terminal and only once the study has taken a second.
-struct Progress {
-    enabled: bool,
-    start: Instant,
-    shown: bool,
-}
-
-impl Progress {
-    fn new() -> Progress {
-        Progress {
-            enabled: std::io::stderr().is_terminal(),
-            start: Instant::now(),
-            shown: false,
-        }
-    }
-
-    fn update(&mut self, method: Method, probe: &Probe) {
-        if !self.enabled || self.start.elapsed() < Duration::from_secs(1) {
-            return;
-        }
-        let verdict = if probe.stable { "stable" } else { "unstable" };
-        // \r and "erase line": one line, rewritten.
-        eprint!(
-            "\r\x1b[2Kstudy stability: {method} dt = {:.4e} s (dt·ω = {:.4}) {verdict}",
-            probe.dt, probe.dt_omega
-        );
-        self.shown = true;
-    }
-
-    fn finish(&self) {
-        if self.shown {
-            eprint!("\r\x1b[2K");
-        }
-    }
-}
-
-fn run_stability(args: &StabilityArgs) -> anyhow::Result<()> {
+/// The scene, options and `--set` list of `study stability`, and its budget estimate (not yet
+/// checked).
+///
+/// # Errors
+/// Bad methods, horizon or scene.
+pub fn prepare_stability(
+    args: &StabilityArgs,
+    limits: &Limits,
+) -> anyhow::Result<(
+    scene::Scene,
+    StabilityOptions,
+    Vec<String>,
+    budget::Estimate,
+)> {
     let options = StabilityOptions {
         methods: match &args.methods {
             Some(text) => stability::parse_methods(text)?,
@@ -130,12 +129,45 @@ fn run_stability(args: &StabilityArgs) -> anyhow::Result<()> {
         criterion: None,
     };
     if !(options.horizon > 0.0 && options.horizon.is_finite()) {
-        return Err(crate::study::StudyError::Horizon(options.horizon).into());
+        bail!(
+            "--horizon {}: expected a duration in seconds > 0",
+            short(options.horizon)
+        );
     }
-    let (scene, sets) = stability::load_scene(&args.scene, &args.sets)?;
-    let mut progress = Progress::new();
+    let sets = stability::scene_sets(&args.scene, &args.sets);
+    let scene = scene::load_with(&args.scene, &sets, limits)?;
+    let estimate = budget::stability(
+        format!("study stability {}", args.scene),
+        &scene,
+        &options.methods,
+        options.horizon,
+        budget::STABILITY_MIN_STEPS,
+    );
+    Ok((scene, options, sets, estimate))
+}
+
+fn run_stability(args: &StabilityArgs) -> anyhow::Result<()> {
+    let limits = Limits::forced(args.force);
+    interrupt::install(interrupt::Mode::Exit);
+    let (scene, options, sets, estimate) = prepare_stability(args, &limits)?;
+    estimate.enforce(&limits)?;
+    let mut progress = Progress::new(
+        options.methods.len() as u64,
+        &format!("study stability {}", args.scene),
+    );
+    let mut current = None;
     let start = Instant::now();
-    let result = stability::stability(&scene, &options, &mut |m, p| progress.update(m, p));
+    let result = stability::stability(&scene, &options, &mut |m, p| {
+        if current.is_some_and(|c| c != m) {
+            progress.inc(1);
+        }
+        current = Some(m);
+        let verdict = if p.stable { "stable" } else { "unstable" };
+        progress.label(format!(
+            "study stability: {m} dt = {:.4e} s (dt·ω = {:.4}) {verdict}",
+            p.dt, p.dt_omega
+        ));
+    });
     progress.finish();
     let mut report = result?;
     report.sets = sets;
@@ -223,7 +255,21 @@ pub fn print_table(
     )
 }
 
-fn run_convergence(args: &ConvergenceArgs, work_precision: bool) -> anyhow::Result<()> {
+/// The scene, options and `--set` list of `study convergence` (or `work-precision`), and its
+/// budget estimate (not yet checked).
+///
+/// # Errors
+/// Bad methods, time, time step or scene.
+pub fn prepare_convergence(
+    args: &ConvergenceArgs,
+    work_precision: bool,
+    limits: &Limits,
+) -> anyhow::Result<(
+    scene::Scene,
+    ConvergenceOptions,
+    Vec<String>,
+    budget::Estimate,
+)> {
     let options = ConvergenceOptions {
         methods: match &args.methods {
             Some(text) => stability::parse_methods(text)?,
@@ -234,28 +280,76 @@ fn run_convergence(args: &ConvergenceArgs, work_precision: bool) -> anyhow::Resu
         levels: args.levels.unwrap_or(if work_precision { 6 } else { 4 }),
         repeats: args.repeats.unwrap_or(if work_precision { 3 } else { 1 }),
     };
-    let (scene, sets) = convergence::load_scene(&args.scene, &args.sets)?;
     let name = if work_precision {
         "work-precision"
     } else {
         "convergence"
     };
-    let enabled = std::io::stderr().is_terminal();
-    let start = Instant::now();
-    let mut shown = false;
-    let result = convergence::convergence(&scene, &options, &mut |m, level| {
-        if enabled && start.elapsed() > Duration::from_secs(1) {
-            eprint!(
-                "\r\x1b[2Kstudy {name}: {m} dt level {} of {}",
-                level + 1,
-                options.levels
-            );
-            shown = true;
-        }
-    });
-    if shown {
-        eprint!("\r\x1b[2K");
+    let mut sets: Vec<String> = convergence::SAME_EQUATIONS
+        .iter()
+        .map(|s| (*s).to_string())
+        .collect();
+    sets.extend(args.sets.iter().cloned());
+    let scene = scene::load_with(&args.scene, &sets, limits)?;
+    let time = options.time.unwrap_or(1.0);
+    if !(time > 0.0 && time.is_finite()) {
+        bail!("--time {}: expected a duration in seconds > 0", short(time));
     }
+    // The study's largest dt: --dt, else 0.005 s for the oscillator, else the scene's.
+    let dt = options.dt.unwrap_or(if scene.name == "oscillator" {
+        0.005
+    } else {
+        scene.dt
+    });
+    if !(dt > 0.0 && dt.is_finite()) {
+        bail!("--dt {}: expected a time step in seconds > 0", short(dt));
+    }
+    if dt > time {
+        bail!(
+            "--dt {} s is longer than the time the error is measured at (--time {} s): expected \
+             a time step at most the simulated time",
+            short(dt),
+            short(time)
+        );
+    }
+    let estimate = budget::convergence(
+        format!("study {name} {}", args.scene),
+        &scene,
+        &options.methods,
+        time,
+        dt,
+        options.levels,
+        options.repeats,
+    );
+    Ok((scene, options, sets, estimate))
+}
+
+fn run_convergence(args: &ConvergenceArgs, work_precision: bool) -> anyhow::Result<()> {
+    let limits = Limits::forced(args.force);
+    interrupt::install(interrupt::Mode::Exit);
+    let (scene, options, sets, estimate) = prepare_convergence(args, work_precision, &limits)?;
+    let name = if work_precision {
+        "work-precision"
+    } else {
+        "convergence"
+    };
+    if let Some(path) = &args.png {
+        output::check_file(path)?;
+    }
+    estimate.enforce(&limits)?;
+    let mut progress = Progress::new(
+        options.methods.len() as u64 * u64::from(options.levels),
+        &format!("study {name} {}", args.scene),
+    );
+    let result = convergence::convergence(&scene, &options, &mut |m, level| {
+        progress.label(format!(
+            "study {name}: {m} dt level {} of {}",
+            level + 1,
+            options.levels
+        ));
+        progress.inc(1);
+    });
+    progress.finish();
     let mut report = result?;
     report.sets = sets;
     if let Some(path) = &args.png {

@@ -180,13 +180,16 @@ fn check_accelerations<H: ClothHomework>(
     set_case(&input);
     let got = hw.spring_accelerations(x, v, w, springs);
     let want = Reference.spring_accelerations(x, v, w, springs);
-    let mut own = vec![DVec3::ZERO; x.len()];
-    for s in springs {
-        let fa = hw.spring_force(x[s.a], x[s.b], s.stiffness, s.rest_length)
-            + hw.damper_force(x[s.a], x[s.b], v[s.a], v[s.b], s.damping);
-        own[s.a] += w[s.a] * fa;
-        own[s.b] -= w[s.b] * fa;
-    }
+    let own = || {
+        let mut own = vec![DVec3::ZERO; x.len()];
+        for s in springs {
+            let fa = hw.spring_force(x[s.a], x[s.b], s.stiffness, s.rest_length)
+                + hw.damper_force(x[s.a], x[s.b], v[s.a], v[s.b], s.damping);
+            own[s.a] += w[s.a] * fa;
+            own[s.b] -= w[s.b] * fa;
+        }
+        own
+    };
     let scale = springs
         .iter()
         .map(|s| s.stiffness * s.rest_length + s.damping)
@@ -196,7 +199,7 @@ fn check_accelerations<H: ClothHomework>(
         &input,
         &got,
         &want,
-        Some(&own),
+        &own,
         scale,
         "m/s²",
         "a_i = w_i Σ f_i with f_a = spring + damper force on a and -f_a on b (w = 0: no motion)",

@@ -16,6 +16,10 @@
 //! contact force uses the velocity before the bounce. A static obstacle is infinitely heavy, so
 //! the 2021 course's factor `(m1 - m2)/(m1 + m2)` on the normal velocity is -1 and drops out.
 //! Cases avoid the undefined corners (`v_T = 0` with friction, `v·N` within 1e-6 of 0).
+//!
+//! Each check runs the whole handler but looks at one output: the bounce check at `v'`, the
+//! projection check at `x'`, the contact check at `force'`. One mistake is charged once: a
+//! missing bounce costs the bounce check only, a missing projection the projection check only.
 
 use glam::DVec3;
 
@@ -116,13 +120,25 @@ pub(crate) type Handler<'a> = &'a dyn Fn(&Surface, &mut Particle);
 /// Surfaces of a check: case `i` of three.
 pub(crate) type Surfaces<'a> = &'a dyn Fn(&mut Rng, usize) -> Surface;
 
-/// Runs one case and compares every field with the reference.
+/// The output a check looks at.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Field {
+    /// The position `x'` (projection).
+    X,
+    /// The velocity `v'` (bounce).
+    V,
+    /// The force `force'` (contact force and friction).
+    Force,
+}
+
+/// Runs one case and compares `field` with the reference.
 fn compare(
     student: Handler<'_>,
     reference: Handler<'_>,
     surface: &Surface,
     start: Particle,
     c: &ContactCoefficients,
+    field: Field,
     why: &str,
 ) -> CheckResult {
     let input = format!(
@@ -138,31 +154,35 @@ fn compare(
     let mut got = start;
     set_case(&input);
     student(surface, &mut got);
-    finite("(x, v, force)", &input, &[got.x, got.v, got.force])?;
     let mut want = start;
     reference(surface, &mut want);
-    let scale_f = start.force.length() + 1.0;
-    for (what, g, w, scale) in [
-        ("x", got.x, want.x, 1.0),
-        ("v", got.v, want.v, 1.0),
-        ("force", got.force, want.force, scale_f),
-    ] {
-        if !close(g, w, REL, scale) {
-            return Err(wrong(
-                input,
-                format!(
-                    "{what}' = {} (x' = {}, v' = {}, force' = {})",
-                    vec3(w),
-                    vec3(want.x),
-                    vec3(want.v),
-                    vec3(want.force)
-                ),
-                format!("{what}' = {}", vec3(g)),
-                why,
-            ));
-        }
+    let (what, g, w, scale) = match field {
+        Field::X => ("x", got.x, want.x, 1.0),
+        Field::V => ("v", got.v, want.v, 1.0),
+        Field::Force => ("force", got.force, want.force, start.force.length() + 1.0),
+    };
+    finite(what, &input, &[g])?;
+    if close(g, w, REL, scale) {
+        return Ok(());
     }
-    Ok(())
+    let unchanged = match field {
+        Field::X => start.x,
+        Field::V => start.v,
+        Field::Force => start.force,
+    };
+    let hint = if g == unchanged && w != unchanged {
+        format!("{why} ({what} did not change)")
+    } else if w == unchanged {
+        format!("{why} ({what} should not change here)")
+    } else {
+        why.to_string()
+    };
+    Err(wrong(
+        input,
+        format!("{what}' = {}", vec3(w)),
+        format!("{what}' = {}", vec3(g)),
+        hint,
+    ))
 }
 
 fn no_sample(surface: &Surface) -> super::runner::Failure {
@@ -201,6 +221,7 @@ pub(crate) fn check_bounce(
             &surface,
             p,
             c,
+            Field::V,
             &format!(
                 "φ = {} m < ε and v·N = {} < 0: bounce, v' = -k_r v_N + v_T with N = {}",
                 num(phi),
@@ -225,6 +246,7 @@ pub(crate) fn check_bounce(
             &surface,
             p,
             c,
+            Field::V,
             &format!(
                 "φ = {} m is farther than ε = {}: no collision, nothing changes",
                 num(phi),
@@ -248,6 +270,7 @@ pub(crate) fn check_bounce(
             &surface,
             p,
             c,
+            Field::V,
             &format!(
                 "v·N = {} > 0: the particle moves away, so no bounce and no contact force",
                 num(vn)
@@ -267,6 +290,7 @@ pub(crate) fn check_bounce(
                 &surface,
                 p,
                 c,
+                Field::V,
                 "the particle is above the rim (y > rim_height), where there is no bowl: nothing changes",
             )?;
         }
@@ -300,15 +324,40 @@ pub(crate) fn check_penetration(
                 &surface,
                 p,
                 c,
+                Field::X,
                 &format!(
                     "φ = {} m < 0: the particle is inside; move it onto the surface, x' = x - φ N \
-                     with N = {}, then bounce if v·N < 0 (here v·N = {})",
+                     with N = {} (here v·N = {})",
                     num(phi),
                     vec3(n),
                     num(vn)
                 ),
             )?;
         }
+        // Touching from the free side: the position stays.
+        let phi = rng.range(0.001, 0.009);
+        let (x, n) = surface
+            .sample(rng, phi)
+            .ok_or_else(|| no_sample(&surface))?;
+        let vn = rng.range(-3.0, -0.5);
+        let p = Particle {
+            x,
+            v: velocity(rng, n, vn, [0.0, 2.0]),
+            force: DVec3::ZERO,
+        };
+        compare(
+            student,
+            reference,
+            &surface,
+            p,
+            c,
+            Field::X,
+            &format!(
+                "φ = {} m ≥ 0: the particle is on the free side; only a particle inside (φ < 0) is \
+                 moved",
+                num(phi)
+            ),
+        )?;
     }
     Ok(())
 }
@@ -341,12 +390,56 @@ pub(crate) fn check_contact_force(
                 &surface,
                 p,
                 c,
+                Field::Force,
                 &format!(
                     "touching (φ < ε), approaching, and N·f = {} < 0 pushes into the surface: \
                      f' = f - (N·f) N - k_f (-N·f) v_T/|v_T| with v_T from the velocity before \
                      the bounce; and the bounce as usual",
                     num(-load)
                 ),
+            )?;
+        }
+        // Farther than ε, or moving away: no contact force even when pushed in.
+        for (phi, vn, why) in [
+            (
+                rng.range(0.05, 1.0),
+                rng.range(-3.0, -0.5),
+                "the particle is farther than ε: no contact force",
+            ),
+            (
+                rng.range(0.001, 0.009),
+                rng.range(0.2, 2.0),
+                "v·N > 0: the particle moves away, so no contact force",
+            ),
+        ] {
+            let (x, n) = surface
+                .sample(rng, phi)
+                .ok_or_else(|| no_sample(&surface))?;
+            let load = rng.range(1.0, 20.0);
+            let p = Particle {
+                x,
+                v: velocity(rng, n, vn, [0.2, 2.0]),
+                force: pushing(rng, n, load),
+            };
+            compare(student, reference, &surface, p, c, Field::Force, why)?;
+        }
+        // Above a bowl's rim: the bowl is not there.
+        if let Some((x, inward)) = surface.above_rim(rng) {
+            let load = rng.range(1.0, 20.0);
+            let p = Particle {
+                x,
+                v: velocity(rng, inward, -1.0, [0.2, 2.0]),
+                force: pushing(rng, inward, load),
+            };
+            compare(
+                student,
+                reference,
+                &surface,
+                p,
+                c,
+                Field::Force,
+                "the particle is above the rim (y > rim_height), where there is no bowl: no \
+                 contact force",
             )?;
         }
     }

@@ -235,7 +235,7 @@ fn check_internal<H: JellyHomework>(
     set_case(&input);
     let got = hw.internal_forces(x, v, springs);
     let want = Reference.internal_forces(x, v, springs);
-    let own = own_internal(hw, x, v, springs);
+    let own = || own_internal(hw, x, v, springs);
     let scale = springs
         .iter()
         .map(|s| s.stiffness * s.rest_length + s.damping)
@@ -244,7 +244,7 @@ fn check_internal<H: JellyHomework>(
         &input,
         &got,
         &want,
-        Some(&own),
+        &own,
         scale,
         "N",
         "for every spring f_a = spring + damper force on a, added to a, and -f_a added to b",

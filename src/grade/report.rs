@@ -72,12 +72,18 @@ pub enum ItemStatus {
     Partial,
     /// No check passed.
     Zero,
-    /// A check panicked: the item scores zero.
+    /// A check panicked: that check scores zero.
     Panicked,
-    /// A check returned NaN or an infinite number: the item scores zero.
+    /// A check returned NaN or an infinite number: that check scores zero.
     NotFinite,
-    /// A check did not finish within the time limit: the item scores zero.
+    /// A check did not finish within the time limit: that check and the item's later checks
+    /// score zero.
     TimedOut,
+    /// The student's program ended during a check (exit, abort, stack overflow, out of memory):
+    /// that check scores zero.
+    Crashed,
+    /// The student's program answered something the grader cannot read: that check scores zero.
+    Malformed,
     /// The crate did not build, or the grading process did not finish: nothing was run.
     NotRun,
 }
@@ -93,6 +99,8 @@ impl ItemStatus {
             ItemStatus::Panicked => "panicked",
             ItemStatus::NotFinite => "NaN/inf",
             ItemStatus::TimedOut => "timed out",
+            ItemStatus::Crashed => "crashed",
+            ItemStatus::Malformed => "bad answer",
             ItemStatus::NotRun => "not run",
         }
     }
@@ -113,7 +121,8 @@ pub struct ItemReport {
     pub max_score: f64,
     /// How it ended.
     pub status: ItemStatus,
-    /// Why the item scored zero when a check panicked, timed out or was not finite.
+    /// What happened when a check panicked, timed out, crashed the program, answered something
+    /// unreadable or was not finite.
     pub reason: Option<String>,
     /// The checks, in the order they ran.
     pub checks: Vec<CheckReport>,

@@ -451,17 +451,20 @@ fn rope_forces<H: RopeHomework>(hw: &H, ctx: &Ctx) -> CheckResult {
         let want = Reference.spring_forces(&rope);
         // The student's own Hooke forces, accumulated correctly: a wrong spring_force is charged
         // in the Hooke check, not again here.
-        let mut own = vec![DVec3::ZERO; rope.masses.len()];
-        for s in &rope.springs {
-            let f = hw.spring_force(
-                rope.masses[s.a].position,
-                rope.masses[s.b].position,
-                s.stiffness,
-                s.rest_length,
-            );
-            own[s.a] += f;
-            own[s.b] -= f;
-        }
+        let own = || {
+            let mut own = vec![DVec3::ZERO; rope.masses.len()];
+            for s in &rope.springs {
+                let f = hw.spring_force(
+                    rope.masses[s.a].position,
+                    rope.masses[s.b].position,
+                    s.stiffness,
+                    s.rest_length,
+                );
+                own[s.a] += f;
+                own[s.b] -= f;
+            }
+            own
+        };
         let scale = rope
             .springs
             .iter()
@@ -471,7 +474,7 @@ fn rope_forces<H: RopeHomework>(hw: &H, ctx: &Ctx) -> CheckResult {
             &input,
             &got,
             &want,
-            Some(&own),
+            &own,
             scale,
             "N",
             "for each spring, f on end a and -f on end b, summed per mass",
@@ -551,7 +554,7 @@ fn explicit_one_step<H: RopeHomework>(hw: &H, ctx: &Ctx) -> CheckResult {
 }
 
 fn explicit_order<H: RopeHomework>(hw: &H, _: &Ctx) -> CheckResult {
-    check_order(&explicit_step(hw), 1.0, 0.8, 1.3)
+    check_order(&explicit_step(hw), 1.0, 0.8, 1.3, EXPLICIT)
 }
 
 /// The course rope of `nodes` nodes and its physics (gravity (0, -1) px/s²).

@@ -7,17 +7,20 @@
 //!    [`std::panic::catch_unwind`]. A process-wide panic hook, installed once, prints nothing for
 //!    grading threads and records the message and location instead; other threads keep the hook
 //!    that was there before, so grading never hides the panics of the program around it.
-//! 3. The runner waits on a channel for at most the time limit. A result is a pass, a failed case
-//!    (the check's points are lost) or a number that is not finite; a panic arrives as its
-//!    message; no answer in time is a timeout.
-//! 4. A panic, a non-finite number or a timeout scores the whole item zero and skips its remaining
-//!    checks; the other items are unaffected.
+//! 3. The thread's deadline is the start plus the time limit; calls to a student's program
+//!    ([`super::remote::Remote`]) wait at most until then. The runner waits on a channel for at
+//!    most the limit plus a short grace. A result is a pass, a failed case (the check's points
+//!    are lost) or a number that is not finite; a panic arrives as its message; a call to the
+//!    student's program that got no answer arrives as its [`CallFailure`]; no answer in time is
+//!    a timeout.
+//! 4. Each of these costs the check in progress only: checks of the same item that passed keep
+//!    their points, and the item's later checks run (after a time-out they are skipped, since
+//!    they would wait the limit again). The item's status and reason name what happened.
 //!
-//! On a timeout the thread cannot be stopped (Rust has no safe way to kill a thread): it is
-//! abandoned and keeps a core busy until the process exits. **A grading process should exit once
-//! grading is done** — the generated `tests/grade.rs` returns from `main`, which ends the process
-//! with all its threads. A check that overflows the stack or aborts takes the whole process down;
-//! `springlab grade` reports that as a crash of the grading run.
+//! With the student's code in its own process (`springlab grade`), a check never needs to be
+//! abandoned: the program is killed at the deadline. Homework graded in this process (the
+//! library calls, used by springlab's own tests) cannot be stopped on a timeout (Rust has no safe
+//! way to kill a thread): the thread is abandoned and keeps a core busy until the process exits.
 
 use std::any::Any;
 use std::cell::{Cell, RefCell};
@@ -26,6 +29,7 @@ use std::sync::{Arc, Mutex, Once, mpsc};
 use std::thread;
 use std::time::{Duration, Instant};
 
+use super::remote::CallFailure;
 use super::report::{
     CheckOutcome, CheckReport, Feedback, ItemReport, ItemStatus, NotGraded, Report,
 };
@@ -172,8 +176,27 @@ enum Verdict {
     Panicked(String, String),
     /// No answer within the limit, on the case last recorded.
     TimedOut(String),
+    /// The student's program ended during the check: how, and the case.
+    Crashed(String, String),
+    /// The student's program answered something unreadable: why, and the case.
+    Malformed(String, String),
     NoThread(String),
 }
+
+thread_local! {
+    /// When the check running on this thread must be done (the remote program's calls wait at
+    /// most until then).
+    static DEADLINE: Cell<Option<Instant>> = const { Cell::new(None) };
+}
+
+/// The deadline of the check running on this thread, if any.
+pub(crate) fn check_deadline() -> Option<Instant> {
+    DEADLINE.with(Cell::get)
+}
+
+/// Time a check thread gets beyond its limit before the runner stops waiting: the student's
+/// program is already stopped at the limit; this covers the grader's own work after it.
+const GRACE: Duration = Duration::from_secs(2);
 
 fn run_isolated<H: Send + Sync + 'static>(
     hw: &Arc<H>,
@@ -186,33 +209,58 @@ fn run_isolated<H: Send + Sync + 'static>(
     let case = Arc::new(Mutex::new(String::new()));
     let case_in_thread = Arc::clone(&case);
     let hw = Arc::clone(hw);
+    let deadline = Instant::now() + limit;
     let spawned = thread::Builder::new()
         .name("springlab-grade-check".to_string())
         .spawn(move || {
             GRADING.with(|g| g.set(true));
+            DEADLINE.with(|d| d.set(Some(deadline)));
             CASE.with(|c| *c.borrow_mut() = Some(case_in_thread));
             let result = panic::catch_unwind(AssertUnwindSafe(|| check(&hw, &ctx)));
-            let message = match result {
-                Ok(r) => Ok(r),
-                Err(payload) => Err(LAST_PANIC
-                    .with(|p| p.borrow_mut().take())
-                    .unwrap_or_else(|| payload_text(payload.as_ref()))),
+            let outcome = match result {
+                Ok(r) => Outcome::Returned(r),
+                Err(payload) => match payload.downcast::<CallFailure>() {
+                    Ok(failure) => Outcome::Remote(*failure),
+                    Err(payload) => Outcome::Panicked(
+                        LAST_PANIC
+                            .with(|p| p.borrow_mut().take())
+                            .unwrap_or_else(|| payload_text(payload.as_ref())),
+                    ),
+                },
             };
             // The receiver is gone when the check timed out: nothing to do.
-            let _ = tx.send(message);
+            let _ = tx.send(outcome);
         });
     if let Err(e) = spawned {
         return Verdict::NoThread(e.to_string());
     }
-    match rx.recv_timeout(limit) {
-        Ok(Ok(result)) => Verdict::Done(result),
-        Ok(Err(message)) => Verdict::Panicked(message, recorded_case(&case)),
-        Err(mpsc::RecvTimeoutError::Timeout) => Verdict::TimedOut(recorded_case(&case)),
+    let in_case = || recorded_case(&case);
+    match rx.recv_timeout(limit + GRACE) {
+        Ok(Outcome::Returned(result)) => Verdict::Done(result),
+        Ok(Outcome::Panicked(message)) => Verdict::Panicked(message, in_case()),
+        Ok(Outcome::Remote(CallFailure::Panicked(message))) => {
+            Verdict::Panicked(message, in_case())
+        }
+        Ok(Outcome::Remote(CallFailure::TimedOut)) => Verdict::TimedOut(in_case()),
+        Ok(Outcome::Remote(CallFailure::Crashed(how))) => Verdict::Crashed(how, in_case()),
+        Ok(Outcome::Remote(CallFailure::NotStarted(why))) => Verdict::Crashed(
+            format!("the homework program could not be started: {why}"),
+            in_case(),
+        ),
+        Ok(Outcome::Remote(CallFailure::Malformed(why))) => Verdict::Malformed(why, in_case()),
+        Err(mpsc::RecvTimeoutError::Timeout) => Verdict::TimedOut(in_case()),
         Err(mpsc::RecvTimeoutError::Disconnected) => Verdict::Panicked(
             "the check's thread ended without an answer".to_string(),
             String::new(),
         ),
     }
+}
+
+/// What a check thread sends back.
+enum Outcome {
+    Returned(CheckResult),
+    Panicked(String),
+    Remote(CallFailure),
 }
 
 /// Runs every check of `rubric` against `hw` and collects the report.
@@ -231,6 +279,22 @@ pub(crate) fn grade<H: Send + Sync + 'static>(
     finish(&rubric, items, options, start.elapsed().as_secs_f64())
 }
 
+/// A failed check's feedback for a run that gave no answer.
+fn no_answer(case: String, expected: String, got: String, hint: &str) -> Option<Feedback> {
+    Some(Feedback {
+        input: case,
+        expected,
+        got,
+        hint: hint.to_string(),
+    })
+}
+
+/// Runs the checks of one item. A check that passes keeps its points whatever happens later; a
+/// wrong answer, a non-finite number, a panic, a crash of the student's program or an
+/// unreadable answer cost the check in progress, and the item's other checks still run (a new
+/// program answers them after a crash). A time-out costs the check in progress and skips the
+/// item's remaining checks, which would most likely wait the whole limit again. The item's
+/// status names the first such event and its reason says what happened.
 fn grade_item<H: Send + Sync + 'static>(
     item: &ItemSpec<H>,
     hw: &Arc<H>,
@@ -239,8 +303,10 @@ fn grade_item<H: Send + Sync + 'static>(
 ) -> ItemReport {
     let mut checks = Vec::with_capacity(item.checks.len());
     let mut fatal: Option<(ItemStatus, String)> = None;
+    let mut skip_rest = false;
+    let ms = limit.as_millis();
     for check in &item.checks {
-        if fatal.is_some() {
+        if skip_rest {
             checks.push(CheckReport {
                 name: check.name.to_string(),
                 score: 0.0,
@@ -250,62 +316,100 @@ fn grade_item<H: Send + Sync + 'static>(
             });
             continue;
         }
+        let name = check.name;
+        let mut first = |status: ItemStatus, reason: String| {
+            if fatal.is_none() {
+                fatal = Some((status, reason));
+            }
+        };
         let (outcome, feedback) = match run_isolated(hw, check.run, ctx, limit) {
             Verdict::Done(Ok(())) => (CheckOutcome::Passed, None),
             Verdict::Done(Err(Failure::Wrong(f))) => (CheckOutcome::Failed, Some(f)),
             Verdict::Done(Err(Failure::NotFinite(f))) => {
-                fatal = Some((
+                first(
                     ItemStatus::NotFinite,
                     format!(
-                        "\"{}\" produced a number that is not finite (NaN or infinite): the item scores 0",
-                        check.name
+                        "\"{name}\" produced a number that is not finite (NaN or infinite): that \
+                         check scores 0"
                     ),
-                ));
+                );
                 (CheckOutcome::Failed, Some(f))
             }
             Verdict::Panicked(message, case) => {
-                fatal = Some((
+                first(
                     ItemStatus::Panicked,
-                    format!("\"{}\" panicked: {message}; the item scores 0", check.name),
-                ));
+                    format!("\"{name}\" panicked: {message}; that check scores 0"),
+                );
                 (
                     CheckOutcome::Failed,
-                    Some(Feedback {
-                        input: case,
-                        expected: "an answer".to_string(),
-                        got: "a panic".to_string(),
-                        hint: "call the function with this input from a test of your own and run \
-                               it with RUST_BACKTRACE=1; a panic is never worth points"
-                            .to_string(),
-                    }),
+                    no_answer(
+                        case,
+                        "an answer".to_string(),
+                        format!("a panic: {message}"),
+                        "call the function with this input from a test of your own and run it \
+                         with RUST_BACKTRACE=1; a panic is never worth points",
+                    ),
+                )
+            }
+            Verdict::Crashed(how, case) => {
+                first(
+                    ItemStatus::Crashed,
+                    format!(
+                        "the homework program ended during \"{name}\": {how}; that check scores \
+                         0 and a new program answers the rest"
+                    ),
+                );
+                (
+                    CheckOutcome::Failed,
+                    no_answer(
+                        case,
+                        "an answer".to_string(),
+                        format!("no answer: {how}"),
+                        "a homework method must return: no process::exit, no abort, no endless \
+                         recursion, no unbounded allocation",
+                    ),
+                )
+            }
+            Verdict::Malformed(why, case) => {
+                first(
+                    ItemStatus::Malformed,
+                    format!("\"{name}\" got an answer the grader cannot read: {why}"),
+                );
+                (
+                    CheckOutcome::Failed,
+                    no_answer(
+                        case,
+                        "an answer of the method's type".to_string(),
+                        format!("an unreadable answer: {why}"),
+                        "return what the method's signature says, of a size that fits the input",
+                    ),
                 )
             }
             Verdict::TimedOut(case) => {
-                fatal = Some((
+                skip_rest = true;
+                first(
                     ItemStatus::TimedOut,
                     format!(
-                        "\"{}\" did not finish within {} ms: the item scores 0",
-                        check.name,
-                        limit.as_millis()
+                        "\"{name}\" did not finish within {ms} ms: that check scores 0 and the \
+                         item's remaining checks were not run"
                     ),
-                ));
+                );
                 (
                     CheckOutcome::Failed,
-                    Some(Feedback {
-                        input: case,
-                        expected: format!("an answer within {} ms", limit.as_millis()),
-                        got: "no answer".to_string(),
-                        hint: "look for a loop whose condition never changes, or one far longer \
-                               than the system (every check takes milliseconds)"
-                            .to_string(),
-                    }),
+                    no_answer(
+                        case,
+                        format!("an answer within {ms} ms"),
+                        "no answer".to_string(),
+                        "look for a loop whose condition never changes, or one far longer than \
+                         the system (every check takes milliseconds)",
+                    ),
                 )
             }
             Verdict::NoThread(e) => {
-                fatal = Some((
+                first(
                     ItemStatus::NotRun,
-                    format!("could not start a thread for \"{}\": {e}", check.name),
-                ));
+                    format!("could not start a thread for \"{name}\": {e}"),
+                );
                 (CheckOutcome::NotRun, None)
             }
         };
@@ -322,24 +426,12 @@ fn grade_item<H: Send + Sync + 'static>(
         });
     }
     let max_score = item.max_points();
-    let (score, status, reason) = match fatal {
-        Some((status, reason)) => {
-            for c in &mut checks {
-                c.score = 0.0;
-            }
-            (0.0, status, Some(reason))
-        }
-        None => {
-            let score: f64 = checks.iter().map(|c| c.score).sum();
-            let status = if score == max_score {
-                ItemStatus::Full
-            } else if score == 0.0 {
-                ItemStatus::Zero
-            } else {
-                ItemStatus::Partial
-            };
-            (score, status, None)
-        }
+    let score: f64 = checks.iter().map(|c| c.score).sum();
+    let (status, reason) = match fatal {
+        Some((status, reason)) => (status, Some(reason)),
+        None if score == max_score => (ItemStatus::Full, None),
+        None if score == 0.0 => (ItemStatus::Zero, None),
+        None => (ItemStatus::Partial, None),
     };
     ItemReport {
         id: item.id.to_string(),

@@ -211,7 +211,7 @@ macro_rules! shared_items {
         }
 
         fn explicit_order<H: $tr>(hw: &H, _: &Ctx) -> CheckResult {
-            check_order(&|s: &mut State, dt, p: &Physics| hw.explicit_euler(s, dt, p), 1.0, 0.8, 1.3)
+            check_order(&|s: &mut State, dt, p: &Physics| hw.explicit_euler(s, dt, p), 1.0, 0.8, 1.3, EXPLICIT)
         }
 
         fn implicit_linear<H: $tr>(hw: &H, _: &Ctx) -> CheckResult {
@@ -255,7 +255,7 @@ macro_rules! shared_items {
         }
 
         fn midpoint_order<H: $tr>(hw: &H, _: &Ctx) -> CheckResult {
-            check_order(&|s: &mut State, dt, p: &Physics| hw.midpoint(s, dt, p), 2.0, 1.7, 2.4)
+            check_order(&|s: &mut State, dt, p: &Physics| hw.midpoint(s, dt, p), 2.0, 1.7, 2.4, MIDPOINT)
         }
 
         fn rk4_one_step<H: $tr>(hw: &H, ctx: &Ctx) -> CheckResult {
@@ -279,7 +279,7 @@ macro_rules! shared_items {
         }
 
         fn rk4_order<H: $tr>(hw: &H, _: &Ctx) -> CheckResult {
-            check_order(&|s: &mut State, dt, p: &Physics| hw.rk4(s, dt, p), 4.0, 3.5, 4.6)
+            check_order(&|s: &mut State, dt, p: &Physics| hw.rk4(s, dt, p), 4.0, 3.5, 4.6, RK4)
         }
     };
 }

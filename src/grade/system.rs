@@ -185,6 +185,12 @@ impl Matrix {
         self.size
     }
 
+    /// The entries, row after row.
+    #[must_use]
+    pub fn row_major(&self) -> &[f64] {
+        &self.data
+    }
+
     /// The product `M y`.
     ///
     /// # Panics

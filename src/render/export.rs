@@ -14,10 +14,15 @@
 //!   names the frame count before any frame is written; when fewer frames arrive (the run
 //!   diverged) the count is corrected in the finished file and its checksum recomputed.
 //!
+//! Every file is complete or absent ([`crate::output`]): each PNG frame, the GIF and the APNG
+//! are written to a temporary file beside the target and renamed when finished; the animations
+//! only by [`FrameEncoder::finish`]. [`FrameEncoder::abort`] (Ctrl-C) and an error remove the
+//! temporary files and the frames of this run.
+//!
 //! All pixmaps drawn by this crate are opaque, so their premultiplied colours are the plain
 //! colours; a translucent pixel is un-premultiplied (`c · 255 / α`) before encoding.
 
-use std::fs::{self, File};
+use std::fs;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
@@ -26,6 +31,7 @@ use std::thread::JoinHandle;
 use tiny_skia::Pixmap;
 
 use super::RenderError;
+use crate::output::AtomicFile;
 
 /// Frames that may wait for the encoder before the drawing thread blocks.
 pub const QUEUE: usize = 3;
@@ -61,12 +67,21 @@ pub fn frame_path(dir: &Path, index: u32) -> PathBuf {
 /// Encodes frames on a background thread (module docs).
 pub struct FrameEncoder {
     sender: Option<SyncSender<Pixmap>>,
-    handle: Option<JoinHandle<Result<Written, RenderError>>>,
+    handle: Option<JoinHandle<Encoded>>,
+    frames_dir: Option<PathBuf>,
+}
+
+/// What the encoder thread hands back: the frames written, the animations not yet renamed into
+/// place, and the first error.
+struct Encoded {
+    frames: u32,
+    pending: Vec<AtomicFile>,
+    error: Option<RenderError>,
 }
 
 impl FrameEncoder {
-    /// Creates the output directory and files and starts the encoder thread for frames of
-    /// `width × height` pixels.
+    /// Creates the output directory and the animations' temporary files and starts the encoder
+    /// thread for frames of `width × height` pixels.
     ///
     /// # Errors
     /// [`RenderError::Io`] when the directory or a file cannot be created (for example the
@@ -80,9 +95,10 @@ impl FrameEncoder {
             None => None,
         };
         let apng = match &outputs.apng {
-            Some(path) => Some((path.clone(), create(path)?)),
+            Some(path) => Some(BufWriter::new(create(path)?)),
             None => None,
         };
+        let frames_dir = outputs.frames_dir.clone();
         let (sender, receiver) = sync_channel::<Pixmap>(QUEUE);
         let handle = std::thread::Builder::new()
             .name("springlab-encoder".into())
@@ -94,13 +110,15 @@ impl FrameEncoder {
         Ok(FrameEncoder {
             sender: Some(sender),
             handle: Some(handle),
+            frames_dir,
         })
     }
 
     /// Queues a frame; blocks while [`QUEUE`] frames are waiting.
     ///
     /// # Errors
-    /// The encoder's error when it has stopped (a file could not be written).
+    /// The encoder's error when it has stopped (a file could not be written); the outputs are
+    /// then removed as by [`FrameEncoder::abort`].
     pub fn send(&mut self, frame: Pixmap) -> Result<(), RenderError> {
         let failed = match &self.sender {
             Some(s) => s.send(frame).is_err(),
@@ -109,64 +127,112 @@ impl FrameEncoder {
         if failed {
             // The encoder hung up: it failed; its error says why.
             self.sender = None;
-            return match self.join() {
-                Err(e) => Err(e),
-                Ok(_) => Err(RenderError::Encode {
-                    path: "frames".into(),
-                    message: "the encoder stopped early".into(),
-                }),
-            };
+            let error = self.join().and_then(|e| e.error);
+            self.remove_frames_written();
+            return Err(error.unwrap_or_else(|| RenderError::Encode {
+                path: "frames".into(),
+                message: "the encoder stopped early".into(),
+            }));
         }
         Ok(())
     }
 
-    /// Waits until every queued frame is written and the files are closed.
+    /// Waits until every queued frame is written, then renames the GIF and the APNG into place.
     ///
     /// # Errors
-    /// The first error of the encoder.
+    /// The first error of the encoder (the outputs are then removed).
     pub fn finish(mut self) -> Result<Written, RenderError> {
         self.sender = None;
-        self.join()
+        let encoded = self.join().ok_or_else(|| RenderError::Encode {
+            path: "frames".into(),
+            message: "the encoder thread panicked".into(),
+        })?;
+        if let Some(e) = encoded.error {
+            self.remove_frames_written();
+            return Err(e);
+        }
+        for file in encoded.pending {
+            let path = file.path().to_path_buf();
+            file.commit().map_err(|e| io_error(&path, e))?;
+        }
+        self.frames_dir = None;
+        Ok(Written {
+            frames: encoded.frames,
+        })
     }
 
-    fn join(&mut self) -> Result<Written, RenderError> {
-        match self.handle.take() {
-            Some(h) => h.join().unwrap_or_else(|_| {
-                Err(RenderError::Encode {
-                    path: "frames".into(),
-                    message: "the encoder thread panicked".into(),
-                })
-            }),
-            None => Ok(Written::default()),
+    /// Stops encoding and removes every output of this run: the animations' temporary files
+    /// and the PNG frames already written (Ctrl-C, or an error elsewhere).
+    pub fn abort(mut self) {
+        self.sender = None;
+        drop(self.join());
+        self.remove_frames_written();
+    }
+
+    fn join(&mut self) -> Option<Encoded> {
+        self.handle.take().and_then(|h| h.join().ok())
+    }
+
+    /// Removes `frame_00000.png` … up to the first missing one (frames are written in order).
+    fn remove_frames_written(&mut self) {
+        if let Some(dir) = self.frames_dir.take() {
+            for index in 0.. {
+                if fs::remove_file(frame_path(&dir, index)).is_err() {
+                    break;
+                }
+            }
         }
     }
 }
 
 impl Drop for FrameEncoder {
+    /// Dropped without [`FrameEncoder::finish`]: nothing is kept (as [`FrameEncoder::abort`]).
     fn drop(&mut self) {
         self.sender = None;
-        let _ = self.join();
+        drop(self.join());
+        self.remove_frames_written();
     }
 }
 
-type GifEncoder = (PathBuf, gif::Encoder<BufWriter<File>>, u16);
+type GifEncoder = (PathBuf, gif::Encoder<BufWriter<AtomicFile>>, u16);
 
-/// The encoder thread: every frame into every output, then the APNG file.
+/// The encoder thread: every frame into every output; the animations stay at their temporary
+/// paths until [`FrameEncoder::finish`] renames them.
 fn encode_all(
     receiver: &Receiver<Pixmap>,
     outputs: &Outputs,
-    mut gif: Option<GifEncoder>,
-    apng: Option<(PathBuf, File)>,
+    gif: Option<GifEncoder>,
+    apng: Option<BufWriter<AtomicFile>>,
     width: u32,
     height: u32,
-) -> Result<Written, RenderError> {
-    let mut apng_bytes = Vec::new();
-    let mut frames = 0u32;
+) -> Encoded {
+    let mut encoded = Encoded {
+        frames: 0,
+        pending: Vec::new(),
+        error: None,
+    };
+    if let Err(e) = encode_frames(receiver, outputs, gif, apng, width, height, &mut encoded) {
+        encoded.error = Some(e);
+        encoded.pending.clear();
+    }
+    encoded
+}
+
+fn encode_frames(
+    receiver: &Receiver<Pixmap>,
+    outputs: &Outputs,
+    mut gif: Option<GifEncoder>,
+    mut apng: Option<BufWriter<AtomicFile>>,
+    width: u32,
+    height: u32,
+    encoded: &mut Encoded,
+) -> Result<(), RenderError> {
+    let apng_path = outputs.apng.clone().unwrap_or_default();
     {
-        let mut apng_writer = match &apng {
-            Some((path, _)) => Some(apng_writer(
-                &mut apng_bytes,
-                path,
+        let mut apng_writer = match apng.as_mut() {
+            Some(w) => Some(apng_writer(
+                w,
+                &apng_path,
                 width,
                 height,
                 outputs.fps,
@@ -177,7 +243,7 @@ fn encode_all(
         for pixmap in receiver {
             let rgb = to_rgb(&pixmap);
             if let Some(dir) = &outputs.frames_dir {
-                let path = frame_path(dir, frames);
+                let path = frame_path(dir, encoded.frames);
                 write_png(&path, &rgb, width, height)?;
             }
             if let Some((path, encoder, delay)) = gif.as_mut() {
@@ -187,29 +253,33 @@ fn encode_all(
                     .write_frame(&frame)
                     .map_err(|e| encode_error(path, e))?;
             }
-            if let (Some(w), Some((path, _))) = (apng_writer.as_mut(), &apng) {
+            if let Some(w) = apng_writer.as_mut() {
                 w.write_image_data(&rgb)
-                    .map_err(|e| encode_error(path, e))?;
+                    .map_err(|e| encode_error(&apng_path, e))?;
             }
-            frames += 1;
+            encoded.frames += 1;
         }
-        if let (Some(w), Some((path, _))) = (apng_writer, &apng) {
-            w.finish().map_err(|e| encode_error(path, e))?;
+        if let Some(w) = apng_writer {
+            w.finish().map_err(|e| encode_error(&apng_path, e))?;
         }
     }
     if let Some((path, encoder, _)) = gif {
-        let mut out = encoder.into_inner().map_err(|e| encode_error(&path, e))?;
-        out.flush().map_err(|e| io_error(&path, e))?;
+        let out = encoder.into_inner().map_err(|e| encode_error(&path, e))?;
+        let file = out
+            .into_inner()
+            .map_err(|e| io_error(&path, e.into_error()))?;
+        encoded.pending.push(file);
     }
-    if let Some((path, mut file)) = apng {
-        if frames < outputs.expected_frames {
-            set_apng_frame_count(&mut apng_bytes, frames);
+    if let Some(w) = apng {
+        let mut file = w
+            .into_inner()
+            .map_err(|e| io_error(&apng_path, e.into_error()))?;
+        if encoded.frames < outputs.expected_frames {
+            set_apng_frame_count(&mut file, encoded.frames).map_err(|e| io_error(&apng_path, e))?;
         }
-        file.write_all(&apng_bytes)
-            .and_then(|()| file.flush())
-            .map_err(|e| io_error(&path, e))?;
+        encoded.pending.push(file);
     }
-    Ok(Written { frames })
+    Ok(())
 }
 
 fn io_error(path: &Path, source: std::io::Error) -> RenderError {
@@ -238,8 +308,9 @@ fn create_dir(dir: &Path) -> Result<(), RenderError> {
     Ok(())
 }
 
-fn create(path: &Path) -> Result<File, RenderError> {
-    File::create(path).map_err(|e| io_error(path, e))
+/// A temporary file beside `path`, renamed over it when complete ([`AtomicFile`]).
+fn create(path: &Path) -> Result<AtomicFile, RenderError> {
+    AtomicFile::create(path).map_err(|e| io_error(path, e))
 }
 
 fn gif_encoder(path: &Path, width: u32, height: u32, fps: f64) -> Result<GifEncoder, RenderError> {
@@ -259,14 +330,14 @@ fn gif_encoder(path: &Path, width: u32, height: u32, fps: f64) -> Result<GifEnco
 }
 
 fn apng_writer<'a>(
-    bytes: &'a mut Vec<u8>,
+    out: &'a mut BufWriter<AtomicFile>,
     path: &Path,
     width: u32,
     height: u32,
     fps: f64,
     frames: u32,
-) -> Result<png::Writer<&'a mut Vec<u8>>, RenderError> {
-    let mut encoder = png::Encoder::new(bytes, width, height);
+) -> Result<png::Writer<&'a mut BufWriter<AtomicFile>>, RenderError> {
+    let mut encoder = png::Encoder::new(out, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
     encoder.set_compression(png::Compression::Fast);
@@ -280,8 +351,21 @@ fn apng_writer<'a>(
     encoder.write_header().map_err(|e| encode_error(path, e))
 }
 
+/// Rewrites the frame count of the `acTL` chunk in the head of an APNG file, and its CRC.
+fn set_apng_frame_count(file: &mut AtomicFile, frames: u32) -> std::io::Result<()> {
+    use std::io::{Read, Seek, SeekFrom};
+    let mut head = vec![0u8; 256];
+    file.seek(SeekFrom::Start(0))?;
+    let n = file.file().read(&mut head)?;
+    head.truncate(n);
+    set_apng_frame_count_bytes(&mut head, frames);
+    file.seek(SeekFrom::Start(0))?;
+    file.write_all(&head)?;
+    file.flush()
+}
+
 /// Rewrites the frame count of an APNG's `acTL` chunk and its CRC (module docs).
-fn set_apng_frame_count(bytes: &mut [u8], frames: u32) {
+fn set_apng_frame_count_bytes(bytes: &mut [u8], frames: u32) {
     let Some(at) = bytes.windows(4).position(|w| w == b"acTL") else {
         return;
     };
@@ -315,16 +399,22 @@ pub fn to_rgb(pixmap: &Pixmap) -> Vec<u8> {
 /// # Errors
 /// [`RenderError::Io`] or [`RenderError::Encode`] naming `path`.
 pub fn write_png(path: &Path, rgb: &[u8], width: u32, height: u32) -> Result<(), RenderError> {
-    let file = create(path)?;
-    let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    encoder.set_compression(png::Compression::Fast);
-    let mut writer = encoder.write_header().map_err(|e| encode_error(path, e))?;
-    writer
-        .write_image_data(rgb)
-        .map_err(|e| encode_error(path, e))?;
-    writer.finish().map_err(|e| encode_error(path, e))
+    let mut out = BufWriter::new(create(path)?);
+    {
+        let mut encoder = png::Encoder::new(&mut out, width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_compression(png::Compression::Fast);
+        let mut writer = encoder.write_header().map_err(|e| encode_error(path, e))?;
+        writer
+            .write_image_data(rgb)
+            .map_err(|e| encode_error(path, e))?;
+        writer.finish().map_err(|e| encode_error(path, e))?;
+    }
+    out.into_inner()
+        .map_err(std::io::IntoInnerError::into_error)
+        .and_then(AtomicFile::commit)
+        .map_err(|e| io_error(path, e))
 }
 
 /// Writes a pixmap as a PNG file.

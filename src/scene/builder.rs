@@ -38,6 +38,16 @@ impl Builder {
         self.x.is_empty()
     }
 
+    /// Reserves room for `particles` more particles and `springs` more springs, so that a large
+    /// scene takes exactly the memory it needs (growth by doubling could take twice as much).
+    pub fn reserve(&mut self, particles: usize, springs: usize) {
+        self.x.reserve(particles);
+        self.v.reserve(particles);
+        self.mass.reserve(particles);
+        self.pinned.reserve(particles);
+        self.springs.reserve(springs);
+    }
+
     /// Adds a particle at `x` (m) at rest with mass `mass` (kg); returns its index.
     pub fn particle(&mut self, x: DVec3, mass: f64) -> u32 {
         self.x.push(x);

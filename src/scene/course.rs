@@ -97,7 +97,7 @@ use super::lattice::{
     ClothSpec, CubeSpec, KindCoefficients, cloth, corners, course_body_offset,
     course_rotation_axis, cube,
 };
-use super::params::{ParamSpec, Params, Range};
+use super::params::{ACCELERATION, DAMPING, LENGTH, MASS, ParamSpec, Params, Range, STIFFNESS};
 use super::{Body, Scene, SceneError, method_param_specs, method_params};
 use crate::physics::collide::{Collider, ContactParams, DynamicSphere};
 use crate::physics::{Method, SpringKind};
@@ -124,20 +124,20 @@ pub const MAX_CLOTH_N: i64 = 200;
 /// (course defaults) and the per-kind overrides (-1: same as the common value).
 fn coefficient_specs(stiffness: f64, damping: f64) -> Vec<ParamSpec> {
     let override_ =
-        |name, unit, doc| ParamSpec::number(name, unit, -1.0, Range::AtLeast(-1.0), doc);
+        |name, unit, doc| ParamSpec::number(name, unit, -1.0, Range::Between(-1.0, 1e9), doc);
     vec![
         ParamSpec::number(
             "stiffness",
             "N/m",
             stiffness,
-            Range::AtLeast(0.0),
+            STIFFNESS,
             "spring stiffness K of every kind (the course's one coefficient)",
         ),
         ParamSpec::number(
             "damping",
             "N·s/m",
             damping,
-            Range::AtLeast(0.0),
+            DAMPING,
             "damper D along every spring (the course's one coefficient)",
         ),
         override_(
@@ -213,7 +213,7 @@ fn gravity_spec() -> ParamSpec {
         "gravity",
         "m/s²",
         9.8,
-        Range::Any,
+        ACCELERATION,
         "downward gravitational acceleration",
     )
 }
@@ -237,20 +237,8 @@ fn lattice_specs(offset: DVec3, friction: f64) -> Vec<ParamSpec> {
             Range::Between(2.0, MAX_CUBE_N as f64),
             "particles along each edge (n³ per cube)",
         ),
-        ParamSpec::number(
-            "edge",
-            "m",
-            4.0,
-            Range::Above(0.0),
-            "edge length L of the cube",
-        ),
-        ParamSpec::number(
-            "mass",
-            "kg",
-            1.0,
-            Range::Above(0.0),
-            "mass of each particle",
-        ),
+        ParamSpec::number("edge", "m", 4.0, LENGTH, "edge length L of the cube"),
+        ParamSpec::number("mass", "kg", 1.0, MASS, "mass of each particle"),
     ];
     p.extend(coefficient_specs(2000.0, 60.0));
     p.extend([
@@ -434,13 +422,7 @@ fn cloth_specs(stiffness: f64) -> Vec<ParamSpec> {
             Range::Between(2.0, MAX_CLOTH_N as f64),
             "particles along each side (n² in all) over x, z in [-2, 2] m",
         ),
-        ParamSpec::number(
-            "mass",
-            "kg",
-            1.0,
-            Range::Above(0.0),
-            "mass of each particle",
-        ),
+        ParamSpec::number("mass", "kg", 1.0, MASS, "mass of each particle"),
     ];
     p.extend(coefficient_specs(stiffness, 750.0));
     p.extend([
@@ -448,7 +430,7 @@ fn cloth_specs(stiffness: f64) -> Vec<ParamSpec> {
             "drag",
             "N·s/m",
             3.4e-4,
-            Range::AtLeast(0.0),
+            DAMPING,
             "viscous drag on each particle",
         ),
         gravity_spec(),
@@ -505,7 +487,7 @@ pub fn cloth_spheres_params() -> Vec<ParamSpec> {
             "sphere_radius",
             "m",
             0.5,
-            Range::Above(0.0),
+            LENGTH,
             "radius r of the four spheres (mass 1000 r³ kg)",
         ),
         ParamSpec::number(
@@ -528,7 +510,7 @@ pub fn cloth_sphere_params() -> Vec<ParamSpec> {
             "sphere_radius",
             "m",
             1.0,
-            Range::Above(0.0),
+            LENGTH,
             "radius of the sphere at the origin",
         ),
         ParamSpec::vector(

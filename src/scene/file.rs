@@ -29,33 +29,33 @@
 //! ```toml
 //! [world]
 //! gravity = [0.0, -9.8, 0.0]  # m/s², optional, default [0, -9.8, 0]
-//! drag = 0.0                  # N·s/m, >= 0, optional, default 0
+//! drag = 0.0                  # N·s/m, 0 ..= 1e9, optional, default 0
 //!
 //! [[particles]]               # particle 0
 //! position = [0.0, 0.0, 0.0]  # m
-//! mass = 1.0                  # kg, > 0
+//! mass = 1.0                  # kg, 1e-6 ..= 1e6
 //! pinned = true               # optional, default false
 //!
 //! [[particles]]               # particle 1
 //! position = [1.0, 0.0, 0.0]  # m
 //! velocity = [0.0, 0.5, 0.0]  # m/s, optional, default at rest
-//! mass = 1.0                  # kg, > 0
+//! mass = 1.0                  # kg, 1e-6 ..= 1e6
 //!
 //! [[springs]]
 //! a = 0                       # particle index
 //! b = 1                       # particle index, not a
-//! stiffness = 100.0           # N/m, >= 0
-//! damping = 0.0               # N·s/m, >= 0, optional, default 0
-//! rest_length = 1.0           # m, >= 0, optional, default: the initial distance of a and b
+//! stiffness = 100.0           # N/m, 0 ..= 1e9
+//! damping = 0.0               # N·s/m, 0 ..= 1e9, optional, default 0
+//! rest_length = 1.0           # m, 0 ..= 1e6, optional, default: the initial distance of a and b
 //! kind = "struct"             # struct | shear | bend, optional, default struct
 //!
 //! [[ropes]]                   # optional: a rope, as in the built-in `rope` scene
 //! start = [0.0, 2.0, 0.0]     # m, first node
 //! end = [-4.0, 2.0, 0.0]      # m, last node (not start)
 //! nodes = 8                   # 2 ..= 1000000
-//! mass = 1.0                  # kg per node, > 0
-//! stiffness = 100.0           # N/m, >= 0
-//! damping = 0.0               # N·s/m, >= 0
+//! mass = 1.0                  # kg per node, 1e-6 ..= 1e6
+//! stiffness = 100.0           # N/m, 0 ..= 1e9
+//! damping = 0.0               # N·s/m, 0 ..= 1e9
 //! pinned = [0]                # node indices within this rope
 //!
 //! [run]
@@ -70,7 +70,10 @@
 //!
 //! Particle indices: the `[[particles]]` come first in file order, then the nodes of each
 //! `[[ropes]]` block in file order, so springs can join a rope to a particle. A file builds at
-//! most [`MAX_PARTICLES`] particles. Every key of a rope
+//! most [`MAX_PARTICLES`] particles, and a file is refused before it is read when it is larger
+//! than the budget's 16 MiB, or before it is built when its particles and springs would need more
+//! memory than the budget allows ([`crate::budget`]; `--force` lifts both). Vectors (positions,
+//! velocities, gravity) must be finite, each component within ±1e6. Every key of a rope
 //! block is optional and defaults to the built-in `rope` scene's value (3 nodes of 1 kg from
 //! [0, 2, 0] to [-4, 2, 0], k = 100 N/m, node 0 pinned). `[run]` works in both forms; in Form 1 the method settings (`verlet_damping`,
 //! `iterations`, `substeps`, `cg_tolerance`) are parameters of the built-in scene and belong in
@@ -101,8 +104,12 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::builder::{Builder, RopeSpec, rope};
-use super::params::{ParamError, ParamSpec, Params, Range, Value};
+use super::params::{
+    DAMPING, MASS, MAX_COMPONENT, MAX_LENGTH, ParamError, ParamSpec, Params, Range, STIFFNESS,
+    Value,
+};
 use super::{BUILTIN, Body, Scene, SceneError, builtin, method_param_specs, method_params};
+use crate::budget::{BASE_BYTES, Estimate, Limits, PARSE_BYTES, body_bytes, short};
 use crate::physics::integrators::method_names;
 use crate::physics::{Method, MethodParams, Spring, SpringKind};
 
@@ -133,11 +140,49 @@ pub const DEFAULT_METHOD: Method = Method::SemiImplicitEuler;
 /// anything wrong in it; [`SceneError::Param`] for a bad `--set`; [`SceneError::Invalid`] for a
 /// `--set` on a file without `scene = ...`.
 pub fn load(path: &Path, sets: &[String]) -> Result<Scene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+    load_with(path, sets, &Limits::DEFAULT)
+}
+
+/// [`load`] within `limits`: a file larger than `limits.file_bytes` is refused before it is
+/// read, and one that would build more memory than `limits.memory` before it is built.
+///
+/// # Errors
+/// As [`load`], and [`SceneError::FileTooLarge`] or [`SceneError::Budget`].
+pub fn load_with(path: &Path, sets: &[String], limits: &Limits) -> Result<Scene, SceneError> {
+    let text = read_bounded(path, limits.file_bytes)?;
+    from_str_with(&text, path, sets, limits)
+}
+
+/// The text of `path`, refused when it has more than `max` bytes (checked while reading, so a
+/// file that grows or a device that never ends is refused too).
+///
+/// # Errors
+/// [`SceneError::Io`] or [`SceneError::FileTooLarge`].
+pub fn read_bounded(path: &Path, max: u64) -> Result<String, SceneError> {
+    use std::io::Read;
+    let io = |source| SceneError::Io {
         path: path.display().to_string(),
         source,
-    })?;
-    from_str(&text, path, sets)
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let mut bytes = Vec::new();
+    file.take(max.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    if bytes.len() as u64 > max {
+        let size = std::fs::metadata(path).map_or(bytes.len() as u64, |m| m.len());
+        return Err(SceneError::FileTooLarge {
+            path: path.display().to_string(),
+            size: size.max(bytes.len() as u64),
+            limit: max,
+        });
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            e.utf8_error(),
+        ))
+    })
 }
 
 /// Builds a scene from TOML `text` as if it had been read from `path` (which names the scene and
@@ -146,6 +191,19 @@ pub fn load(path: &Path, sets: &[String]) -> Result<Scene, SceneError> {
 /// # Errors
 /// As [`load`], except that nothing is read.
 pub fn from_str(text: &str, path: &Path, sets: &[String]) -> Result<Scene, SceneError> {
+    from_str_with(text, path, sets, &Limits::DEFAULT)
+}
+
+/// [`from_str`] within `limits` (see [`load_with`]).
+///
+/// # Errors
+/// As [`from_str`], and [`SceneError::Budget`] for a scene over `limits.memory`.
+pub fn from_str_with(
+    text: &str,
+    path: &Path,
+    sets: &[String],
+    limits: &Limits,
+) -> Result<Scene, SceneError> {
     let source = Source {
         path: path.display().to_string(),
         text,
@@ -155,7 +213,11 @@ pub fn from_str(text: &str, path: &Path, sets: &[String]) -> Result<Scene, Scene
         .file_name()
         .map_or_else(|| source.path.clone(), |n| n.to_string_lossy().into_owned());
     match &file.scene {
-        Some(name) => load_builtin(&source, &file, name, &file_name, sets),
+        Some(name) => {
+            let scene = load_builtin(&source, &file, name, &file_name, sets, limits)?;
+            super::check_memory(&scene, &source.path, limits)?;
+            Ok(scene)
+        }
         None => {
             if let Some(set) = sets.first() {
                 return Err(SceneError::Invalid(format!(
@@ -168,7 +230,7 @@ pub fn from_str(text: &str, path: &Path, sets: &[String]) -> Result<Scene, Scene
             let label = path
                 .file_stem()
                 .map_or_else(|| file_name.clone(), |n| n.to_string_lossy().into_owned());
-            load_explicit(&source, &file, &file_name, &label)
+            load_explicit(&source, &file, &file_name, &label, limits)
         }
     }
 }
@@ -317,14 +379,18 @@ impl Source<'_> {
     /// Checks that all three components of a vector are finite.
     fn vector(&self, key: &str, unit: &str, v: &Spanned<[f64; 3]>) -> Result<DVec3, SceneError> {
         let d = DVec3::from_array(*v.get_ref());
-        if d.is_finite() {
+        if d.is_finite() && d.abs().max_element() <= MAX_COMPONENT {
             Ok(d)
         } else {
             Err(self.error(
                 v.span(),
                 format!(
-                    "`{key}` = [{}, {}, {}]: expected a vector [x, y, z] of finite numbers ({unit})",
-                    d.x, d.y, d.z
+                    "`{key}` = [{}, {}, {}]: expected a vector [x, y, z] of finite numbers, each \
+                     within ±{} ({unit})",
+                    short(d.x),
+                    short(d.y),
+                    short(d.z),
+                    short(MAX_COMPONENT)
                 ),
             ))
         }
@@ -383,6 +449,7 @@ fn load_builtin(
     name: &Spanned<String>,
     file_name: &str,
     sets: &[String],
+    limits: &Limits,
 ) -> Result<Scene, SceneError> {
     // Form 2 sections make no sense next to `scene = ...`.
     let form2 = [
@@ -460,6 +527,7 @@ fn load_builtin(
             .find(|(k, _)| k.get_ref() == key)
             .map(|(_, v)| v.span())
     };
+    super::check_size(def, &params, &format!("scene file {}", source.path), limits)?;
     let mut scene = (def.build)(&params).map_err(|e| match e {
         SceneError::Param(
             ref p @ (ParamError::OutOfRange { ref key, .. } | ParamError::BadValue { ref key, .. }),
@@ -562,6 +630,20 @@ fn run_settings(source: &Source<'_>, run: &RunSpec) -> Result<RunSettings, Scene
         .as_ref()
         .map(|x| source.number(&time_spec, x))
         .transpose()?;
+    if let (Some(d), Some(t), Some(span)) = (dt, time, run.dt.as_ref().map(Spanned::span))
+        && t > 0.0
+        && d > t
+    {
+        return Err(source.error(
+            span,
+            format!(
+                "`dt` = {} s is longer than the run (`time` = {} s): expected a time step at \
+                 most the simulated time",
+                short(d),
+                short(t)
+            ),
+        ));
+    }
     Ok(RunSettings { method, dt, time })
 }
 
@@ -573,6 +655,7 @@ fn load_explicit(
     file: &FileSpec,
     file_name: &str,
     label: &str,
+    limits: &Limits,
 ) -> Result<Scene, SceneError> {
     if let Some(params) = &file.params {
         return Err(source.error(
@@ -591,7 +674,7 @@ fn load_explicit(
             gravity = source.vector("gravity", "m/s²", g)?;
         }
         if let Some(d) = &world.drag {
-            let spec = ParamSpec::number("drag", "N·s/m", 0.0, Range::AtLeast(0.0), "drag");
+            let spec = ParamSpec::number("drag", "N·s/m", 0.0, DAMPING, "drag");
             drag = source.number(&spec, d)?;
         }
     }
@@ -599,7 +682,7 @@ fn load_explicit(
     let mut b = Builder::new();
 
     // Particles.
-    let mass_spec = ParamSpec::number("mass", "kg", 1.0, Range::Above(0.0), "mass");
+    let mass_spec = ParamSpec::number("mass", "kg", 1.0, MASS, "mass");
     for p in file.particles.iter().flat_map(|ps| ps.get_ref()) {
         let p = p.get_ref();
         let x = source.vector("position", "m", &p.position)?;
@@ -640,6 +723,20 @@ fn load_explicit(
         }
         ropes.push(spec);
     }
+    // Memory, from the counts, before anything large is built.
+    let springs = file.springs.as_ref().map_or(0, |s| s.get_ref().len())
+        + ropes.iter().map(|r| r.nodes - 1).sum::<usize>();
+    let estimate = Estimate {
+        what: format!("scene file {}", source.path),
+        particles: total as f64,
+        springs: springs as f64,
+        memory: BASE_BYTES
+            + PARSE_BYTES * source.text.len() as f64
+            + body_bytes(total as f64, springs as f64, &Method::ALL, 1.0),
+        ..Estimate::default()
+    };
+    estimate.check(limits)?;
+    b.reserve(total, springs);
     for spec in &ropes {
         rope(&mut b, spec);
     }
@@ -654,10 +751,15 @@ fn load_explicit(
 
     // Springs.
     let count = b.len();
-    let stiffness_spec =
-        ParamSpec::number("stiffness", "N/m", 0.0, Range::AtLeast(0.0), "stiffness");
-    let damping_spec = ParamSpec::number("damping", "N·s/m", 0.0, Range::AtLeast(0.0), "damping");
-    let rest_spec = ParamSpec::number("rest_length", "m", 0.0, Range::AtLeast(0.0), "rest length");
+    let stiffness_spec = ParamSpec::number("stiffness", "N/m", 0.0, STIFFNESS, "stiffness");
+    let damping_spec = ParamSpec::number("damping", "N·s/m", 0.0, DAMPING, "damping");
+    let rest_spec = ParamSpec::number(
+        "rest_length",
+        "m",
+        0.0,
+        Range::Between(0.0, MAX_LENGTH),
+        "rest length",
+    );
     for s in file.springs.iter().flat_map(|ss| ss.get_ref()) {
         let end = |key: &str, i: &Spanned<i64>| -> Result<u32, SceneError> {
             usize::try_from(*i.get_ref())
@@ -770,9 +872,9 @@ fn rope_spec(source: &Source<'_>, block: &Spanned<RopeBlock>) -> Result<RopeSpec
             Some(x) => source.number(&ParamSpec::number(key, unit, 0.0, range, key), x),
             None => Ok(defaults.number(key)),
         };
-    let node_mass = number("mass", "kg", Range::Above(0.0), &r.mass)?;
-    let stiffness = number("stiffness", "N/m", Range::AtLeast(0.0), &r.stiffness)?;
-    let damping = number("damping", "N·s/m", Range::AtLeast(0.0), &r.damping)?;
+    let node_mass = number("mass", "kg", MASS, &r.mass)?;
+    let stiffness = number("stiffness", "N/m", STIFFNESS, &r.stiffness)?;
+    let damping = number("damping", "N·s/m", DAMPING, &r.damping)?;
     let nodes = match &r.nodes {
         Some(n) => {
             let spec = ParamSpec::integer(

@@ -5,6 +5,34 @@ use std::fmt;
 
 use glam::DVec3;
 
+use crate::budget::short;
+
+/// Masses (kg): from a milligram to a thousand tonnes. Excludes subnormal and vanishing masses,
+/// whose `1/m` overflows or makes `k/m` meaningless.
+pub const MASS: Range = Range::Between(1e-6, 1e6);
+
+/// Spring stiffness (N/m): up to 10⁹, so that `k·Δx`, `½ k Δx²` and `k/m` stay finite for any
+/// length and mass allowed here.
+pub const STIFFNESS: Range = Range::Between(0.0, 1e9);
+
+/// Damping and drag coefficients (N·s/m), bounded like [`STIFFNESS`].
+pub const DAMPING: Range = Range::Between(0.0, 1e9);
+
+/// The largest length, coordinate or displacement (m).
+pub const MAX_LENGTH: f64 = 1e6;
+
+/// Lengths that must be positive (m): rest lengths, edges, radii.
+pub const LENGTH: Range = Range::Between(1e-6, MAX_LENGTH);
+
+/// Signed lengths (m), for example the oscillator's amplitude.
+pub const DISPLACEMENT: Range = Range::Between(-MAX_LENGTH, MAX_LENGTH);
+
+/// Gravitational acceleration (m/s²).
+pub const ACCELERATION: Range = Range::Between(-1e6, 1e6);
+
+/// The largest component of a vector parameter (positions in m, velocities in m/s).
+pub const MAX_COMPONENT: f64 = 1e6;
+
 /// The value of one parameter.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Value {
@@ -21,9 +49,9 @@ pub enum Value {
 impl fmt::Display for Value {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Value::Number(x) => write!(f, "{x}"),
+            Value::Number(x) => write!(f, "{}", short(*x)),
             Value::Integer(i) => write!(f, "{i}"),
-            Value::Vector(v) => write!(f, "[{}, {}, {}]", v.x, v.y, v.z),
+            Value::Vector(v) => write!(f, "[{}, {}, {}]", short(v.x), short(v.y), short(v.z)),
             Value::Indices(list) => {
                 let items: Vec<String> = list.iter().map(i64::to_string).collect();
                 write!(f, "[{}]", items.join(", "))
@@ -59,14 +87,29 @@ impl Range {
     }
 }
 
+impl Range {
+    /// The range of a whole-number parameter: its bounds as integers (`2 ..= 1000000`).
+    #[must_use]
+    pub fn integer_text(self) -> String {
+        let i = |x: f64| format!("{}", x as i64);
+        match self {
+            Range::Any => "any whole number".to_string(),
+            Range::Above(min) => format!("> {}", i(min)),
+            Range::AtLeast(min) => format!(">= {}", i(min)),
+            Range::Between(min, max) => format!("{} ..= {}", i(min), i(max)),
+            Range::From(min, max) => format!("{} ..< {}", i(min), i(max)),
+        }
+    }
+}
+
 impl fmt::Display for Range {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Range::Any => write!(f, "any finite value"),
-            Range::Above(min) => write!(f, "> {min}"),
-            Range::AtLeast(min) => write!(f, ">= {min}"),
-            Range::Between(min, max) => write!(f, "{min} ..= {max}"),
-            Range::From(min, max) => write!(f, "{min} ..< {max}"),
+            Range::Above(min) => write!(f, "> {}", short(*min)),
+            Range::AtLeast(min) => write!(f, ">= {}", short(*min)),
+            Range::Between(min, max) => write!(f, "{} ..= {}", short(*min), short(*max)),
+            Range::From(min, max) => write!(f, "{} ..< {}", short(*min), short(*max)),
         }
     }
 }
@@ -156,14 +199,25 @@ impl ParamSpec {
     pub fn expected(&self) -> String {
         match &self.default {
             Value::Number(_) => format!("a number {}", self.range),
-            Value::Integer(_) => format!("a whole number {}", self.range),
-            Value::Vector(_) => "a vector [x, y, z]".to_string(),
+            Value::Integer(_) => format!("a whole number {}", self.range.integer_text()),
+            Value::Vector(_) => format!(
+                "a vector [x, y, z] of finite numbers, each within ±{}{}",
+                short(MAX_COMPONENT),
+                if self.unit.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({})", self.unit)
+                }
+            ),
             // Particle indices are checked against the particle count by the scene; any other
             // index list (the cloth's corner keys 1 ..= 4) says its range.
             Value::Indices(_) if self.range == Range::AtLeast(0.0) => {
                 "a list of particle indices [i, j, ...]".to_string()
             }
-            Value::Indices(_) => format!("a list [i, j, ...] of whole numbers {}", self.range),
+            Value::Indices(_) => format!(
+                "a list [i, j, ...] of whole numbers {}",
+                self.range.integer_text()
+            ),
         }
     }
 
@@ -180,7 +234,10 @@ impl ParamSpec {
         let out_of_range = |got: String| ParamError::OutOfRange {
             key: self.name.to_string(),
             got,
-            range: self.range.to_string(),
+            range: match self.default {
+                Value::Integer(_) | Value::Indices(_) => self.range.integer_text(),
+                _ => self.range.to_string(),
+            },
             unit: self.unit.to_string(),
         };
         let value = match (&self.default, value) {
@@ -192,11 +249,13 @@ impl ParamSpec {
             (_, v) => return Err(bad(&v)),
         };
         match &value {
-            Value::Number(x) if !self.range.contains(*x) => Err(out_of_range(x.to_string())),
+            Value::Number(x) if !self.range.contains(*x) => Err(out_of_range(short(*x))),
             Value::Integer(i) if !self.range.contains(*i as f64) => {
                 Err(out_of_range(i.to_string()))
             }
-            Value::Vector(v) if !v.is_finite() => Err(bad(&value)),
+            Value::Vector(v) if !(v.is_finite() && v.abs().max_element() <= MAX_COMPONENT) => {
+                Err(bad(&value))
+            }
             Value::Indices(list) => match list.iter().find(|&&i| !self.range.contains(i as f64)) {
                 Some(i) => Err(out_of_range(i.to_string())),
                 None => Ok(value),

@@ -7,46 +7,25 @@
 use glam::DVec3;
 
 use super::builder::{Builder, RopeSpec, rope};
-use super::params::{ParamSpec, Params, Range};
+use super::params::{
+    ACCELERATION, DAMPING, DISPLACEMENT, LENGTH, MASS, MAX_LENGTH, ParamSpec, Params, Range,
+    STIFFNESS,
+};
 use super::{Body, Scene, SceneError, method_param_specs, method_params};
 use crate::physics::{Method, SpringKind};
 
 /// Parameters of `oscillator`.
 pub fn oscillator_params() -> Vec<ParamSpec> {
     let mut p = vec![
-        ParamSpec::number(
-            "mass",
-            "kg",
-            1.0,
-            Range::Above(0.0),
-            "mass of the moving particle",
-        ),
-        ParamSpec::number(
-            "stiffness",
-            "N/m",
-            100.0,
-            Range::AtLeast(0.0),
-            "spring stiffness k",
-        ),
-        ParamSpec::number(
-            "damping",
-            "N·s/m",
-            0.0,
-            Range::AtLeast(0.0),
-            "damper along the spring",
-        ),
-        ParamSpec::number(
-            "rest_length",
-            "m",
-            1.0,
-            Range::Above(0.0),
-            "spring rest length L0",
-        ),
+        ParamSpec::number("mass", "kg", 1.0, MASS, "mass of the moving particle"),
+        ParamSpec::number("stiffness", "N/m", 100.0, STIFFNESS, "spring stiffness k"),
+        ParamSpec::number("damping", "N·s/m", 0.0, DAMPING, "damper along the spring"),
+        ParamSpec::number("rest_length", "m", 1.0, LENGTH, "spring rest length L0"),
         ParamSpec::number(
             "amplitude",
             "m",
             0.1,
-            Range::Any,
+            DISPLACEMENT,
             "initial stretch x(0) - L0",
         ),
     ];
@@ -97,33 +76,15 @@ fn rope_specs(separation: bool) -> Vec<ParamSpec> {
             Range::Between(2.0, 1_000_000.0),
             "number of nodes",
         ),
-        ParamSpec::number("mass", "kg", 1.0, Range::Above(0.0), "mass of each node"),
-        ParamSpec::number(
-            "stiffness",
-            "N/m",
-            100.0,
-            Range::AtLeast(0.0),
-            "spring stiffness k",
-        ),
-        ParamSpec::number(
-            "damping",
-            "N·s/m",
-            0.0,
-            Range::AtLeast(0.0),
-            "damper along each spring",
-        ),
-        ParamSpec::number(
-            "drag",
-            "N·s/m",
-            0.0,
-            Range::AtLeast(0.0),
-            "viscous drag on each node",
-        ),
+        ParamSpec::number("mass", "kg", 1.0, MASS, "mass of each node"),
+        ParamSpec::number("stiffness", "N/m", 100.0, STIFFNESS, "spring stiffness k"),
+        ParamSpec::number("damping", "N·s/m", 0.0, DAMPING, "damper along each spring"),
+        ParamSpec::number("drag", "N·s/m", 0.0, DAMPING, "viscous drag on each node"),
         ParamSpec::number(
             "gravity",
             "m/s²",
             9.8,
-            Range::Any,
+            ACCELERATION,
             "downward gravitational acceleration",
         ),
         ParamSpec::vector("start", "m", DVec3::new(0.0, 2.0, 0.0), "first node"),
@@ -135,7 +96,7 @@ fn rope_specs(separation: bool) -> Vec<ParamSpec> {
             "separation",
             "m",
             9.0,
-            Range::AtLeast(0.0),
+            Range::Between(0.0, MAX_LENGTH),
             "distance between the two ropes along x",
         ));
     }

@@ -1,0 +1,329 @@
+//! The program's side of the protocol ([`crate::wire`]): read a call, run the student's method,
+//! write the answer; answer nothing else.
+//!
+//! The loop runs on the main thread. Each call runs under `catch_unwind`, so a panic becomes a
+//! PANIC reply and the program serves the next call. `std::process::exit`, an abort, a stack
+//! overflow or running out of memory end the program; the grader notices the missing reply and
+//! starts a new program for the next call.
+
+use std::cell::RefCell;
+use std::io::{IsTerminal, Read, Write};
+use std::panic::{self, AssertUnwindSafe};
+use std::process::ExitCode;
+
+use crate::physics::Physics;
+use crate::wire::{
+    MAX_FRAME, Reader, TOKEN_LEN, VERSION, Wire, WireError, encode, method, reply_frame, to_grader,
+    to_program,
+};
+use crate::{
+    Body, Bowl, ClothHomework, ContactCoefficients, DVec3, JellyHomework, Particle, Plane, Rope,
+    RopeHomework, Spring, State,
+};
+
+thread_local! {
+    /// The session token while the loop runs on this thread.
+    static TOKEN: RefCell<Option<[u8; TOKEN_LEN]>> = const { RefCell::new(None) };
+    /// The message and location of the last panic on this thread.
+    static LAST_PANIC: RefCell<Option<String>> = const { RefCell::new(None) };
+}
+
+/// The next frame from the grader; `None` at the end of its input.
+fn read_frame() -> Option<Vec<u8>> {
+    let mut input = std::io::stdin().lock();
+    let mut len = [0u8; 4];
+    input.read_exact(&mut len).ok()?;
+    let len = u32::from_le_bytes(len) as usize;
+    if len > MAX_FRAME {
+        return None;
+    }
+    let mut payload = vec![0u8; len];
+    input.read_exact(&mut payload).ok()?;
+    Some(payload)
+}
+
+/// Writes one reply; the program ends when the grader is gone.
+fn send(token: &[u8; TOKEN_LEN], payload: &[u8]) {
+    let mut out = std::io::stdout().lock();
+    let written = out
+        .write_all(&reply_frame(token, payload))
+        .and_then(|()| out.flush());
+    if written.is_err() {
+        std::process::exit(0);
+    }
+}
+
+fn token() -> Option<[u8; TOKEN_LEN]> {
+    TOKEN.with(|t| *t.borrow())
+}
+
+/// Asks the grader for accelerations (`what` = 0) or a Jacobian (1: J_x, 2: J_v) at `(x, v)`;
+/// `expected` numbers come back.
+pub(crate) fn ask_grader(what: u8, x: &[DVec3], v: &[DVec3], expected: usize) -> Vec<f64> {
+    let Some(token) = token() else {
+        panic!(
+            "Physics: the grader's physics answers only during a call from the grader, on the \
+             thread that received it"
+        );
+    };
+    let mut payload = vec![to_grader::PHYSICS, what];
+    x.to_vec().put(&mut payload);
+    v.to_vec().put(&mut payload);
+    send(&token, &payload);
+    let Some(reply) = read_frame() else {
+        // The grader stopped listening: nothing left to do.
+        std::process::exit(0);
+    };
+    let mut r = Reader::new(&reply);
+    let answer = (|| -> Result<Result<Vec<f64>, String>, WireError> {
+        if u8::take(&mut r)? != to_program::PHYSICS_REPLY {
+            return Err(WireError("the grader sent something else".to_string()));
+        }
+        Ok(if bool::take(&mut r)? {
+            Ok(Vec::<f64>::take(&mut r)?)
+        } else {
+            Err(String::take(&mut r)?)
+        })
+    })();
+    match answer {
+        Ok(Ok(values)) if values.len() == expected => values,
+        Ok(Ok(values)) => panic!(
+            "Physics: the grader answered {} numbers, {expected} expected",
+            values.len()
+        ),
+        Ok(Err(message)) => panic!("{message}"),
+        Err(e) => panic!("Physics: unreadable answer from the grader: {e}"),
+    }
+}
+
+fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = payload.downcast_ref::<&str>() {
+        (*s).to_string()
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "a panic without a message".to_string()
+    }
+}
+
+/// The arguments of a call: exactly one value of type `T`.
+fn args<T: Wire>(r: &mut Reader<'_>) -> Result<T, WireError> {
+    let value = T::take(r)?;
+    r.finish()?;
+    Ok(value)
+}
+
+fn unknown(m: u8, assignment: &str) -> WireError {
+    WireError(format!(
+        "method {m} is not part of the {assignment} homework"
+    ))
+}
+
+/// Runs one call: `(method, arguments) → the answer's bytes`.
+type Dispatch<'d> = dyn FnMut(u8, &mut Reader<'_>) -> Result<Vec<u8>, WireError> + 'd;
+
+/// The loop (module docs); `dispatch(method, arguments)` runs one call.
+fn serve(assignment: &str, dispatch: &mut Dispatch<'_>) -> ExitCode {
+    if std::io::stdin().is_terminal() {
+        eprintln!(
+            "This program answers springlab's grader, which runs it: use `cargo test` in this \
+             crate, or `springlab grade DIR`."
+        );
+        return ExitCode::from(2);
+    }
+    let Some(hello) = read_frame() else {
+        return ExitCode::FAILURE;
+    };
+    let mut r = Reader::new(&hello);
+    let parsed = (|| -> Result<(u32, [u8; TOKEN_LEN]), WireError> {
+        if u8::take(&mut r)? != to_program::HELLO {
+            return Err(WireError("the first frame is not a greeting".to_string()));
+        }
+        let version = u32::take(&mut r)?;
+        let token = <[u8; TOKEN_LEN]>::take(&mut r)?;
+        Ok((version, token))
+    })();
+    let Ok((_their_version, token)) = parsed else {
+        return ExitCode::FAILURE;
+    };
+    TOKEN.with(|t| *t.borrow_mut() = Some(token));
+    let mut greeting = vec![to_grader::HELLO];
+    VERSION.put(&mut greeting);
+    assignment.to_string().put(&mut greeting);
+    send(&token, &greeting);
+    // Panics become PANIC replies: record them instead of printing.
+    panic::set_hook(Box::new(|info| {
+        let location = info
+            .location()
+            .map(|l| format!(" at {}:{}:{}", l.file(), l.line(), l.column()))
+            .unwrap_or_default();
+        let message = panic_text(info.payload());
+        LAST_PANIC.with(|p| *p.borrow_mut() = Some(format!("{message}{location}")));
+    }));
+    while let Some(frame) = read_frame() {
+        let reply = match frame.as_slice() {
+            [to_program::CALL, m, arguments @ ..] => {
+                let m = *m;
+                let outcome = panic::catch_unwind(AssertUnwindSafe(|| {
+                    dispatch(m, &mut Reader::new(arguments))
+                }));
+                match outcome {
+                    Ok(Ok(answer)) => {
+                        let mut reply = Vec::with_capacity(1 + answer.len());
+                        reply.push(to_grader::RESULT);
+                        reply.extend_from_slice(&answer);
+                        reply
+                    }
+                    Ok(Err(e)) => {
+                        let mut reply = vec![to_grader::ERROR];
+                        e.0.put(&mut reply);
+                        reply
+                    }
+                    Err(payload) => {
+                        let message = LAST_PANIC
+                            .with(|p| p.borrow_mut().take())
+                            .unwrap_or_else(|| panic_text(payload.as_ref()));
+                        let mut reply = vec![to_grader::PANIC];
+                        message.put(&mut reply);
+                        reply
+                    }
+                }
+            }
+            _ => {
+                let mut reply = vec![to_grader::ERROR];
+                "expected a call".to_string().put(&mut reply);
+                reply
+            }
+        };
+        send(&token, &reply);
+    }
+    ExitCode::SUCCESS
+}
+
+/// Serves a rope homework to the grader (the `main` of a rope crate's program).
+pub fn serve_rope<H: RopeHomework>(homework: H) -> ExitCode {
+    serve("rope", &mut |m, r| {
+        Ok(match m {
+            method::ROPE_ROPE => {
+                let (start, end, nodes, node_mass, stiffness, pinned): (
+                    DVec3,
+                    DVec3,
+                    usize,
+                    f64,
+                    f64,
+                    Vec<usize>,
+                ) = args(r)?;
+                encode(&homework.rope(start, end, nodes, node_mass, stiffness, &pinned))
+            }
+            method::ROPE_SPRING_FORCE => {
+                let (a, b, k, l): (DVec3, DVec3, f64, f64) = args(r)?;
+                encode(&homework.spring_force(a, b, k, l))
+            }
+            method::ROPE_SPRING_FORCES => {
+                let rope: Rope = args(r)?;
+                encode(&homework.spring_forces(&rope))
+            }
+            method::ROPE_EXPLICIT_EULER => {
+                let (mut rope, dt, w): (Rope, f64, Vec<f64>) = args(r)?;
+                homework.explicit_euler(&mut rope, dt, &Physics::grader(w));
+                encode(&rope)
+            }
+            method::ROPE_SEMI_IMPLICIT_EULER => {
+                let (mut rope, dt, w): (Rope, f64, Vec<f64>) = args(r)?;
+                homework.semi_implicit_euler(&mut rope, dt, &Physics::grader(w));
+                encode(&rope)
+            }
+            method::ROPE_VERLET => {
+                let (mut rope, dt, damping, w): (Rope, f64, f64, Vec<f64>) = args(r)?;
+                homework.verlet(&mut rope, dt, damping, &Physics::grader(w));
+                encode(&rope)
+            }
+            other => return Err(unknown(other, "rope")),
+        })
+    })
+}
+
+/// One step of an integrator on a state: `(State, dt, inverse_mass) → State`.
+fn step(
+    r: &mut Reader<'_>,
+    f: impl FnOnce(&mut State, f64, &Physics),
+) -> Result<Vec<u8>, WireError> {
+    let (mut state, dt, w): (State, f64, Vec<f64>) = args(r)?;
+    f(&mut state, dt, &Physics::grader(w));
+    Ok(encode(&state))
+}
+
+/// Serves a jelly homework to the grader (the `main` of a jelly crate's program).
+pub fn serve_jelly<H: JellyHomework>(homework: H) -> ExitCode {
+    let hw = &homework;
+    serve("jelly", &mut |m, r| {
+        Ok(match m {
+            method::JELLY_SPRINGS => {
+                let counts: [usize; 3] = args(r)?;
+                encode(&hw.springs(counts))
+            }
+            method::JELLY_SPRING_FORCE => {
+                let (a, b, k, l): (DVec3, DVec3, f64, f64) = args(r)?;
+                encode(&hw.spring_force(a, b, k, l))
+            }
+            method::JELLY_DAMPER_FORCE => {
+                let (xa, xb, va, vb, kd): (DVec3, DVec3, DVec3, DVec3, f64) = args(r)?;
+                encode(&hw.damper_force(xa, xb, va, vb, kd))
+            }
+            method::JELLY_INTERNAL_FORCES => {
+                let (x, v, springs): (Vec<DVec3>, Vec<DVec3>, Vec<Spring>) = args(r)?;
+                encode(&hw.internal_forces(&x, &v, &springs))
+            }
+            method::JELLY_PLANE_COLLISION => {
+                let (plane, mut p, c): (Plane, Particle, ContactCoefficients) = args(r)?;
+                hw.plane_collision(&plane, &mut p, &c);
+                encode(&p)
+            }
+            method::JELLY_BOWL_COLLISION => {
+                let (bowl, mut p, c): (Bowl, Particle, ContactCoefficients) = args(r)?;
+                hw.bowl_collision(&bowl, &mut p, &c);
+                encode(&p)
+            }
+            method::JELLY_EXPLICIT_EULER => step(r, |s, dt, p| hw.explicit_euler(s, dt, p))?,
+            method::JELLY_IMPLICIT_EULER => step(r, |s, dt, p| hw.implicit_euler(s, dt, p))?,
+            method::JELLY_MIDPOINT => step(r, |s, dt, p| hw.midpoint(s, dt, p))?,
+            method::JELLY_RK4 => step(r, |s, dt, p| hw.rk4(s, dt, p))?,
+            other => return Err(unknown(other, "jelly")),
+        })
+    })
+}
+
+/// Serves a cloth homework to the grader (the `main` of a cloth crate's program).
+pub fn serve_cloth<H: ClothHomework>(homework: H) -> ExitCode {
+    let hw = &homework;
+    serve("cloth", &mut |m, r| {
+        Ok(match m {
+            method::CLOTH_SPRINGS => {
+                let n: usize = args(r)?;
+                encode(&hw.springs(n))
+            }
+            method::CLOTH_SPRING_FORCE => {
+                let (a, b, k, l): (DVec3, DVec3, f64, f64) = args(r)?;
+                encode(&hw.spring_force(a, b, k, l))
+            }
+            method::CLOTH_DAMPER_FORCE => {
+                let (xa, xb, va, vb, kd): (DVec3, DVec3, DVec3, DVec3, f64) = args(r)?;
+                encode(&hw.damper_force(xa, xb, va, vb, kd))
+            }
+            method::CLOTH_SPRING_ACCELERATIONS => {
+                let (x, v, w, springs): (Vec<DVec3>, Vec<DVec3>, Vec<f64>, Vec<Spring>) = args(r)?;
+                encode(&hw.spring_accelerations(&x, &v, &w, &springs))
+            }
+            method::CLOTH_SPHERE_COLLISION => {
+                let (mut sphere, radius, mut particle, e): (Body, f64, Body, f64) = args(r)?;
+                hw.sphere_collision(&mut sphere, radius, &mut particle, e);
+                encode(&(sphere, particle))
+            }
+            method::CLOTH_EXPLICIT_EULER => step(r, |s, dt, p| hw.explicit_euler(s, dt, p))?,
+            method::CLOTH_IMPLICIT_EULER => step(r, |s, dt, p| hw.implicit_euler(s, dt, p))?,
+            method::CLOTH_MIDPOINT => step(r, |s, dt, p| hw.midpoint(s, dt, p))?,
+            method::CLOTH_RK4 => step(r, |s, dt, p| hw.rk4(s, dt, p))?,
+            other => return Err(unknown(other, "cloth")),
+        })
+    })
+}

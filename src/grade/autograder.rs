@@ -1,0 +1,162 @@
+//! `springlab homework autograder --assignment A --out autograder.zip`: the files a Gradescope
+//! course uploads for a programming assignment.
+//!
+//! ```text
+//! autograder.zip
+//!   setup.sh         run once when Gradescope builds the image (as root, in
+//!                    /autograder/source): installs a Rust toolchain if there is none (rustup,
+//!                    minimal profile) and grades the untouched starter crate once, so that the
+//!                    student API is compiled before the first submission
+//!   run_autograder   run for every submission: `springlab grade /autograder/submission
+//!                    --assignment A --gradescope /autograder/results/results.json`
+//!                    (SPRINGLAB_AUTOGRADER_ROOT replaces /autograder, for a local test run)
+//!   springlab        this binary (Linux; Gradescope's images are Ubuntu on x86-64)
+//!   README.txt       what the files are
+//! ```
+//! A submission may be the crate folder, its `src/` contents, or the crate folder one level
+//! down (see [`super::build::locate`]). The zip is written with deflate (`miniz_oxide`) and
+//! Unix permissions, so the scripts stay executable.
+//!
+//! Reference: Gradescope, "Autograder Specifications" (setup.sh, run_autograder,
+//! /autograder/submission, /autograder/results/results.json).
+
+use std::path::Path;
+
+use super::Assignment;
+
+/// The environment variable that replaces `/autograder` in `run_autograder`.
+pub const ROOT_ENV: &str = "SPRINGLAB_AUTOGRADER_ROOT";
+
+const SETUP: &str = r#"#!/usr/bin/env bash
+# Gradescope runs this once, as root, when it builds the autograder image.
+# It installs a Rust toolchain (submissions are compiled) and compiles the student API once.
+set -euo pipefail
+cd "$(dirname "$0")"
+export PATH="$HOME/.cargo/bin:$PATH"
+if ! command -v cargo >/dev/null 2>&1; then
+  apt-get update
+  apt-get install -y --no-install-recommends ca-certificates curl build-essential
+  curl --proto '=https' --tlsv1.2 -sSf https://sh.rustup.rs | sh -s -- -y --profile minimal
+fi
+chmod +x ./springlab ./run_autograder
+rm -rf /tmp/springlab-warm
+./springlab homework new /tmp/springlab-warm --assignment {{ASSIGNMENT}} >/dev/null
+./springlab grade /tmp/springlab-warm --target-dir "$PWD/target" >/dev/null
+"#;
+
+const RUN: &str = r#"#!/usr/bin/env bash
+# Gradescope runs this for every submission; it writes $ROOT/results/results.json.
+# springlab grade always writes that file (a submission that does not build, crashes or hangs
+# gets a report saying so) and exits 0 whatever the score.
+set -uo pipefail
+ROOT="${{{ROOT_ENV}}:-/autograder}"
+export PATH="$HOME/.cargo/bin:$PATH"
+mkdir -p "$ROOT/results"
+exec "$ROOT/source/springlab" grade "$ROOT/submission" \
+  --assignment {{ASSIGNMENT}} \
+  --target-dir "$ROOT/source/target" \
+  --gradescope "$ROOT/results/results.json"
+"#;
+
+const README: &str = "springlab autograder for the {{TITLE}} homework ({{ASSIGNMENT}}).
+
+Upload this zip as the autograder of a Gradescope programming assignment (Ubuntu base image).
+setup.sh installs Rust and compiles springlab's student API; run_autograder grades
+/autograder/submission (the student's crate folder, or just its src/ files) and writes
+/autograder/results/results.json. Students upload their homework crate made with
+`springlab homework new DIR --assignment {{ASSIGNMENT}}`.
+";
+
+/// The files of the autograder for `assignment`: `(name, contents, Unix mode)`; `springlab` is
+/// the binary to include.
+#[must_use]
+pub fn files(assignment: Assignment, springlab: Vec<u8>) -> Vec<(String, Vec<u8>, u32)> {
+    let fill = |t: &str| {
+        t.replace("{{ASSIGNMENT}}", assignment.name())
+            .replace("{{ROOT_ENV}}", ROOT_ENV)
+            .replace("{{TITLE}}", assignment.title())
+    };
+    vec![
+        ("setup.sh".to_string(), fill(SETUP).into_bytes(), 0o755),
+        ("run_autograder".to_string(), fill(RUN).into_bytes(), 0o755),
+        ("README.txt".to_string(), fill(README).into_bytes(), 0o644),
+        ("springlab".to_string(), springlab, 0o755),
+    ]
+}
+
+/// A zip archive of `files` (deflated, Unix permissions, a fixed date so the same input gives
+/// the same bytes).
+#[must_use]
+pub fn zip(files: &[(String, Vec<u8>, u32)]) -> Vec<u8> {
+    // 1980-01-01 00:00, the zip epoch.
+    const DATE: u16 = (1 << 5) | 1;
+    let mut out = Vec::new();
+    let mut central = Vec::new();
+    let u16le = |v: &mut Vec<u8>, x: u16| v.extend_from_slice(&x.to_le_bytes());
+    let u32le = |v: &mut Vec<u8>, x: u32| v.extend_from_slice(&x.to_le_bytes());
+    for (name, data, mode) in files {
+        let crc = crc32fast::hash(data);
+        let packed = miniz_oxide::deflate::compress_to_vec(data, 6);
+        let offset = out.len() as u32;
+        let name_len = name.len() as u16;
+        // Local header.
+        u32le(&mut out, 0x0403_4b50);
+        u16le(&mut out, 20);
+        u16le(&mut out, 0x0800); // UTF-8 names
+        u16le(&mut out, 8); // deflate
+        u16le(&mut out, 0);
+        u16le(&mut out, DATE);
+        u32le(&mut out, crc);
+        u32le(&mut out, packed.len() as u32);
+        u32le(&mut out, data.len() as u32);
+        u16le(&mut out, name_len);
+        u16le(&mut out, 0);
+        out.extend_from_slice(name.as_bytes());
+        out.extend_from_slice(&packed);
+        // Central directory entry.
+        u32le(&mut central, 0x0201_4b50);
+        u16le(&mut central, (3 << 8) | 20); // made by Unix, so the mode below counts
+        u16le(&mut central, 20);
+        u16le(&mut central, 0x0800);
+        u16le(&mut central, 8);
+        u16le(&mut central, 0);
+        u16le(&mut central, DATE);
+        u32le(&mut central, crc);
+        u32le(&mut central, packed.len() as u32);
+        u32le(&mut central, data.len() as u32);
+        u16le(&mut central, name_len);
+        u16le(&mut central, 0);
+        u16le(&mut central, 0);
+        u16le(&mut central, 0);
+        u16le(&mut central, 0);
+        u32le(&mut central, (0o100_000 | mode) << 16); // regular file with its permissions
+        u32le(&mut central, offset);
+        central.extend_from_slice(name.as_bytes());
+    }
+    let central_offset = out.len() as u32;
+    out.extend_from_slice(&central);
+    u32le(&mut out, 0x0605_4b50);
+    u16le(&mut out, 0);
+    u16le(&mut out, 0);
+    u16le(&mut out, files.len() as u16);
+    u16le(&mut out, files.len() as u16);
+    u32le(&mut out, central.len() as u32);
+    u32le(&mut out, central_offset);
+    u16le(&mut out, 0);
+    out
+}
+
+/// Writes the autograder zip of `assignment` to `out`, with the binary at `springlab`.
+///
+/// # Errors
+/// When the binary cannot be read or the zip cannot be written.
+pub fn write(assignment: Assignment, springlab: &Path, out: &Path) -> std::io::Result<usize> {
+    let binary = std::fs::read(springlab)?;
+    let files = files(assignment, binary);
+    let bytes = zip(&files);
+    // A temporary file renamed into place: a half-written zip is never left behind.
+    let tmp = out.with_extension("zip.partial");
+    std::fs::write(&tmp, &bytes)?;
+    std::fs::rename(&tmp, out)?;
+    Ok(bytes.len())
+}
