@@ -59,8 +59,8 @@ pub const MIN_SIZE: (u16, u16) = (80, 24);
 /// Frames are drawn at most this often while something animates.
 const FRAME: Duration = Duration::from_micros(16_667);
 
-/// The raster view sends a new image at most this often while the simulation runs (30 a
-/// second); paused, every change is sent at once.
+/// The raster view sends a new image, and redraws the screen, at most this often while the
+/// simulation runs (30 a second); paused, every change is sent at once.
 const RASTER_FRAME: Duration = Duration::from_micros(33_333);
 
 /// Wall time a frame may spend stepping before the rest of its steps are dropped.
@@ -565,10 +565,17 @@ impl App {
             if animating {
                 // Frames on a fixed schedule; a late frame starts the schedule again from now.
                 let now = Instant::now();
-                next_frame = if next_frame + FRAME < now {
-                    now + FRAME
+                // The raster view redraws the screen at the images' rate: the CPU the text and
+                // plots would take at 60 frames a second goes to stepping and encoding.
+                let period = if self.view == ViewMode::Raster && self.encoder.is_some() {
+                    RASTER_FRAME
                 } else {
-                    next_frame + FRAME
+                    FRAME
+                };
+                next_frame = if next_frame + period < now {
+                    now + period
+                } else {
+                    next_frame + period
                 };
                 while !self.quit {
                     let timeout = next_frame.saturating_duration_since(Instant::now());
