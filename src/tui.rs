@@ -151,6 +151,8 @@ pub struct App {
     clear: bool,
     /// When the last raster job was sent.
     last_raster: Option<Instant>,
+    /// Counts the lessons opened: a raster frame of an earlier one is never shown.
+    opened: u64,
     /// Raster images shown per second (measured by [`App::run`]).
     raster_fps: Option<f64>,
 }
@@ -183,6 +185,7 @@ impl App {
             clear: false,
             last_raster: None,
             raster_fps: None,
+            opened: 0,
         }
     }
 
@@ -301,7 +304,7 @@ impl App {
             filter: run.spring_filter(),
             cells: ratatui::layout::Size::new(inner.width, inner.height),
             graphics: self.graphics,
-            stamp: run.version(),
+            stamp: raster_stamp(self.opened, run.version()),
             full: !run.is_running(),
         });
         true
@@ -381,6 +384,12 @@ impl App {
         self.screen = Screen::Lesson(Box::new(run));
         self.menu_message = None;
         self.clear = true;
+        // A new run counts its versions from 0 again: forget the last lesson's frame.
+        self.submitted = None;
+        self.opened += 1;
+        if let Some(encoder) = &mut self.encoder {
+            encoder.clear();
+        }
         self.report_aspect();
         Ok(())
     }
@@ -693,6 +702,11 @@ impl Widget for &App {
     }
 }
 
+/// The stamp of a raster job: the lesson opened (`opened`, high bits) and the run's version.
+fn raster_stamp(opened: u64, version: u64) -> u64 {
+    (opened << 40) | (version & ((1 << 40) - 1))
+}
+
 /// Draws the scene pane's content in the app's view.
 struct ScenePainter<'a> {
     app: &'a App,
@@ -704,6 +718,7 @@ impl Painter for ScenePainter<'_> {
         if app.view == ViewMode::Raster
             && let Some(frame) = app.encoder.as_ref().and_then(Encoder::latest)
             && frame.cells == ratatui::layout::Size::new(inner.width, inner.height)
+            && frame.stamp >> 40 == app.opened
         {
             raster::show(&frame.encoded, inner, buf);
             return;

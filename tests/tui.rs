@@ -808,3 +808,48 @@ fn the_raster_view_shows_the_encoded_frame() {
     let cell = &terminal.backend().buffer()[(inner.x + 3, inner.y + 3)];
     assert!(cell.symbol().contains('\u{10EEEE}'), "{:?}", cell.symbol());
 }
+
+#[test]
+fn a_raster_frame_of_another_lesson_is_never_shown() {
+    use springlab::tui::{ColourDepth, Graphics, Protocol, ViewMode};
+    let kitty = Graphics {
+        protocol: Some(Protocol::Kitty),
+        ..Graphics::NONE
+    };
+    let mut app = App::new(lesson::builtin(), Theme { color: true }).with_display(
+        ViewMode::Raster,
+        kitty,
+        ColourDepth::TrueColour,
+    );
+    app.resize(100, 32);
+    app.open_lesson(0).expect("opens");
+    assert!(app.submit_raster());
+    let wait = |app: &mut App| {
+        for _ in 0..2000 {
+            if app.poll_raster() {
+                return;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        panic!("no frame within 2 s");
+    };
+    wait(&mut app);
+    let placeholder = |app: &App| {
+        let inner = canvas_inner(app);
+        let terminal = draw(app, 100, 32);
+        terminal.backend().buffer()[(inner.x + 3, inner.y + 3)]
+            .symbol()
+            .contains('\u{10EEEE}')
+    };
+    assert!(placeholder(&app), "lesson 1's frame is shown");
+    // Lesson 1 again, from the menu: a new run, whose versions start at 0 again.
+    key(&mut app, KeyCode::Char('q'));
+    app.open_lesson(0).expect("opens");
+    assert!(
+        !placeholder(&app),
+        "the old frame is not shown: half-blocks until the new one"
+    );
+    assert!(app.submit_raster(), "the new run's first frame is sent");
+    wait(&mut app);
+    assert!(placeholder(&app));
+}
