@@ -588,8 +588,25 @@ impl App {
                 };
                 while !self.quit {
                     let timeout = next_frame.saturating_duration_since(Instant::now());
-                    if timeout.is_zero() || !event::poll(timeout)? {
+                    if timeout.is_zero() {
                         break;
+                    }
+                    // While an image is being encoded, look for it every 2 ms: the next one is
+                    // sent as soon as the encoder is free, not at the next frame.
+                    let slice = if self.encoder.as_ref().is_some_and(Encoder::busy) {
+                        timeout.min(Duration::from_millis(2))
+                    } else {
+                        timeout
+                    };
+                    if !event::poll(slice)? {
+                        if let Some(encoder) = &mut self.encoder
+                            && encoder.poll()
+                        {
+                            images += 1;
+                            dirty = true;
+                            self.submit_raster();
+                        }
+                        continue;
                     }
                     dirty |= self.handle_pending_events()?;
                     if !self.is_animating() {
