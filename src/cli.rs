@@ -1,9 +1,9 @@
 //! The command line: clap definitions, validation into options, and dispatch.
 //!
-//! The contract (DESIGN.md) is:
+//! The command-line contract:
 //! ```text
-//! springlab [--lessons DIR]          the lesson menu (terminal app)
-//! springlab lesson <N|slug>          one lesson
+//! springlab [--lessons DIR] [--view raster|halfblocks|braille]   the lesson menu (terminal app)
+//! springlab lesson <N|slug> [--view …]                            one lesson
 //! springlab lessons                  list the lessons
 //! springlab scenes
 //! springlab run <scene|file.toml> [--method M] [--dt S] [--steps N | --time T]
@@ -46,6 +46,15 @@ pub struct Cli {
     /// Load the lessons (*.md) from this directory instead of the built-in ones.
     #[arg(long, global = true, value_name = "DIR")]
     pub lessons: Option<PathBuf>,
+    /// How the lesson app draws the scene: raster (the terminal's graphics protocol: kitty,
+    /// sixel or iTerm2), halfblocks (colour text cells) or braille. Default: raster when the
+    /// terminal answers a graphics protocol, else halfblocks.
+    #[arg(long, global = true, value_name = "VIEW", value_parser = parse_view)]
+    pub view: Option<crate::tui::ViewMode>,
+}
+
+fn parse_view(s: &str) -> Result<crate::tui::ViewMode, String> {
+    crate::tui::ViewMode::parse(s)
 }
 
 /// The subcommands.
@@ -85,7 +94,7 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let dir = cli.lessons.as_deref();
     let result = match cli.command {
-        Some(Command::Lesson { which }) => lessons::open(dir, &which),
+        Some(Command::Lesson { which }) => lessons::open(dir, &which, cli.view),
         Some(Command::Lessons) => lessons::list(dir),
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::Scenes) => scenes::list(),
@@ -94,7 +103,7 @@ pub fn main() -> ExitCode {
         Some(Command::Study { command }) => study::run(&command),
         Some(Command::Homework(args)) => grade::homework(&args),
         Some(Command::Grade(args)) => grade::grade(&args),
-        None => lessons::menu(dir),
+        None => lessons::menu(dir, cli.view),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

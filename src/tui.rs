@@ -18,15 +18,18 @@
 //! 60 times a second; while nothing animates the loop blocks on input and uses no CPU.
 
 pub mod export;
+pub mod graphics;
+pub mod halfblocks;
 pub mod help;
 pub mod lesson_view;
 pub mod markdown;
 pub mod menu;
 pub mod plots;
+pub mod raster;
 pub mod sim_view;
 pub mod status;
 
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 use std::io::{IsTerminal, stdout};
 use std::time::{Duration, Instant};
 
@@ -44,13 +47,21 @@ use ratatui::text::Line;
 use ratatui::widgets::{Paragraph, Widget, Wrap};
 
 use crate::lesson::{Lesson, LessonError};
+pub use graphics::{Graphics, Protocol, ViewMode};
+pub use halfblocks::ColourDepth;
 pub use lesson_view::LessonRun;
+use raster::{Encoder, Job, PaneRenderer};
+use sim_view::Painter;
 
 /// The smallest terminal the app draws into (columns, rows).
 pub const MIN_SIZE: (u16, u16) = (80, 24);
 
 /// Frames are drawn at most this often while something animates.
 const FRAME: Duration = Duration::from_micros(16_667);
+
+/// The raster view sends a new image, and redraws the screen, at most this often while the
+/// simulation runs (30 a second); paused, every change is sent at once.
+const RASTER_FRAME: Duration = Duration::from_micros(33_333);
 
 /// Wall time a frame may spend stepping before the rest of its steps are dropped.
 const STEP_BUDGET: Duration = Duration::from_millis(20);
@@ -122,6 +133,28 @@ pub struct App {
     fps: Option<f64>,
     /// Where the scene canvas was last drawn (for the mouse).
     canvas_area: Cell<Rect>,
+    /// How the scene pane draws the scene.
+    view: ViewMode,
+    /// The terminal's graphics protocol and cell size.
+    graphics: Graphics,
+    /// Colours of the half-block view.
+    colour: ColourDepth,
+    /// The terminal's size (columns, rows), for the pane's aspect ratio.
+    size: (u16, u16),
+    /// The rasteriser of the half-block view.
+    pane: RefCell<PaneRenderer>,
+    /// The encoder thread of the raster view (when a protocol was detected).
+    encoder: Option<Encoder>,
+    /// What the last raster job showed: (lesson run version, pane size).
+    submitted: Option<(u64, Rect)>,
+    /// The whole screen must be cleared before the next draw (images left behind).
+    clear: bool,
+    /// When the last raster job was sent.
+    last_raster: Option<Instant>,
+    /// Counts the lessons opened: a raster frame of an earlier one is never shown.
+    opened: u64,
+    /// Raster images shown per second (measured by [`App::run`]).
+    raster_fps: Option<f64>,
 }
 
 impl App {
@@ -138,7 +171,143 @@ impl App {
             theme,
             fps: None,
             canvas_area: Cell::new(Rect::default()),
+            view: ViewMode::HalfBlocks,
+            graphics: Graphics::NONE,
+            colour: if theme.color {
+                ColourDepth::TrueColour
+            } else {
+                ColourDepth::None
+            },
+            size: (120, 40),
+            pane: RefCell::new(PaneRenderer::default()),
+            encoder: None,
+            submitted: None,
+            clear: false,
+            last_raster: None,
+            raster_fps: None,
+            opened: 0,
         }
+    }
+
+    /// Sets how the terminal shows the scene: the view, the graphics protocol (the raster view
+    /// needs one; without it the half-block view is used) and the half-block colours.
+    #[must_use]
+    pub fn with_display(mut self, view: ViewMode, graphics: Graphics, colour: ColourDepth) -> App {
+        self.colour = colour;
+        self.encoder = graphics.protocol.and_then(|_| Encoder::new());
+        // Without an encoder thread there is no raster view.
+        self.graphics = if self.encoder.is_some() {
+            graphics
+        } else {
+            Graphics {
+                protocol: None,
+                ..graphics
+            }
+        };
+        self.view = if view == ViewMode::Raster && self.graphics.protocol.is_none() {
+            ViewMode::HalfBlocks
+        } else {
+            view
+        };
+        self
+    }
+
+    /// The scene pane's view.
+    #[must_use]
+    pub fn view(&self) -> ViewMode {
+        self.view
+    }
+
+    /// The view's name in the status line: `raster (sixel)`, `halfblocks`, `braille`.
+    #[must_use]
+    pub fn view_label(&self) -> String {
+        match (self.view, self.graphics.protocol) {
+            (ViewMode::Raster, Some(p)) => match self.raster_fps {
+                Some(f) if self.is_animating() => format!("raster ({}, {f:.0} images/s)", p.name()),
+                _ => format!("raster ({})", p.name()),
+            },
+            (v, _) => v.name().to_string(),
+        }
+    }
+
+    /// Tells the app the terminal's size (columns, rows): the scene pane's aspect ratio follows.
+    pub fn resize(&mut self, width: u16, height: u16) {
+        self.size = (width, height);
+        self.report_aspect();
+    }
+
+    /// Tells the open lesson the pixel grid of the view shown (the font cell for raster, braille
+    /// dots otherwise) and the pane's aspect ratio in it.
+    fn report_aspect(&mut self) {
+        let (w, h) = self.size;
+        let grid = if self.view == ViewMode::Raster {
+            (
+                u32::from(self.graphics.cell.0),
+                u32::from(self.graphics.cell.1),
+            )
+        } else {
+            sim_view::DOTS
+        };
+        if let Screen::Lesson(run) = &mut self.screen {
+            run.set_grid(grid);
+            let inner = lesson_view::scene_inner(run, Rect::new(0, 0, w, h));
+            if inner.width > 0 && inner.height > 0 {
+                let aspect = (f64::from(inner.width) * f64::from(grid.0))
+                    / (f64::from(inner.height) * f64::from(grid.1));
+                run.set_aspect(aspect);
+            }
+        }
+    }
+
+    /// The raster encoder, when the terminal has a graphics protocol.
+    #[must_use]
+    pub fn encoder(&self) -> Option<&Encoder> {
+        self.encoder.as_ref()
+    }
+
+    /// Takes a finished raster frame from the encoder, if one is ready; true when one was.
+    pub fn poll_raster(&mut self) -> bool {
+        self.encoder.as_mut().is_some_and(Encoder::poll)
+    }
+
+    /// Sends the open lesson's current frame to the raster encoder when the raster view shows
+    /// something new and the encoder is free; true when a job was sent.
+    pub fn submit_raster(&mut self) -> bool {
+        let Some(encoder) = &mut self.encoder else {
+            return false;
+        };
+        let Screen::Lesson(run) = &self.screen else {
+            return false;
+        };
+        if self.view != ViewMode::Raster
+            || self.help
+            || encoder.busy()
+            || run.sim().diverged.is_some()
+        {
+            return false;
+        }
+        let inner = lesson_view::scene_inner(run, Rect::new(0, 0, self.size.0, self.size.1));
+        let key = (run.version(), inner);
+        if self.submitted == Some(key) || inner.width < 4 || inner.height < 2 {
+            return false;
+        }
+        let now = Instant::now();
+        if run.is_running() && self.last_raster.is_some_and(|t| now - t < RASTER_FRAME) {
+            return false;
+        }
+        self.last_raster = Some(now);
+        self.submitted = Some(key);
+        encoder.submit(Job {
+            scene: run.sim().scene.clone(),
+            generation: run.generation(),
+            camera: *run.camera(),
+            filter: run.spring_filter(),
+            cells: ratatui::layout::Size::new(inner.width, inner.height),
+            graphics: self.graphics,
+            stamp: raster_stamp(self.opened, run.version()),
+            full: !run.is_running(),
+        });
+        true
     }
 
     /// The lessons, as loaded.
@@ -214,6 +383,14 @@ impl App {
         let run = LessonRun::new(lesson, 0)?;
         self.screen = Screen::Lesson(Box::new(run));
         self.menu_message = None;
+        self.clear = true;
+        // A new run counts its versions from 0 again: forget the last lesson's frame.
+        self.submitted = None;
+        self.opened += 1;
+        if let Some(encoder) = &mut self.encoder {
+            encoder.clear();
+        }
+        self.report_aspect();
         Ok(())
     }
 
@@ -249,7 +426,11 @@ impl App {
                 true
             }
             Event::Mouse(mouse) => self.handle_mouse(*mouse),
-            Event::Resize(..) => true,
+            Event::Resize(w, h) => {
+                self.resize(*w, *h);
+                self.clear = true;
+                true
+            }
             _ => false,
         }
     }
@@ -269,19 +450,42 @@ impl App {
         if self.help {
             // Any key closes the overlay; `q` and Esc only close it.
             self.help = false;
+            self.clear = true;
+            self.submitted = None;
             return;
         }
         if key.code == KeyCode::Char('?') {
             self.help = true;
             return;
         }
+        let raster = self.graphics.protocol.is_some();
         match &mut self.screen {
             Screen::Menu => self.menu_key(key.code),
             Screen::Lesson(run) => {
                 if matches!(key.code, KeyCode::Char('q') | KeyCode::Esc) {
                     self.screen = Screen::Menu;
+                    self.clear = true;
+                } else if key.code == KeyCode::Char('v') {
+                    self.view = self.view.next(raster);
+                    self.report_aspect();
+                    let Screen::Lesson(run) = &mut self.screen else {
+                        return;
+                    };
+                    self.clear = true;
+                    self.submitted = None;
+                    let note = if raster {
+                        ""
+                    } else {
+                        " (no raster view: the terminal answered no graphics protocol)"
+                    };
+                    run.set_message(format!("view: {}{note}", self.view.name()));
                 } else {
-                    run.handle_key(key.code);
+                    let step = run.step_index();
+                    run.handle_key_with(key.code, key.modifiers);
+                    if run.step_index() != step {
+                        self.clear = true;
+                        self.report_aspect();
+                    }
                 }
             }
         }
@@ -345,9 +549,23 @@ impl App {
         let mut last_tick = Instant::now();
         let mut next_frame = Instant::now();
         let mut fps_window = (Instant::now(), 0u32);
+        let mut images = 0u32;
         let mut dirty = true;
+        if let Ok(size) = terminal.size() {
+            self.resize(size.width, size.height);
+        }
         while !self.quit {
+            self.submit_raster();
+            if let Some(encoder) = &mut self.encoder
+                && encoder.poll()
+            {
+                dirty = true;
+                images += 1;
+            }
             if dirty {
+                if std::mem::take(&mut self.clear) {
+                    terminal.clear()?;
+                }
                 terminal.draw(|frame| frame.render_widget(&*self, frame.area()))?;
                 fps_window.1 += 1;
                 dirty = false;
@@ -356,20 +574,49 @@ impl App {
             if animating {
                 // Frames on a fixed schedule; a late frame starts the schedule again from now.
                 let now = Instant::now();
-                next_frame = if next_frame + FRAME < now {
-                    now + FRAME
+                // The raster view redraws the screen at the images' rate: the CPU the text and
+                // plots would take at 60 frames a second goes to stepping and encoding.
+                let period = if self.view == ViewMode::Raster && self.encoder.is_some() {
+                    RASTER_FRAME
                 } else {
-                    next_frame + FRAME
+                    FRAME
+                };
+                next_frame = if next_frame + period < now {
+                    now + period
+                } else {
+                    next_frame + period
                 };
                 while !self.quit {
                     let timeout = next_frame.saturating_duration_since(Instant::now());
-                    if timeout.is_zero() || !event::poll(timeout)? {
+                    if timeout.is_zero() {
                         break;
+                    }
+                    // While an image is being encoded, look for it every 2 ms: the next one is
+                    // sent as soon as the encoder is free, not at the next frame.
+                    let slice = if self.encoder.as_ref().is_some_and(Encoder::busy) {
+                        timeout.min(Duration::from_millis(2))
+                    } else {
+                        timeout
+                    };
+                    if !event::poll(slice)? {
+                        if let Some(encoder) = &mut self.encoder
+                            && encoder.poll()
+                        {
+                            images += 1;
+                            dirty = true;
+                            self.submit_raster();
+                        }
+                        continue;
                     }
                     dirty |= self.handle_pending_events()?;
                     if !self.is_animating() {
                         break;
                     }
+                }
+            } else if self.raster_in_flight() {
+                // A frame is being encoded: wait for it or for input, whichever comes first.
+                if event::poll(Duration::from_millis(5))? {
+                    dirty |= self.handle_pending_events()?;
                 }
             } else {
                 // Nothing moves: block until the user does something (no CPU while paused).
@@ -391,15 +638,38 @@ impl App {
                 let elapsed = now - fps_window.0;
                 if elapsed >= Duration::from_millis(500) {
                     self.fps = Some(f64::from(fps_window.1) / elapsed.as_secs_f64());
+                    self.raster_fps = Some(f64::from(images) / elapsed.as_secs_f64());
                     fps_window = (now, 0);
+                    images = 0;
                 }
             } else {
                 fps_window = (now, 0);
+                images = 0;
                 next_frame = now;
                 self.fps = None;
+                self.raster_fps = None;
             }
         }
         Ok(())
+    }
+
+    /// True while the raster view waits for a frame: one is being encoded, or the pane changed
+    /// since the last one was sent.
+    fn raster_in_flight(&self) -> bool {
+        let Some(encoder) = &self.encoder else {
+            return false;
+        };
+        if encoder.busy() {
+            return true;
+        }
+        match &self.screen {
+            Screen::Lesson(run) if self.view == ViewMode::Raster && !self.help => {
+                let inner =
+                    lesson_view::scene_inner(run, Rect::new(0, 0, self.size.0, self.size.1));
+                run.sim().diverged.is_none() && self.submitted != Some((run.version(), inner))
+            }
+            _ => false,
+        }
     }
 
     fn handle_pending_events(&mut self) -> anyhow::Result<bool> {
@@ -430,12 +700,60 @@ impl Widget for &App {
         match &self.screen {
             Screen::Menu => menu::render(self, area, buf),
             Screen::Lesson(run) => {
-                let canvas = lesson_view::render(run, self.fps, theme, area, buf);
+                let label = self.view_label();
+                let canvas = lesson_view::render(
+                    run,
+                    self.fps,
+                    &label,
+                    theme,
+                    &ScenePainter { app: self },
+                    area,
+                    buf,
+                );
                 self.canvas_area.set(canvas);
             }
         }
         if self.help {
             help::render(matches!(self.screen, Screen::Menu), theme, area, buf);
+        }
+    }
+}
+
+/// The stamp of a raster job: the lesson opened (`opened`, high bits) and the run's version.
+fn raster_stamp(opened: u64, version: u64) -> u64 {
+    (opened << 40) | (version & ((1 << 40) - 1))
+}
+
+/// Draws the scene pane's content in the app's view.
+struct ScenePainter<'a> {
+    app: &'a App,
+}
+
+impl Painter for ScenePainter<'_> {
+    fn paint(&self, run: &LessonRun, theme: Theme, inner: Rect, buf: &mut Buffer) {
+        let app = self.app;
+        if app.view == ViewMode::Raster
+            && let Some(frame) = app.encoder.as_ref().and_then(Encoder::latest)
+            && frame.cells == ratatui::layout::Size::new(inner.width, inner.height)
+            && frame.stamp >> 40 == app.opened
+        {
+            raster::show(&frame.encoded, inner, buf);
+            return;
+        }
+        match app.view {
+            ViewMode::Braille => sim_view::Braille.paint(run, theme, inner, buf),
+            // The raster view shows half-blocks until its first frame is encoded.
+            ViewMode::HalfBlocks | ViewMode::Raster => {
+                let pixmap = app.pane.borrow_mut().draw(
+                    &run.sim().scene,
+                    run.generation(),
+                    run.camera(),
+                    run.spring_filter(),
+                    (u32::from(inner.width), 2 * u32::from(inner.height)),
+                    None,
+                );
+                halfblocks::render(&pixmap, app.colour, inner, buf);
+            }
         }
     }
 }
@@ -473,18 +791,46 @@ fn too_small(area: Rect, buf: &mut Buffer, theme: Theme) {
 ///
 /// # Errors
 /// Standard output is not a terminal, the lesson does not open, or the terminal fails.
-pub fn run(lessons: Vec<Result<Lesson, LessonError>>, open: Option<usize>) -> anyhow::Result<()> {
+pub fn run(
+    lessons: Vec<Result<Lesson, LessonError>>,
+    open: Option<usize>,
+    view: Option<ViewMode>,
+) -> anyhow::Result<()> {
     if !stdout().is_terminal() || !std::io::stdin().is_terminal() {
         bail!(
             "the lesson app needs a terminal; `springlab lessons` lists the lessons, \
              `springlab run <scene>` runs a scene headless"
         );
     }
-    let mut app = App::new(lessons, Theme::from_env());
-    if let Some(i) = open {
-        app.open_lesson(i).map_err(anyhow::Error::msg)?;
-    }
+    let theme = Theme::from_env();
     let mut terminal = ratatui::try_init().context("cannot set up the terminal")?;
+    // Ask the terminal before anything else reads its input (raw mode is on).
+    let graphics = Graphics::detect();
+    let default = if graphics.protocol.is_some() {
+        ViewMode::Raster
+    } else {
+        ViewMode::HalfBlocks
+    };
+    let mut app = App::new(lessons, theme).with_display(
+        view.unwrap_or(default),
+        graphics,
+        ColourDepth::from_env(),
+    );
+    if let Ok(size) = terminal.size() {
+        app.resize(size.width, size.height);
+    }
+    if let Some(i) = open
+        && let Err(e) = app.open_lesson(i)
+    {
+        ratatui::restore();
+        bail!(e);
+    }
+    if view == Some(ViewMode::Raster)
+        && graphics.protocol.is_none()
+        && let Some(run) = app.lesson_mut()
+    {
+        run.set_message("no raster view: the terminal answered no graphics protocol (halfblocks)");
+    }
     // ratatui's panic hook restores raw mode and the screen; turn the mouse off first.
     let hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
@@ -495,6 +841,10 @@ pub fn run(lessons: Vec<Result<Lesson, LessonError>>, open: Option<usize>) -> an
         .map_err(anyhow::Error::from)
         .and_then(|()| app.run(&mut terminal));
     let _ = execute!(stdout(), DisableMouseCapture);
+    if graphics.protocol == Some(Protocol::Kitty) {
+        use std::io::Write as _;
+        let _ = write!(stdout(), "{}", raster::kitty_delete(graphics.tmux_wrap));
+    }
     ratatui::restore();
     result
 }

@@ -13,7 +13,7 @@ use ratatui::style::Color;
 use springlab::lesson;
 use springlab::physics::Method;
 use springlab::simulation::Simulation;
-use springlab::tui::{App, LessonRun, Screen, Theme};
+use springlab::tui::{App, LessonRun, Screen, Theme, sim_view};
 
 fn app() -> App {
     App::new(lesson::builtin(), Theme { color: false })
@@ -569,10 +569,14 @@ fn mouse_grabs_drags_and_releases_a_particle() {
     let camera = *run_ref.camera();
     let inner = canvas_inner(&app);
     // The cell of particle 1 (the free end).
-    let p = camera.project(run_ref.sim().scene.bodies[0].state.x[1]);
-    let ([x0, x1], [y0, y1]) = camera.bounds(inner.width, inner.height);
-    let column = inner.x + ((p.x - x0) / (x1 - x0) * f64::from(inner.width)) as u16;
-    let row = inner.y + ((y1 - p.y) / (y1 - y0) * f64::from(inner.height)) as u16;
+    // The cell of particle 1 (the free end): its pixel on the pane's braille dots (2 × 4 a
+    // cell).
+    let view = sim_view::dot_view(&camera, inner);
+    let p = view
+        .project(run_ref.sim().scene.bodies[0].state.x[1])
+        .expect("in front of the camera");
+    let column = inner.x + (p.x / 2.0) as u16;
+    let row = inner.y + (p.y / 4.0) as u16;
     let mouse = |kind, column, row| MouseEvent {
         kind,
         column,
@@ -592,9 +596,11 @@ fn mouse_grabs_drags_and_releases_a_particle() {
         row + 5
     )));
     let state = &run(&app).sim().scene.bodies[0].state;
-    let (vx, vy) = camera.cell_to_view(inner, column, row + 5);
-    let q = camera.project(state.x[1]);
-    assert!((q.x - vx).abs() < 1e-9 && (q.y - vy).abs() < 1e-9);
+    // It sits under the centre of the cell, in the view plane of its grab (same depth).
+    let q = view.project(state.x[1]).expect("in front");
+    assert!((f64::from(q.x) - (f64::from(column - inner.x) + 0.5) * 2.0).abs() < 1e-3);
+    assert!((f64::from(q.y) - (f64::from(row + 5 - inner.y) + 0.5) * 4.0).abs() < 1e-3);
+    assert!((q.depth - p.depth).abs() < 1e-9);
     assert_eq!(state.v[1], glam::DVec3::ZERO);
     // Stepping while held keeps it there.
     let held = state.x[1];
@@ -647,9 +653,11 @@ fn arrows_orbit_the_camera() {
         "elevation stops at 89°"
     );
     // Projection and its inverse agree.
-    let camera = run(&app).camera();
+    let view = springlab::render::View::new(run(&app).camera(), 160, 96);
     let p = glam::DVec3::new(0.3, -1.2, 2.5);
-    assert!((camera.unproject(camera.project(p)) - p).length() < 1e-12);
+    let q = view.project(p).expect("in front");
+    let back = view.unproject(f64::from(q.x), f64::from(q.y), q.depth);
+    assert!((back - p).length() < 1e-5, "{back} vs {p}");
 }
 
 #[test]
@@ -717,4 +725,131 @@ fn no_color_draws_without_colours() {
             .iter()
             .any(|c| c.fg != Color::Reset)
     );
+}
+
+#[test]
+fn v_cycles_the_views_and_the_status_line_names_the_view() {
+    use springlab::tui::{ColourDepth, Graphics, Protocol, ViewMode};
+    let mut plain = app();
+    plain.open_lesson(0).expect("opens");
+    assert_eq!(
+        plain.view(),
+        ViewMode::HalfBlocks,
+        "no protocol: half-blocks"
+    );
+    assert!(screen_text(&plain, 100, 32).contains("view: halfblocks (v)"));
+    key(&mut plain, KeyCode::Char('v'));
+    assert_eq!(plain.view(), ViewMode::Braille);
+    assert!(screen_text(&plain, 100, 32).contains("view: braille (v)"));
+    key(&mut plain, KeyCode::Char('v'));
+    assert_eq!(
+        plain.view(),
+        ViewMode::HalfBlocks,
+        "no raster view to go to"
+    );
+    // With a protocol the raster view is in the cycle (and asked for, it is the start).
+    let sixel = Graphics {
+        protocol: Some(Protocol::Sixel),
+        ..Graphics::NONE
+    };
+    let mut raster = App::new(lesson::builtin(), Theme { color: true }).with_display(
+        ViewMode::Raster,
+        sixel,
+        ColourDepth::TrueColour,
+    );
+    raster.open_lesson(0).expect("opens");
+    assert!(screen_text(&raster, 100, 32).contains("view: raster (sixel) (v)"));
+    for want in [ViewMode::HalfBlocks, ViewMode::Braille, ViewMode::Raster] {
+        key(&mut raster, KeyCode::Char('v'));
+        assert_eq!(raster.view(), want);
+    }
+    // Asking for the raster view without a protocol gives half-blocks.
+    let fallback = App::new(lesson::builtin(), Theme { color: true }).with_display(
+        ViewMode::Raster,
+        Graphics::NONE,
+        ColourDepth::Palette256,
+    );
+    assert_eq!(fallback.view(), ViewMode::HalfBlocks);
+}
+
+#[test]
+fn the_raster_view_shows_the_encoded_frame() {
+    use springlab::tui::{ColourDepth, Graphics, Protocol, ViewMode};
+    let kitty = Graphics {
+        protocol: Some(Protocol::Kitty),
+        ..Graphics::NONE
+    };
+    let mut app = App::new(lesson::builtin(), Theme { color: true }).with_display(
+        ViewMode::Raster,
+        kitty,
+        ColourDepth::TrueColour,
+    );
+    app.resize(100, 32);
+    app.open_lesson(0).expect("opens");
+    assert!(app.submit_raster(), "a frame is sent to the encoder");
+    assert!(!app.submit_raster(), "nothing new to send");
+    assert!(app.encoder().is_some(), "an encoder thread");
+    let mut waited = 0;
+    while app.encoder().is_some_and(|e| e.busy()) && waited < 2000 {
+        std::thread::sleep(std::time::Duration::from_millis(1));
+        waited += 1;
+        if app.poll_raster() {
+            break;
+        }
+    }
+    let frame = app.encoder().and_then(|e| e.latest()).expect("a frame");
+    let inner = canvas_inner(&app);
+    assert_eq!(
+        (frame.cells.width, frame.cells.height),
+        (inner.width, inner.height)
+    );
+    // The pane now holds kitty's placeholders, not half blocks.
+    let terminal = draw(&app, 100, 32);
+    let cell = &terminal.backend().buffer()[(inner.x + 3, inner.y + 3)];
+    assert!(cell.symbol().contains('\u{10EEEE}'), "{:?}", cell.symbol());
+}
+
+#[test]
+fn a_raster_frame_of_another_lesson_is_never_shown() {
+    use springlab::tui::{ColourDepth, Graphics, Protocol, ViewMode};
+    let kitty = Graphics {
+        protocol: Some(Protocol::Kitty),
+        ..Graphics::NONE
+    };
+    let mut app = App::new(lesson::builtin(), Theme { color: true }).with_display(
+        ViewMode::Raster,
+        kitty,
+        ColourDepth::TrueColour,
+    );
+    app.resize(100, 32);
+    app.open_lesson(0).expect("opens");
+    assert!(app.submit_raster());
+    let wait = |app: &mut App| {
+        for _ in 0..2000 {
+            if app.poll_raster() {
+                return;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        panic!("no frame within 2 s");
+    };
+    wait(&mut app);
+    let placeholder = |app: &App| {
+        let inner = canvas_inner(app);
+        let terminal = draw(app, 100, 32);
+        terminal.backend().buffer()[(inner.x + 3, inner.y + 3)]
+            .symbol()
+            .contains('\u{10EEEE}')
+    };
+    assert!(placeholder(&app), "lesson 1's frame is shown");
+    // Lesson 1 again, from the menu: a new run, whose versions start at 0 again.
+    key(&mut app, KeyCode::Char('q'));
+    app.open_lesson(0).expect("opens");
+    assert!(
+        !placeholder(&app),
+        "the old frame is not shown: half-blocks until the new one"
+    );
+    assert!(app.submit_raster(), "the new run's first frame is sent");
+    wait(&mut app);
+    assert!(placeholder(&app));
 }

@@ -1,6 +1,7 @@
 //! Snapshots of the lesson app drawn into ratatui's `TestBackend` at 100 × 32: the menu, the
 //! first step of every lesson (initial state: nothing depends on the wall clock), the help
-//! overlay, a diverged run and the "terminal too small" message.
+//! overlay, a diverged run and the "terminal too small" message; and the half-block view of the
+//! scene pane with its colours (the cloth with four spheres, the jelly in its bowl), at 120 × 40.
 //!
 //! After an intended change of the screens, review with `cargo insta review` (or accept with
 //! `INSTA_UPDATE=always cargo test --test tui_snapshots`) and commit `tests/snapshots/`.
@@ -9,7 +10,7 @@ use ratatui::Terminal;
 use ratatui::backend::TestBackend;
 use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 use springlab::lesson;
-use springlab::tui::{App, Theme};
+use springlab::tui::{App, ColourDepth, Graphics, Theme, ViewMode};
 
 fn draw(app: &App, width: u16, height: u16) -> String {
     let mut terminal = Terminal::new(TestBackend::new(width, height)).expect("test backend");
@@ -19,8 +20,14 @@ fn draw(app: &App, width: u16, height: u16) -> String {
     terminal.backend().to_string()
 }
 
+/// The app without colours, in the braille view (the half-block views have tests of their own
+/// below, with colours).
 fn app() -> App {
-    App::new(lesson::builtin(), Theme { color: false })
+    App::new(lesson::builtin(), Theme { color: false }).with_display(
+        ViewMode::Braille,
+        Graphics::NONE,
+        ColourDepth::None,
+    )
 }
 
 fn key(app: &mut App, code: KeyCode) {
@@ -172,4 +179,101 @@ fn three_d_scene_with_colliders_and_two_bodies() {
     assert!(pinned(&app));
     key(&mut app, KeyCode::Char('4'));
     assert!(!pinned(&app));
+}
+
+/// The scene pane's cells in a compact text form: one line per row, runs of equal cells as
+/// `count×symbol fg/bg`, colours as `#rrggbb` (24-bit) or `@n` (palette entry n).
+fn pane_cells(terminal: &Terminal<TestBackend>, pane: ratatui::layout::Rect) -> String {
+    use ratatui::style::Color;
+    let colour = |c: Color| match c {
+        Color::Rgb(r, g, b) => format!("#{r:02x}{g:02x}{b:02x}"),
+        Color::Indexed(i) => format!("@{i}"),
+        other => format!("{other:?}"),
+    };
+    let buffer = terminal.backend().buffer();
+    let mut out = String::new();
+    for y in pane.y..pane.y + pane.height {
+        let mut runs: Vec<(usize, String)> = Vec::new();
+        for x in pane.x..pane.x + pane.width {
+            let c = &buffer[(x, y)];
+            let text = format!("{} {}/{}", c.symbol(), colour(c.fg), colour(c.bg));
+            match runs.last_mut() {
+                Some((n, t)) if *t == text => *n += 1,
+                _ => runs.push((1, text)),
+            }
+        }
+        let line: Vec<String> = runs.iter().map(|(n, t)| format!("{n}×{t}")).collect();
+        out.push_str(&line.join(" "));
+        out.push('\n');
+    }
+    out
+}
+
+/// Lesson `slug` at step `step` (0-based) in the half-block view at colour depth `depth`, run
+/// for `seconds` of simulated time in frames of 0.1 s; returns the pane's cells and the set of
+/// distinct colours in it.
+fn half_blocks(
+    slug: &str,
+    step: usize,
+    seconds: f64,
+    depth: ColourDepth,
+) -> (String, std::collections::BTreeSet<String>) {
+    let mut app = App::new(lesson::builtin(), Theme { color: true }).with_display(
+        ViewMode::HalfBlocks,
+        Graphics::NONE,
+        depth,
+    );
+    app.resize(120, 40);
+    let i = app.find_lesson(slug).expect("lesson");
+    app.open_lesson(i).expect("opens");
+    for _ in 0..step {
+        key(&mut app, KeyCode::Char('n'));
+    }
+    key(&mut app, KeyCode::Char(' '));
+    for _ in 0..(seconds * 10.0).round() as usize {
+        app.tick(0.1);
+    }
+    key(&mut app, KeyCode::Char(' '));
+    let terminal = {
+        let mut t = Terminal::new(TestBackend::new(120, 40)).expect("test backend");
+        t.draw(|frame| frame.render_widget(&app, frame.area()))
+            .expect("draw");
+        t
+    };
+    let run = app.lesson().expect("open");
+    let pane =
+        springlab::tui::lesson_view::scene_inner(run, ratatui::layout::Rect::new(0, 0, 120, 40));
+    let cells = pane_cells(&terminal, pane);
+    let buffer = terminal.backend().buffer();
+    let mut colours = std::collections::BTreeSet::new();
+    for y in pane.y..pane.y + pane.height {
+        for x in pane.x..pane.x + pane.width {
+            let c = &buffer[(x, y)];
+            assert_eq!(c.symbol(), "▀", "every pane cell is a half block");
+            colours.insert(format!("{:?}", c.fg));
+            colours.insert(format!("{:?}", c.bg));
+        }
+    }
+    (cells, colours)
+}
+
+#[test]
+fn half_blocks_cloth_with_four_spheres() {
+    // Lesson 6, step 2, 1.5 s after the start: the spheres lie in the sagging cloth.
+    let (cells, colours) = half_blocks("cloth", 1, 1.5, ColourDepth::TrueColour);
+    // Shaded: many colours, not a flat silhouette.
+    assert!(colours.len() > 40, "{} colours", colours.len());
+    insta::assert_snapshot!("half_blocks_cloth_spheres", cells);
+}
+
+#[test]
+fn half_blocks_jelly_in_the_bowl_256_colours() {
+    // Lesson 5, step 5 (jelly-bowl), 2 s: the jelly has fallen through the hole into the bowl.
+    let (cells, colours) = half_blocks("jelly", 4, 2.0, ColourDepth::Palette256);
+    assert!(colours.len() > 8, "{} colours", colours.len());
+    assert!(
+        colours.iter().all(|c| c.starts_with("Indexed(")),
+        "only palette colours: {colours:?}"
+    );
+    insta::assert_snapshot!("half_blocks_jelly_bowl_256", cells);
 }

@@ -24,18 +24,18 @@ pub fn load(dir: Option<&Path>) -> anyhow::Result<Vec<Result<Lesson, LessonError
 ///
 /// # Errors
 /// No terminal, an unreadable `--lessons` directory, or a terminal failure.
-pub fn menu(dir: Option<&Path>) -> anyhow::Result<()> {
-    tui::run(load(dir)?, None)
+pub fn menu(dir: Option<&Path>, view: Option<tui::ViewMode>) -> anyhow::Result<()> {
+    tui::run(load(dir)?, None, view)
 }
 
 /// `springlab lesson <N|slug>`: the app, opened on that lesson.
 ///
 /// # Errors
 /// No such lesson (the message lists them), a lesson that failed to load, no terminal.
-pub fn open(dir: Option<&Path>, which: &str) -> anyhow::Result<()> {
+pub fn open(dir: Option<&Path>, which: &str, view: Option<tui::ViewMode>) -> anyhow::Result<()> {
     let lessons = load(dir)?;
     let index = find(&lessons, which)?;
-    tui::run(lessons, Some(index))
+    tui::run(lessons, Some(index), view)
 }
 
 /// The index of lesson `which` (a number or a slug) in `lessons`.

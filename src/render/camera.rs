@@ -224,6 +224,155 @@ impl Camera {
     }
 }
 
+/// Factor of one zoom step ([`Camera::zoom`]).
+pub const ZOOM_STEP: f64 = 1.25;
+
+/// The smallest and largest elevation the orbit controls reach (degrees).
+pub const ELEVATION_LIMIT: f64 = 89.0;
+
+impl Camera {
+    /// Turns the eye about the target by `orbit` and `elevation` degrees (the elevation stays
+    /// within ±89°, so the camera never looks straight along the vertical).
+    pub fn turn(&mut self, orbit: f64, elevation: f64) {
+        self.orbit = (self.orbit + orbit.to_radians()).rem_euclid(std::f64::consts::TAU);
+        let limit = ELEVATION_LIMIT.to_radians();
+        self.elevation = (self.elevation + elevation.to_radians()).clamp(-limit, limit);
+    }
+
+    /// Orbit and elevation in whole degrees, the orbit in `(-180, 180]`.
+    #[must_use]
+    pub fn angles_degrees(&self) -> (i64, i64) {
+        let mut orbit = self.orbit.to_degrees().round() as i64 % 360;
+        if orbit > 180 {
+            orbit -= 360;
+        } else if orbit <= -180 {
+            orbit += 360;
+        }
+        (orbit, self.elevation.to_degrees().round() as i64)
+    }
+
+    /// Moves closer (`factor > 1`) or farther (`factor < 1`): the distance (perspective) or the
+    /// height seen (orthographic) is divided by `factor`.
+    pub fn zoom(&mut self, factor: f64) {
+        if !(factor > 0.0 && factor.is_finite()) {
+            return;
+        }
+        match &mut self.projection {
+            Projection::Perspective { .. } => self.distance /= factor,
+            Projection::Orthographic { height } => *height /= factor,
+        }
+    }
+
+    /// The height of the world seen at the target's depth (m): `2 d tan(φ/2)` for perspective,
+    /// `h` for orthographic.
+    #[must_use]
+    pub fn visible_height(&self) -> f64 {
+        match self.projection {
+            Projection::Perspective { fov_y } => 2.0 * self.distance * (0.5 * fov_y).tan(),
+            Projection::Orthographic { height } => height,
+        }
+    }
+
+    /// Moves the target (and the eye with it) by `right` and `up` times the visible height at
+    /// the target, along the camera's right and up vectors.
+    pub fn pan(&mut self, right: f64, up: f64) {
+        let (r, u, _) = self.basis();
+        let h = self.visible_height();
+        self.target += h * (right * r + up * u);
+    }
+
+    /// Follows `points` (m): moves the target by the least amount (in the view plane) that brings
+    /// every point within `zone` (a fraction, e.g. 0.9) of the half-width and half-height of an
+    /// image of aspect `aspect = W/H`, and moves the eye back (perspective) or widens the view
+    /// (orthographic) when the points do not fit at all, never beyond `max_distance` (m) or
+    /// `max_height` (m). Returns true when the camera moved.
+    ///
+    /// With `(x, y, z')` a point's camera coordinates relative to the target, the target at
+    /// distance `d`, `T = tan(φ/2)` and `a` the aspect, a shift `(s_x, s_y)` of the target along
+    /// `(r̂, û)` keeps the point in the zone when
+    ///
+    /// ```text
+    /// |x - s_x| ≤ ζ T a (d + z')    and    |y - s_y| ≤ ζ T (d + z')      (perspective)
+    /// |x - s_x| ≤ ζ a h / 2         and    |y - s_y| ≤ ζ h / 2           (orthographic)
+    /// ```
+    /// where ζ is `zone` and `h` the orthographic height: every point bounds `s_x` and `s_y` to an
+    /// interval, and the shift is the point of the intersection of all intervals nearest to 0.
+    /// When an intersection is empty, `d` (or `h`) grows by 10 % until it is not.
+    pub fn follow(
+        &mut self,
+        points: &[DVec3],
+        aspect: f64,
+        zone: f64,
+        max_distance: f64,
+        max_height: f64,
+    ) -> bool {
+        let points: Vec<DVec3> = points.iter().copied().filter(|p| p.is_finite()).collect();
+        if points.is_empty() || !(aspect > 0.0 && aspect.is_finite()) {
+            return false;
+        }
+        let (right, up, forward) = self.basis();
+        let rel: Vec<(f64, f64, f64)> = points
+            .iter()
+            .map(|p| {
+                let d = *p - self.target;
+                (d.dot(right), d.dot(up), d.dot(forward))
+            })
+            .collect();
+        let before = *self;
+        for _ in 0..64 {
+            let (t, d, half_h) = match self.projection {
+                Projection::Perspective { fov_y } => ((0.5 * fov_y).tan(), self.distance, 0.0),
+                Projection::Orthographic { height } => (0.0, 0.0, 0.5 * height),
+            };
+            let (mut x_lo, mut x_hi) = (f64::NEG_INFINITY, f64::INFINITY);
+            let (mut y_lo, mut y_hi) = (f64::NEG_INFINITY, f64::INFINITY);
+            let mut behind = false;
+            for &(x, y, z) in &rel {
+                let half_v = if t > 0.0 {
+                    let depth = d + z;
+                    behind |= depth <= 1e-3 * d;
+                    zone * t * depth
+                } else {
+                    zone * half_h
+                };
+                let half_x = half_v * aspect;
+                x_lo = x_lo.max(x - half_x);
+                x_hi = x_hi.min(x + half_x);
+                y_lo = y_lo.max(y - half_v);
+                y_hi = y_hi.min(y + half_v);
+            }
+            if !behind && x_lo <= x_hi && y_lo <= y_hi {
+                let sx = 0.0f64.clamp(x_lo, x_hi);
+                let sy = 0.0f64.clamp(y_lo, y_hi);
+                self.target += sx * right + sy * up;
+                return *self != before;
+            }
+            match &mut self.projection {
+                Projection::Perspective { .. } => {
+                    if self.distance >= max_distance {
+                        break;
+                    }
+                    self.distance = (self.distance * 1.1).min(max_distance);
+                }
+                Projection::Orthographic { height } => {
+                    if *height >= max_height {
+                        break;
+                    }
+                    *height = (*height * 1.1).min(max_height);
+                }
+            }
+        }
+        // Too far apart even at the largest view: centre on their middle.
+        let mut b = Aabb::EMPTY;
+        for p in &points {
+            b.add(*p);
+        }
+        let c = b.centre() - self.target;
+        self.target += c.dot(right) * right + c.dot(up) * up;
+        *self != before
+    }
+}
+
 /// `(cos e sin a, sin e, cos e cos a)`: the unit vector from the target to the eye.
 fn direction(orbit: f64, elevation: f64) -> DVec3 {
     DVec3::new(
@@ -544,6 +693,20 @@ impl View {
     #[must_use]
     pub fn project(&self, p: DVec3) -> Option<Projected> {
         self.project_camera(self.to_camera(p))
+    }
+
+    /// The world point (m) at pixel `(x, y)` and depth `depth` (m) along the view direction: the
+    /// inverse of [`View::project`] for points in front of the eye.
+    #[must_use]
+    pub fn unproject(&self, x: f64, y: f64, depth: f64) -> DVec3 {
+        let k = if self.perspective {
+            depth / self.scale
+        } else {
+            1.0 / self.scale
+        };
+        let xc = (x - 0.5 * self.width) * k;
+        let yc = (0.5 * self.height - y) * k;
+        self.eye + xc * self.right + yc * self.up + depth * self.forward
     }
 
     /// Pixels per metre at depth `depth` (m): `s / depth` for perspective, `s` for orthographic.

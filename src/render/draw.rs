@@ -256,6 +256,9 @@ pub struct Renderer {
     bowls: Vec<Bowl>,
     /// The background gradient, drawn once and copied into every frame.
     background: Pixmap,
+    /// Line widths and disc radii scale with the image height (1 at 480 px), but never below
+    /// this factor.
+    min_line_scale: f32,
 }
 
 /// A bowl's tessellation in world coordinates.
@@ -390,7 +393,23 @@ impl Renderer {
             floors,
             bowls,
             background,
+            min_line_scale: 0.5,
         }
+    }
+
+    /// Keeps lines and particles at least `scale` times their size at 480 px high (default
+    /// 0.5): small images, such as a terminal pane of half-blocks, need thicker lines to show.
+    pub fn set_min_line_scale(&mut self, scale: f32) {
+        if scale.is_finite() && scale > 0.0 {
+            self.min_line_scale = scale;
+        }
+    }
+
+    /// Lays the floor and plane patches out again around `scene` as it is now (the patches of
+    /// a new renderer surround the scene as it was then): content that slid away stays on a
+    /// drawn floor.
+    pub fn refit_floors(&mut self, scene: &Scene) {
+        self.floors = static_geometry(scene).0;
     }
 
     /// The default camera for `scene` ([`Camera::for_scene_window`]) with `projection`, keeping
@@ -457,7 +476,7 @@ impl Renderer {
         let mut pixmap = self.background.clone();
         let view = View::new(&self.camera, self.width, self.height);
         // Line widths and text grow with the image: 1 at 480 px high.
-        let s = (self.height as f32 / 480.0).max(0.5);
+        let s = (self.height as f32 / 480.0).max(self.min_line_scale);
         let mut paint = Paint {
             anti_alias: self.style.quality.anti_alias,
             force_hq_pipeline: self.style.quality.force_hq_pipeline,

@@ -1,30 +1,45 @@
-//! `e` on a lesson: the current frame as a PNG file, drawn by the render module (tiny-skia).
+//! `e` on a lesson: the scene pane's view as a PNG file, drawn by the render module (tiny-skia).
+//!
+//! The file shows exactly what the pane shows: the same camera (so the same framing), at
+//! [`EXPORT_WIDTH`] pixels across and the pane's aspect ratio, with the text overlay (scene,
+//! method, dt, t, energy) in its top-left corner.
 
 use std::path::{Path, PathBuf};
 
-use crate::render::{Projection, Renderer, Style, export};
-use crate::simulation::Simulation;
+use super::lesson_view::LessonRun;
+use super::raster::PaneRenderer;
+use crate::render::{Overlay, export};
 
-/// Size of an exported frame (pixels).
-pub const EXPORT_SIZE: (u32, u32) = (1280, 720);
+/// Width of an exported frame (pixels); the height follows the pane's aspect ratio.
+pub const EXPORT_WIDTH: u32 = 1280;
 
-/// Writes the scene of `sim` as it is now, seen from the terminal view's angles (`yaw`, `pitch`
-/// in rad), to the PNG file `path`; returns the path written.
+/// The size of the exported image for a pane of aspect `aspect` (width / height): 1280 pixels
+/// across, the height rounded, between 90 and 4096 pixels.
+#[must_use]
+pub fn export_size(aspect: f64) -> (u32, u32) {
+    let h = (f64::from(EXPORT_WIDTH) / aspect).round();
+    let h = if h.is_finite() {
+        h.clamp(90.0, 4096.0)
+    } else {
+        720.0
+    };
+    (EXPORT_WIDTH, h as u32)
+}
+
+/// Writes the scene of `run` as its pane shows it now to the PNG file `path`; returns the path
+/// written.
 ///
 /// # Errors
 /// A message for the status line when the file cannot be written.
-pub fn export_png(sim: &Simulation, yaw: f64, pitch: f64, path: &Path) -> Result<PathBuf, String> {
-    let (w, h) = EXPORT_SIZE;
-    let mut renderer = Renderer::new(&sim.scene, w, h, Projection::default(), Style::default())
-        .map_err(|e| e.to_string())?;
-    // The terminal view turns the world by `yaw` about the vertical axis (its right vector is
-    // (cos yaw, 0, sin yaw)); the render camera orbits its eye by `orbit` (right vector
-    // (cos orbit, 0, -sin orbit)): the same view has orbit = -yaw. Both raise the eye by the
-    // elevation angle.
-    renderer.camera.orbit = -yaw;
-    renderer.camera.elevation = pitch;
-    renderer.refit(&sim.scene);
-    let pixmap = renderer.draw_simulation(sim);
+pub fn export_png(run: &LessonRun, path: &Path) -> Result<PathBuf, String> {
+    let pixmap = PaneRenderer::default().draw(
+        &run.sim().scene,
+        run.generation(),
+        run.camera(),
+        run.spring_filter(),
+        export_size(run.aspect()),
+        Some(&Overlay::of(run.sim())),
+    );
     export::save_png(&pixmap, path).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(path.to_path_buf())
 }

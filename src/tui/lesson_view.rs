@@ -7,18 +7,20 @@ use std::time::Instant;
 
 use glam::DVec3;
 use ratatui::buffer::Buffer;
-use ratatui::crossterm::event::{KeyCode, MouseButton, MouseEvent, MouseEventKind};
+use ratatui::crossterm::event::{KeyCode, KeyModifiers, MouseButton, MouseEvent, MouseEventKind};
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Paragraph, Widget};
 
 use super::plots::{self, History, Oscillator, Studies};
-use super::sim_view::{self, Camera, ORBIT_STEP_DEGREES};
+use super::sim_view::{self, ORBIT_STEP_DEGREES, Painter};
 use super::{Theme, export, markdown, status};
 use crate::lesson::{GoalKind, GoalProgress, Lesson, Step};
 use crate::physics::particles::pin_particle;
 use crate::physics::{SpringKind, State, diverge};
+use crate::render::camera::ZOOM_STEP;
+use crate::render::{Camera, Projection};
 use crate::scene::lattice;
 use crate::simulation::Simulation;
 
@@ -40,8 +42,23 @@ pub const COEFFICIENT_FACTOR: f64 = 1.5;
 /// `D` on an undamped spring starts at this fraction of its critical damping `2√(k m)`.
 pub const FIRST_DAMPING: f64 = 0.01;
 
+/// Fraction of the visible height one press of Shift + arrow moves the view.
+pub const PAN_STEP: f64 = 0.1;
+
+/// Following keeps every body within this fraction of the view's half-width and half-height:
+/// more than the `1/1.08` that the step's first framing leaves the framed region, so a step
+/// never starts with the camera moving.
+pub const FOLLOW_ZONE: f64 = 0.95;
+
+/// Following moves the eye back at most this many times the step's initial distance.
+pub const FOLLOW_MAX_ZOOM_OUT: f64 = 10.0;
+
+/// Aspect ratio (width / height, in pixels) of the scene pane before the app reports it: the
+/// pane of a 120 × 40 terminal.
+pub const DEFAULT_ASPECT: f64 = 1.75;
+
 /// Which spring kinds are drawn (`t` cycles through them).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SpringFilter {
     /// Every spring.
     All,
@@ -154,7 +171,23 @@ pub struct LessonRun {
     max_steps_per_frame: u64,
     last_frame_steps: u64,
     rates: Rates,
+    /// The camera the pane shows (every view, and `e`).
     camera: Camera,
+    /// The step's initial camera, restored by `r`, `c` and on entering a step.
+    home: Camera,
+    /// The camera keeps the bodies in view.
+    follow: bool,
+    /// Width / height of the scene pane in pixels.
+    aspect: f64,
+    /// Changes whenever the scene's structure (bodies, springs) may have changed.
+    generation: u64,
+    /// The last cell of a drag that pans the view (the left button on empty space).
+    pan_drag: Option<(u16, u16)>,
+    /// Changes whenever what the pane shows may have changed (a key, the mouse, a step).
+    version: u64,
+    /// Pixels of a cell in the view shown (dots for braille and half-blocks, the font cell for
+    /// raster): the mouse maps cells to the scene through it.
+    grid: (u32, u32),
     filter: SpringFilter,
     history: History,
     oscillator: Option<Oscillator>,
@@ -179,7 +212,14 @@ impl LessonRun {
         let sim = build(&lesson, step)?;
         let mut run = LessonRun {
             initial: Vec::new(),
-            camera: Camera::fit(&sim.scene),
+            camera: Camera::default(),
+            home: Camera::default(),
+            follow: true,
+            aspect: DEFAULT_ASPECT,
+            generation: 0,
+            pan_drag: None,
+            version: 0,
+            grid: sim_view::DOTS,
             history: History::new(sim.dt(), None),
             sim,
             lesson,
@@ -215,7 +255,11 @@ impl LessonRun {
     /// Everything that follows from a freshly built scene.
     fn start_step(&mut self) {
         self.initial = self.sim.states().cloned().collect();
-        self.camera = Camera::fit(&self.sim.scene);
+        self.generation += 1;
+        self.home = Camera::for_scene(&self.sim.scene, self.aspect, Projection::default());
+        self.camera = self.home;
+        self.follow = true;
+        self.pan_drag = None;
         self.oscillator = Oscillator::detect(&self.sim.scene);
         let step = &self.lesson.steps[self.step];
         self.studies = Studies::compute(&step.plots, &step.scene, &step.params);
@@ -315,6 +359,125 @@ impl LessonRun {
     #[must_use]
     pub fn camera(&self) -> &Camera {
         &self.camera
+    }
+
+    /// The step's initial camera (what `r` and `c` return to).
+    #[must_use]
+    pub fn home_camera(&self) -> &Camera {
+        &self.home
+    }
+
+    /// True while the camera follows the bodies.
+    #[must_use]
+    pub fn follows(&self) -> bool {
+        self.follow
+    }
+
+    /// Width / height of the scene pane in pixels, as last reported.
+    #[must_use]
+    pub fn aspect(&self) -> f64 {
+        self.aspect
+    }
+
+    /// Changes whenever the scene's bodies or springs may have changed (a renderer made for an
+    /// older generation must be rebuilt).
+    #[must_use]
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// Changes whenever what the scene pane shows may have changed.
+    #[must_use]
+    pub fn version(&self) -> u64 {
+        self.version
+    }
+
+    /// Tells the run the pixel size of a cell in the view shown (see [`sim_view::grid_view`]).
+    pub fn set_grid(&mut self, grid: (u32, u32)) {
+        self.grid = (grid.0.max(1), grid.1.max(1));
+    }
+
+    /// Shows `message` on the hint line.
+    pub fn set_message(&mut self, message: impl Into<String>) {
+        self.message = Some(message.into());
+    }
+
+    /// Tells the run the scene pane's aspect ratio (width / height in pixels). The step's
+    /// initial view is framed for it; a camera the user has not moved follows the new framing.
+    pub fn set_aspect(&mut self, aspect: f64) {
+        if !(aspect.is_finite() && aspect > 0.0) || (aspect / self.aspect - 1.0).abs() < 1e-3 {
+            return;
+        }
+        self.aspect = aspect;
+        self.version += 1;
+        let untouched = self.camera == self.home;
+        self.home = Camera::for_scene(&self.scene_at_start(), aspect, Projection::default());
+        if untouched {
+            self.camera = self.home;
+        }
+    }
+
+    /// The scene with the bodies' initial states.
+    fn scene_at_start(&self) -> crate::scene::Scene {
+        let mut scene = self.sim.scene.clone();
+        for (body, initial) in scene.bodies.iter_mut().zip(&self.initial) {
+            body.state = initial.clone();
+        }
+        scene
+    }
+
+    /// Turns following on or off.
+    pub fn set_follow(&mut self, on: bool) {
+        self.follow = on;
+        if on {
+            self.follow_bodies();
+        }
+    }
+
+    /// Moves the camera so that every body is in view (see [`Camera::follow`]).
+    fn follow_bodies(&mut self) {
+        if self.sim.diverged.is_some() {
+            return;
+        }
+        let mut points: Vec<DVec3> = Vec::new();
+        for body in &self.sim.scene.bodies {
+            points.extend(body.state.x.iter().copied());
+            for s in &body.state.spheres {
+                points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::X));
+                points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::Y));
+                points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::Z));
+            }
+        }
+        let max_distance = self.home.distance * FOLLOW_MAX_ZOOM_OUT;
+        let max_height = self.home.visible_height() * FOLLOW_MAX_ZOOM_OUT;
+        self.camera
+            .follow(&points, self.aspect, FOLLOW_ZONE, max_distance, max_height);
+    }
+
+    fn zoom(&mut self, factor: f64) {
+        let before = self.camera;
+        self.camera.zoom(factor);
+        if self.follow {
+            self.follow_bodies();
+            if factor > 1.0 && self.camera.distance >= before.distance {
+                self.message = Some(
+                    "following keeps every body in view: f stops following, to zoom closer".into(),
+                );
+            }
+        }
+    }
+
+    fn pan(&mut self, right: f64, up: f64) {
+        self.camera.pan(right, up);
+        if self.follow {
+            self.follow_bodies();
+        }
+    }
+
+    /// Back to the step's initial view.
+    pub fn reset_camera(&mut self) {
+        self.camera = self.home;
+        self.pan_drag = None;
     }
 
     /// Which springs are drawn.
@@ -452,8 +615,11 @@ impl LessonRun {
             (self.accumulator - taken as f64 * dt).max(0.0)
         };
         self.last_frame_steps = taken;
+        self.version += 1;
         self.rates.add(wall_dt, taken as f64 * dt, taken);
-        self.camera.follow(&self.sim);
+        if self.follow {
+            self.follow_bodies();
+        }
     }
 
     /// One step, then the history, the goal and the divergence check; true when it diverged.
@@ -492,9 +658,28 @@ impl LessonRun {
         self.goal = goal.check(&mut self.goal_progress, time, speed, diverged);
     }
 
-    /// Handles a key of the lesson screen (the app handles `q`, Esc, `?` and Ctrl-C).
+    /// Handles a key of the lesson screen (the app handles `q`, Esc, `?`, `v` and Ctrl-C).
     pub fn handle_key(&mut self, code: KeyCode) {
+        self.handle_key_with(code, KeyModifiers::NONE);
+    }
+
+    /// As [`LessonRun::handle_key`], with the modifier keys held (Shift + arrows pan).
+    pub fn handle_key_with(&mut self, code: KeyCode, modifiers: KeyModifiers) {
         self.message = None;
+        self.version += 1;
+        if modifiers.contains(KeyModifiers::SHIFT) {
+            let moved = match code {
+                KeyCode::Left => Some((-PAN_STEP, 0.0)),
+                KeyCode::Right => Some((PAN_STEP, 0.0)),
+                KeyCode::Up => Some((0.0, PAN_STEP)),
+                KeyCode::Down => Some((0.0, -PAN_STEP)),
+                _ => None,
+            };
+            if let Some((right, up)) = moved {
+                self.pan(right, up);
+                return;
+            }
+        }
         match code {
             KeyCode::Char(' ') => self.toggle_run(),
             KeyCode::Char('s') => self.single_step(),
@@ -510,10 +695,24 @@ impl LessonRun {
             KeyCode::Char('k') => self.scale_stiffness(1.0 / COEFFICIENT_FACTOR),
             KeyCode::Char('D') => self.scale_damping(true),
             KeyCode::Char('d') => self.scale_damping(false),
-            KeyCode::Left => self.camera.orbit(-ORBIT_STEP_DEGREES, 0.0),
-            KeyCode::Right => self.camera.orbit(ORBIT_STEP_DEGREES, 0.0),
-            KeyCode::Up => self.camera.orbit(0.0, ORBIT_STEP_DEGREES),
-            KeyCode::Down => self.camera.orbit(0.0, -ORBIT_STEP_DEGREES),
+            KeyCode::Left => self.turn(-ORBIT_STEP_DEGREES, 0.0),
+            KeyCode::Right => self.turn(ORBIT_STEP_DEGREES, 0.0),
+            KeyCode::Up => self.turn(0.0, ORBIT_STEP_DEGREES),
+            KeyCode::Down => self.turn(0.0, -ORBIT_STEP_DEGREES),
+            KeyCode::Char('i') => self.zoom(ZOOM_STEP),
+            KeyCode::Char('o') => self.zoom(1.0 / ZOOM_STEP),
+            KeyCode::Char('f') => {
+                self.set_follow(!self.follow);
+                self.message = Some(if self.follow {
+                    "the camera follows the bodies".into()
+                } else {
+                    "the camera stays where it is".into()
+                });
+            }
+            KeyCode::Char('c') => {
+                self.reset_camera();
+                self.message = Some("back to the step's first view".into());
+            }
             KeyCode::Char(c @ '1'..='4') => self.toggle_corner(c as usize - '1' as usize),
             KeyCode::Char('t') => self.filter = self.filter.next(),
             KeyCode::Char('e') => self.export(),
@@ -525,6 +724,13 @@ impl LessonRun {
             KeyCode::PageDown => self.text_scroll = self.text_scroll.saturating_add(5).min(999),
             KeyCode::PageUp => self.text_scroll = self.text_scroll.saturating_sub(5),
             _ => {}
+        }
+    }
+
+    fn turn(&mut self, orbit: f64, elevation: f64) {
+        self.camera.turn(orbit, elevation);
+        if self.follow {
+            self.follow_bodies();
         }
     }
 
@@ -564,6 +770,7 @@ impl LessonRun {
             self.sim.set_dt(dt);
         }
         self.running = false;
+        self.reset_camera();
         // The exact solution starts again from the initial state.
         self.oscillator = Oscillator::detect(&self.sim.scene);
         self.restart_records();
@@ -685,6 +892,7 @@ impl LessonRun {
         {
             return;
         }
+        self.generation += 1;
         let body = &mut self.sim.scene.bodies[cloth.body];
         if body.model.is_pinned(p) {
             body.model.unpin(p);
@@ -702,12 +910,10 @@ impl LessonRun {
             self.step + 1,
             self.sim.steps
         ));
-        self.message = Some(
-            match export::export_png(&self.sim, self.camera.yaw, self.camera.pitch, &path) {
-                Ok(p) => format!("wrote {}", p.display()),
-                Err(e) => e,
-            },
-        );
+        self.message = Some(match export::export_png(self, &path) {
+            Ok(p) => format!("wrote {}", p.display()),
+            Err(e) => e,
+        });
     }
 
     /// Opens step `step` (0-based) of the lesson.
@@ -730,17 +936,47 @@ impl LessonRun {
     /// Grabs, drags and releases particles with the left button; `canvas` is the canvas's inner
     /// area on screen. Returns true when something changed.
     pub fn handle_mouse(&mut self, mouse: MouseEvent, canvas: Rect) -> bool {
+        let changed = self.mouse(mouse, canvas);
+        if changed {
+            self.version += 1;
+        }
+        changed
+    }
+
+    fn mouse(&mut self, mouse: MouseEvent, canvas: Rect) -> bool {
         match mouse.kind {
+            MouseEventKind::ScrollUp | MouseEventKind::ScrollDown
+                if contains(canvas, mouse.column, mouse.row) =>
+            {
+                self.message = None;
+                self.zoom(if mouse.kind == MouseEventKind::ScrollUp {
+                    ZOOM_STEP
+                } else {
+                    1.0 / ZOOM_STEP
+                });
+                true
+            }
             MouseEventKind::Down(MouseButton::Left) => {
                 self.release();
+                self.pan_drag = None;
                 if self.sim.diverged.is_some() {
                     return false;
                 }
-                let Some((body, index, depth)) =
-                    self.camera.pick(&self.sim, canvas, mouse.column, mouse.row)
-                else {
+                let Some((body, index, depth)) = sim_view::pick(
+                    &self.camera,
+                    &self.sim,
+                    canvas,
+                    self.grid,
+                    mouse.column,
+                    mouse.row,
+                ) else {
+                    // Empty space: the drag pans the view.
+                    if contains(canvas, mouse.column, mouse.row) {
+                        self.pan_drag = Some((mouse.column, mouse.row));
+                    }
                     return false;
                 };
+                self.generation += 1;
                 let b = &mut self.sim.scene.bodies[body];
                 let inv_mass = b.model.inv_mass[index];
                 pin_particle(&mut b.model, &mut b.state, index);
@@ -755,10 +991,27 @@ impl LessonRun {
             }
             MouseEventKind::Drag(MouseButton::Left) => {
                 let Some(drag) = self.drag else {
-                    return false;
+                    let Some((c0, r0)) = self.pan_drag else {
+                        return false;
+                    };
+                    let (w, h) = (
+                        f64::from(canvas.width.max(1)),
+                        f64::from(canvas.height.max(1)),
+                    );
+                    let dx = f64::from(mouse.column) - f64::from(c0);
+                    let dy = f64::from(mouse.row) - f64::from(r0);
+                    self.pan_drag = Some((mouse.column, mouse.row));
+                    self.pan(-dx / w * self.aspect, dy / h);
+                    return true;
                 };
-                let (vx, vy) = self.camera.cell_to_view(canvas, mouse.column, mouse.row);
-                let p = self.camera.unproject(DVec3::new(vx, vy, drag.depth));
+                let p = sim_view::cell_to_world(
+                    &self.camera,
+                    canvas,
+                    self.grid,
+                    mouse.column,
+                    mouse.row,
+                    drag.depth,
+                );
                 let state = &mut self.sim.scene.bodies[drag.body].state;
                 state.x[drag.index] = p;
                 state.x_prev[drag.index] = p;
@@ -766,6 +1019,7 @@ impl LessonRun {
                 true
             }
             MouseEventKind::Up(MouseButton::Left) => {
+                self.pan_drag = None;
                 let held = self.drag.is_some();
                 self.release();
                 held
@@ -789,6 +1043,10 @@ impl LessonRun {
     fn text_scroll(&self) -> u16 {
         self.text_scroll
     }
+}
+
+fn contains(r: Rect, column: u16, row: u16) -> bool {
+    column >= r.x && column < r.x + r.width && row >= r.y && row < r.y + r.height
 }
 
 fn build(lesson: &Lesson, step: usize) -> Result<Simulation, String> {
@@ -843,7 +1101,9 @@ fn find_cloth(sim: &Simulation) -> Option<Cloth> {
 pub fn render(
     run: &LessonRun,
     fps: Option<f64>,
+    view: &str,
     theme: Theme,
+    painter: &dyn Painter,
     area: Rect,
     buf: &mut Buffer,
 ) -> Rect {
@@ -859,15 +1119,9 @@ pub fn render(
         Layout::horizontal([Constraint::Percentage(40), Constraint::Fill(1)]).areas(body);
     render_text(run, theme, left, buf);
     let step = run.step();
-    let canvas = if step.plots.is_empty() {
-        sim_view::render(run, theme, right, buf)
-    } else {
-        let plot_height = (right.height * 2 / 5)
-            .max(8)
-            .min(right.height.saturating_sub(6));
-        let [scene, plot_area] =
-            Layout::vertical([Constraint::Fill(1), Constraint::Length(plot_height)]).areas(right);
-        let inner = sim_view::render(run, theme, scene, buf);
+    let (scene, plot_area) = split_right(step, right);
+    let canvas = sim_view::render(run, theme, painter, scene, buf);
+    if let Some(plot_area) = plot_area {
         plots::render(
             &step.plots,
             run.history(),
@@ -878,11 +1132,39 @@ pub fn render(
             plot_area,
             buf,
         );
-        inner
-    };
-    status::render(run, fps, theme, status_area, buf);
+    }
+    status::render(run, fps, view, theme, status_area, buf);
     render_hints(run, theme, hints, buf);
     canvas
+}
+
+/// The scene pane and the plots' area of the right column (no plots: the whole column).
+fn split_right(step: &Step, right: Rect) -> (Rect, Option<Rect>) {
+    if step.plots.is_empty() {
+        return (right, None);
+    }
+    let plot_height = (right.height * 2 / 5)
+        .max(8)
+        .min(right.height.saturating_sub(6));
+    let [scene, plot_area] =
+        Layout::vertical([Constraint::Fill(1), Constraint::Length(plot_height)]).areas(right);
+    (scene, Some(plot_area))
+}
+
+/// The scene pane's inner area (inside its border) when the lesson screen fills `area`.
+#[must_use]
+pub fn scene_inner(run: &LessonRun, area: Rect) -> Rect {
+    let [_, body, _, _] = Layout::vertical([
+        Constraint::Length(1),
+        Constraint::Fill(1),
+        Constraint::Length(2),
+        Constraint::Length(1),
+    ])
+    .areas(area);
+    let [_, right] =
+        Layout::horizontal([Constraint::Percentage(40), Constraint::Fill(1)]).areas(body);
+    let (scene, _) = split_right(run.step(), right);
+    ratatui::widgets::Block::bordered().inner(scene)
 }
 
 fn render_header(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
@@ -990,8 +1272,8 @@ fn render_hints(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
     let line = match run.message() {
         Some(m) => Line::from(Span::styled(format!(" {m}"), theme.fg(Color::Yellow))),
         None => Line::from(Span::styled(
-            " space run · s step · r reset · m method · +/- dt · k/K d/D · n/p step · ? help · \
-             q menu",
+            " space run · s step · r reset · m method · +/- dt · k/K d/D · v view · n/p step · \
+             ? help · q menu",
             theme.dim(),
         )),
     };

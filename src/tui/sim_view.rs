@@ -1,18 +1,14 @@
-//! The live scene on a braille canvas: an orbit camera, an orthographic projection, springs
-//! coloured by kind, particles, pinned markers and the colliders' outlines.
+//! The scene pane: its border and title, and the scene drawn in one of three views — the
+//! rasterised frame through a terminal graphics protocol, the same frame as colour half-blocks,
+//! or a braille line drawing — all through the one camera of [`crate::render::camera`].
 //!
 //! # Projection
 //!
-//! ```text
-//! d  = p - c                                  c: the point the camera orbits (m)
-//! x1 =  d.x cos ψ + d.z sin ψ                 ψ: yaw (angle about +y), rad
-//! z1 = -d.x sin ψ + d.z cos ψ
-//! view x = x1
-//! view y = d.y cos θ - z1 sin θ               θ: elevation (camera above the scene for θ > 0)
-//! depth  = d.y sin θ + z1 cos θ               towards the viewer
-//! ```
-//! Orthographic: distances in the view plane are metres, the same along x and y (the canvas
-//! bounds follow the cell aspect, a braille dot is about square), so circles stay round.
+//! Every view projects with [`View`]: the pane's inner `w × h` cells are an image of
+//! `2w × 4h` braille dots (a dot is square on a cell of aspect 1 : 2), `w × 2h` half-block
+//! pixels, or `w·c_w × h·c_h` pixels of the terminal's font cell (raster). These have the same
+//! aspect ratio, so the camera shows the same region of the world in each, and [`pick`] and
+//! [`cell_to_world`] (the mouse) invert the same projection.
 
 use glam::DVec3;
 use ratatui::buffer::Buffer;
@@ -27,264 +23,101 @@ use super::Theme;
 use super::lesson_view::{LessonRun, SpringFilter};
 use crate::physics::SpringKind;
 use crate::physics::collide::Collider;
-use crate::scene::Scene;
+use crate::render::camera::plane_axes;
+use crate::render::{Camera, View};
 use crate::simulation::Simulation;
 
 /// Degrees the arrow keys turn the camera.
 pub const ORBIT_STEP_DEGREES: f64 = 15.0;
 
-/// The view may grow to this many times its first size to follow the particles.
-const MAX_GROWTH: f64 = 4.0;
+/// Braille dots per cell across and down (the grid of the braille and half-block views: a
+/// half-block pixel is two dots square).
+pub const DOTS: (u32, u32) = (2, 4);
 
-/// An orbit camera with an orthographic projection (see the module documentation).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Camera {
-    /// Angle about the vertical axis (rad).
-    pub yaw: f64,
-    /// Elevation above the horizontal (rad), within ±89°.
-    pub pitch: f64,
-    /// The point at the centre of the view (m).
-    pub center: DVec3,
-    /// Radius of the sphere around `center` that the view shows (m).
-    pub radius: f64,
-    first_radius: f64,
+/// The view of `camera` on a pane with inner area `inner` whose cells are `grid` pixels (dots)
+/// across and down: [`DOTS`] for the braille and half-block views, the font cell for raster.
+#[must_use]
+pub fn grid_view(camera: &Camera, inner: Rect, grid: (u32, u32)) -> View {
+    View::new(
+        camera,
+        u32::from(inner.width.max(1)) * grid.0.max(1),
+        u32::from(inner.height.max(1)) * grid.1.max(1),
+    )
 }
 
-impl Camera {
-    /// A camera that shows `scene`: its particles, where hanging particles can swing to, and its
-    /// colliders. Flat scenes in the x-y plane are seen from the front; others from above at an
-    /// angle.
-    #[must_use]
-    pub fn fit(scene: &Scene) -> Camera {
-        let mut bounds = Bounds::default();
-        let mut add = |p: DVec3| bounds.add(p);
-        let mut flat = true;
-        for body in &scene.bodies {
-            let (model, state) = (&body.model, &body.state);
-            for (p, v) in state.x.iter().zip(&state.v) {
-                add(*p);
-                flat &= p.z == 0.0 && v.z == 0.0;
-            }
-            // Where a particle can hang: straight down from its nearest pinned particle.
-            let down = model.gravity.normalize_or_zero();
-            let pins: Vec<DVec3> = (0..model.particle_count())
-                .filter(|&i| model.is_pinned(i))
-                .map(|i| state.x[i])
-                .collect();
-            if down != DVec3::ZERO && !pins.is_empty() {
-                for p in &state.x {
-                    let (pin, distance) = pins.iter().map(|q| (*q, (*p - *q).length())).fold(
-                        (DVec3::ZERO, f64::INFINITY),
-                        |a, b| if b.1 < a.1 { b } else { a },
-                    );
-                    add(pin + down * distance);
-                }
-            }
-            for s in &state.spheres {
-                add(s.center - DVec3::splat(s.radius));
-                add(s.center + DVec3::splat(s.radius));
-                flat = false;
-            }
-            flat &= model.colliders.is_empty();
-        }
-        let mid = bounds.mid().unwrap_or(DVec3::ZERO);
-        let mut add = |p: DVec3| bounds.add(p);
-        for body in &scene.bodies {
-            for c in &body.model.colliders {
-                match *c {
-                    Collider::Plane { point, normal }
-                    | Collider::HolePlane { point, normal, .. } => {
-                        add(mid - (mid - point).dot(normal) * normal);
-                    }
-                    Collider::Sphere { center, radius } => {
-                        add(center - DVec3::splat(radius));
-                        add(center + DVec3::splat(radius));
-                    }
-                    Collider::Bowl {
-                        center,
-                        radius,
-                        rim_height,
-                    } => {
-                        add(center - DVec3::splat(radius));
-                        add(DVec3::new(
-                            center.x + radius,
-                            rim_height.min(center.y),
-                            center.z + radius,
-                        ));
-                    }
-                }
-            }
-        }
-        let (center, radius) = match bounds.mid() {
-            Some(mid) => (
-                mid,
-                (0.5 * (bounds.hi - bounds.lo).length() * 1.05).max(0.5),
-            ),
-            None => (DVec3::ZERO, 1.0),
-        };
-        let (yaw, pitch) = if flat {
-            (0.0, 0.0)
-        } else {
-            ((-30f64).to_radians(), 25f64.to_radians())
-        };
-        Camera {
-            yaw,
-            pitch,
-            center,
-            radius,
-            first_radius: radius,
-        }
-    }
-
-    /// `p` (m) in view coordinates: `(x, y)` on the screen plane and depth towards the viewer.
-    #[must_use]
-    pub fn project(&self, p: DVec3) -> DVec3 {
-        let d = p - self.center;
-        let (sy, cy) = self.yaw.sin_cos();
-        let (sp, cp) = self.pitch.sin_cos();
-        let x1 = d.x * cy + d.z * sy;
-        let z1 = -d.x * sy + d.z * cy;
-        DVec3::new(x1, d.y * cp - z1 * sp, d.y * sp + z1 * cp)
-    }
-
-    /// The world point (m) at view coordinates `v` (the inverse of [`Camera::project`]).
-    #[must_use]
-    pub fn unproject(&self, v: DVec3) -> DVec3 {
-        let (sy, cy) = self.yaw.sin_cos();
-        let (sp, cp) = self.pitch.sin_cos();
-        let dy = v.y * cp + v.z * sp;
-        let z1 = -v.y * sp + v.z * cp;
-        let dx = v.x * cy - z1 * sy;
-        let dz = v.x * sy + z1 * cy;
-        self.center + DVec3::new(dx, dy, dz)
-    }
-
-    /// Turns the camera by `yaw` and `pitch` degrees (the elevation stays within ±89°).
-    pub fn orbit(&mut self, yaw: f64, pitch: f64) {
-        self.yaw = (self.yaw + yaw.to_radians()).rem_euclid(std::f64::consts::TAU);
-        let limit = 89f64.to_radians();
-        self.pitch = (self.pitch + pitch.to_radians()).clamp(-limit, limit);
-    }
-
-    /// Yaw and elevation in whole degrees, yaw in `(-180, 180]`.
-    #[must_use]
-    pub fn angles_degrees(&self) -> (i64, i64) {
-        let mut yaw = self.yaw.to_degrees().round() as i64 % 360;
-        if yaw > 180 {
-            yaw -= 360;
-        } else if yaw <= -180 {
-            yaw += 360;
-        }
-        (yaw, self.pitch.to_degrees().round() as i64)
-    }
-
-    /// Widens the view (up to four times its first size) when a particle leaves it; never
-    /// narrows it, so the picture does not jump back and forth.
-    pub fn follow(&mut self, sim: &Simulation) {
-        let mut far = 0.0f64;
-        for p in sim.positions() {
-            let d = (p - self.center).length();
-            if d.is_finite() {
-                far = far.max(d);
-            }
-        }
-        if far > self.radius {
-            self.radius = (far * 1.2).min(self.first_radius * MAX_GROWTH);
-        }
-    }
-
-    /// The canvas bounds `(x, y)` in view coordinates for a canvas of `width × height` cells:
-    /// at least `±radius` both ways, with equal scales along x and y (a cell is half as wide as
-    /// it is tall, a braille dot about square).
-    #[must_use]
-    pub fn bounds(&self, width: u16, height: u16) -> ([f64; 2], [f64; 2]) {
-        let (w, h) = (f64::from(width.max(1)), f64::from(height.max(1)));
-        let r = self.radius;
-        let (half_x, half_y) = if w / (2.0 * h) >= 1.0 {
-            (r * w / (2.0 * h), r)
-        } else {
-            (r, r * 2.0 * h / w)
-        };
-        ([-half_x, half_x], [-half_y, half_y])
-    }
-
-    /// View coordinates of the centre of cell `(column, row)` of the canvas at `inner`.
-    #[must_use]
-    pub fn cell_to_view(&self, inner: Rect, column: u16, row: u16) -> (f64, f64) {
-        let ([x0, x1], [y0, y1]) = self.bounds(inner.width, inner.height);
-        let fx = (f64::from(column) - f64::from(inner.x) + 0.5) / f64::from(inner.width.max(1));
-        let fy = (f64::from(row) - f64::from(inner.y) + 0.5) / f64::from(inner.height.max(1));
-        (x0 + fx * (x1 - x0), y1 - fy * (y1 - y0))
-    }
-
-    /// The particle nearest to cell `(column, row)`, within 3 columns (rows count double, being
-    /// twice as tall): `(body, particle, depth)`.
-    #[must_use]
-    pub fn pick(
-        &self,
-        sim: &Simulation,
-        inner: Rect,
-        column: u16,
-        row: u16,
-    ) -> Option<(usize, usize, f64)> {
-        if !inner_contains(inner, column, row) {
-            return None;
-        }
-        let ([x0, x1], [y0, y1]) = self.bounds(inner.width, inner.height);
-        let (w, h) = (f64::from(inner.width), f64::from(inner.height));
-        let (cx, cy) = (
-            f64::from(column - inner.x) + 0.5,
-            f64::from(row - inner.y) + 0.5,
-        );
-        let mut best: Option<(usize, usize, f64, f64)> = None;
-        for (b, body) in sim.scene.bodies.iter().enumerate() {
-            for (i, p) in body.state.x.iter().enumerate() {
-                let v = self.project(*p);
-                let px = (v.x - x0) / (x1 - x0) * w;
-                let py = (y1 - v.y) / (y1 - y0) * h;
-                let d2 = (px - cx).powi(2) + (2.0 * (py - cy)).powi(2);
-                if d2.is_finite() && d2 <= 9.0 && best.is_none_or(|(_, _, _, bd)| d2 < bd) {
-                    best = Some((b, i, v.z, d2));
-                }
-            }
-        }
-        best.map(|(b, i, z, _)| (b, i, z))
-    }
+/// The view of `camera` on the braille dots of a pane with inner area `inner`.
+#[must_use]
+pub fn dot_view(camera: &Camera, inner: Rect) -> View {
+    grid_view(camera, inner, DOTS)
 }
 
-/// An axis-aligned box grown point by point.
-struct Bounds {
-    lo: DVec3,
-    hi: DVec3,
+/// The world point (m) under the centre of cell `(column, row)` of the pane `inner` (cells of
+/// `grid` pixels), at depth `depth` (m) from the eye.
+#[must_use]
+pub fn cell_to_world(
+    camera: &Camera,
+    inner: Rect,
+    grid: (u32, u32),
+    column: u16,
+    row: u16,
+    depth: f64,
+) -> DVec3 {
+    let view = grid_view(camera, inner, grid);
+    let x = (f64::from(column) - f64::from(inner.x) + 0.5) * f64::from(grid.0);
+    let y = (f64::from(row) - f64::from(inner.y) + 0.5) * f64::from(grid.1);
+    view.unproject(x, y, depth)
 }
 
-impl Default for Bounds {
-    fn default() -> Bounds {
-        Bounds {
-            lo: DVec3::splat(f64::INFINITY),
-            hi: DVec3::splat(f64::NEG_INFINITY),
+/// The particle nearest to cell `(column, row)` of the pane `inner` (cells of `grid` pixels),
+/// within 3 columns (distances measured in pixels, so rows count by their height):
+/// `(body, particle, depth)`; the nearest to the eye wins a tie.
+#[must_use]
+pub fn pick(
+    camera: &Camera,
+    sim: &Simulation,
+    inner: Rect,
+    grid: (u32, u32),
+    column: u16,
+    row: u16,
+) -> Option<(usize, usize, f64)> {
+    if !inner_contains(inner, column, row) {
+        return None;
+    }
+    let view = grid_view(camera, inner, grid);
+    let cx = (f64::from(column - inner.x) + 0.5) * f64::from(grid.0);
+    let cy = (f64::from(row - inner.y) + 0.5) * f64::from(grid.1);
+    let reach2 = (3.0 * f64::from(grid.0)).powi(2);
+    let mut best: Option<(usize, usize, f64, f64)> = None;
+    for (b, body) in sim.scene.bodies.iter().enumerate() {
+        for (i, p) in body.state.x.iter().enumerate() {
+            let Some(q) = view.project(*p) else {
+                continue;
+            };
+            let d2 = (f64::from(q.x) - cx).powi(2) + (f64::from(q.y) - cy).powi(2);
+            let better = best.is_none_or(|(_, _, bz, bd)| {
+                d2 < bd - 1e-9 || ((d2 - bd).abs() <= 1e-9 && q.depth < bz)
+            });
+            if d2.is_finite() && d2 <= reach2 && better {
+                best = Some((b, i, q.depth, d2));
+            }
         }
     }
+    best.map(|(b, i, z, _)| (b, i, z))
 }
 
-impl Bounds {
-    fn add(&mut self, p: DVec3) {
-        if p.is_finite() {
-            self.lo = self.lo.min(p);
-            self.hi = self.hi.max(p);
-        }
-    }
-
-    fn mid(&self) -> Option<DVec3> {
-        (self.lo.is_finite() && self.hi.is_finite()).then(|| 0.5 * (self.lo + self.hi))
-    }
+/// Draws the scene's content into the pane's inner area (the half-block and raster views).
+pub trait Painter {
+    /// Draws `run`'s scene into `inner`.
+    fn paint(&self, run: &LessonRun, theme: Theme, inner: Rect, buf: &mut Buffer);
 }
 
-fn inner_contains(inner: Rect, column: u16, row: u16) -> bool {
-    column >= inner.x
-        && column < inner.x + inner.width
-        && row >= inner.y
-        && row < inner.y + inner.height
+/// The braille line drawing (no image at all).
+pub struct Braille;
+
+impl Painter for Braille {
+    fn paint(&self, run: &LessonRun, theme: Theme, inner: Rect, buf: &mut Buffer) {
+        braille(run, theme, inner, buf);
+    }
 }
 
 /// Colour of body `b`'s structural springs (the ropes scene has two bodies).
@@ -304,11 +137,18 @@ const MAX_POINTS: usize = 400;
 /// Scenes with at most this many particles mark each one with a dot a cell wide.
 const MAX_MARKED: usize = 64;
 
-/// Draws the scene of `run` into `area` (with its border); returns the canvas's inner area.
-pub fn render(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) -> Rect {
+/// Draws the pane of `run` into `area`: its border and titles, then the scene by `painter`
+/// (or the divergence message); returns the pane's inner area.
+pub fn render(
+    run: &LessonRun,
+    theme: Theme,
+    painter: &dyn Painter,
+    area: Rect,
+    buf: &mut Buffer,
+) -> Rect {
     let sim = run.sim();
     let camera = run.camera();
-    let (yaw, pitch) = camera.angles_degrees();
+    let (orbit, elevation) = camera.angles_degrees();
     let plural = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
     let title = format!(
         " {} · {} · {} ",
@@ -317,7 +157,8 @@ pub fn render(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) -> Re
         plural(sim.scene.spring_count(), "spring")
     );
     let bottom = format!(
-        " view {yaw}°/{pitch}° (arrows) · springs: {} (t) ",
+        " view {orbit}°/{elevation}°{} · springs: {} (t) ",
+        if run.follows() { " · follow" } else { "" },
         run.spring_filter().name()
     );
     let block = Block::bordered()
@@ -351,88 +192,7 @@ pub fn render(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) -> Re
             .render(rect, buf);
         return inner;
     }
-    let (x_bounds, y_bounds) = camera.bounds(inner.width, inner.height);
-    let filter = run.spring_filter();
-    let drag = run.dragged();
-    Canvas::default()
-        .marker(Marker::Braille)
-        .x_bounds(x_bounds)
-        .y_bounds(y_bounds)
-        .paint(|ctx| {
-            draw_colliders(ctx, sim, camera, theme.color(Color::DarkGray));
-            for kind in [SpringKind::Bend, SpringKind::Shear, SpringKind::Struct] {
-                if !filter.shows(kind) {
-                    continue;
-                }
-                for (b, body) in sim.scene.bodies.iter().enumerate() {
-                    let color = theme.color(spring_color(b, kind));
-                    let x = &body.state.x;
-                    for s in body.model.springs.iter().filter(|s| s.kind == kind) {
-                        let p = camera.project(x[s.a as usize]);
-                        let q = camera.project(x[s.b as usize]);
-                        ctx.draw(&CanvasLine::new(p.x, p.y, q.x, q.y, color));
-                    }
-                }
-            }
-            let many = sim.scene.particle_count() > MAX_POINTS && filter != SpringFilter::None;
-            let mut pinned = Vec::new();
-            let mut free = Vec::new();
-            let marked = sim.scene.particle_count() <= MAX_MARKED;
-            for (b, body) in sim.scene.bodies.iter().enumerate() {
-                let coords: Vec<(f64, f64)> = body
-                    .state
-                    .x
-                    .iter()
-                    .map(|p| {
-                        let v = camera.project(*p);
-                        (v.x, v.y)
-                    })
-                    .collect();
-                if !many {
-                    ctx.draw(&Points::new(&coords, theme.color(Color::White)));
-                }
-                for (i, c) in coords.iter().enumerate() {
-                    let held = drag.is_some_and(|(db, di)| db == b && di == i);
-                    if body.model.is_pinned(i) && !held {
-                        pinned.push(*c);
-                    } else if marked && !held {
-                        free.push(*c);
-                    }
-                }
-            }
-            ctx.layer();
-            // Marks only where they stay apart: neighbouring marks would hide the springs.
-            let cell = |(x, y): (f64, f64)| {
-                (
-                    ((x - x_bounds[0]) / (x_bounds[1] - x_bounds[0]) * f64::from(inner.width))
-                        .floor() as i64,
-                    ((y_bounds[1] - y) / (y_bounds[1] - y_bounds[0]) * f64::from(inner.height))
-                        .floor() as i64,
-                )
-            };
-            let cells: Vec<(i64, i64)> = free.iter().map(|&p| cell(p)).collect();
-            let crowded = cells.iter().enumerate().any(|(i, a)| {
-                cells[i + 1..]
-                    .iter()
-                    .any(|b| (a.0 - b.0).abs() <= 1 && (a.1 - b.1).abs() <= 1)
-            });
-            if crowded {
-                free.clear();
-            }
-            for (x, y) in free {
-                ctx.print(x, y, Span::styled("•", theme.fg(Color::White)));
-            }
-            for (x, y) in pinned {
-                ctx.print(x, y, Span::styled("■", theme.fg(Color::Yellow)));
-            }
-            if let Some((b, i)) = drag
-                && let Some(p) = sim.scene.bodies.get(b).and_then(|body| body.state.x.get(i))
-            {
-                let v = camera.project(*p);
-                ctx.print(v.x, v.y, Span::styled("●", theme.fg(Color::LightRed)));
-            }
-        })
-        .render(inner, buf);
+    painter.paint(run, theme, inner, buf);
     // With several bodies, a legend: which colour is which body and method.
     if sim.scene.bodies.len() > 1 {
         for (b, body) in sim
@@ -452,6 +212,124 @@ pub fn render(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) -> Re
     inner
 }
 
+/// Projection onto the braille canvas: pixels of [`dot_view`], y flipped (the canvas's y axis
+/// points up).
+struct Dots {
+    view: View,
+}
+
+impl Dots {
+    fn point(&self, p: DVec3) -> Option<(f64, f64)> {
+        self.view
+            .project(p)
+            .map(|q| (f64::from(q.x), self.view.height - f64::from(q.y)))
+    }
+
+    fn line(&self, ctx: &mut Context, a: DVec3, b: DVec3, color: Color) {
+        let (ca, cb) = (self.view.to_camera(a), self.view.to_camera(b));
+        if let Some((ca, cb)) = self.view.clip_segment(ca, cb)
+            && let (Some(p), Some(q)) = (self.view.project_camera(ca), self.view.project_camera(cb))
+        {
+            let h = self.view.height;
+            ctx.draw(&CanvasLine::new(
+                f64::from(p.x),
+                h - f64::from(p.y),
+                f64::from(q.x),
+                h - f64::from(q.y),
+                color,
+            ));
+        }
+    }
+
+    fn polyline(&self, ctx: &mut Context, points: &[DVec3], color: Color) {
+        for w in points.windows(2) {
+            self.line(ctx, w[0], w[1], color);
+        }
+    }
+}
+
+/// The braille line drawing of `run`'s scene in `inner`.
+fn braille(run: &LessonRun, theme: Theme, inner: Rect, buf: &mut Buffer) {
+    let sim = run.sim();
+    let dots = Dots {
+        view: dot_view(run.camera(), inner),
+    };
+    let (w, h) = (dots.view.width, dots.view.height);
+    let filter = run.spring_filter();
+    let drag = run.dragged();
+    let camera = run.camera();
+    Canvas::default()
+        .marker(Marker::Braille)
+        .x_bounds([0.0, w])
+        .y_bounds([0.0, h])
+        .paint(|ctx| {
+            draw_colliders(ctx, sim, camera, &dots, theme.color(Color::DarkGray));
+            for kind in [SpringKind::Bend, SpringKind::Shear, SpringKind::Struct] {
+                if !filter.shows(kind) {
+                    continue;
+                }
+                for (b, body) in sim.scene.bodies.iter().enumerate() {
+                    let color = theme.color(spring_color(b, kind));
+                    let x = &body.state.x;
+                    for s in body.model.springs.iter().filter(|s| s.kind == kind) {
+                        dots.line(ctx, x[s.a as usize], x[s.b as usize], color);
+                    }
+                }
+            }
+            let many = sim.scene.particle_count() > MAX_POINTS && filter != SpringFilter::None;
+            let mut pinned = Vec::new();
+            let mut free = Vec::new();
+            let marked = sim.scene.particle_count() <= MAX_MARKED;
+            for (b, body) in sim.scene.bodies.iter().enumerate() {
+                let coords: Vec<Option<(f64, f64)>> =
+                    body.state.x.iter().map(|p| dots.point(*p)).collect();
+                if !many {
+                    let shown: Vec<(f64, f64)> = coords.iter().flatten().copied().collect();
+                    ctx.draw(&Points::new(&shown, theme.color(Color::White)));
+                }
+                for (i, c) in coords.iter().enumerate() {
+                    let Some(c) = c else { continue };
+                    let held = drag.is_some_and(|(db, di)| db == b && di == i);
+                    if body.model.is_pinned(i) && !held {
+                        pinned.push(*c);
+                    } else if marked && !held {
+                        free.push(*c);
+                    }
+                }
+            }
+            ctx.layer();
+            // Marks only where they stay apart: neighbouring marks would hide the springs.
+            let cell = |(x, y): (f64, f64)| {
+                (
+                    (x / f64::from(DOTS.0)).floor() as i64,
+                    ((h - y) / f64::from(DOTS.1)).floor() as i64,
+                )
+            };
+            let cells: Vec<(i64, i64)> = free.iter().map(|&p| cell(p)).collect();
+            let crowded = cells.iter().enumerate().any(|(i, a)| {
+                cells[i + 1..]
+                    .iter()
+                    .any(|b| (a.0 - b.0).abs() <= 1 && (a.1 - b.1).abs() <= 1)
+            });
+            if crowded {
+                free.clear();
+            }
+            for (x, y) in free {
+                ctx.print(x, y, Span::styled("•", theme.fg(Color::White)));
+            }
+            for (x, y) in pinned {
+                ctx.print(x, y, Span::styled("■", theme.fg(Color::Yellow)));
+            }
+            if let Some((b, i)) = drag
+                && let Some(p) = sim.scene.bodies.get(b).and_then(|body| body.state.x.get(i))
+                && let Some((x, y)) = dots.point(*p)
+            {
+                ctx.print(x, y, Span::styled("●", theme.fg(Color::LightRed)));
+            }
+        })
+        .render(inner, buf);
+}
+
 /// Simulated time with as many decimals as the time step needs (2 to 6).
 #[must_use]
 pub fn time_text(t: f64, dt: f64) -> String {
@@ -459,17 +337,16 @@ pub fn time_text(t: f64, dt: f64) -> String {
     format!("{t:.decimals$}")
 }
 
-/// Segments of a polyline through `points` (m), projected.
-fn polyline(ctx: &mut Context, camera: &Camera, points: &[DVec3], color: Color) {
-    for w in points.windows(2) {
-        let (p, q) = (camera.project(w[0]), camera.project(w[1]));
-        ctx.draw(&CanvasLine::new(p.x, p.y, q.x, q.y, color));
-    }
+fn inner_contains(inner: Rect, column: u16, row: u16) -> bool {
+    column >= inner.x
+        && column < inner.x + inner.width
+        && row >= inner.y
+        && row < inner.y + inner.height
 }
 
 /// Points of the circle of `radius` (m) about `center` (m) in the plane normal to `normal`.
 fn circle(center: DVec3, normal: DVec3, radius: f64, segments: usize) -> Vec<DVec3> {
-    let (u, w) = normal.normalize_or_zero().any_orthonormal_pair();
+    let (u, w) = plane_axes(normal);
     (0..=segments)
         .map(|i| {
             let a = std::f64::consts::TAU * i as f64 / segments as f64;
@@ -482,14 +359,14 @@ fn circle(center: DVec3, normal: DVec3, radius: f64, segments: usize) -> Vec<DVe
 /// `origin` with unit `normal`; segments for which `skip(midpoint)` is true are left out.
 fn plane_grid(
     ctx: &mut Context,
-    camera: &Camera,
+    dots: &Dots,
     origin: DVec3,
     normal: DVec3,
     half: f64,
     color: Color,
     skip: &dyn Fn(DVec3) -> bool,
 ) {
-    let (u, w) = normal.any_orthonormal_pair();
+    let (u, w) = plane_axes(normal);
     let lines = 4;
     let pieces = 32;
     for (a, b) in [(u, w), (w, u)] {
@@ -501,21 +378,23 @@ fn plane_grid(
                 let p = origin + offset * a + s0 * b;
                 let q = origin + offset * a + s1 * b;
                 if !skip(0.5 * (p + q)) {
-                    polyline(ctx, camera, &[p, q], color);
+                    dots.line(ctx, p, q, color);
                 }
             }
         }
     }
 }
 
-fn draw_colliders(ctx: &mut Context, sim: &Simulation, camera: &Camera, color: Color) {
-    let half = camera.radius;
+fn draw_colliders(ctx: &mut Context, sim: &Simulation, camera: &Camera, dots: &Dots, color: Color) {
+    // Planes are drawn as a patch around the point the camera looks at, as wide as the view.
+    let half = 0.75 * camera.visible_height();
+    let centre = camera.target;
     for body in &sim.scene.bodies {
         for c in &body.model.colliders {
             match *c {
                 Collider::Plane { point, normal } => {
-                    let origin = camera.center - (camera.center - point).dot(normal) * normal;
-                    plane_grid(ctx, camera, origin, normal, half, color, &|_| false);
+                    let origin = centre - (centre - point).dot(normal) * normal;
+                    plane_grid(ctx, dots, origin, normal, half, color, &|_| false);
                 }
                 Collider::HolePlane {
                     point,
@@ -523,20 +402,15 @@ fn draw_colliders(ctx: &mut Context, sim: &Simulation, camera: &Camera, color: C
                     hole_center,
                     hole_radius,
                 } => {
-                    let origin = camera.center - (camera.center - point).dot(normal) * normal;
+                    let origin = centre - (centre - point).dot(normal) * normal;
                     let in_hole = move |m: DVec3| {
                         let r = m - hole_center;
                         (r - r.dot(normal) * normal).length() < hole_radius
                     };
-                    plane_grid(ctx, camera, origin, normal, half, color, &in_hole);
-                    polyline(
-                        ctx,
-                        camera,
-                        &circle(hole_center, normal, hole_radius, 64),
-                        color,
-                    );
+                    plane_grid(ctx, dots, origin, normal, half, color, &in_hole);
+                    dots.polyline(ctx, &circle(hole_center, normal, hole_radius, 64), color);
                 }
-                Collider::Sphere { center, radius } => sphere(ctx, camera, center, radius, color),
+                Collider::Sphere { center, radius } => sphere(ctx, dots, center, radius, color),
                 Collider::Bowl {
                     center,
                     radius,
@@ -545,14 +419,9 @@ fn draw_colliders(ctx: &mut Context, sim: &Simulation, camera: &Camera, color: C
                     let rim = rim_height.min(center.y);
                     let rim_radius = (radius * radius - (center.y - rim).powi(2)).max(0.0).sqrt();
                     let rim_center = DVec3::new(center.x, rim, center.z);
-                    polyline(
-                        ctx,
-                        camera,
-                        &circle(rim_center, DVec3::Y, rim_radius, 64),
-                        color,
-                    );
+                    dots.polyline(ctx, &circle(rim_center, DVec3::Y, rim_radius, 64), color);
                     // The arc of the bowl in the vertical plane facing the camera.
-                    let right = camera.unproject(DVec3::X) - camera.unproject(DVec3::ZERO);
+                    let right = dots.view.right;
                     let across = DVec3::new(right.x, 0.0, right.z).normalize_or(DVec3::X);
                     let arc: Vec<DVec3> = (0..=64)
                         .map(|i| {
@@ -562,29 +431,27 @@ fn draw_colliders(ctx: &mut Context, sim: &Simulation, camera: &Camera, color: C
                         .collect();
                     for w in arc.windows(2) {
                         if w[0].y <= rim + 1e-9 && w[1].y <= rim + 1e-9 {
-                            polyline(ctx, camera, w, color);
+                            dots.polyline(ctx, w, color);
                         }
                     }
                 }
             }
         }
         for s in &body.state.spheres {
-            sphere(ctx, camera, s.center, s.radius, color);
+            sphere(ctx, dots, s.center, s.radius, color);
         }
     }
 }
 
 /// A sphere's outline (a circle in the view plane) and its equator.
-fn sphere(ctx: &mut Context, camera: &Camera, center: DVec3, radius: f64, color: Color) {
-    let c = camera.project(center);
-    let outline: Vec<(f64, f64)> = (0..=64)
+fn sphere(ctx: &mut Context, dots: &Dots, center: DVec3, radius: f64, color: Color) {
+    let (r, u) = (dots.view.right, dots.view.up);
+    let outline: Vec<DVec3> = (0..=64)
         .map(|i| {
             let a = std::f64::consts::TAU * f64::from(i) / 64.0;
-            (c.x + radius * a.cos(), c.y + radius * a.sin())
+            center + radius * (a.cos() * r + a.sin() * u)
         })
         .collect();
-    for w in outline.windows(2) {
-        ctx.draw(&CanvasLine::new(w[0].0, w[0].1, w[1].0, w[1].1, color));
-    }
-    polyline(ctx, camera, &circle(center, DVec3::Y, radius, 64), color);
+    dots.polyline(ctx, &outline, color);
+    dots.polyline(ctx, &circle(center, DVec3::Y, radius, 64), color);
 }

@@ -4,6 +4,8 @@
 //!  rk4 · dt 0.010 s · dt·ω 0.100 · k 100 N/m · k_d 0 N·s/m
 //!  ‖ paused · t = 0.00 s · step 0 · 0/4096 steps/frame · ×— real time · — steps/s · — fps
 //! ```
+//! The first line ends with the scene pane's view (`view: raster (sixel, 30 images/s) (v)`,
+//! `view: halfblocks (v)`, `view: braille (v)`).
 //! `ω` is the upper bound of [`LessonRun::omega_max`]: exact for one spring, `2√(k/m)` for a
 //! chain. Times are simulated times; the real-time factor, steps per second and frames per
 //! second are measured (a dash until measured).
@@ -19,7 +21,14 @@ use super::plots::number;
 use super::sim_view::time_text;
 
 /// Draws the status lines of `run` into the two rows of `area`.
-pub fn render(run: &LessonRun, fps: Option<f64>, theme: Theme, area: Rect, buf: &mut Buffer) {
+pub fn render(
+    run: &LessonRun,
+    fps: Option<f64>,
+    view: &str,
+    theme: Theme,
+    area: Rect,
+    buf: &mut Buffer,
+) {
     let sim = run.sim();
     let dt = sim.dt();
     let sep = || Span::styled(" · ", theme.dim());
@@ -107,6 +116,17 @@ pub fn render(run: &LessonRun, fps: Option<f64>, theme: Theme, area: Rect, buf: 
         ]
     };
     buf.set_line(area.x, area.y, &Line::from(first), area.width);
+    // The view, right-aligned on the first line (over its end when the line is too long).
+    let label = format!(" view: {view} (v) ");
+    let width = label.chars().count() as u16;
+    if area.width > width {
+        buf.set_string(
+            area.x + area.width - width,
+            area.y,
+            label,
+            theme.fg(Color::Cyan),
+        );
+    }
     if area.height > 1 {
         buf.set_line(area.x, area.y + 1, &Line::from(second), area.width);
     }
