@@ -5,7 +5,7 @@
 //! springlab [--lessons DIR] [--view raster|halfblocks|braille]   the lesson menu (terminal app)
 //! springlab lesson <N|slug> [--view …]                            one lesson
 //! springlab lessons                  list the lessons
-//! springlab scenes
+//! springlab scenes [scene] [--method M]
 //! springlab run <scene|file.toml> [--method M] [--dt S] [--steps N | --time T]
 //!               [--set key=value ...] [--json] [--csv FILE]
 //! springlab bench [workload ...] [--json] [--repeats R]
@@ -75,8 +75,8 @@ pub enum Command {
     Lessons,
     /// Run a scene headless and print a summary (or JSON).
     Run(run::RunArgs),
-    /// List the built-in scenes with their parameters.
-    Scenes,
+    /// List the built-in scenes with their own parameters (`--method M`: that method's too).
+    Scenes(scenes::ScenesArgs),
     /// Time the peer-benchmark workloads and check their checksums.
     Bench(bench::BenchArgs),
     /// Draw a scene's frames as PNG files, a GIF or an APNG, and its energy chart.
@@ -105,7 +105,7 @@ pub fn main() -> ExitCode {
         Some(Command::Lesson { which }) => lessons::open(dir, &which, cli.view),
         Some(Command::Lessons) => lessons::list(dir),
         Some(Command::Run(args)) => run::run(&args),
-        Some(Command::Scenes) => scenes::list(),
+        Some(Command::Scenes(args)) => scenes::list(&args),
         Some(Command::Bench(args)) => bench::run(&args),
         Some(Command::Render(args)) => render::run(&args),
         Some(Command::Study { command }) => study::run(&command),
