@@ -782,6 +782,7 @@ pub fn advise(
     cap: f64,
     verifications: f64,
     margin: f64,
+    search_runs: f64,
 ) -> Estimate {
     let last = first_steps * 2f64.powi(halvings.min(60) as i32);
     let per_step = updates_per_step(reference, Some(Method::Rk4));
@@ -805,16 +806,20 @@ pub fn advise(
             short(time),
             approx(time / last)
         ),
-        runs: f64::from(halvings + 1) + verifications * 2.0,
+        // At most: the chain, every model × method halved `MAX_HALVINGS` times, the checks.
+        runs: f64::from(halvings + 1) + search_runs + verifications * 2.0,
         particles: largest(Scene::particle_count),
         springs: largest(Scene::spring_count),
         work,
-        // Every model is built before the search, the reference's snapshots are small.
-        memory: models
-            .iter()
-            .map(|m| scene_bytes(m, Some(&[Method::Rk4]), 1.0))
-            .sum::<f64>()
-            + scene_bytes(reference, Some(&Method::ALL), 2.0),
+        // Every model is built before the search (one model and state each) and one is run at
+        // a time; the reference's snapshots are small.
+        memory: BASE_BYTES
+            + models
+                .iter()
+                .map(|m| scene_bytes(m, None, 1.0) - BASE_BYTES)
+                .sum::<f64>()
+            + scene_bytes(reference, Some(&Method::ALL), 1.0)
+            - BASE_BYTES,
         ..Estimate::default()
     }
 }

@@ -233,8 +233,11 @@ pub fn print(out: &mut impl Write, r: &AdviseReport) -> std::io::Result<()> {
     }
     writeln!(
         out,
-        "\nsearch: {:.3e} updates of a cap of {:.3e} (4 × the reference run), {:.1} s in all",
-        r.search_work, r.search_cap, r.wall_seconds
+        "\nsearch: {:.3e} updates of a cap of {:.3e} ({} × the reference run), {:.1} s in all",
+        r.search_work,
+        r.search_cap,
+        advise::SEARCH_CAP,
+        r.wall_seconds
     )?;
     for v in &r.verifications {
         let c = &r.candidates[v.candidate];

@@ -71,11 +71,11 @@ pub const MARGIN: f64 = 1.5;
 /// Halvings of `dt` per (resolution, kinds, method).
 pub const MAX_HALVINGS: u32 = 8;
 /// Halvings of the reference's `dt`.
-pub const REFERENCE_HALVINGS: u32 = 6;
+pub const REFERENCE_HALVINGS: u32 = 5;
 /// The reference chain stops when successive runs differ by at most this fraction of `X`.
 pub const REFERENCE_FRACTION: f64 = 0.25;
 /// The search's work is capped at this many times the reference run's cost.
-pub const SEARCH_CAP: f64 = 4.0;
+pub const SEARCH_CAP: f64 = 3.0;
 /// The error must fall by at least this factor per halving for its trend to prune a method.
 pub const PROJECTION_RATIO: f64 = 1.2;
 /// At most this many configurations are verified.
@@ -284,6 +284,7 @@ pub fn estimate(what: impl Into<String>, plan: &Plan) -> budget::Estimate {
         SEARCH_CAP,
         MAX_VERIFICATIONS as f64,
         MARGIN,
+        (plan.models.len() * plan.options.methods.len()) as f64 * f64::from(MAX_HALVINGS + 1),
     )
 }
 
@@ -516,7 +517,7 @@ fn accepted(error: &Difference, reference: &Difference, tolerance: f64) -> bool 
 fn command(plan: &Plan, c: &Candidate) -> String {
     let model = &plan.models[c.model];
     let mut line = format!(
-        "springlab run {} --method {} --dt {:.6e} --time {}",
+        "springlab run {} --method {} --dt {:e} --time {}",
         plan.scene,
         c.method,
         c.dt,

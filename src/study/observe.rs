@@ -233,6 +233,16 @@ pub struct Observable {
     trackers: Vec<(String, Tracker)>,
 }
 
+/// The volume (m³) inside a jelly cube's outer faces at positions `x` (module docs), or `None`
+/// for a body that is not a lattice block.
+#[must_use]
+pub fn block_volume(model: &crate::physics::Model, x: &[DVec3]) -> Option<f64> {
+    match Lattice::detect(model) {
+        Some(lattice @ Lattice::Block { .. }) => Some(volume(&lattice.quads(), x)),
+        _ => None,
+    }
+}
+
 /// The volume (m³) inside the closed surface `quads` (outward normals) of positions `x`.
 fn volume(quads: &[[u32; 4]], x: &[DVec3]) -> f64 {
     let mut six_v = 0.0;
