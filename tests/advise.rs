@@ -410,8 +410,10 @@ fn advise_recommends_a_verified_configuration_with_its_margin() {
     assert!(e_ref <= x / 4.0, "the reference converged: {e_ref}");
     let over_run = verification["error"]["metres"].as_f64().expect("error");
     assert!(over_run + e_ref <= x, "{over_run} + {e_ref} > {x}");
-    let at_t = c["error"]["metres"].as_f64().expect("error at T");
+    let at_t = c["error_at_t"]["metres"].as_f64().expect("error at T");
     assert!(at_t <= over_run, "the run's worst instant includes T");
+    // The verification's run is the search's, with the energy accounting on: the same motion.
+    assert_eq!(c["error"], verification["error"]);
 
     // The margin, measured by perturbation growth (not the theory advise used) and by the
     // stability study's theory column.

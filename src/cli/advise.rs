@@ -176,7 +176,8 @@ pub fn print(out: &mut impl Write, r: &AdviseReport) -> std::io::Result<()> {
     writeln!(out, "margin: {}", r.margin_rule)?;
     writeln!(
         out,
-        "accepted when: error at T + the reference's own error ≤ X (in m, and in s for times)"
+        "accepted when: error + the reference's own error ≤ X (in m, and in s for times); error: \
+         the largest difference from the reference at the 20 instants k·T/20, T included"
     )?;
     writeln!(out, "cost: {}", r.cost_unit)?;
     for (m, why) in &r.left_out {
@@ -251,7 +252,9 @@ pub fn print(out: &mut impl Write, r: &AdviseReport) -> std::io::Result<()> {
         )?;
         writeln!(
             out,
-            "    accuracy: largest error over the 20 instants k·T/20 = {} {unit} + reference {e_ref} ≤ X: {}",
+            "    accuracy: the same run as springlab run makes it: error at T {} {unit}, largest \
+             over the 20 instants {} {unit}, + reference {e_ref} ≤ X: {}",
+            error_text(Some(&v.error_at_t), has_time),
             error_text(Some(&v.error), has_time),
             if v.accurate { "holds" } else { "fails" }
         )?;
