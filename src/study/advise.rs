@@ -323,7 +323,7 @@ impl Verdict {
             Verdict::Meets => "meets",
             Verdict::TooInaccurate => "error > X",
             Verdict::Diverged => "diverged",
-            Verdict::Costlier => "skipped: costlier than the best",
+            Verdict::Costlier => "skipped: costs more than the best so far or the reference",
             Verdict::ProjectedCostlier => "error > X; reaching X would cost more",
             Verdict::ModelTooCoarse => "model too coarse",
             Verdict::NoStableDt => "no stable dt (theory)",
