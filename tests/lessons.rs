@@ -72,7 +72,7 @@ fn steps_carry_scene_parameters_method_plots_and_goal() {
     assert!(scene.bodies[0].model.is_pinned(8));
     assert_eq!(bridge.plots, vec![Plot::Energy, Plot::Speed]);
     let text = format!(
-        "{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\ngoal = {{ kind = \"settle\", time = 8.0, text = \"t\" }}\n+++\ntext\n"
+        "{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\ntry = [{{ text = \"run\", keys = \"D*2 space\" }}]\ngoal = {{ kind = \"settle\", time = 8.0, text = \"t\" }}\n+++\ntext\n"
     );
     let parsed = lesson::parse(&text, "goal.md", None).expect("a lesson with a goal");
     let goal = parsed.steps[0].goal.as_ref().expect("goal");

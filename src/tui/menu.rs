@@ -47,11 +47,22 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
                     if selected {
                         head = head.add_modifier(Modifier::REVERSED);
                     }
+                    let (done, steps) = app.lesson_done(i).unwrap_or((0, l.steps.len()));
+                    let mark = if done == steps && steps > 0 {
+                        Span::styled(" ✓ ", theme.fg(Color::LightGreen).add_modifier(Modifier::BOLD))
+                    } else {
+                        Span::raw("   ")
+                    };
+                    let command = match app.lessons_dir() {
+                        Some(dir) => format!("springlab --lessons {} lesson {}", dir.display(), l.slug),
+                        None => format!("springlab lesson {}", l.slug),
+                    };
                     lines.push(Line::from(vec![
                         Span::styled(pointer, theme.fg(Color::Yellow)),
                         Span::styled(format!("{:>2}. {}", l.number, l.title), head),
+                        mark,
                         Span::styled(
-                            format!("  ({} steps, `springlab lesson {}`)", l.steps.len(), l.slug),
+                            format!("{done}/{steps} steps · `{command}`"),
                             theme.dim(),
                         ),
                     ]));
