@@ -116,7 +116,10 @@ impl Plot {
     /// the number keys show and hide.
     #[must_use]
     pub fn is_study(self) -> bool {
-        matches!(self, Plot::Convergence | Plot::Stability | Plot::WorkPrecision)
+        matches!(
+            self,
+            Plot::Convergence | Plot::Stability | Plot::WorkPrecision
+        )
     }
 }
 
@@ -532,7 +535,9 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
                     return Err(err(
                         l,
                         Some(c),
-                        format!("goal: try = {n}: expected the number (from 1) of a try item with keys"),
+                        format!(
+                            "goal: try = {n}: expected the number (from 1) of a try item with keys"
+                        ),
                     ));
                 }
                 None if !(0..try_list.len()).any(keyed) => {
@@ -546,7 +551,11 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
                 _ => {}
             }
             if g.body.is_some() && g.kind != GoalKind::Settle {
-                return Err(err(l, Some(c), "goal: `body` applies to `settle` only".into()));
+                return Err(err(
+                    l,
+                    Some(c),
+                    "goal: `body` applies to `settle` only".into(),
+                ));
             }
         }
         let predict = match st.predict {
@@ -692,11 +701,15 @@ fn prediction(p: PredictToml) -> Result<Prediction, String> {
         })?;
         let speed = o.speed.or(p.speed).unwrap_or_else(default_settle_speed);
         if !(time > 0.0 && time.is_finite() && speed > 0.0) {
-            return Err(format!("predict: option {n}: expected time > 0 (s) and speed > 0 (m/s)"));
+            return Err(format!(
+                "predict: option {n}: expected time > 0 (s) and speed > 0 (m/s)"
+            ));
         }
         let body = o.body.or(p.body);
         if body.is_some() && kind != GoalKind::Settle {
-            return Err(format!("predict: option {n}: `body` applies to `settle` only"));
+            return Err(format!(
+                "predict: option {n}: `body` applies to `settle` only"
+            ));
         }
         options.push(PredictOption {
             claim: Goal {

@@ -48,10 +48,10 @@ use ratatui::text::Line;
 use ratatui::widgets::{Paragraph, Widget, Wrap};
 
 use crate::lesson::{Lesson, LessonError};
-pub use progress::Progress;
 pub use graphics::{Graphics, Protocol, ViewMode};
 pub use halfblocks::ColourDepth;
 pub use lesson_view::LessonRun;
+pub use progress::Progress;
 use raster::{Encoder, Job, PaneRenderer};
 use sim_view::Painter;
 
@@ -526,7 +526,7 @@ impl App {
             self.submitted = None;
             return;
         }
-        if key.code == KeyCode::Char('?') {
+        if key.code == KeyCode::Char('?') && self.lesson().is_none_or(|r| r.chooser().is_none()) {
             self.help = true;
             return;
         }
@@ -534,7 +534,10 @@ impl App {
         match &mut self.screen {
             Screen::Menu => self.menu_key(key.code),
             Screen::Lesson(run) => {
-                if matches!(key.code, KeyCode::Char('q') | KeyCode::Esc) {
+                if run.chooser().is_some() {
+                    // The method chooser takes every key (its own `v`, `q`, Esc, numbers).
+                    run.handle_key_with(key.code, key.modifiers);
+                } else if matches!(key.code, KeyCode::Char('q') | KeyCode::Esc) {
                     self.screen = Screen::Menu;
                     self.clear = true;
                 } else if key.code == KeyCode::Char('v') {
@@ -556,8 +559,8 @@ impl App {
                     && run.step_index() + 1 == run.lesson().steps.len()
                 {
                     // `n` on the last step opens the next lesson that loads.
-                    let next = (self.selected + 1..self.lessons.len())
-                        .find(|&i| self.lessons[i].is_ok());
+                    let next =
+                        (self.selected + 1..self.lessons.len()).find(|&i| self.lessons[i].is_ok());
                     match next {
                         Some(i) => {
                             if let Err(e) = self.open_lesson(i)
@@ -566,7 +569,9 @@ impl App {
                                 run.set_message(e);
                             }
                         }
-                        None => run.set_message("this was the last lesson: q goes back to the menu"),
+                        None => {
+                            run.set_message("this was the last lesson: q goes back to the menu")
+                        }
                     }
                 } else {
                     let step = run.step_index();

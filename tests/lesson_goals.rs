@@ -116,12 +116,20 @@ fn every_goal_is_met_by_its_try_keys_and_action_goals_not_by_idling() {
     for (li, l) in lessons().iter().enumerate() {
         for (si, step) in l.steps.iter().enumerate() {
             let Some(goal) = &step.goal else { continue };
-            let keys = step.goal_keys().expect("a goal has its keys (checked at load)");
-            let at = format!("lesson {} step {} \"{}\" ({keys})", l.number, si + 1, step.title);
+            let keys = step
+                .goal_keys()
+                .expect("a goal has its keys (checked at load)");
+            let at = format!(
+                "lesson {} step {} \"{}\" ({keys})",
+                l.number,
+                si + 1,
+                step.title
+            );
             let mut app = open_at(li, si);
             play(&mut app, keys);
             assert!(
-                app.lesson().expect("open").is_running() || app.lesson().expect("open").run_verdict().is_some(),
+                app.lesson().expect("open").is_running()
+                    || app.lesson().expect("open").run_verdict().is_some(),
                 "{at}: the keys leave the run paused"
             );
             let verdict = goal_verdict(&mut app, goal);
@@ -133,7 +141,11 @@ fn every_goal_is_met_by_its_try_keys_and_action_goals_not_by_idling() {
                 run.sim().time(),
                 run.sim().diverged
             );
-            assert_eq!(run.goal_state(), Some(true), "{at}: the screen shows it met");
+            assert_eq!(
+                run.goal_state(),
+                Some(true),
+                "{at}: the screen shows it met"
+            );
             if keys.is_action() {
                 let mut idle = open_at(li, si);
                 play(&mut idle, &Keys::parse("space").expect("space"));
@@ -171,12 +183,19 @@ fn every_prediction_is_confirmed_by_a_run_of_its_answer_and_only_that() {
                 play(&mut app, &option.keys);
                 let holds = decide(&mut app, &option.claim);
                 let t = app.lesson().expect("open").sim().time();
-                assert!(holds.is_some(), "{at}: the run did not decide (t = {t:.3} s)");
+                assert!(
+                    holds.is_some(),
+                    "{at}: the run did not decide (t = {t:.3} s)"
+                );
                 assert_eq!(
                     holds == Some(true),
                     oi == p.answer,
                     "{at}: the claim {} at t = {t:.3} s, but the answer is option {}",
-                    if holds == Some(true) { "holds" } else { "fails" },
+                    if holds == Some(true) {
+                        "holds"
+                    } else {
+                        "fails"
+                    },
                     p.answer + 1
                 );
             }

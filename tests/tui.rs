@@ -97,16 +97,111 @@ fn single_step_advances_time_by_dt_and_pauses() {
 }
 
 #[test]
-fn m_cycles_the_method() {
+fn m_opens_the_method_chooser_which_picks_by_key_number_or_enter() {
     let mut app = open("hooke");
     let method = |app: &App| run(app).sim().scene.bodies[0].method;
     assert_eq!(method(&app), Method::Rk4, "the step asks for rk4");
     key(&mut app, KeyCode::Char('m'));
-    assert_eq!(method(&app), Method::Rk4.next());
-    for _ in 1..Method::ALL.len() {
-        key(&mut app, KeyCode::Char('m'));
+    assert!(run(&app).chooser().is_some(), "m opens the chooser");
+    assert_eq!(method(&app), Method::Rk4, "opening it changes nothing");
+    let text = screen_text(&app, 100, 32);
+    for m in Method::ALL {
+        assert!(text.contains(m.name()), "the chooser lists {m}:\n{text}");
     }
-    assert_eq!(method(&app), Method::Rk4, "back after a full cycle");
+    // Esc closes it (and stays in the lesson); each method's key picks it and closes it.
+    key(&mut app, KeyCode::Esc);
+    assert!(run(&app).chooser().is_none());
+    for m in Method::ALL {
+        key(&mut app, KeyCode::Char('m'));
+        key(
+            &mut app,
+            KeyCode::Char(springlab::tui::lesson_view::method_key(m)),
+        );
+        assert_eq!(method(&app), m);
+        assert!(run(&app).chooser().is_none());
+    }
+    // Numbers pick by position; arrows and Enter too; Esc closes without a change.
+    keys(&mut app, "m2");
+    assert_eq!(method(&app), Method::ALL[1]);
+    key(&mut app, KeyCode::Char('m'));
+    key(&mut app, KeyCode::Down);
+    key(&mut app, KeyCode::Enter);
+    assert_eq!(method(&app), Method::ALL[2]);
+    key(&mut app, KeyCode::Char('m'));
+    key(&mut app, KeyCode::Esc);
+    assert_eq!(method(&app), Method::ALL[2]);
+    assert!(run(&app).chooser().is_none());
+    assert!(
+        app.lesson().is_some(),
+        "Esc in the chooser does not leave the lesson"
+    );
+}
+
+#[test]
+fn the_chooser_gives_a_method_to_one_body_with_tab() {
+    let mut app = open("verlet");
+    let methods = |app: &App| -> Vec<Method> {
+        run(app)
+            .sim()
+            .scene
+            .bodies
+            .iter()
+            .map(|b| b.method)
+            .collect()
+    };
+    assert_eq!(methods(&app), [Method::SemiImplicitEuler, Method::Verlet]);
+    // Tab: the first body only.
+    key(&mut app, KeyCode::Char('m'));
+    key(&mut app, KeyCode::Tab);
+    key(&mut app, KeyCode::Char('r'));
+    assert_eq!(methods(&app), [Method::Rk4, Method::Verlet]);
+    // Without Tab: every body.
+    keys(&mut app, "mx");
+    assert_eq!(methods(&app), [Method::Xpbd, Method::Xpbd]);
+}
+
+#[test]
+fn drag_gamma_and_passes_keys_change_the_model_and_rebase_the_energy() {
+    let mut app = open("verlet");
+    keys(&mut app, " ");
+    for _ in 0..10 {
+        app.tick(0.1);
+    }
+    keys(&mut app, " ");
+    let body = |app: &App, b: usize| run(app).sim().scene.bodies[b].clone();
+    assert_eq!(body(&app, 0).model.drag, 0.0);
+    // A: the first press sets c/m = 0.25 1/s, then ×2; a: ÷2 down to 0.
+    keys(&mut app, "A");
+    assert_eq!(body(&app, 0).model.drag, 0.25);
+    assert_eq!(body(&app, 1).model.drag, 0.25);
+    assert_eq!(
+        run(&app).sim().energy_residual(),
+        0.0,
+        "rebased after the edit"
+    );
+    keys(&mut app, "AA");
+    assert_eq!(body(&app, 0).model.drag, 1.0);
+    keys(&mut app, "aaa");
+    assert_eq!(body(&app, 0).model.drag, 0.0);
+    // G: γ × 10 from the scene's 5e-5, capped at 0.5; g: ÷ 10, to 0 below 5e-5.
+    keys(&mut app, "G");
+    assert!((body(&app, 1).params.verlet_damping - 5e-4).abs() < 1e-15);
+    keys(&mut app, "GGGG");
+    assert_eq!(body(&app, 1).params.verlet_damping, 0.5);
+    assert!(
+        run(&app).message().is_some_and(|m| m.contains("1/s")),
+        "the rate γ/dt is shown"
+    );
+    keys(&mut app, "ggggg");
+    assert_eq!(body(&app, 1).params.verlet_damping, 0.0);
+    // J: passes × 2 (0 → 1); j: ÷ 2.
+    assert_eq!(body(&app, 1).params.iterations, 1);
+    keys(&mut app, "JJJ");
+    assert_eq!(body(&app, 1).params.iterations, 8);
+    keys(&mut app, "jjjj");
+    assert_eq!(body(&app, 1).params.iterations, 0);
+    keys(&mut app, "J");
+    assert_eq!(body(&app, 1).params.iterations, 1);
 }
 
 #[test]
@@ -160,10 +255,10 @@ fn reset_restores_the_initial_state_bit_for_bit() {
 #[test]
 fn reset_keeps_the_chosen_method_and_dt() {
     let mut app = open("euler");
-    keys(&mut app, "m+ss");
+    keys(&mut app, "ms+ss");
     key(&mut app, KeyCode::Char('r'));
     let sim = run(&app).sim();
-    assert_eq!(sim.scene.bodies[0].method, Method::ExplicitEuler.next());
+    assert_eq!(sim.scene.bodies[0].method, Method::SemiImplicitEuler);
     assert_eq!(sim.dt(), 0.04);
     assert_eq!(sim.time(), 0.0);
 }
@@ -179,16 +274,33 @@ fn n_and_p_move_between_steps() {
     assert_eq!(run(&app).step_index(), 1);
     // Step 2 of lesson 1 is the rope with 3 nodes.
     assert_eq!(run(&app).sim().scene.particle_count(), 3);
-    for _ in 0..count + 2 {
+    for _ in 0..count - 2 {
         key(&mut app, KeyCode::Char('n'));
     }
-    assert_eq!(run(&app).step_index(), count - 1, "no step after the last");
-    key(&mut app, KeyCode::Char('p'));
-    assert_eq!(run(&app).step_index(), count - 2);
+    assert_eq!(run(&app).step_index(), count - 1);
     // A new step starts paused at t = 0 with the step's own dt (step 4 asks for 0.004).
-    key(&mut app, KeyCode::Char('n'));
     assert_eq!(run(&app).sim().dt(), 0.004);
     assert_eq!(run(&app).sim().time(), 0.0);
+    key(&mut app, KeyCode::Char('p'));
+    assert_eq!(run(&app).step_index(), count - 2);
+    key(&mut app, KeyCode::Char('n'));
+    // `n` on the last step opens the next lesson.
+    key(&mut app, KeyCode::Char('n'));
+    assert_eq!(run(&app).lesson().slug, "hooke");
+    assert_eq!(run(&app).step_index(), 0);
+    // And on the last step of the last lesson it says so.
+    let last = app.lessons().len() - 1;
+    app.open_lesson(last).expect("opens");
+    let steps = run(&app).lesson().steps.len();
+    for _ in 0..steps + 1 {
+        key(&mut app, KeyCode::Char('n'));
+    }
+    assert_eq!(app.selected(), last);
+    assert!(
+        run(&app)
+            .message()
+            .is_some_and(|m| m.contains("last lesson"))
+    );
 }
 
 #[test]
@@ -339,6 +451,12 @@ fn divergence_stops_the_run_and_meets_the_diverge_goal() {
     assert!(!run.is_running());
     assert_eq!(run.goal_state(), Some(true), "goal: make it blow up");
     assert!(d.time <= 60.0);
+    // The diverging sample is recorded: the history ends at the divergence with its speed
+    // (the 7th quantity of a sample), the largest of the run.
+    let last = run.history().bins.last().expect("samples");
+    assert_eq!(last.t1, d.time);
+    assert_eq!(last.hi[6], d.max_speed);
+    assert!(run.history().bins.iter().all(|b| b.hi[6] <= d.max_speed));
     let text = screen_text(&app, 100, 32);
     assert!(
         text.contains(&format!("unstable at step {}", d.step)),
@@ -349,7 +467,12 @@ fn divergence_stops_the_run_and_meets_the_diverge_goal() {
     assert!(!self::run(&app).is_running());
     key(&mut app, KeyCode::Char('r'));
     assert!(self::run(&app).sim().diverged.is_none());
-    assert_eq!(self::run(&app).goal_state(), None);
+    assert_eq!(self::run(&app).run_verdict(), None, "r starts a new run");
+    assert_eq!(
+        self::run(&app).goal_state(),
+        Some(true),
+        "a met goal stays met"
+    );
 }
 
 #[test]

@@ -109,7 +109,9 @@ fn parse(inner: &str) -> Result<Placeholder, String> {
         (Arg::Methods(n), a) => {
             let list: Vec<&str> = a.as_deref().map_or(vec![], |a| a.split(',').collect());
             if list.len() != *n {
-                return Err(format!("{{{{{inner}}}}}: expected {n} method name(s) after `{kind}:`"));
+                return Err(format!(
+                    "{{{{{inner}}}}}: expected {n} method name(s) after `{kind}:`"
+                ));
             }
             for m in list {
                 m.trim()
@@ -179,6 +181,8 @@ struct Context {
     convergence: OnceCell<Option<ConvergenceReport>>,
     work: OnceCell<Option<ConvergenceReport>>,
     stability: OnceCell<Option<StabilityReport>>,
+    /// Per body with stiffness: its spectrum at the initial state.
+    spectra: OnceCell<Vec<(usize, theory::Spectrum)>>,
 }
 
 impl Context {
@@ -192,17 +196,36 @@ impl Context {
             convergence: OnceCell::new(),
             work: OnceCell::new(),
             stability: OnceCell::new(),
+            spectra: OnceCell::new(),
         }
+    }
+
+    fn spectra(&self) -> &[(usize, theory::Spectrum)] {
+        self.spectra.get_or_init(|| {
+            let Some(scene) = &self.scene else {
+                return Vec::new();
+            };
+            scene
+                .bodies
+                .iter()
+                .enumerate()
+                .filter_map(|(i, b)| {
+                    let omega = studies::omega_max(&b.model, &b.state).omega;
+                    (omega > 0.0).then(|| (i, theory::spectrum(&b.model, &b.state, omega)))
+                })
+                .collect()
+        })
     }
 
     fn omega(&self) -> f64 {
         *self.omega.get_or_init(|| {
-            self.scene.as_ref().map_or(f64::NAN, |s| {
-                s.bodies
-                    .iter()
-                    .map(|b| studies::omega_max(&b.model, &b.state).omega)
-                    .fold(0.0, f64::max)
-            })
+            if self.scene.is_none() {
+                return f64::NAN;
+            }
+            self.spectra()
+                .iter()
+                .map(|(_, s)| s.omega_max)
+                .fold(0.0, f64::max)
         })
     }
 
@@ -246,13 +269,8 @@ impl Context {
     fn theory(&self, method: Method) -> Option<theory::TheoryLimit> {
         let scene = self.scene.as_ref()?;
         let mut best: Option<theory::TheoryLimit> = None;
-        for b in &scene.bodies {
-            let omega = studies::omega_max(&b.model, &b.state).omega;
-            if omega <= 0.0 {
-                continue;
-            }
-            let spectrum = theory::spectrum(&b.model, &b.state, omega);
-            let l = theory::limit(method, &b.params, &spectrum);
+        for (i, spectrum) in self.spectra() {
+            let l = theory::limit(method, &scene.bodies[*i].params, spectrum);
             let better = match (&best, l.dt) {
                 (None, _) => true,
                 (Some(prev), Some(dt)) => prev.dt.is_none_or(|p| dt < p),

@@ -344,11 +344,12 @@ impl LessonRun {
             self.met[i] |= met.get(i).copied().unwrap_or(false);
             self.visited[i] |= visited.get(i).copied().unwrap_or(false);
             if self.answers[i].is_none() {
-                self.answers[i] = answers
-                    .get(i)
-                    .copied()
-                    .flatten()
-                    .filter(|&a| self.lesson.steps[i].predict.as_ref().is_some_and(|p| a < p.options.len()));
+                self.answers[i] = answers.get(i).copied().flatten().filter(|&a| {
+                    self.lesson.steps[i]
+                        .predict
+                        .as_ref()
+                        .is_some_and(|p| a < p.options.len())
+                });
             }
         }
     }
@@ -1119,11 +1120,7 @@ impl LessonRun {
     }
 
     fn prediction_prompt(&self) -> String {
-        let n = self
-            .step()
-            .predict
-            .as_ref()
-            .map_or(0, |p| p.options.len());
+        let n = self.step().predict.as_ref().map_or(0, |p| p.options.len());
         format!("predict first: press 1–{n} (the run starts after your answer)")
     }
 
@@ -1214,7 +1211,8 @@ impl LessonRun {
         match target {
             None => self.sim.set_method(method),
             Some(b) => {
-                let mut methods: Vec<Method> = self.sim.scene.bodies.iter().map(|b| b.method).collect();
+                let mut methods: Vec<Method> =
+                    self.sim.scene.bodies.iter().map(|b| b.method).collect();
                 if let Some(m) = methods.get_mut(b) {
                     *m = method;
                 }
@@ -1233,7 +1231,11 @@ impl LessonRun {
             None => format!("method: {method}"),
             Some(b) => format!(
                 "method of {}: {method}",
-                self.sim.scene.bodies.get(b).map_or("?", |b| b.label.as_str())
+                self.sim
+                    .scene
+                    .bodies
+                    .get(b)
+                    .map_or("?", |b| b.label.as_str())
             ),
         });
     }
@@ -1258,7 +1260,10 @@ impl LessonRun {
         let drags: Vec<f64> = self.sim.scene.bodies.iter().map(|b| b.model.drag).collect();
         self.message = Some(match uniform(drags.iter().copied()) {
             Some(0.0) => "no air drag".into(),
-            Some(c) => format!("air drag c = {} N·s/m on every particle (f = -c v)", plots::number(c)),
+            Some(c) => format!(
+                "air drag c = {} N·s/m on every particle (f = -c v)",
+                plots::number(c)
+            ),
             None => "air drag changed on every body".into(),
         });
     }
@@ -1315,13 +1320,27 @@ impl LessonRun {
         self.sim.rebase_energy();
         self.refresh_limit();
         let dt = self.sim.dt();
-        let g = self.sim.scene.bodies.first().map_or(0.0, |b| b.params.verlet_damping);
-        let verlet = self.sim.scene.bodies.iter().any(|b| b.method == Method::Verlet);
+        let g = self
+            .sim
+            .scene
+            .bodies
+            .first()
+            .map_or(0.0, |b| b.params.verlet_damping);
+        let verlet = self
+            .sim
+            .scene
+            .bodies
+            .iter()
+            .any(|b| b.method == Method::Verlet);
         self.message = Some(format!(
             "Verlet damping γ = {} per step: a decay rate γ/dt = {} 1/s at this dt{}",
             plots::number(g),
             plots::number(g / dt),
-            if verlet { "" } else { " (no body uses Verlet now: m v)" }
+            if verlet {
+                ""
+            } else {
+                " (no body uses Verlet now: m v)"
+            }
         ));
     }
 
@@ -1330,7 +1349,9 @@ impl LessonRun {
         for body in &mut self.sim.scene.bodies {
             let p = body.params.iterations;
             body.params.iterations = if up {
-                (p.max(1) * 2).min(MAX_PASSES).max(if p == 0 { 1 } else { 0 })
+                (p.max(1) * 2)
+                    .min(MAX_PASSES)
+                    .max(if p == 0 { 1 } else { 0 })
             } else {
                 p / 2
             };
@@ -1343,7 +1364,12 @@ impl LessonRun {
         }
         self.sim.rebase_energy();
         self.refresh_limit();
-        let p = self.sim.scene.bodies.first().map_or(0, |b| b.params.iterations);
+        let p = self
+            .sim
+            .scene
+            .bodies
+            .first()
+            .map_or(0, |b| b.params.iterations);
         self.message = Some(format!(
             "{p} projection pass{} per step (Verlet; XPBD: solver passes per substep)",
             if p == 1 { "" } else { "es" }
@@ -1713,7 +1739,11 @@ fn split_right(step: &Step, right: Rect) -> (Rect, Option<Rect>) {
         return (right, None);
     }
     // Study charts (log-log, several methods) get more of the column than time plots.
-    let share = if step.plots.iter().any(|p| p.is_study()) { 3 } else { 2 };
+    let share = if step.plots.iter().any(|p| p.is_study()) {
+        3
+    } else {
+        2
+    };
     let plot_height = (right.height * share / 5)
         .max(8)
         .min(right.height.saturating_sub(6));
@@ -1786,7 +1816,7 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
             Span::styled("Predict ", bold_green),
             Span::styled(
                 match run.answer() {
-                    None => "press 1–N before you run".replace('N', &p.options.len().to_string()),
+                    None => format!("1–{} first", p.options.len()),
                     Some(a) => format!("you chose {}", a + 1),
                 },
                 theme.fg(Color::Yellow),
@@ -1799,10 +1829,15 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
                 (Some(a), _) if a == i => "▸",
                 _ => " ",
             };
-            let mut lines = markdown::wrap_text(&format!("{}) {}", i + 1, o.text), width - 2, theme);
+            let mut lines =
+                markdown::wrap_text(&format!("{}) {}", i + 1, o.text), width - 2, theme);
             for (j, l) in lines.iter_mut().enumerate() {
                 let mut spans = vec![Span::styled(
-                    if j == 0 { format!("{mark} ") } else { "  ".into() },
+                    if j == 0 {
+                        format!("{mark} ")
+                    } else {
+                        "  ".into()
+                    },
                     key_style,
                 )];
                 spans.append(&mut l.spans);
@@ -1835,7 +1870,10 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
                         l.spans.push(Span::styled(k, key_style));
                     }
                 } else {
-                    lines.push(Line::from(Span::styled(format!("  keys: {keys}"), key_style)));
+                    lines.push(Line::from(Span::styled(
+                        format!("  keys: {keys}"),
+                        key_style,
+                    )));
                 }
             }
             tail.extend(lines);
@@ -1953,7 +1991,10 @@ fn render_chooser(run: &LessonRun, c: &Chooser, theme: Theme, area: Rect, buf: &
             .target
             .and_then(|b| bodies.get(b))
             .map_or("every body".to_string(), |b| b.label.clone());
-        lines.push(Line::styled(format!(" Tab: for {target}"), theme.fg(Color::Yellow)));
+        lines.push(Line::styled(
+            format!(" Tab: for {target}"),
+            theme.fg(Color::Yellow),
+        ));
     }
     lines.push(Line::styled(" key, number or Enter · Esc", theme.dim()));
     let height = (lines.len() as u16 + 2).min(area.height);

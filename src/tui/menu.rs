@@ -49,22 +49,24 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
                     }
                     let (done, steps) = app.lesson_done(i).unwrap_or((0, l.steps.len()));
                     let mark = if done == steps && steps > 0 {
-                        Span::styled(" ✓ ", theme.fg(Color::LightGreen).add_modifier(Modifier::BOLD))
+                        Span::styled(
+                            " ✓ ",
+                            theme.fg(Color::LightGreen).add_modifier(Modifier::BOLD),
+                        )
                     } else {
                         Span::raw("   ")
                     };
                     let command = match app.lessons_dir() {
-                        Some(dir) => format!("springlab --lessons {} lesson {}", dir.display(), l.slug),
+                        Some(dir) => {
+                            format!("springlab --lessons {} lesson {}", dir.display(), l.slug)
+                        }
                         None => format!("springlab lesson {}", l.slug),
                     };
                     lines.push(Line::from(vec![
                         Span::styled(pointer, theme.fg(Color::Yellow)),
                         Span::styled(format!("{:>2}. {}", l.number, l.title), head),
                         mark,
-                        Span::styled(
-                            format!("{done}/{steps} steps · `{command}`"),
-                            theme.dim(),
-                        ),
+                        Span::styled(format!("{done}/{steps} steps · `{command}`"), theme.dim()),
                     ]));
                     for line in markdown::wrap_text(&l.summary, width, theme) {
                         let mut spans = vec![Span::raw("       ")];

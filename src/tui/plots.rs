@@ -498,7 +498,12 @@ impl Series {
 /// `columns` braille dots wide: one point per bin while the bins fit, else per column its
 /// largest and its smallest value as two lines (a min / max envelope). Returns (upper, lower);
 /// lower is empty when every column holds a single value.
-fn envelope(history: &History, q: usize, t_end: f64, columns: usize) -> (Vec<(f64, f64)>, Vec<(f64, f64)>) {
+fn envelope(
+    history: &History,
+    q: usize,
+    t_end: f64,
+    columns: usize,
+) -> (Vec<(f64, f64)>, Vec<(f64, f64)>) {
     let finite = |b: &Bin| {
         let (lo, hi) = (
             b.lo.get(q).copied().unwrap_or(f64::NAN),
@@ -521,7 +526,9 @@ fn envelope(history: &History, q: usize, t_end: f64, columns: usize) -> (Vec<(f6
     for b in &history.bins {
         let Some((lo, hi)) = finite(b) else { continue };
         let t = 0.5 * (b.t0 + b.t1);
-        let c = ((t / span) * columns as f64).floor().clamp(0.0, columns as f64 - 1.0) as usize;
+        let c = ((t / span) * columns as f64)
+            .floor()
+            .clamp(0.0, columns as f64 - 1.0) as usize;
         cols[c] = Some(match cols[c] {
             None => (t, lo, hi),
             Some((t0, l, h)) => (t0, l.min(lo), h.max(hi)),
@@ -573,11 +580,21 @@ fn render_one(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
             let colours = [Color::Green, Color::Yellow, Color::Cyan, Color::Magenta];
             for (b, label) in history.labels.iter().enumerate() {
                 let c = colours[b % colours.len()];
-                curves.push((format!("total {label}"), format!("E{}", b + 1), c, body_index(b, 0)));
+                curves.push((
+                    format!("total {label}"),
+                    format!("E{}", b + 1),
+                    c,
+                    body_index(b, 0),
+                ));
             }
             for (b, label) in history.labels.iter().enumerate() {
                 let c = colours[b % colours.len()];
-                curves.push((format!("kin {label}"), format!("K{}", b + 1), dimmer(c), body_index(b, 1)));
+                curves.push((
+                    format!("kin {label}"),
+                    format!("K{}", b + 1),
+                    dimmer(c),
+                    body_index(b, 1),
+                ));
             }
             ("E (J):", false)
         }
@@ -599,7 +616,12 @@ fn render_one(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
         Plot::Speed if bodies > 1 => {
             let colours = [Color::Green, Color::Yellow, Color::Cyan, Color::Magenta];
             for (b, label) in history.labels.iter().enumerate() {
-                curves.push((label.clone(), format!("{}", b + 1), colours[b % 4], body_index(b, 2)));
+                curves.push((
+                    label.clone(),
+                    format!("{}", b + 1),
+                    colours[b % 4],
+                    body_index(b, 2),
+                ));
             }
             ("max |v| (m/s):", true)
         }
@@ -610,7 +632,12 @@ fn render_one(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
         Plot::Stretch => {
             let colours = [Color::Green, Color::Yellow, Color::Cyan, Color::Magenta];
             for (b, label) in history.labels.iter().enumerate() {
-                curves.push((label.clone(), format!("{}", b + 1), colours[b % 4], body_index(b, 3)));
+                curves.push((
+                    label.clone(),
+                    format!("{}", b + 1),
+                    colours[b % 4],
+                    body_index(b, 3),
+                ));
             }
             ("max |L/L0 - 1|:", true)
         }
@@ -765,7 +792,17 @@ fn render_exact(v: &View, area: Rect, buf: &mut Buffer) {
         Series::new("exact", "exact", Color::Yellow, exact),
         Series::new("simulated", "sim", Color::Cyan, simulated),
     ];
-    draw_chart("x (m):", &series, [start, end], " s", false, true, theme, area, buf);
+    draw_chart(
+        "x (m):",
+        &series,
+        [start, end],
+        " s",
+        false,
+        true,
+        theme,
+        area,
+        buf,
+    );
 }
 
 fn not_available(title: &str, text: &str, theme: Theme, area: Rect, buf: &mut Buffer) {
@@ -915,7 +952,9 @@ fn study_series(report: &ConvergenceReport, work: bool, shown: [bool; 8]) -> Vec
                     p.error.filter(|e| *e > 0.0).map(|e| (x.log10(), e.log10()))
                 })
                 .collect();
-            let order = m.order.map_or_else(|| "—".to_string(), |o| format!("{o:.2}"));
+            let order = m
+                .order
+                .map_or_else(|| "—".to_string(), |o| format!("{o:.2}"));
             Series::new(
                 &format!("{key} {short} {order}"),
                 &format!("{key}{short} {order}"),
@@ -963,14 +1002,35 @@ fn render_study(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
     let mut series = study_series(report, work, v.shown);
     let pts = || series.iter().flat_map(|s| s.points.iter().copied());
     let (x0, x1, y0, y1) = pts().fold(
-        (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY),
+        (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ),
         |(a, b, c, d), (x, y)| (a.min(x), b.max(x), c.min(y), d.max(y)),
     );
     let (x0, x1, y0, y1) = if x0.is_finite() {
-        (x0.floor(), x1.ceil().max(x0.floor() + 1.0), y0.floor(), y1.ceil().max(y0.floor() + 1.0))
+        (
+            x0.floor(),
+            x1.ceil().max(x0.floor() + 1.0),
+            y0.floor(),
+            y1.ceil().max(y0.floor() + 1.0),
+        )
     } else {
         (-3.0, 0.0, -6.0, 0.0)
     };
+    // Labels every k decades, k so that they fit (ratatui spreads labels evenly over the
+    // bounds, so the bounds become multiples of k).
+    let step = |lo: f64, hi: f64, room: f64| -> (f64, f64, i32) {
+        let mut k = 1.0;
+        while (hi - lo) / k + 1.0 > room.max(2.0) {
+            k += 1.0;
+        }
+        ((lo / k).floor() * k, (hi / k).ceil() * k, k as i32)
+    };
+    let (y0, y1, ky) = step(y0, y1, f64::from(area.height.saturating_sub(4)) / 2.0 + 1.0);
+    let (x0, x1, kx) = step(x0, x1, f64::from(area.width.saturating_sub(10)) / 7.0);
     // Slope guides through the corner where the curves start: the largest dt (convergence,
     // error falls to the left) or the fewest evaluations (work, error falls to the right).
     for p in [1.0, 2.0, 4.0] {
@@ -979,40 +1039,81 @@ fn render_study(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
         let far = if work { x1 } else { x0 };
         // Where the line leaves the box at the bottom.
         let bottom_x = ax + sign * (y0 - ay) / p;
-        let end_x = if work { far.min(bottom_x) } else { far.max(bottom_x) };
+        let end_x = if work {
+            far.min(bottom_x)
+        } else {
+            far.max(bottom_x)
+        };
         let end_y = ay + sign * p * (end_x - ax);
-        let mut g = Series::new(&format!("slope {p}"), "", Color::DarkGray, vec![(ax, ay), (end_x, end_y)]);
+        let mut g = Series::new(
+            &format!("slope {p}"),
+            "",
+            Color::DarkGray,
+            vec![(ax, ay), (end_x, end_y)],
+        );
         g.guide = true;
         series.push(g);
     }
-    let x_labels: Vec<Span> = (x0 as i32..=x1 as i32).map(|p| Span::raw(decade(p))).collect();
-    let y_labels: Vec<Span> = (y0 as i32..=y1 as i32).map(|p| Span::raw(decade(p))).collect();
+    let x_labels: Vec<Span> = (x0 as i32..=x1 as i32)
+        .step_by(kx as usize)
+        .map(|p| Span::raw(decade(p)))
+        .collect();
+    let y_labels: Vec<Span> = (y0 as i32..=y1 as i32)
+        .step_by(ky as usize)
+        .map(|p| Span::raw(decade(p)))
+        .collect();
     let datasets: Vec<Dataset> = series
         .iter()
         .map(|s| {
-            Dataset::default()
+            let d = Dataset::default()
                 .marker(Marker::Braille)
                 .graph_type(GraphType::Line)
-                .style(if s.guide { theme.dim() } else { theme.fg(s.color) })
-                .data(&s.points)
+                .style(if s.guide {
+                    theme.dim()
+                } else {
+                    theme.fg(s.color)
+                })
+                .data(&s.points);
+            // The legend (in the corner the curves leave empty) names the methods with their
+            // fitted orders; guides have no name.
+            if s.guide { d } else { d.name(s.short.clone()) }
         })
         .collect();
-    let mut spans = vec![Span::raw(if work {
-        "error (m) vs force evals; slopes 1 2 4; order: ".to_string()
+    let title = if work {
+        "log-log: error (m) vs force evals"
     } else {
-        "error (m) vs dt (s); slopes 1 2 4; order: ".to_string()
-    })];
-    for s in series.iter().filter(|s| !s.guide) {
-        spans.push(Span::styled(format!("{} ", s.name), theme.fg(s.color)));
-    }
+        "log-log: error (m) vs dt (s)"
+    };
+    let mut spans = vec![Span::raw(title)];
     if series.iter().all(|s| s.guide) {
-        spans.push(Span::styled("none shown: press 1–8", theme.dim()));
+        spans.push(Span::styled(" (none shown: 1–8)", theme.dim()));
+    } else {
+        spans.push(Span::styled(" · grey: slopes 1 2 4", theme.dim()));
     }
+    let corner = if work {
+        ratatui::widgets::LegendPosition::TopRight
+    } else {
+        ratatui::widgets::LegendPosition::TopLeft
+    };
     Chart::new(datasets)
         .block(Block::bordered().title(Line::from(spans)))
-        .x_axis(Axis::default().bounds([x0, x1]).labels(x_labels).style(theme.dim()))
-        .y_axis(Axis::default().bounds([y0, y1]).labels(y_labels).style(theme.dim()))
-        .legend_position(None)
+        .x_axis(
+            Axis::default()
+                .bounds([x0, x1])
+                .labels(x_labels)
+                .style(theme.dim()),
+        )
+        .y_axis(
+            Axis::default()
+                .bounds([y0, y1])
+                .labels(y_labels)
+                .style(theme.dim()),
+        )
+        .legend_position(Some(corner))
+        .hidden_legend_constraints((
+            ratatui::layout::Constraint::Percentage(100),
+            ratatui::layout::Constraint::Percentage(100),
+        ))
         .render(area, buf);
 }
 
@@ -1034,14 +1135,25 @@ fn render_stability(
         );
         return;
     };
-    let block = Block::bordered().title(format!(
-        "largest stable dt·ω (ω_max = {} rad/s)",
-        number(r.omega_max)
-    ));
+    let block =
+        Block::bordered().title(format!("stable dt·ω (ω_max {} rad/s)", number(r.omega_max)));
     let inner = block.inner(area);
     block.render(area, buf);
+    // Name column as wide as the pane allows (names shortened with … when narrow).
+    let w = if inner.width >= 30 { 8 } else { 6 };
+    let name_width = usize::from(inner.width)
+        .saturating_sub(4 + 2 * w)
+        .clamp(5, 20);
+    let (measured_head, theory_head) = if w == 8 {
+        ("measured", "theory")
+    } else {
+        ("meas.", "theory")
+    };
     let mut lines = vec![Line::styled(
-        format!("{:<22} {:>8} {:>8}", "method", "measured", "theory"),
+        format!(
+            "  {:<name_width$} {measured_head:>w$} {theory_head:>w$}",
+            "method"
+        ),
         theme.dim(),
     )];
     for m in &r.methods {
@@ -1066,9 +1178,13 @@ fn render_stability(
             },
             |z| format!("{z:.3}"),
         );
+        let mut name = m.method.name().to_string();
+        if name.chars().count() > name_width {
+            name = name.chars().take(name_width - 1).collect::<String>() + "…";
+        }
         lines.push(Line::from(vec![
-            Span::styled(format!("{} {:<20} ", key + 1, m.method.name()), theme.fg(color)),
-            Span::raw(format!("{measured:>8} {theory:>8}")),
+            Span::styled(format!("{} {name:<name_width$} ", key + 1), theme.fg(color)),
+            Span::raw(format!("{measured:>w$} {theory:>w$}")),
         ]));
     }
     ratatui::widgets::Paragraph::new(lines).render(inner, buf);
