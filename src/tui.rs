@@ -910,7 +910,7 @@ pub fn run(
         );
     }
     let theme = Theme::from_env();
-    let mut terminal = ratatui::try_init().context("cannot set up the terminal")?;
+    let mut terminal = init_terminal().context("cannot set up the terminal")?;
     // Ask the terminal before anything else reads its input (raw mode is on).
     let graphics = Graphics::detect();
     let default = if graphics.protocol.is_some() {
@@ -928,7 +928,7 @@ pub fn run(
     if let Some(i) = open
         && let Err(e) = app.open_lesson(i)
     {
-        ratatui::restore();
+        restore_terminal();
         bail!(e);
     }
     if view == Some(ViewMode::Raster)
@@ -937,20 +937,52 @@ pub fn run(
     {
         run.set_message("no raster view: the terminal answered no graphics protocol (halfblocks)");
     }
-    // ratatui's panic hook restores raw mode and the screen; turn the mouse off first.
-    let hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        let _ = execute!(stdout(), DisableMouseCapture);
-        hook(info);
-    }));
     let result = execute!(stdout(), EnableMouseCapture)
         .map_err(anyhow::Error::from)
         .and_then(|()| app.run(&mut terminal));
-    let _ = execute!(stdout(), DisableMouseCapture);
     if graphics.protocol == Some(Protocol::Kitty) {
         use std::io::Write as _;
         let _ = write!(stdout(), "{}", raster::kitty_delete(graphics.tmux_wrap));
     }
-    ratatui::restore();
+    restore_terminal();
     result
+}
+
+/// Sets the terminal up for the app: raw mode, the alternate screen, and a panic hook that
+/// restores it (see [`restore_terminal`]) before the panic message is printed.
+///
+/// # Errors
+/// The terminal cannot be set up.
+pub fn init_terminal() -> std::io::Result<DefaultTerminal> {
+    let terminal = ratatui::try_init()?;
+    // ratatui's hook (installed by `try_init`) leaves raw mode and the alternate screen; ours
+    // runs first and empties the screen and turns the mouse off.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        leave_clean();
+        hook(info);
+    }));
+    Ok(terminal)
+}
+
+/// Restores the terminal: the alternate screen emptied and left, raw mode and the mouse off.
+///
+/// The alternate screen is emptied first because tmux, when the window changed size while the
+/// app ran, reflows what the alternate screen holds into the shell's screen on leaving it
+/// (lines wider than the shell's old width wrap into its history and come back above the prompt);
+/// an empty screen leaves nothing.
+pub fn restore_terminal() {
+    leave_clean();
+    ratatui::restore();
+}
+
+fn leave_clean() {
+    use ratatui::crossterm::cursor::MoveTo;
+    use ratatui::crossterm::terminal::{Clear, ClearType};
+    let _ = execute!(
+        stdout(),
+        DisableMouseCapture,
+        Clear(ClearType::All),
+        MoveTo(0, 0)
+    );
 }
