@@ -976,3 +976,173 @@ fn a_raster_frame_of_another_lesson_is_never_shown() {
     wait(&mut app);
     assert!(placeholder(&app));
 }
+
+/// The braille view puts a particle's mark in the cell its spring is drawn through: the pinned
+/// ■ of lesson 1's first step has the spring's braille dots beside it in its own row.
+#[test]
+fn particle_marks_sit_on_the_braille_line() {
+    let mut app = App::new(lesson::builtin(), Theme { color: false }).with_display(
+        springlab::tui::ViewMode::Braille,
+        springlab::tui::Graphics::NONE,
+        springlab::tui::ColourDepth::None,
+    );
+    for (w, h) in [(100, 32), (120, 40), (80, 24), (97, 31)] {
+        app.resize(w, h);
+        app.open_lesson(0).expect("opens");
+        let text = screen_text(&app, w, h);
+        let (row, line) = text
+            .lines()
+            .enumerate()
+            .find(|(_, l)| l.contains('■'))
+            .expect("the pinned particle is marked");
+        let chars: Vec<char> = line.chars().collect();
+        let at = chars.iter().position(|&c| c == '■').expect("■");
+        let braille = |c: char| ('\u{2801}'..='\u{28ff}').contains(&c);
+        assert!(
+            braille(chars[at - 1]) || braille(chars[at + 1]),
+            "{w}×{h}: the spring passes through the row of ■ (row {row}):\n{text}"
+        );
+    }
+}
+
+/// Progress goes to the file given, survives a restart, and a met goal is met again when the
+/// lesson is opened anew; `Progress::in_memory` writes nothing.
+#[test]
+fn progress_is_saved_and_restored() {
+    use springlab::tui::Progress;
+    let dir = temp_dir("progress");
+    let path = dir.join("progress.json");
+    let hooke = |progress: Progress| {
+        let mut app = App::new(lesson::builtin(), Theme { color: false }).with_progress(progress);
+        let i = app.find_lesson("hooke").expect("lesson 2");
+        app.open_lesson(i).expect("opens");
+        app
+    };
+    let mut app = hooke(Progress::load(&path));
+    // Step 3: bring the oscillator to rest by raising the damping (its try keys).
+    keys(&mut app, "nn");
+    for _ in 0..5 {
+        key(&mut app, KeyCode::Char('D'));
+    }
+    key(&mut app, KeyCode::Char(' '));
+    for _ in 0..40 {
+        app.tick(0.1);
+    }
+    assert_eq!(run(&app).goal_state(), Some(true));
+    assert!(path.exists(), "written when the goal was met");
+    let text = std::fs::read_to_string(&path).expect("readable");
+    assert!(text.contains("\"hooke\""), "{text}");
+    // A new app with the same file: lesson 2 shows its three steps done and the goal met.
+    let app = hooke(Progress::load(&path));
+    assert_eq!(app.lesson_done(1), Some((3, 3)));
+    let mut app = app;
+    keys(&mut app, "nn");
+    assert_eq!(
+        run(&app).goal_state(),
+        Some(true),
+        "re-entering keeps the met goal"
+    );
+    assert_eq!(
+        run(&app).run_verdict(),
+        None,
+        "while this run has not decided"
+    );
+    // In memory: nothing is written.
+    let other = dir.join("other.json");
+    let mut app = hooke(Progress::in_memory());
+    keys(&mut app, "nn");
+    assert!(!other.exists() && app.progress().path().is_none());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A step with a prediction waits for the answer before it runs, records it, and shows the
+/// answer once a run is decided.
+#[test]
+fn a_prediction_is_asked_before_the_run_and_answered_after_it() {
+    let mut app = open("euler");
+    key(&mut app, KeyCode::Char('n'));
+    assert!(run(&app).awaiting_prediction());
+    key(&mut app, KeyCode::Char(' '));
+    assert!(!run(&app).is_running(), "no run before the answer");
+    assert!(run(&app).message().is_some_and(|m| m.contains("predict")));
+    // Option 1 (explicit Euler), then the experiment of option 1.
+    key(&mut app, KeyCode::Char('1'));
+    assert_eq!(run(&app).answer(), Some(0));
+    assert!(!run(&app).awaiting_prediction());
+    keys(&mut app, "me+++ ");
+    for _ in 0..300 {
+        app.tick(0.1);
+        if run(&app).revealed().is_some() {
+            break;
+        }
+    }
+    let revealed = run(&app)
+        .revealed()
+        .expect("revealed after the run decided")
+        .to_string();
+    assert!(revealed.contains("blew up"), "{revealed}");
+    assert!(revealed.contains("2) semi-implicit Euler"), "{revealed}");
+    assert!(revealed.contains("✗ you predicted 1)"), "{revealed}");
+    let text = screen_text(&app, 120, 40);
+    assert!(text.contains("✗ you predicted"), "{text}");
+}
+
+/// The status line shows the method's limit on the scene by the damped theory, and marks a dt
+/// beyond it.
+#[test]
+fn status_line_shows_the_damped_limit() {
+    use springlab::tui::lesson_view::Limit;
+    // The oscillator under semi-implicit Euler: dt·ω < 2, ω = 10 rad/s.
+    let mut app = open("euler");
+    key(&mut app, KeyCode::Char('n'));
+    let (limit, omega) = run(&app).limit().expect("a limit").clone();
+    assert!((omega - 10.0).abs() < 1e-9);
+    let Limit::Below(dt) = limit else {
+        panic!("conditional: {limit:?}")
+    };
+    assert!((dt - 0.2).abs() < 1e-3, "{dt}");
+    assert!(screen_text(&app, 120, 40).contains("limit 0.200 s"));
+    keys(&mut app, "1++++");
+    assert!(screen_text(&app, 120, 40).contains("✗ over limit"));
+    // Explicit Euler without damping: unstable at every dt; with the damper, a limit.
+    let mut app = open("euler");
+    assert_eq!(run(&app).limit().map(|l| l.0.clone()), Some(Limit::Never));
+    keys(&mut app, "DDDDDDDDDD");
+    assert!(matches!(
+        run(&app).limit().map(|l| l.0.clone()),
+        Some(Limit::Below(_))
+    ));
+    // The jelly: the dampers set semi-implicit Euler's limit far below dt·ω = 2.
+    let mut app = open("jelly");
+    keys(&mut app, "nn");
+    let (limit, omega) = run(&app).limit().expect("a limit").clone();
+    let Limit::Below(dt) = limit else {
+        panic!("conditional: {limit:?}")
+    };
+    assert!(dt * omega < 0.5, "dt·ω = {}", dt * omega);
+}
+
+/// Lesson 1's first step says particle 0, the pinned one, is on the right: it is, in the step's
+/// first view.
+#[test]
+fn lesson_1_pins_the_particle_on_the_right() {
+    let app = App::new(lesson::builtin(), Theme { color: false }).with_display(
+        springlab::tui::ViewMode::Braille,
+        springlab::tui::Graphics::NONE,
+        springlab::tui::ColourDepth::None,
+    );
+    let mut app = app;
+    app.open_lesson(0).expect("opens");
+    let text = screen_text(&app, 100, 32);
+    let column = |mark: char| {
+        text.lines()
+            .find_map(|l| l.chars().position(|c| c == mark))
+            .unwrap_or_else(|| panic!("{mark} drawn:\n{text}"))
+    };
+    assert!(
+        column('■') > column('•'),
+        "the pinned ■ right of the free •:\n{text}"
+    );
+    assert!(run(&app).text().contains("on the **right**"));
+    assert!(run(&app).sim().scene.bodies[0].model.is_pinned(0));
+}

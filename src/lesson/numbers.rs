@@ -30,6 +30,10 @@ use crate::study::convergence::{self, ConvergenceOptions, ConvergenceReport};
 use crate::study::stability::{self, StabilityOptions, StabilityReport};
 use crate::study::{self as studies, theory};
 
+/// What a placeholder shows when its value cannot be computed (a scene too large to study, a
+/// method the study did not fit).
+pub const UNKNOWN: &str = "⟨?⟩";
+
 /// Scenes with more springs than this are not studied for a placeholder.
 pub const MAX_STUDY_SPRINGS: usize = 200;
 
@@ -320,8 +324,14 @@ fn format_count(x: f64) -> String {
         let m = x / 1e6;
         return format!("{} million", format(round_sig(m, 2)));
     }
-    let r = round_sig(x, 2) as i64;
-    let s = r.to_string();
+    grouped(&(round_sig(x, 2) as i64).to_string())
+}
+
+/// Digits in groups of three from the right when there are five or more: `2400`, `12 876`.
+fn grouped(s: &str) -> String {
+    if s.len() < 5 {
+        return s.to_string();
+    }
     let mut out = String::new();
     for (i, c) in s.chars().enumerate() {
         if i > 0 && (s.len() - i) % 3 == 0 {
@@ -354,7 +364,7 @@ fn value(p: &Placeholder, cx: &Context) -> String {
         "param" => {
             let key = p.arg.as_deref().unwrap_or("");
             let Some(def) = scene::builtin(&cx.name) else {
-                return "?".into();
+                return UNKNOWN.into();
             };
             let mut params = def.default_params();
             for s in &cx.sets {
@@ -363,11 +373,11 @@ fn value(p: &Placeholder, cx: &Context) -> String {
             params
                 .iter()
                 .find(|(k, _)| *k == key)
-                .map_or_else(|| "?".into(), |(_, v)| v.to_string())
+                .map_or_else(|| UNKNOWN.into(), |(_, v)| v.to_string())
         }
         "particles" | "springs" => {
             let Some(scene) = &cx.scene else {
-                return "?".into();
+                return UNKNOWN.into();
             };
             let n = if p.kind == "particles" {
                 scene.particle_count()
@@ -393,7 +403,7 @@ fn value(p: &Placeholder, cx: &Context) -> String {
         "omega_max" => format(round_sig(cx.omega(), 3)),
         "limit_dt" | "limit_dt_omega" | "lambda" => {
             let Some(l) = m.and_then(|m| cx.theory(m)) else {
-                return "?".into();
+                return UNKNOWN.into();
             };
             match (l.stability, p.kind.as_str()) {
                 ("conditional", "limit_dt") => format(l.dt.unwrap_or(f64::NAN)),
@@ -410,10 +420,10 @@ fn value(p: &Placeholder, cx: &Context) -> String {
             .convergence(false)
             .and_then(|r| r.methods.iter().find(|x| Some(x.method) == m))
             .and_then(|x| x.order)
-            .map_or_else(|| "?".into(), |o| format!("{o:.2}")),
+            .map_or_else(|| UNKNOWN.into(), |o| format!("{o:.2}")),
         "error_ratio" => {
             let Some(r) = cx.convergence(false) else {
-                return "?".into();
+                return UNKNOWN.into();
             };
             let last = |method: Method| {
                 r.methods
@@ -424,15 +434,15 @@ fn value(p: &Placeholder, cx: &Context) -> String {
             };
             match (last(ms[0]), last(ms[1])) {
                 (Some(a), Some(b)) if b > 0.0 => format!("{:.0}", a / b),
-                _ => "?".into(),
+                _ => UNKNOWN.into(),
             }
         }
         "stable_dt_omega" => {
             let Some(r) = cx.stability() else {
-                return "?".into();
+                return UNKNOWN.into();
             };
             let Some(x) = r.methods.iter().find(|x| Some(x.method) == m) else {
-                return "?".into();
+                return UNKNOWN.into();
             };
             x.linear_dt_omega.map_or_else(
                 || x.linear_stability.name().to_string(),
@@ -442,27 +452,19 @@ fn value(p: &Placeholder, cx: &Context) -> String {
         "crossover" => cx
             .convergence(true)
             .and_then(|r| crossover(r, ms[0], ms[1]))
-            .map_or_else(|| "?".into(), |e| format(round_sig(e, 1))),
+            .map_or_else(|| UNKNOWN.into(), |e| format(round_sig(e, 1))),
         "wp_error" => cx
             .convergence(true)
             .and_then(|r| r.methods.iter().find(|x| Some(x.method) == m))
             .and_then(|x| x.points.first())
             .and_then(|pt| pt.error)
-            .map_or_else(|| "?".into(), |e| format(round_sig(e, 2))),
-        _ => "?".into(),
+            .map_or_else(|| UNKNOWN.into(), |e| format(round_sig(e, 2))),
+        _ => UNKNOWN.into(),
     }
 }
 
 fn format_count_exact(n: usize) -> String {
-    let s = n.to_string();
-    let mut out = String::new();
-    for (i, c) in s.chars().enumerate() {
-        if i > 0 && (s.len() - i) % 3 == 0 {
-            out.push(' ');
-        }
-        out.push(c);
-    }
-    out
+    grouped(&n.to_string())
 }
 
 /// The error (m) below which `a` needs fewer force evaluations than `b` for the same error:
