@@ -566,7 +566,7 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
             }
         };
         // Placeholders: known names, methods and scenes (computed when the step opens).
-        for (offset, message) in numbers::check(body) {
+        if let Some((offset, message)) = numbers::check(body).into_iter().next() {
             let line = body_line(&lines, *start, offset);
             return Err(err(line, None, message));
         }

@@ -494,6 +494,9 @@ impl Series {
     }
 }
 
+/// The points of one curve: (x, y).
+type Points = Vec<(f64, f64)>;
+
 /// The curve of quantity `q` ([`Sample::values`] order) over the run, drawn into a chart
 /// `columns` braille dots wide: one point per bin while the bins fit, else per column its
 /// largest and its smallest value as two lines (a min / max envelope). Returns (upper, lower);
@@ -503,7 +506,7 @@ fn envelope(
     q: usize,
     t_end: f64,
     columns: usize,
-) -> (Vec<(f64, f64)>, Vec<(f64, f64)>) {
+) -> (Points, Points) {
     let finite = |b: &Bin| {
         let (lo, hi) = (
             b.lo.get(q).copied().unwrap_or(f64::NAN),
