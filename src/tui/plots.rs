@@ -501,12 +501,7 @@ type Points = Vec<(f64, f64)>;
 /// `columns` braille dots wide: one point per bin while the bins fit, else per column its
 /// largest and its smallest value as two lines (a min / max envelope). Returns (upper, lower);
 /// lower is empty when every column holds a single value.
-fn envelope(
-    history: &History,
-    q: usize,
-    t_end: f64,
-    columns: usize,
-) -> (Points, Points) {
+fn envelope(history: &History, q: usize, t_end: f64, columns: usize) -> (Points, Points) {
     let finite = |b: &Bin| {
         let (lo, hi) = (
             b.lo.get(q).copied().unwrap_or(f64::NAN),
