@@ -431,3 +431,42 @@ fn placeholders_resolve_and_match_the_studies() {
     let e = lesson::parse(&bad, "bad.md", None).expect_err("unknown placeholder");
     assert!(e.message.contains("unknown placeholder"), "{e}");
 }
+
+/// Lesson 7's work-precision step compares numbers it computes: RK4 is cheaper than
+/// semi-implicit Euler at "every error measured" (the crossover lies above semi-implicit
+/// Euler's largest error, the one at the largest dt), and semi-implicit Euler's error at the
+/// largest dt is "the largest of the one-evaluation methods" it names.
+#[test]
+fn work_precision_comparisons_in_lesson_7_hold() {
+    let l = lesson::builtin()
+        .into_iter()
+        .map(|l| l.expect("loads"))
+        .find(|l| l.number == 7)
+        .expect("lesson 7");
+    let step = l
+        .steps
+        .iter()
+        .find(|s| s.text.contains("{{crossover:rk4,semi-implicit-euler}}"))
+        .expect("the work-precision step");
+    assert!(step.text.contains("every error measured"), "{}", step.text);
+    assert!(
+        step.text
+            .contains("the largest of the one-evaluation methods")
+    );
+    let value = |p: &str| -> f64 {
+        let s = numbers::fill(p, &step.scene, &step.params, None);
+        s.parse().unwrap_or_else(|_| panic!("{p} = {s}"))
+    };
+    let crossover = value("{{crossover:rk4,semi-implicit-euler}}");
+    let sie = value("{{wp_error:semi-implicit-euler}}");
+    let ee = value("{{wp_error:explicit-euler}}");
+    let verlet = value("{{wp_error:verlet}}");
+    assert!(
+        crossover > sie,
+        "crossover {crossover} m, largest error {sie} m"
+    );
+    assert!(
+        sie > ee && sie > verlet,
+        "SIE {sie}, EE {ee}, Verlet {verlet}"
+    );
+}
