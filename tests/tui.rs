@@ -1146,3 +1146,41 @@ fn lesson_1_pins_the_particle_on_the_right() {
     assert!(run(&app).text().contains("on the **right**"));
     assert!(run(&app).sim().scene.bodies[0].model.is_pinned(0));
 }
+
+/// Every live edit of the model (stiffness, damping, drag, γ, passes, dt, the method, a pin)
+/// restarts the energy accounting from the present state: right after the key the energy
+/// error `E + D - E_0` is zero, where the run before it had accumulated one (so the plot of
+/// the method's energy error does not jump by the edit's change of energy).
+#[test]
+fn every_live_edit_rebases_the_energy_accounting() {
+    for (slug, edits) in [
+        (
+            "verlet",
+            &["K", "k", "D", "d", "A", "a", "G", "g", "J", "j", "+", "-"][..],
+        ),
+        ("euler", &["me", "ms", "mr", "mi"][..]),
+        ("cloth", &["1", "2"][..]),
+    ] {
+        let mut app = open(slug);
+        for edit in edits {
+            keys(&mut app, " ");
+            for _ in 0..3 {
+                app.tick(0.1);
+            }
+            keys(&mut app, " ");
+            let sim = run(&app).sim();
+            assert!(sim.diverged.is_none(), "{slug} {edit}");
+            let before = sim.energy_residual();
+            assert!(
+                before != 0.0,
+                "{slug} before {edit}: the run has an energy error"
+            );
+            keys(&mut app, edit);
+            let after = run(&app).sim().energy_residual();
+            assert!(
+                after.abs() <= 1e-12 * run(&app).sim().energy().total.abs().max(1.0),
+                "{slug} {edit}: energy error {after} J right after the edit (was {before} J)"
+            );
+        }
+    }
+}
