@@ -226,14 +226,19 @@ impl App {
     /// Steps done and steps of entry `index` of the menu (see [`Progress::done`]).
     #[must_use]
     pub fn lesson_done(&self, index: usize) -> Option<(usize, usize)> {
+        let steps = self.lesson_steps_done(index)?;
+        Some((steps.iter().filter(|d| **d).count(), steps.len()))
+    }
+
+    /// Per step of lesson `index`: done (opened, its goal met, its prediction answered), from
+    /// the kept progress; `None` for a lesson that did not load.
+    #[must_use]
+    pub fn lesson_steps_done(&self, index: usize) -> Option<Vec<bool>> {
         let l = self.lessons.get(index)?.as_ref().ok()?;
         let goals: Vec<bool> = l.steps.iter().map(|s| s.goal.is_some()).collect();
         let predictions: Vec<bool> = l.steps.iter().map(|s| s.predict.is_some()).collect();
         let key = Progress::key(&l.source, &l.slug);
-        Some((
-            self.progress.done(&key, &goals, &predictions),
-            l.steps.len(),
-        ))
+        Some(self.progress.steps_done(&key, &goals, &predictions))
     }
 
     /// Saves what the open lesson's run changed (met goals, visits, predictions).

@@ -141,15 +141,24 @@ impl Progress {
     /// its prediction (if any) answered.
     #[must_use]
     pub fn done(&self, key: &str, goals: &[bool], predictions: &[bool]) -> usize {
+        self.steps_done(key, goals, predictions)
+            .iter()
+            .filter(|d| **d)
+            .count()
+    }
+
+    /// Per step of the lesson: done (as in [`Progress::done`]).
+    #[must_use]
+    pub fn steps_done(&self, key: &str, goals: &[bool], predictions: &[bool]) -> Vec<bool> {
         let Some(r) = self.lessons.get(key) else {
-            return 0;
+            return vec![false; goals.len()];
         };
         (0..goals.len())
-            .filter(|&i| {
+            .map(|i| {
                 r.visited.get(i).copied().unwrap_or(false)
                     && (!goals[i] || r.met.get(i).copied().unwrap_or(false))
                     && (!predictions[i] || r.answers.get(i).copied().flatten().is_some())
             })
-            .count()
+            .collect()
     }
 }
