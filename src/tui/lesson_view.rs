@@ -2013,11 +2013,22 @@ fn render_chooser(run: &LessonRun, c: &Chooser, theme: Theme, area: Rect, buf: &
 fn render_hints(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
     let line = match run.message() {
         Some(m) => Line::from(Span::styled(format!(" {m}"), theme.fg(Color::Yellow))),
-        None => Line::from(Span::styled(
-            " space run · s step · r reset · m method · +/- dt · k/K d/D a/A · v view · n/p step · \
-             ? help · q menu",
-            theme.dim(),
-        )),
+        None => {
+            // The longest hint that fits, so that "? help · q menu" is never cut off.
+            let hints = [
+                " space run · s step · r reset · m method · +/- dt · k/K d/D a/A · v view · \
+                 n/p step · ? help · q menu",
+                " space run · s step · r reset · m method · +/- dt · v view · n/p step · ? help \
+                 · q menu",
+                " space run · r reset · m method · +/- dt · n/p step · ? help · q menu",
+                " space run · ? help · q menu",
+            ];
+            let fits = hints
+                .iter()
+                .find(|h| h.chars().count() <= usize::from(area.width))
+                .unwrap_or(&hints[hints.len() - 1]);
+            Line::from(Span::styled(*fits, theme.dim()))
+        }
     };
     buf.set_line(area.x, area.y, &line, area.width);
 }
