@@ -1184,3 +1184,29 @@ fn every_live_edit_rebases_the_energy_accounting() {
         }
     }
 }
+
+/// A prediction about the bodies of one run (lesson 4 step 3: which rope comes to rest) is
+/// revealed with what each body did in the student's run, not a bare "kept going".
+#[test]
+fn a_per_body_prediction_reveals_each_body() {
+    let mut app = open("verlet");
+    keys(&mut app, "nn");
+    assert!(run(&app).awaiting_prediction());
+    keys(&mut app, "2GGG ");
+    for _ in 0..300 {
+        app.tick(0.1);
+        if run(&app).revealed().is_some() {
+            break;
+        }
+    }
+    let revealed = run(&app).revealed().expect("revealed").to_string();
+    assert!(
+        revealed.contains("the semi-implicit Euler rope (left) still moving"),
+        "{revealed}"
+    );
+    assert!(
+        revealed.contains("the Verlet rope (right) at rest"),
+        "{revealed}"
+    );
+    assert!(revealed.contains("✓ you predicted it"), "{revealed}");
+}

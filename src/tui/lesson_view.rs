@@ -952,8 +952,36 @@ impl LessonRun {
         if !diverged && time < horizon {
             return;
         }
+        let per_body = p
+            .options
+            .iter()
+            .all(|o| o.claim.kind == crate::lesson::GoalKind::Settle && o.claim.body.is_some());
         let what = if diverged {
             format!("this run blew up at t = {} s", super::plots::number(time))
+        } else if per_body {
+            // Options about different bodies of one run: say what each body did in this one.
+            let bodies: Vec<String> = p
+                .options
+                .iter()
+                .map(|o| {
+                    let v = self.body_speed(o.claim.body);
+                    let state = if v < o.claim.speed {
+                        "at rest"
+                    } else {
+                        "still moving"
+                    };
+                    format!(
+                        "{} {state} (max |v| {} m/s)",
+                        o.text,
+                        super::plots::number(v)
+                    )
+                })
+                .collect();
+            format!(
+                "at t = {} s in this run: {}",
+                super::plots::number(time),
+                bodies.join(", ")
+            )
         } else {
             format!("this run kept going for {} s", super::plots::number(time))
         };
