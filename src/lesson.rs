@@ -86,6 +86,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
         "07-speed-accuracy.md",
         include_str!("../lessons/07-speed-accuracy.md"),
     ),
+    ("08-model.md", include_str!("../lessons/08-model.md")),
 ];
 
 /// A plot the lesson screen can show beside the scene.
