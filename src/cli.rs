@@ -3,7 +3,7 @@
 //! The command-line contract:
 //! ```text
 //! springlab [--lessons DIR] [--view raster|halfblocks|braille]   the lesson menu (terminal app)
-//! springlab lesson <N|slug> [--view …]                            one lesson
+//! springlab lesson <N|slug> [--view …] [--no-save]                one lesson
 //! springlab lessons                  list the lessons
 //! springlab scenes [scene] [--method M]
 //! springlab run <scene|file.toml> [--method M] [--dt S] [--steps N | --time T]
@@ -56,6 +56,10 @@ pub struct Cli {
     /// terminal answers a graphics protocol, else halfblocks.
     #[arg(long, global = true, value_name = "VIEW", value_parser = parse_view)]
     pub view: Option<crate::tui::ViewMode>,
+    /// Keep the lesson progress (goals met, predictions) in memory only: nothing is written to
+    /// the user's data directory (a classroom machine).
+    #[arg(long, global = true)]
+    pub no_save: bool,
 }
 
 fn parse_view(s: &str) -> Result<crate::tui::ViewMode, String> {
@@ -102,7 +106,7 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let dir = cli.lessons.as_deref();
     let result = match cli.command {
-        Some(Command::Lesson { which }) => lessons::open(dir, &which, cli.view),
+        Some(Command::Lesson { which }) => lessons::open(dir, &which, cli.view, cli.no_save),
         Some(Command::Lessons) => lessons::list(dir),
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::Scenes(args)) => scenes::list(&args),
@@ -112,7 +116,7 @@ pub fn main() -> ExitCode {
         Some(Command::Advise(args)) => advise::run(&args),
         Some(Command::Homework(args)) => grade::homework(&args),
         Some(Command::Grade(args)) => grade::grade(&args),
-        None => lessons::menu(dir, cli.view),
+        None => lessons::menu(dir, cli.view, cli.no_save),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
