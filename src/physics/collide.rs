@@ -369,6 +369,54 @@ impl Collider {
     }
 }
 
+impl Collider {
+    /// False when `x` (m) is certainly farther than `epsilon` (m) from the collider's surface on
+    /// its free side, so that [`Collider::contact`] would give no `φ < epsilon`: a test without
+    /// square roots (squared distances, a height), with a relative margin of 10⁻⁹ against
+    /// rounding, for the broad phase of the contact loops. True also for NaN.
+    #[must_use]
+    pub fn may_touch(&self, x: DVec3, epsilon: f64) -> bool {
+        const MARGIN: f64 = 1e-9;
+        match *self {
+            // A plane's φ costs no more than any test.
+            Collider::Plane { .. } => true,
+            Collider::Sphere { center, radius } => {
+                // |x - c| - r < ε  ⇔  |x - c|² < (r + ε)²
+                let reach = (radius + epsilon).max(0.0);
+                let d2 = (x - center).length_squared();
+                d2 < reach * reach * (1.0 + MARGIN) + MARGIN || d2.is_nan()
+            }
+            Collider::Bowl { center, radius, .. } => {
+                // r - |x - c| < ε  ⇔  |x - c|² > (r - ε)²
+                let inner = (radius - epsilon).max(0.0);
+                let d2 = (x - center).length_squared();
+                d2 >= inner * inner * (1.0 - MARGIN) || d2.is_nan()
+            }
+            Collider::HolePlane {
+                point,
+                normal,
+                hole_center,
+                hole_radius,
+            } => {
+                // Every contact has the height h < ε; below the floor only the shaft's wall
+                // band (ρ > R - ε) and the solid (ρ ≥ R) touch.
+                let scale = point.abs().max_element() + hole_center.abs().max_element() + 1.0;
+                let h = (x - point).dot(normal);
+                if h >= epsilon + MARGIN * scale {
+                    return false;
+                }
+                if h >= -MARGIN * scale {
+                    return true;
+                }
+                let q = x - hole_center;
+                let rho2 = (q - q.dot(normal) * normal).length_squared();
+                let inner = (hole_radius - epsilon).max(0.0);
+                rho2 >= inner * inner * (1.0 - MARGIN) || rho2.is_nan()
+            }
+        }
+    }
+}
+
 /// `(|d|, d/|d|)`, with the direction `+y` when `d = 0`.
 fn distance_and_direction(d: DVec3) -> (f64, DVec3) {
     let length = d.length();
@@ -518,10 +566,25 @@ pub fn contact_power(model: &Model, x: &[DVec3], v: &[DVec3], f_applied: &[DVec3
 /// and friction to the applied force `f` (N), each collider in order seeing what the previous
 /// ones left (module docs); `None` when no collider pushes it.
 fn with_contact(model: &Model, x: DVec3, v: DVec3, f: DVec3) -> Option<DVec3> {
-    let params = &model.contact;
+    contact_force(&model.colliders, &model.contact, x, v, f)
+}
+
+/// [`contact_forces`] for one particle at `x` (m) moving at `v` (m/s) with applied force `f`
+/// (N): the force after `colliders` added their contact force and friction, or `None` when no
+/// collider pushes it. The stencil's fused pass calls this for the particles that may touch.
+pub(crate) fn contact_force(
+    colliders: &[Collider],
+    params: &ContactParams,
+    x: DVec3,
+    v: DVec3,
+    f: DVec3,
+) -> Option<DVec3> {
     let mut f = f;
     let mut touched = false;
-    for collider in &model.colliders {
+    for collider in colliders {
+        if !collider.may_touch(x, params.epsilon) {
+            continue;
+        }
         let Some(Contact { phi, normal }) = collider.contact(x) else {
             continue;
         };
@@ -573,6 +636,11 @@ fn friction_force(limit: f64, f_t: DVec3, v_t: DVec3, rest_speed: f64) -> DVec3 
 /// colliders, after a step of `dt` seconds (module docs). Keeps position Verlet's history
 /// consistent: a particle whose velocity changed gets `x_prev = x - dt v`.
 pub fn resolve(model: &Model, state: &mut State, dt: f64) {
+    resolve_logged(model, state, dt, None);
+}
+
+/// [`resolve`], recording in `log` (when given) every particle it changes.
+pub fn resolve_logged(model: &Model, state: &mut State, dt: f64, mut log: Option<&mut Changes>) {
     if model.colliders.is_empty() {
         return;
     }
@@ -581,6 +649,7 @@ pub fn resolve(model: &Model, state: &mut State, dt: f64) {
         if model.inv_mass[i] == 0.0 {
             continue;
         }
+        let (x_old, v_old) = (state.x[i], state.v[i]);
         let mut touched = false;
         for collider in &model.colliders {
             touched |= respond(
@@ -600,8 +669,55 @@ pub fn resolve(model: &Model, state: &mut State, dt: f64) {
                 state.v[i],
                 dt,
             );
+            if let Some(log) = log.as_deref_mut() {
+                log.record(i, x_old, v_old);
+            }
         }
     }
+}
+
+/// What a collision response changed, for the energy it removed without a pass over the whole
+/// system ([`super::energy::energy_change`]): every particle it moved or slowed, with its
+/// position (m) and velocity (m/s) before the first change, and the dynamic spheres' energy
+/// before (J).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Changes {
+    /// `(particle, x before, v before)`, sorted by particle, each once after [`Changes::finish`].
+    pub(crate) particles: Vec<(u32, DVec3, DVec3)>,
+    /// Kinetic and gravitational energy of the non-kinematic spheres before (J).
+    pub(crate) spheres_before: f64,
+}
+
+impl Changes {
+    /// Forgets everything recorded.
+    pub fn clear(&mut self) {
+        self.particles.clear();
+        self.spheres_before = 0.0;
+    }
+
+    fn record(&mut self, i: usize, x: DVec3, v: DVec3) {
+        self.particles.push((i as u32, x, v));
+    }
+
+    /// Sorts the records by particle and keeps each particle's first (its state before any
+    /// change).
+    pub fn finish(&mut self) {
+        // A stable sort keeps the records of one particle in the order they were made.
+        self.particles.sort_by_key(|p| p.0);
+        self.particles.dedup_by_key(|p| p.0);
+    }
+}
+
+/// Kinetic and gravitational energy of the non-kinematic dynamic spheres (J), as
+/// [`super::energy::energy`] counts them.
+#[must_use]
+pub fn spheres_energy(model: &Model, state: &State) -> f64 {
+    state
+        .spheres
+        .iter()
+        .filter(|s| !s.kinematic)
+        .map(|s| 0.5 * s.mass * s.velocity.length_squared() - s.mass * model.gravity.dot(s.center))
+        .sum()
 }
 
 /// The response of one point (a particle, or a sphere's centre with `offset` its radius, m) to
@@ -615,6 +731,9 @@ fn respond(
     x: &mut DVec3,
     v: &mut DVec3,
 ) -> bool {
+    if !collider.may_touch(*x, params.epsilon + offset) {
+        return false;
+    }
     let Some(Contact { phi, normal }) = collider.contact(*x) else {
         return false;
     };
@@ -701,8 +820,22 @@ pub fn advance_spheres(model: &Model, state: &mut State, dt: f64) {
 /// Steps 2–4 of [`step_spheres`]: the impulses and separations between spheres, colliders and
 /// particles after the spheres moved. `dt` (s) keeps Verlet's history consistent.
 pub fn collide_spheres(model: &Model, state: &mut State, dt: f64) {
+    collide_spheres_logged(model, state, dt, None);
+}
+
+/// [`collide_spheres`], recording in `log` (when given) the spheres' energy before and every
+/// particle it changes.
+pub fn collide_spheres_logged(
+    model: &Model,
+    state: &mut State,
+    dt: f64,
+    mut log: Option<&mut Changes>,
+) {
     if state.spheres.is_empty() {
         return;
+    }
+    if let Some(log) = log.as_deref_mut() {
+        log.spheres_before += spheres_energy(model, state);
     }
     let params = &model.contact;
     let State {
@@ -748,7 +881,14 @@ pub fn collide_spheres(model: &Model, state: &mut State, dt: f64) {
     }
     for s in spheres.iter_mut() {
         let ws = s.inv_mass();
+        // Broad phase: a particle at |x - c|² ≥ r² (with a margin against rounding) does not
+        // touch, and needs no square root.
+        let reach2 = s.radius * s.radius * (1.0 + 1e-9);
         for i in 0..x.len().min(model.particle_count()) {
+            if (x[i] - s.center).length_squared() >= reach2 {
+                continue;
+            }
+            let (x_old, v_old) = (x[i], v[i]);
             let touched = impulse_pair(
                 Side {
                     x: &mut s.center,
@@ -765,6 +905,9 @@ pub fn collide_spheres(model: &Model, state: &mut State, dt: f64) {
             );
             if touched {
                 keep_verlet_history(*history_valid, &mut x_prev[i], x[i], v[i], dt);
+                if let Some(log) = log.as_deref_mut() {
+                    log.record(i, x_old, v_old);
+                }
             }
         }
     }

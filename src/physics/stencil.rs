@@ -21,26 +21,45 @@
 //! register of f64) and tiles of 64 (`TILE`). For each tile:
 //!
 //! ```text
-//! pass 1, each offset δ, each chunk p of the tile:  f_δ[p..p+8]  (8 springs at once) → ring_δ
-//! pass 2, each chunk q of the tile:                 plus  = Σ_δ ring_δ[q..q+8]
-//!                                                   minus = Σ_δ ring_δ[q-δ..q-δ+8]
-//!                                                   F[q..q+8] += plus - minus
+//! pass 1, each chunk p of the tile:  load x[p..p+8], v[p..p+8] once;  plus = 0
+//!         each offset δ:             f_δ[p..p+8] (8 springs at once) → ring_δ;  plus += f_δ
+//! pass 2, each chunk q of the tile:  minus = Σ_δ ring_δ[q-δ..q-δ+8]
+//!                                    F[q..q+8] = plus[q] - minus,  then the output
 //! ```
-//! Pass 1 reads `x[p..p+8]` and `x[p+δ..p+δ+8]` as contiguous loads, and its iterations are
-//! independent, so the processor overlaps them. A spring's force is needed twice, for both its
-//! ends, `δ` particles apart, so it is kept in a ring buffer per offset holding the last
-//! `R ≥ δ + TILE + 8` forces (`R` a power of two, index `p mod R`, plus a copy of the first eight
-//! after the end so that eight values can always be read at once). The whole working set stays
-//! in the core's caches however large the lattice is. Positions and velocities are first copied
-//! into one contiguous `f64` array per component (structure of arrays).
+//! Pass 1 reads `x[p+δ..p+δ+8]` as contiguous loads, and its iterations are independent, so
+//! the processor overlaps them; the first ends and the sum of the forces that start at `p`
+//! stay in registers across the offsets. A spring's force is needed a second time, at its
+//! second end `δ` particles later, so it is kept in a ring buffer per offset holding the last
+//! `R ≥ δ + TILE + 8` forces (`R` a power of two, index `p mod R`, plus a copy of the first
+//! eight after the end so that eight values can always be read at once). The whole working set
+//! stays in the core's caches however large the lattice is. Positions and velocities are first
+//! copied into one contiguous `f64` array per component (structure of arrays; with AVX-512 eight
+//! particles at a time by two-register permutes).
 //!
 //! **To the end of the step in the same pass.** Pass 2 finishes each chunk with what the caller
-//! asked for ([`Output`]): the spring force, the total force with weight and drag, the
-//! acceleration `f/m`, or a whole semi-implicit Euler step `v' = v + dt a`, `x' = x + dt v'`. So
-//! [`super::forces::forces`], [`super::forces::accelerations`] and the semi-implicit Euler step
-//! need no further pass over the particles, and that work is split between the threads too.
-//! Each output does the same operations in the same order as the plain loop it replaces, so
-//! the numbers are the same.
+//! asked for ([`Output`]): the spring force; the total force with weight, drag and the
+//! colliders' contact force ([`Dynamics`]); the acceleration `f/m`; or a whole stage of an
+//! integrator ([`Update`]): the semi-implicit Euler step `v' = v + dt a`, `x' = x + dt v'`, an
+//! Euler stage `x' = x_b + h v`, `v' = v_b + h a` from a base state (explicit Euler, the
+//! midpoint and predictor–corrector stages, RK4's first three stages), or RK4's weighted sum.
+//! So [`super::forces::forces`], [`super::forces::accelerations`] and every explicit method's
+//! stages need no further pass over the particles, and that work is split between the threads
+//! too. Each output does the same operations in the same order as the textbook loop it
+//! replaces, so the numbers are the same bit for bit (tested for every method).
+//!
+//! **Contact in the same pass.** The contact force depends on the total of the other forces on
+//! the particle, which pass 2 has in registers. A chunk is tested against each collider in its
+//! registers first (a broad phase without square roots: a plane's signed distance, a sphere's
+//! or bowl's squared distance, a floor's height, each with a relative margin of 10⁻⁹ so that it
+//! never rejects a particle the exact test would accept); only particles that may touch go
+//! through the scalar contact code of [`super::collide`], with the same operations as
+//! [`super::collide::contact_forces`].
+//!
+//! **Dissipated power in the same pass.** When asked ([`Stencil::write`] with a power buffer),
+//! pass 1 also computes each damper's power `k_d ((v_b - v_a)·n)²` (two more multiplications
+//! per spring) and pass 2 adds the drag `c |v|²` and the contact power of each particle
+//! (see [`super::energy::dissipated_power`]); each chunk writes its eight partial sums, and the
+//! caller adds them in chunk order, so the total does not depend on the split between threads.
 //!
 //! **One reciprocal square root.** The length and the direction need `L = √(d·d)` and `1/L`.
 //! A 512-bit square root or division keeps the divider busy for about 13–16 cycles (measured on
@@ -82,6 +101,7 @@ use std::sync::Mutex;
 
 use glam::DVec3;
 
+use super::collide::{Collider, ContactParams, contact_force};
 use super::pool::Pool;
 use super::springs::Spring;
 
@@ -101,14 +121,13 @@ const MIN_SPRINGS: usize = 32;
 /// computed before their forces are gathered (see `range_body`).
 const TILE: usize = 64;
 
-/// At most this many parts (threads) per force evaluation.
-const MAX_PARTS: usize = 8;
+/// At most this many parts (threads) per pass.
+pub const MAX_PARTS: usize = 16;
 
 /// Split the work between threads only with at least this many spring slots per thread
-/// (about 3 µs of work): measured with `examples/stencil_micro.rs`, two parts already win on a
-/// 24×24 cloth (3 500 slots: 7.7 → 4.7 µs per call) and on a 16×16 cloth (1 500 slots:
-/// 3.4 → 2.4 µs) when the second core is free, but lose on the 64-node rope (0.3 → 0.6 µs);
-/// the margin keeps small lattices on one thread when the machine is busy.
+/// (about 1.5 µs of work): measured with `examples/stencil_micro.rs`, two parts already win on
+/// a 24×24 cloth (3 500 slots: 6.5 → 3.7 µs per call) and on a 16×16 cloth (1 500 slots:
+/// 2.7 → 1.8 µs) when the second core is free, but lose on the 64-node rope (0.3 → 0.4 µs).
 const MIN_SLOTS_PER_PART: usize = 1024;
 
 /// The instructions that compute the springs (see the module docs). All give the same forces
@@ -153,42 +172,100 @@ impl Kernel {
     }
 }
 
-/// What the stencil writes for each particle `q`, given its spring force `F_springs[q]` (N).
+/// Everything besides the springs that acts on a particle: weight, drag and the colliders'
+/// contact force, as in [`super::forces::forces`]:
+///
+/// ```text
+/// f_q = (m_q g - c v_q) + F_springs[q]        then the contact force of the colliders
+/// a_q = f_q · (1/m_q)
+/// ```
+/// where `m` is in kg, `g` in m/s², `c` the drag coefficient in N·s/m, `v` in m/s.
 #[derive(Clone, Copy, Debug)]
+pub struct Dynamics<'a> {
+    /// Masses `m` (kg).
+    pub mass: &'a [f64],
+    /// Inverse masses `1/m` (1/kg, 0 for pinned particles).
+    pub inv_mass: &'a [f64],
+    /// Gravitational acceleration `g` (m/s²).
+    pub gravity: DVec3,
+    /// Drag coefficient `c` (N·s/m).
+    pub drag: f64,
+    /// Static colliders (empty: no contact force).
+    pub colliders: &'a [Collider],
+    /// Their contact coefficients.
+    pub contact: &'a ContactParams,
+}
+
+/// A per-particle rule applied to positions and velocities (m, m/s) at the end of a step, such
+/// as the benchmark's contact projections: it must treat every particle on its own, so that
+/// applying it to any split of the particles gives the same result.
+pub type After<'a> = &'a (dyn Fn(&mut [DVec3], &mut [DVec3]) + Sync);
+
+/// What the stencil writes for each particle `q`, given its spring force `F_springs[q]` (N),
+/// into the outputs `outs` of [`Stencil::write`]. Every variant does the same operations in
+/// the same order as the textbook loop it replaces, so the numbers are the same.
+#[derive(Clone, Copy)]
 pub enum Output<'a> {
-    /// Adds the spring force: `f[q] += F_springs[q]`.
+    /// Adds the spring force: `outs[0][q] += F_springs[q]`.
     Add,
-    /// The total force with weight and drag, `f[q] = (m_q g - c v_q) + F_springs[q]` (N), or,
-    /// when `inv_mass` is given, the acceleration `a[q] = f[q] · (1/m_q)` (m/s²). The same
-    /// operations in the same order as [`super::forces::forces`] and
-    /// [`super::forces::accelerations`] without the stencil (so the same numbers), done by each
-    /// thread for its own particles, eight at a time, instead of in separate passes.
-    Total {
-        /// Masses `m` (kg).
-        mass: &'a [f64],
-        /// Gravitational acceleration `g` (m/s²).
-        gravity: DVec3,
-        /// Drag coefficient `c` (N·s/m).
-        drag: f64,
-        /// Inverse masses `1/m` (1/kg, 0 for pinned particles), for accelerations.
-        inv_mass: Option<&'a [f64]>,
+    /// The total force `f_q` of [`Dynamics`] (N) into `outs[0]`.
+    Forces(Dynamics<'a>),
+    /// The acceleration `a_q = f_q / m_q` (m/s²) into `outs[0]`.
+    Accelerations(Dynamics<'a>),
+    /// Nothing but the dissipated power (a power buffer is required).
+    Power(Dynamics<'a>),
+    /// A stage of an integrator (see [`Update`]) with the accelerations `a` of
+    /// [`Output::Accelerations`]; then `after`, if given, on the new positions and velocities.
+    Step {
+        /// Weight, drag, contact and masses.
+        dynamics: Dynamics<'a>,
+        /// What the stage writes.
+        update: Update<'a>,
+        /// Applied to the new positions and velocities of each tile once they are written.
+        after: Option<After<'a>>,
     },
-    /// One semi-implicit Euler step: with `a[q]` the acceleration of [`Output::Total`],
-    /// `v'[q] = v[q] + dt a[q]` goes to the first output and `x'[q] = x[q] + dt v'[q]` to the
-    /// second (the operations of `semi_implicit_euler::step`, so the same numbers). The
-    /// outputs must not be `x` and `v` themselves: other threads still read those.
+}
+
+/// What a stage writes, from the input `(x, v)` of the pass and its accelerations `a` (m/s²).
+/// Positions go to `outs[0]`, velocities to `outs[1]`. Outputs that are not written in place
+/// must not be the inputs themselves: other threads still read those.
+#[derive(Clone, Copy)]
+pub enum Update<'a> {
+    /// Semi-implicit Euler: `v' = v + dt a`, then `x' = x + dt v'` (`dt` in s).
     SemiImplicitEuler {
-        /// Masses `m` (kg).
-        mass: &'a [f64],
-        /// Gravitational acceleration `g` (m/s²).
-        gravity: DVec3,
-        /// Drag coefficient `c` (N·s/m).
-        drag: f64,
-        /// Inverse masses `1/m` (1/kg, 0 for pinned particles).
-        inv_mass: &'a [f64],
         /// Time step (s).
         dt: f64,
     },
+    /// An Euler stage from a base state `(x_b, v_b)`: `x' = x_b + h v`, `v' = v_b + h a`, and
+    /// `a` itself into `outs[2]` when that is not empty (`h` in s).
+    Euler {
+        /// Stage length (s).
+        h: f64,
+        /// Where `(x_b, v_b)` come from.
+        base: Base<'a>,
+    },
+    /// RK4's last stage, in place: with `(x_n, v_n)` in `outs[0]`, `outs[1]` on entry,
+    /// `x' = x_n + sixth (v_n + 2 v_2 + 2 v_3 + v)` and
+    /// `v' = v_n + sixth (a_1 + 2 a_2 + 2 a_3 + a)` (`sixth = dt/6` in s).
+    Rk4 {
+        /// `dt/6` (s).
+        sixth: f64,
+        /// The slopes `a_1`, `a_2`, `a_3` of the first three stages (m/s²).
+        a: [&'a [DVec3]; 3],
+        /// The velocities `v_2`, `v_3` of stages 2 and 3 (m/s).
+        v: [&'a [DVec3]; 2],
+    },
+}
+
+/// The base state of an [`Update::Euler`] stage.
+#[derive(Clone, Copy)]
+pub enum Base<'a> {
+    /// The pass's own input `(x, v)`.
+    Input,
+    /// Other positions and velocities (m, m/s), read only.
+    Slices(&'a [DVec3], &'a [DVec3]),
+    /// `outs[0]` and `outs[1]` as they are on entry (updated in place).
+    InPlace,
 }
 
 /// The springs of one index offset `δ`, all with the same stiffness and damping.
@@ -205,8 +282,8 @@ struct Group {
     /// Rest length of the spring starting at `p` (m); 0 where there is none. Padded with zeros
     /// to a whole number of chunks.
     rest_length: Vec<f64>,
-    /// 1 where a spring starts at `p`, 0 where none does (and in the padding).
-    present: Vec<f64>,
+    /// Bit `l` of byte `c` is set when a spring starts at `p = 8 c + l` (zero in the padding).
+    present: Vec<u8>,
     /// Length `R` of the group's force ring (a power of two, at least `delta + LANES`).
     ring: usize,
     /// Where the group's ring starts in [`Scratch::ring`]: three components of `R + LANES`
@@ -276,7 +353,7 @@ impl Stencil {
                         damping: s.damping,
                         starts,
                         rest_length: vec![0.0; padded],
-                        present: vec![0.0; padded],
+                        present: vec![0; padded / LANES],
                         ring: (delta + TILE + LANES).next_power_of_two(),
                         ring_offset: 0,
                     });
@@ -284,21 +361,28 @@ impl Stencil {
                 }
             };
             let group = &mut groups[g];
-            if group.present[a] != 0.0 {
+            let bit = 1u8 << (a % LANES);
+            if group.present[a / LANES] & bit != 0 {
                 return None;
             }
-            group.present[a] = 1.0;
+            group.present[a / LANES] |= bit;
             group.rest_length[a] = s.rest_length;
         }
         let slots: usize = groups.iter().map(|g| g.starts).sum();
         let count: usize = groups
             .iter()
-            .map(|g| g.present.iter().sum::<f64>() as usize)
+            .map(|g| {
+                g.present
+                    .iter()
+                    .map(|b| b.count_ones() as usize)
+                    .sum::<usize>()
+            })
             .sum();
         if (count as f64) < MIN_DENSITY * slots as f64 {
             return None;
         }
-        // Visit offsets in increasing order: neighbouring streams, better locality.
+        // Visit offsets in increasing order: neighbouring streams, better locality; and the
+        // groups a chunk has (`p < starts`) are then always a prefix of the list.
         groups.sort_by_key(|g| g.delta);
         let mut ring_len = 0;
         for g in &mut groups {
@@ -336,6 +420,13 @@ impl Stencil {
         self.groups.len()
     }
 
+    /// Number of spring slots (springs and the gaps between them that the passes compute as
+    /// zeros): the work of one pass.
+    #[must_use]
+    pub fn slots(&self) -> usize {
+        self.work.last().copied().unwrap_or(0)
+    }
+
     /// The instructions that compute the springs ([`Kernel::best`] unless changed).
     #[must_use]
     pub fn kernel(&self) -> Kernel {
@@ -362,12 +453,34 @@ impl Stencil {
         }
     }
 
-    /// The number of parts (threads) worth using with a pool of `threads` threads: 1 for small
-    /// lattices (see `MIN_SLOTS_PER_PART`).
+    /// The number of parts (threads) worth using with a pool of `threads` threads: one per
+    /// `MIN_SLOTS_PER_PART` spring slots, at most `threads` and [`MAX_PARTS`].
     #[must_use]
     pub fn parallel_parts(&self, threads: usize) -> usize {
-        let slots = self.work.last().copied().unwrap_or(0);
-        (slots / MIN_SLOTS_PER_PART).clamp(1, threads.clamp(1, MAX_PARTS))
+        (self.slots() / MIN_SLOTS_PER_PART).clamp(1, threads.clamp(1, MAX_PARTS))
+    }
+
+    /// The length of the power buffer of [`Stencil::write`]: two values per particle, rounded
+    /// up to whole chunks.
+    #[must_use]
+    pub fn power_len(&self) -> usize {
+        2 * self.particles.next_multiple_of(LANES)
+    }
+
+    /// The dissipated power in a buffer written by [`Stencil::write`]: `(dampers and drag,
+    /// contact)` (W), added chunk by chunk in a fixed order (so the same for any split).
+    #[must_use]
+    pub fn sum_power(power: &[f64]) -> (f64, f64) {
+        let mut sums = [[0.0; LANES]; 2];
+        for chunk in power.chunks_exact(2 * LANES) {
+            for (sum, part) in sums.iter_mut().zip(chunk.chunks_exact(LANES)) {
+                for (s, p) in sum.iter_mut().zip(part) {
+                    *s += p;
+                }
+            }
+        }
+        let total = |s: [f64; LANES]| s.iter().sum::<f64>();
+        (total(sums[0]), total(sums[1]))
     }
 
     /// Adds the spring forces (N) at positions `x` and velocities `v` to `f`, on as many
@@ -376,93 +489,108 @@ impl Stencil {
     /// # Panics
     /// If the slices are shorter than the stencil's particle count.
     pub fn add_forces(&self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
-        self.write(x, v, f, &mut [], Output::Add);
+        self.write(x, v, [f, &mut [], &mut []], &mut [], Output::Add);
     }
 
-    /// [`Stencil::add_forces`] with the particles split into `parts` ranges (at most 8), run
-    /// in parallel where the global pool has free threads. The result is bit-identical for
-    /// every `parts` (see the module docs).
+    /// [`Stencil::add_forces`] with the particles split into `parts` ranges (at most
+    /// [`MAX_PARTS`]), run in parallel where the global pool has free threads. The result is
+    /// bit-identical for every `parts` (see the module docs).
     ///
     /// # Panics
     /// If the slices are shorter than the stencil's particle count.
     pub fn add_forces_in_parts(&self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3], parts: usize) {
-        self.write_in_parts(x, v, f, &mut [], Output::Add, parts);
+        self.write_in_parts(x, v, [f, &mut [], &mut []], &mut [], Output::Add, parts);
     }
 
-    /// Writes `output` (see [`Output`]) for every particle into `out` (and, for
-    /// [`Output::SemiImplicitEuler`], the new positions into `out2`; otherwise `out2` is not
-    /// used and may be empty), on as many threads of [`Pool::global`] as pay off.
+    /// Writes `output` (see [`Output`] and [`Update`] for which of `outs` each writes; the
+    /// others may be empty) for every particle at positions `x` (m) and velocities `v` (m/s),
+    /// on as many threads of [`Pool::global`] as pay off. When `power` is not empty (at least
+    /// [`Stencil::power_len`] long; only with [`Dynamics`]), it receives the dissipated power of
+    /// each chunk, which [`Stencil::sum_power`] adds up.
     ///
     /// # Panics
-    /// If the slices (or the masses of `output`) are shorter than the stencil's particle count.
+    /// If a slice the output needs is shorter than the stencil's particle count.
     pub fn write(
         &self,
         x: &[DVec3],
         v: &[DVec3],
-        out: &mut [DVec3],
-        out2: &mut [DVec3],
+        outs: [&mut [DVec3]; 3],
+        power: &mut [f64],
         output: Output,
     ) {
         let parts = self.parallel_parts(Pool::global().threads());
-        self.write_in_parts(x, v, out, out2, output, parts);
+        self.write_in_parts(x, v, outs, power, output, parts);
     }
 
-    /// [`Stencil::write`] with the particles split into `parts` ranges (at most 8); the result
-    /// is bit-identical for every `parts`.
+    /// [`Stencil::write`] with the particles split into `parts` ranges (at most
+    /// [`MAX_PARTS`]); the result is bit-identical for every `parts`.
     ///
     /// # Panics
-    /// If the slices (or the masses of `output`) are shorter than the stencil's particle count.
+    /// If a slice the output needs is shorter than the stencil's particle count.
     pub fn write_in_parts(
         &self,
         x: &[DVec3],
         v: &[DVec3],
-        out: &mut [DVec3],
-        out2: &mut [DVec3],
+        outs: [&mut [DVec3]; 3],
+        power: &mut [f64],
         output: Output,
         parts: usize,
     ) {
         let n = self.particles;
-        let (x, v, out) = (&x[..n], &v[..n], &mut out[..n]);
-        let out2 = match output {
-            Output::Total { mass, inv_mass, .. } => {
-                assert!(mass.len() >= n && inv_mass.is_none_or(|w| w.len() >= n));
-                &mut out2[..0]
-            }
-            Output::SemiImplicitEuler { mass, inv_mass, .. } => {
-                assert!(mass.len() >= n && inv_mass.len() >= n);
-                &mut out2[..n]
-            }
-            Output::Add => &mut out2[..0],
+        let (x, v) = (&x[..n], &v[..n]);
+        let [o0, o1, o2] = outs;
+        // The outputs this variant writes, cut to n particles; the others to nothing.
+        let (count, optional) = output.outputs();
+        let outs = [
+            cut(o0, count > 0, n),
+            cut(o1, count > 1, n),
+            cut(o2, optional && !o2.is_empty(), n),
+        ];
+        output.check(n);
+        let power = if power.is_empty() {
+            power
+        } else {
+            assert!(
+                !matches!(output, Output::Add),
+                "the dissipated power needs the dynamics"
+            );
+            &mut power[..self.power_len()]
         };
         let parts = parts.clamp(1, MAX_PARTS);
         if parts == 1 {
-            SCRATCH.with(|s| self.range(&mut s.borrow_mut(), x, v, 0, n, out, out2, &output));
+            let mut part = Part { outs, power };
+            SCRATCH.with(|s| self.range(&mut s.borrow_mut(), x, v, 0, n, &mut part, &output));
             return;
         }
         let bounds = self.split(parts);
-        // Each part gets its own slices of the outputs (disjoint: no thread writes another's
+        // Each part gets its own pieces of the outputs (disjoint: no thread writes another's
         // values).
-        let (mut rest, mut rest2) = (out, out2);
-        let outputs: [Mutex<(&mut [DVec3], &mut [DVec3])>; MAX_PARTS] = std::array::from_fn(|k| {
+        let [mut r0, mut r1, mut r2] = outs;
+        let mut rest_power = power;
+        let pieces: [Mutex<Part>; MAX_PARTS] = std::array::from_fn(|k| {
             let len = if k < parts {
                 bounds[k + 1] - bounds[k]
             } else {
                 0
             };
-            let (mine, others) = std::mem::take(&mut rest).split_at_mut(len);
-            rest = others;
-            let len2 = len.min(rest2.len());
-            let (mine2, others2) = std::mem::take(&mut rest2).split_at_mut(len2);
-            rest2 = others2;
-            Mutex::new((mine, mine2))
+            let outs = [take(&mut r0, len), take(&mut r1, len), take(&mut r2, len)];
+            // Two values per particle, whole chunks: the last part takes the padding too.
+            let power_len = if k + 1 == parts {
+                rest_power.len()
+            } else {
+                (2 * len).min(rest_power.len())
+            };
+            debug_assert!(power_len <= rest_power.len());
+            let (power, others) = std::mem::take(&mut rest_power).split_at_mut(power_len);
+            rest_power = others;
+            Mutex::new(Part { outs, power })
         });
         Pool::global().run(parts, &|k| {
-            let mut mine = outputs[k]
+            let mut part = pieces[k]
                 .lock()
                 .unwrap_or_else(std::sync::PoisonError::into_inner);
-            let (out, out2) = &mut *mine;
             let (q0, q1) = (bounds[k], bounds[k + 1]);
-            SCRATCH.with(|s| self.range(&mut s.borrow_mut(), x, v, q0, q1, out, out2, &output));
+            SCRATCH.with(|s| self.range(&mut s.borrow_mut(), x, v, q0, q1, &mut part, &output));
         });
     }
 
@@ -475,7 +603,7 @@ impl Stencil {
     /// where it reaches `k X - (k-1) H`.
     fn split(&self, parts: usize) -> [usize; MAX_PARTS + 1] {
         let n = self.particles;
-        let total = self.work.last().copied().unwrap_or(0);
+        let total = self.slots();
         let each = (total + (parts - 1) * self.halo_work) / parts;
         let mut bounds = [n; MAX_PARTS + 1];
         bounds[0] = 0;
@@ -487,8 +615,8 @@ impl Stencil {
         bounds
     }
 
-    /// Writes `output` for particles `q0..q1` into `out` and `out2` (`out[i]` is particle
-    /// `q0 + i`; `out2` is empty unless the output needs it).
+    /// Writes `output` for particles `q0..q1` into `part` (`part.outs[k][i]` is particle
+    /// `q0 + i`).
     #[allow(clippy::too_many_arguments)]
     fn range(
         &self,
@@ -497,41 +625,108 @@ impl Stencil {
         v: &[DVec3],
         q0: usize,
         q1: usize,
-        out: &mut [DVec3],
-        out2: &mut [DVec3],
+        part: &mut Part,
         output: &Output,
     ) {
-        match self.kernel {
+        let power = !part.power.is_empty();
+        match (self.kernel, power) {
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 => {
+            (Kernel::Avx512, false) => {
                 // SAFETY: `with_kernel` and `Kernel::best` only choose `Avx512` on a CPU that
                 // supports AVX-512F.
-                unsafe { range_avx512(self, s, x, v, q0, q1, out, out2, output) }
+                unsafe { range_avx512::<false>(self, s, x, v, q0, q1, part, output) }
             }
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 => {
+            (Kernel::Avx512, true) => {
+                // SAFETY: as above.
+                unsafe { range_avx512::<true>(self, s, x, v, q0, q1, part, output) }
+            }
+            #[cfg(target_arch = "x86_64")]
+            (Kernel::Avx2, false) => {
                 // SAFETY: `with_kernel` and `Kernel::best` only choose `Avx2` on a CPU that
                 // supports AVX2.
-                unsafe { range_avx2(self, s, x, v, q0, q1, out, out2, output) }
+                unsafe { range_avx2::<false>(self, s, x, v, q0, q1, part, output) }
             }
-            _ => range_body(
-                self,
-                s,
-                x,
-                v,
-                q0,
-                q1,
-                out,
-                out2,
-                output,
-                // A closure, not the function item: the item would be called through a shim
-                // that is not inlined.
-                #[inline(always)]
-                #[allow(clippy::redundant_closure)]
-                |g, first, w, i, p| springs_exact::<Plain>(g, first, w, i, p),
-            ),
+            #[cfg(target_arch = "x86_64")]
+            (Kernel::Avx2, true) => {
+                // SAFETY: as above.
+                unsafe { range_avx2::<true>(self, s, x, v, q0, q1, part, output) }
+            }
+            (_, false) => range_portable::<false>(self, s, x, v, q0, q1, part, output),
+            (_, true) => range_portable::<true>(self, s, x, v, q0, q1, part, output),
         }
     }
+}
+
+impl Output<'_> {
+    /// How many of `outs` this output writes (always the first ones), and whether `outs[2]`
+    /// is optional (written when not empty).
+    fn outputs(&self) -> (usize, bool) {
+        match self {
+            Output::Add | Output::Forces(_) | Output::Accelerations(_) => (1, false),
+            Output::Power(_) => (0, false),
+            Output::Step {
+                update: Update::Euler { .. },
+                ..
+            } => (2, true),
+            Output::Step { .. } => (2, false),
+        }
+    }
+
+    /// Panics when a slice this output reads is shorter than `n`.
+    fn check(&self, n: usize) {
+        let dynamics = match self {
+            Output::Add => return,
+            Output::Forces(d) | Output::Accelerations(d) | Output::Power(d) => d,
+            Output::Step {
+                dynamics, update, ..
+            } => {
+                match update {
+                    Update::SemiImplicitEuler { .. }
+                    | Update::Euler {
+                        base: Base::Input, ..
+                    } => {}
+                    Update::Euler {
+                        base: Base::InPlace,
+                        ..
+                    } => {}
+                    Update::Euler {
+                        base: Base::Slices(x, v),
+                        ..
+                    } => assert!(x.len() >= n && v.len() >= n, "base state too short"),
+                    Update::Rk4 { a, v, .. } => assert!(
+                        a.iter().chain(v).all(|s| s.len() >= n),
+                        "RK4 slopes too short"
+                    ),
+                }
+                dynamics
+            }
+        };
+        assert!(
+            dynamics.mass.len() >= n && dynamics.inv_mass.len() >= n,
+            "masses too short"
+        );
+    }
+}
+
+/// The first `len` values of `rest` (all of them when shorter), which keeps the others.
+fn take<'a>(rest: &mut &'a mut [DVec3], len: usize) -> &'a mut [DVec3] {
+    let len = len.min(rest.len());
+    let (mine, others) = std::mem::take(rest).split_at_mut(len);
+    *rest = others;
+    mine
+}
+
+/// `o[..n]` when `keep`, else `o[..0]`.
+fn cut(o: &mut [DVec3], keep: bool, n: usize) -> &mut [DVec3] {
+    if keep { &mut o[..n] } else { &mut o[..0] }
+}
+
+/// One part's pieces of the outputs: `outs[k][i]` and `power[2 i..]` belong to the part's
+/// particle `q0 + i`.
+struct Part<'o> {
+    outs: [&'o mut [DVec3]; 3],
+    power: &'o mut [f64],
 }
 
 /// Scratch buffers of one thread (reused, so steps do not allocate).
@@ -576,8 +771,8 @@ fn lanes(values: &[f64], i: usize) -> &[f64; LANES] {
 }
 
 /// `LANES` f64 computed together, and the few operations the streaming loop needs on them.
-/// Two implementations: [`Plain`] (an array; the compiler vectorises what it can) and, on
-/// x86-64, [`Avx512`] (one AVX-512 register).
+/// Three implementations: [`Plain`] (an array; the compiler vectorises what it can) and, on
+/// x86-64, [`Avx2`] (two AVX2 registers) and [`Avx512`] (one AVX-512 register).
 trait Lanes: Copy {
     /// All lanes zero.
     fn zero() -> Self;
@@ -601,6 +796,34 @@ trait Lanes: Copy {
     fn div(self, other: Self) -> Self;
     /// `self` in the lanes where `condition > 0`, zero elsewhere (also where it is NaN).
     fn where_positive(self, condition: Self) -> Self;
+    /// `self` in the lanes whose bit is set in `mask` (bit `l` is lane `l`), zero elsewhere.
+    fn select(self, mask: u8) -> Self {
+        let mut values = [0.0; LANES];
+        self.store(&mut values);
+        for (l, value) in values.iter_mut().enumerate() {
+            if mask & (1 << l) == 0 {
+                *value = 0.0;
+            }
+        }
+        Self::load(&values)
+    }
+    /// Bit `l` set where lane `l` of `self` is less than that of `other` (false for NaN).
+    fn less_than(self, other: Self) -> u8 {
+        let (mut a, mut b) = ([0.0; LANES], [0.0; LANES]);
+        self.store(&mut a);
+        other.store(&mut b);
+        (0..LANES).fold(0, |m, l| m | (u8::from(a[l] < b[l]) << l))
+    }
+    /// Eight vectors `[x, y, z]` as lanes (structure of arrays).
+    #[inline(always)]
+    fn load_vectors(vectors: &[DVec3; LANES]) -> [Self; 3] {
+        to_lanes(vectors)
+    }
+    /// Lanes `[x, y, z]` into eight vectors.
+    #[inline(always)]
+    fn store_vectors(lanes: [Self; 3], vectors: &mut [DVec3; LANES]) {
+        from_lanes(lanes, vectors);
+    }
 }
 
 /// [`Lanes`] as a plain array.
@@ -654,6 +877,12 @@ impl Lanes for Plain {
             if condition.0[l] > 0.0 { self.0[l] } else { 0.0 }
         }))
     }
+    #[inline(always)]
+    fn select(self, mask: u8) -> Plain {
+        Plain(std::array::from_fn(|l| {
+            if mask & (1 << l) != 0 { self.0[l] } else { 0.0 }
+        }))
+    }
 }
 
 /// One chunk of spring forces: `[fx, fy, fz]` (N), one spring per lane.
@@ -690,26 +919,26 @@ impl Window<'_> {
 }
 
 /// The streaming loop of the module docs for particles `q0..q1`, with `springs` computing each
-/// chunk of springs. Inlined into one copy per instruction set.
+/// chunk of springs (forces, and their dampers' power when `POWER`). Inlined into one copy per
+/// instruction set.
 ///
-/// Every call `springs(g, w, i, p)` has `p` a multiple of `LANES`, `p < g.starts` and
+/// Every call `springs(g, first, w, i, p)` has `p` a multiple of `LANES`, `p < g.starts` and
 /// `i = p - base` with `i + g.delta + LANES <= len`: the `LANES` springs starting at `p` and
 /// both their ends are inside the window and inside `g`'s padded arrays.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn range_body<V: Lanes>(
+fn range_body<V: Lanes, const POWER: bool>(
     st: &Stencil,
     s: &mut Scratch,
     x: &[DVec3],
     v: &[DVec3],
     q0: usize,
     q1: usize,
-    out: &mut [DVec3],
-    out2: &mut [DVec3],
+    part: &mut Part,
     output: &Output,
     // The `LANES` springs of a group starting at window index `i` (particle `p`), given the
-    // positions and velocities of their first ends.
-    springs: impl Fn(&Group, &[V; 6], &Window, usize, usize) -> Forces<V>,
+    // positions and velocities of their first ends: their forces, and their dampers' power.
+    springs: impl Fn(&Group, &[V; 6], &Window, usize, usize) -> (Forces<V>, V),
 ) {
     if q0 >= q1 {
         return;
@@ -726,11 +955,22 @@ fn range_body<V: Lanes>(
     let mut vs = [vs0.get_mut(len), vs1.get_mut(len), vs2.get_mut(len)];
     let ring = ring.get_mut(st.ring_len);
     let real = n.min(base + len) - base;
-    for (i, (x, v)) in x[base..base + real]
+    let whole = real / LANES * LANES;
+    for i in (0..whole).step_by(LANES) {
+        let p = base + i;
+        let xc = V::load_vectors(x[p..p + LANES].try_into().expect("a chunk"));
+        let vc = V::load_vectors(v[p..p + LANES].try_into().expect("a chunk"));
+        for c in 0..3 {
+            xc[c].store((&mut xs[c][i..i + LANES]).try_into().expect("a chunk"));
+            vc[c].store((&mut vs[c][i..i + LANES]).try_into().expect("a chunk"));
+        }
+    }
+    for (i, (x, v)) in x[base + whole..base + real]
         .iter()
-        .zip(&v[base..base + real])
+        .zip(&v[base + whole..base + real])
         .enumerate()
     {
+        let i = whole + i;
         xs[0][i] = x.x;
         xs[1][i] = x.y;
         xs[2][i] = x.z;
@@ -749,33 +989,39 @@ fn range_body<V: Lanes>(
     for g in &st.groups {
         let first = q0.saturating_sub(g.delta) / LANES * LANES;
         for p in (first..q0.min(g.starts)).step_by(LANES) {
-            let f = springs(g, &w.first_ends(p - base), &w, p - base, p);
+            let (f, _) = springs(g, &w.first_ends(p - base), &w, p - base, p);
             ring_store(ring, g, p, f);
         }
     }
+    const CHUNKS: usize = TILE / LANES;
     for t0 in (q0..q1).step_by(TILE) {
         let t1 = (t0 + TILE).min(q1);
-        // Pass 1, group by group: the springs that start in the tile, into the rings. The
-        // iterations are independent, so the processor overlaps them.
-        for g in &st.groups {
-            for p in (t0..t1.min(g.starts)).step_by(LANES) {
-                let f = springs(g, &w.first_ends(p - base), &w, p - base, p);
+        // Pass 1, chunk by chunk: the springs that start here, offset by offset (the groups
+        // a chunk has are a prefix of the list), into the rings, and their sum `plus`.
+        let mut plus = [[V::zero(); 3]; CHUNKS];
+        let mut spring_power = [V::zero(); CHUNKS];
+        for (c, p) in (t0..t1).step_by(LANES).enumerate() {
+            let first = w.first_ends::<V>(p - base);
+            let mut sum = [V::zero(); 3];
+            let mut power = V::zero();
+            for g in st.groups.iter().take_while(|g| p < g.starts) {
+                let (f, pw) = springs(g, &first, &w, p - base, p);
                 ring_store(ring, g, p, f);
-            }
-        }
-        // Pass 2, chunk by chunk: + the springs that start here, - those that end here (they
-        // started δ earlier). The ring of δ holds at least the last δ + TILE + LANES forces.
-        for q in (t0..t1).step_by(LANES) {
-            // Two sums, so that the processor can add both at once: the springs that start
-            // here and those that end here (they started δ earlier).
-            let (mut plus, mut minus) = ([V::zero(); 3], [V::zero(); 3]);
-            for g in &st.groups {
-                if q < g.starts {
-                    let f: Forces<V> = ring_load(ring, g, q);
-                    for (total, part) in plus.iter_mut().zip(f) {
-                        *total = total.add(part);
-                    }
+                for (total, part) in sum.iter_mut().zip(f) {
+                    *total = total.add(part);
                 }
+                if POWER {
+                    power = power.add(pw);
+                }
+            }
+            plus[c] = sum;
+            spring_power[c] = power;
+        }
+        // Pass 2, chunk by chunk: minus the springs that end here (they started δ earlier).
+        // The ring of δ holds at least the last δ + TILE + LANES forces.
+        for (c, q) in (t0..t1).step_by(LANES).enumerate() {
+            let mut minus = [V::zero(); 3];
+            for g in &st.groups {
                 let mut f: Forces<V> = ring_load(ring, g, q.wrapping_sub(g.delta));
                 if q < g.delta {
                     // Near particle 0 the first lanes have no such spring (it would start
@@ -792,67 +1038,286 @@ fn range_body<V: Lanes>(
                 }
             }
             let sum = [
-                plus[0].sub(minus[0]),
-                plus[1].sub(minus[1]),
-                plus[2].sub(minus[2]),
+                plus[c][0].sub(minus[0]),
+                plus[c][1].sub(minus[1]),
+                plus[c][2].sub(minus[2]),
             ];
-            let count = (q1 - q).min(LANES);
             let i = q - base;
-            let out = &mut out[q - q0..q - q0 + count];
-            match *output {
-                Output::Add => {
-                    let old = to_lanes::<V>(out);
-                    from_lanes(
-                        [old[0].add(sum[0]), old[1].add(sum[1]), old[2].add(sum[2])],
-                        out,
-                    );
-                }
-                Output::Total {
-                    mass,
-                    gravity,
-                    drag,
-                    inv_mass,
-                } => {
-                    let m = load_padded::<V>(mass, q, count);
-                    let total = weight_drag_springs(m, gravity, drag, components(w.v, i), sum);
-                    match inv_mass {
-                        Some(inv_mass) => {
-                            let w = load_padded::<V>(inv_mass, q, count);
-                            from_lanes([total[0].mul(w), total[1].mul(w), total[2].mul(w)], out);
-                        }
-                        None => from_lanes(total, out),
-                    }
-                }
-                Output::SemiImplicitEuler {
-                    mass,
-                    gravity,
-                    drag,
-                    inv_mass,
-                    dt,
-                } => {
-                    let m = load_padded::<V>(mass, q, count);
-                    let v: [V; 3] = components(w.v, i);
-                    let total = weight_drag_springs(m, gravity, drag, v, sum);
-                    let inv = load_padded::<V>(inv_mass, q, count);
+            let chunk = Chunk {
+                q,
+                at: q - q0,
+                count: (q1 - q).min(LANES),
+                x: components(w.x, i),
+                v: components(w.v, i),
+            };
+            finish::<V, POWER>(output, &chunk, sum, spring_power[c], part);
+        }
+        if let Output::Step {
+            after: Some(after), ..
+        } = output
+        {
+            let (a, b) = (t0 - q0, t1 - q0);
+            let [xo, vo, _] = &mut part.outs;
+            after(&mut xo[a..b], &mut vo[a..b]);
+        }
+    }
+}
+
+/// One chunk of particles in pass 2: particle `q` (a multiple of `LANES`) is index `at` of the
+/// part's outputs; `count` of its `LANES` particles exist; `x`, `v` are the pass's input.
+struct Chunk<V> {
+    q: usize,
+    at: usize,
+    count: usize,
+    x: [V; 3],
+    v: [V; 3],
+}
+
+/// Pass 2's end for one chunk: from the spring forces `sum` (N) to what `output` asks for,
+/// and the chunk's dissipated power when `POWER`.
+#[inline(always)]
+fn finish<V: Lanes, const POWER: bool>(
+    output: &Output,
+    chunk: &Chunk<V>,
+    sum: [V; 3],
+    spring_power: V,
+    part: &mut Part,
+) {
+    let Chunk { q, at, count, x, v } = *chunk;
+    let d = match *output {
+        Output::Add => {
+            let out = &mut part.outs[0][at..];
+            let old = load_chunk::<V>(out, count);
+            let new = [old[0].add(sum[0]), old[1].add(sum[1]), old[2].add(sum[2])];
+            store_chunk(new, out, count);
+            return;
+        }
+        Output::Forces(d) | Output::Accelerations(d) | Output::Power(d) => d,
+        Output::Step { dynamics, .. } => dynamics,
+    };
+    // f = (m g - c v) + F_springs, in the order of `forces`; then the contact force.
+    let m = load_padded::<V>(d.mass, q, count);
+    let mut f = weight_drag_springs(m, d.gravity, d.drag, v, sum);
+    let w = load_padded::<V>(d.inv_mass, q, count);
+    let free = V::zero().less_than(w);
+    let mut contact_power = V::zero();
+    if !d.colliders.is_empty() {
+        let candidates = free & may_touch(d.colliders, d.contact.epsilon, x);
+        if candidates != 0 {
+            (f, contact_power) = contact_lanes(&d, x, v, f, candidates);
+        }
+    }
+    if POWER {
+        // Drag c |v|² of the free particles, added to the dampers of the springs that start
+        // here (see `energy::dissipated_power`).
+        let drag = if d.drag == 0.0 {
+            V::zero()
+        } else {
+            let v2 = v[0].mul(v[0]).add(v[1].mul(v[1])).add(v[2].mul(v[2]));
+            V::splat(d.drag).mul(v2).select(free)
+        };
+        let power = &mut part.power[2 * at..2 * at + 2 * LANES];
+        let (dampers, contact) = power.split_at_mut(LANES);
+        spring_power
+            .add(drag)
+            .store(dampers.try_into().expect("a chunk"));
+        contact_power.store(contact.try_into().expect("a chunk"));
+    }
+    let a = [f[0].mul(w), f[1].mul(w), f[2].mul(w)];
+    match *output {
+        Output::Add | Output::Power(_) => {}
+        Output::Forces(_) => store_chunk(f, &mut part.outs[0][at..], count),
+        Output::Accelerations(_) => store_chunk(a, &mut part.outs[0][at..], count),
+        Output::Step { update, .. } => {
+            let [xo, vo, ao] = &mut part.outs;
+            match update {
+                Update::SemiImplicitEuler { dt } => {
                     let dt = V::splat(dt);
-                    // v' = v + dt a, a = f w; then x' = x + dt v'.
+                    // v' = v + dt a; then x' = x + dt v'.
                     let v_new = [
-                        v[0].add(dt.mul(total[0].mul(inv))),
-                        v[1].add(dt.mul(total[1].mul(inv))),
-                        v[2].add(dt.mul(total[2].mul(inv))),
+                        v[0].add(dt.mul(a[0])),
+                        v[1].add(dt.mul(a[1])),
+                        v[2].add(dt.mul(a[2])),
                     ];
-                    let x: [V; 3] = components(w.x, i);
                     let x_new = [
                         x[0].add(dt.mul(v_new[0])),
                         x[1].add(dt.mul(v_new[1])),
                         x[2].add(dt.mul(v_new[2])),
                     ];
-                    from_lanes(v_new, out);
-                    from_lanes(x_new, &mut out2[q - q0..q - q0 + count]);
+                    store_chunk(x_new, &mut xo[at..], count);
+                    store_chunk(v_new, &mut vo[at..], count);
+                }
+                Update::Euler { h, base } => {
+                    let (bx, bv) = match base {
+                        Base::Input => (x, v),
+                        Base::Slices(bx, bv) => {
+                            (load_chunk(&bx[q..], count), load_chunk(&bv[q..], count))
+                        }
+                        Base::InPlace => {
+                            (load_chunk(&xo[at..], count), load_chunk(&vo[at..], count))
+                        }
+                    };
+                    let h = V::splat(h);
+                    // x' = x_b + h v;  v' = v_b + h a.
+                    let x_new = [
+                        bx[0].add(h.mul(v[0])),
+                        bx[1].add(h.mul(v[1])),
+                        bx[2].add(h.mul(v[2])),
+                    ];
+                    let v_new = [
+                        bv[0].add(h.mul(a[0])),
+                        bv[1].add(h.mul(a[1])),
+                        bv[2].add(h.mul(a[2])),
+                    ];
+                    store_chunk(x_new, &mut xo[at..], count);
+                    store_chunk(v_new, &mut vo[at..], count);
+                    if !ao.is_empty() {
+                        store_chunk(a, &mut ao[at..], count);
+                    }
+                }
+                Update::Rk4 {
+                    sixth,
+                    a: [a1, a2, a3],
+                    v: [v2, v3],
+                } => {
+                    let (xn, vn) = (
+                        load_chunk::<V>(&xo[at..], count),
+                        load_chunk::<V>(&vo[at..], count),
+                    );
+                    let (a1, a2, a3) = (
+                        load_chunk::<V>(&a1[q..], count),
+                        load_chunk::<V>(&a2[q..], count),
+                        load_chunk::<V>(&a3[q..], count),
+                    );
+                    let (v2, v3) = (
+                        load_chunk::<V>(&v2[q..], count),
+                        load_chunk::<V>(&v3[q..], count),
+                    );
+                    let (two, sixth) = (V::splat(2.0), V::splat(sixth));
+                    // x' = x_n + dt/6 (k1x + 2 k2x + 2 k3x + k4x), k1x = v_n, k4x = v;
+                    // v' = v_n + dt/6 (k1v + 2 k2v + 2 k3v + k4v), k4v = a.
+                    let weighted =
+                        |k1: V, k2: V, k3: V, k4: V| k1.add(two.mul(k2)).add(two.mul(k3)).add(k4);
+                    let x_new: [V; 3] = std::array::from_fn(|c| {
+                        xn[c].add(sixth.mul(weighted(vn[c], v2[c], v3[c], v[c])))
+                    });
+                    let v_new: [V; 3] = std::array::from_fn(|c| {
+                        vn[c].add(sixth.mul(weighted(a1[c], a2[c], a3[c], a[c])))
+                    });
+                    store_chunk(x_new, &mut xo[at..], count);
+                    store_chunk(v_new, &mut vo[at..], count);
                 }
             }
         }
     }
+}
+
+/// The chunk's particles (bit `l` for lane `l`) that may touch one of `colliders` (closer than
+/// `epsilon`, m, or inside): a test without square roots with a relative margin of 10⁻⁹, so
+/// that it never leaves out a particle that [`Collider::contact`] would put within `epsilon`.
+#[inline(always)]
+fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3]) -> u8 {
+    const MARGIN: f64 = 1e-9;
+    let dot = |p: [V; 3], n: DVec3| {
+        p[0].mul(V::splat(n.x))
+            .add(p[1].mul(V::splat(n.y)))
+            .add(p[2].mul(V::splat(n.z)))
+    };
+    let minus = |p: DVec3| {
+        [
+            x[0].sub(V::splat(p.x)),
+            x[1].sub(V::splat(p.y)),
+            x[2].sub(V::splat(p.z)),
+        ]
+    };
+    let squared = |d: [V; 3]| d[0].mul(d[0]).add(d[1].mul(d[1])).add(d[2].mul(d[2]));
+    let mut mask = 0u8;
+    for collider in colliders {
+        mask |= match *collider {
+            Collider::Plane { point, normal } => {
+                // φ = (x - p)·n < ε, with a margin for rounding.
+                let phi = dot(minus(point), normal);
+                let scale = point.abs().max_element() + 1.0;
+                phi.less_than(V::splat(epsilon + MARGIN * scale)) | !phi.less_than(phi) // NaN: let the exact test decide
+            }
+            Collider::Sphere { center, radius } => {
+                // |x - c| - r < ε  ⇔  |x - c|² < (r + ε)².
+                let reach = (radius + epsilon).max(0.0);
+                let d2 = squared(minus(center));
+                d2.less_than(V::splat(reach * reach * (1.0 + MARGIN) + MARGIN)) | !d2.less_than(d2)
+            }
+            Collider::Bowl { center, radius, .. } => {
+                // r - |x - c| < ε  ⇔  |x - c|² > (r - ε)² (when r > ε; the rim is left to the
+                // exact test).
+                let inner = (radius - epsilon).max(0.0);
+                let d2 = squared(minus(center));
+                !d2.less_than(V::splat(inner * inner * (1.0 - MARGIN)))
+            }
+            Collider::HolePlane {
+                point,
+                normal,
+                hole_center,
+                hole_radius,
+            } => {
+                // Every contact needs the height h = (x - p)·n < ε; below the floor (h < 0)
+                // only the shaft's wall band ρ > R - ε or the solid, so ρ² > (R - ε)².
+                let scale = point.abs().max_element() + hole_center.abs().max_element() + 1.0;
+                let h = dot(minus(point), normal);
+                let low = h.less_than(V::splat(epsilon + MARGIN * scale)) | !h.less_than(h);
+                let q = minus(hole_center);
+                let along = dot(q, normal);
+                let radial = [
+                    q[0].sub(along.mul(V::splat(normal.x))),
+                    q[1].sub(along.mul(V::splat(normal.y))),
+                    q[2].sub(along.mul(V::splat(normal.z))),
+                ];
+                let rho2 = squared(radial);
+                let inner = (hole_radius - epsilon).max(0.0);
+                let near_wall = !rho2.less_than(V::splat(inner * inner * (1.0 - MARGIN)));
+                let above = !h.less_than(V::splat(-MARGIN * scale));
+                low & (above | near_wall)
+            }
+        };
+    }
+    mask
+}
+
+/// The contact force of `d`'s colliders on the `candidates` lanes of a chunk (positions `x`,
+/// velocities `v`, forces before contact `f`), with [`contact_force`], the function of
+/// [`super::collide::contact_forces`]: the new forces, and the contact power
+/// `-(f_contact)·v` (W) per lane.
+#[inline(always)]
+fn contact_lanes<V: Lanes>(
+    d: &Dynamics,
+    x: [V; 3],
+    v: [V; 3],
+    f: [V; 3],
+    candidates: u8,
+) -> ([V; 3], V) {
+    let unpack = |lanes: [V; 3]| {
+        let mut values = [[0.0; LANES]; 3];
+        for (c, lane) in lanes.into_iter().enumerate() {
+            lane.store(&mut values[c]);
+        }
+        values
+    };
+    let (xs, vs, mut fs) = (unpack(x), unpack(v), unpack(f));
+    let mut power = [0.0; LANES];
+    for l in (0..LANES).filter(|l| candidates & (1 << l) != 0) {
+        let at = |a: &[[f64; LANES]; 3]| DVec3::new(a[0][l], a[1][l], a[2][l]);
+        let (xl, vl, fl) = (at(&xs), at(&vs), at(&fs));
+        if let Some(total) = contact_force(d.colliders, d.contact, xl, vl, fl) {
+            // P = -f_contact · v (see `collide::contact_power`).
+            power[l] = -(total - fl).dot(vl);
+            fs[0][l] = total.x;
+            fs[1][l] = total.y;
+            fs[2][l] = total.z;
+        }
+    }
+    (
+        [V::load(&fs[0]), V::load(&fs[1]), V::load(&fs[2])],
+        V::load(&power),
+    )
 }
 
 /// The `x`, `y`, `z` lanes of window arrays (positions or velocities) from index `i`.
@@ -886,6 +1351,27 @@ fn load_padded<V: Lanes>(values: &[f64], q: usize, count: usize) -> V {
         let mut chunk = [0.0; LANES];
         chunk[..count].copy_from_slice(&values[q..q + count]);
         V::load(&chunk)
+    }
+}
+
+/// The first `count` (at most `LANES`) vectors of `vectors` as lanes `[x, y, z]`, zero past
+/// `count`.
+#[inline(always)]
+fn load_chunk<V: Lanes>(vectors: &[DVec3], count: usize) -> [V; 3] {
+    if count == LANES {
+        V::load_vectors(vectors[..LANES].try_into().expect("a chunk"))
+    } else {
+        to_lanes(&vectors[..count])
+    }
+}
+
+/// Writes lanes `[x, y, z]` into the first `count` (at most `LANES`) vectors of `vectors`.
+#[inline(always)]
+fn store_chunk<V: Lanes>(lanes: [V; 3], vectors: &mut [DVec3], count: usize) {
+    if count == LANES {
+        V::store_vectors(lanes, (&mut vectors[..LANES]).try_into().expect("a chunk"));
+    } else {
+        from_lanes(lanes, &mut vectors[..count]);
     }
 }
 
@@ -959,9 +1445,16 @@ fn ring_load<V: Lanes>(ring: &[f64], g: &Group, p: usize) -> Forces<V> {
 
 /// The springs of one chunk with correctly rounded operations only: `sqrt`, then `1/L`, in the
 /// order of [`Spring::force_on_a`](super::springs::Spring::force_on_a) (the result does not
-/// depend on the lane type: [`Plain`] and [`Avx2`] give the same bits).
+/// depend on the lane type: [`Plain`] and [`Avx2`] give the same bits); and the dampers' power
+/// `k_d ((v_b - v_a)·n)²` (W).
 #[inline(always)]
-fn springs_exact<V: Lanes>(g: &Group, first: &[V; 6], w: &Window, i: usize, p: usize) -> Forces<V> {
+fn springs_exact<V: Lanes>(
+    g: &Group,
+    first: &[V; 6],
+    w: &Window,
+    i: usize,
+    p: usize,
+) -> (Forces<V>, V) {
     let j = i + g.delta;
     // d = x_b - x_a, L = |d|
     let dx = V::load(lanes(w.x[0], j)).sub(first[0]);
@@ -979,8 +1472,39 @@ fn springs_exact<V: Lanes>(g: &Group, first: &[V; 6], w: &Window, i: usize, p: u
     let rest = V::load(lanes(&g.rest_length, p));
     let hooke = V::splat(g.stiffness).mul(length.sub(rest));
     let damper = V::splat(g.damping).mul(rel);
-    let tension = V::load(lanes(&g.present, p)).mul(hooke.add(damper));
-    [tension.mul(nx), tension.mul(ny), tension.mul(nz)]
+    let present = g.present[p / LANES];
+    let tension = hooke.add(damper).select(present);
+    let power = damper.mul(rel).select(present);
+    ([tension.mul(nx), tension.mul(ny), tension.mul(nz)], power)
+}
+
+/// The streaming loop in plain Rust with the exact springs.
+#[allow(clippy::too_many_arguments)]
+fn range_portable<const POWER: bool>(
+    st: &Stencil,
+    s: &mut Scratch,
+    x: &[DVec3],
+    v: &[DVec3],
+    q0: usize,
+    q1: usize,
+    part: &mut Part,
+    output: &Output,
+) {
+    range_body::<Plain, POWER>(
+        st,
+        s,
+        x,
+        v,
+        q0,
+        q1,
+        part,
+        output,
+        // A closure, not the function item: the item would be called through a shim that is
+        // not inlined.
+        #[inline(always)]
+        #[allow(clippy::redundant_closure)]
+        |g, first, w, i, p| springs_exact::<Plain>(g, first, w, i, p),
+    );
 }
 
 /// The streaming loop on AVX2 registers with the exact springs (the same operations as the
@@ -988,26 +1512,24 @@ fn springs_exact<V: Lanes>(g: &Group, first: &[V; 6], w: &Window, i: usize, p: u
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[allow(clippy::too_many_arguments)]
-fn range_avx2(
+fn range_avx2<const POWER: bool>(
     st: &Stencil,
     s: &mut Scratch,
     x: &[DVec3],
     v: &[DVec3],
     q0: usize,
     q1: usize,
-    out: &mut [DVec3],
-    out2: &mut [DVec3],
+    part: &mut Part,
     output: &Output,
 ) {
-    range_body(
+    range_body::<Avx2, POWER>(
         st,
         s,
         x,
         v,
         q0,
         q1,
-        out,
-        out2,
+        part,
         output,
         // A closure, not the function item: only a closure is inlined (and with it the AVX2
         // instructions, which cannot be inlined into a function without AVX2).
@@ -1021,26 +1543,24 @@ fn range_avx2(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 #[allow(clippy::too_many_arguments)]
-fn range_avx512(
+fn range_avx512<const POWER: bool>(
     st: &Stencil,
     s: &mut Scratch,
     x: &[DVec3],
     v: &[DVec3],
     q0: usize,
     q1: usize,
-    out: &mut [DVec3],
-    out2: &mut [DVec3],
+    part: &mut Part,
     output: &Output,
 ) {
-    range_body(
+    range_body::<Avx512, POWER>(
         st,
         s,
         x,
         v,
         q0,
         q1,
-        out,
-        out2,
+        part,
         output,
         #[inline(always)]
         |g, first, w, i, p| {
@@ -1057,9 +1577,9 @@ use std::arch::x86_64::__m512d;
 /// [`Lanes`] as one AVX-512 register.
 ///
 /// Its methods call AVX-512F instructions without checking the CPU: an `Avx512` value is only
-/// ever created by [`springs_avx512`] (an `unsafe fn` whose contract includes AVX-512F) or by
-/// the methods of a value that already exists, so their code only runs where AVX-512F was
-/// detected.
+/// ever created inside `range_avx512` (a `target_feature(enable = "avx512f")` function, which
+/// runs only where AVX-512F was detected) or by the methods of a value that already exists, so
+/// their code only runs where AVX-512F was detected.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
 struct Avx512(__m512d);
@@ -1106,8 +1626,7 @@ impl Lanes for Avx512 {
     fn clear_below(self, k: usize) -> Avx512 {
         // Keep lanes k.. : bit l of the mask is lane l.
         let keep = (0xFF_u32 << k.min(LANES)) as u8;
-        // SAFETY: AVX-512F, see the type's docs.
-        Avx512(unsafe { std::arch::x86_64::_mm512_maskz_mov_pd(keep, self.0) })
+        self.select(keep)
     }
     #[inline(always)]
     fn sqrt(self) -> Avx512 {
@@ -1121,12 +1640,75 @@ impl Lanes for Avx512 {
     }
     #[inline(always)]
     fn where_positive(self, condition: Avx512) -> Avx512 {
-        use std::arch::x86_64::{_CMP_GT_OQ, _mm512_cmp_pd_mask, _mm512_maskz_mov_pd};
+        self.select(Avx512::zero().less_than(condition))
+    }
+    #[inline(always)]
+    fn select(self, mask: u8) -> Avx512 {
         // SAFETY: AVX-512F, see the type's docs.
+        Avx512(unsafe { std::arch::x86_64::_mm512_maskz_mov_pd(mask, self.0) })
+    }
+    #[inline(always)]
+    fn less_than(self, other: Avx512) -> u8 {
+        use std::arch::x86_64::{_CMP_LT_OQ, _mm512_cmp_pd_mask};
+        // SAFETY: AVX-512F, see the type's docs.
+        unsafe { _mm512_cmp_pd_mask::<_CMP_LT_OQ>(self.0, other.0) }
+    }
+    #[inline(always)]
+    fn load_vectors(vectors: &[DVec3; LANES]) -> [Avx512; 3] {
+        use std::arch::x86_64::{_mm512_loadu_pd, _mm512_permutex2var_pd, _mm512_setr_epi64};
+        // The 24 values x0 y0 z0 x1 … z7 are three registers r0, r1, r2; each component is
+        // gathered from two of them, then completed from the third (index i < 8: the first
+        // operand's lane i, i ≥ 8: the second's lane i - 8).
+        // SAFETY: AVX-512F, see the type's docs; `vectors` is 24 contiguous f64 (`DVec3` is
+        // `repr(C)` with three f64), three unaligned 512-bit loads.
         unsafe {
-            let zero = std::arch::x86_64::_mm512_setzero_pd();
-            let positive = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(condition.0, zero);
-            Avx512(_mm512_maskz_mov_pd(positive, self.0))
+            let p = vectors.as_ptr().cast::<f64>();
+            let (r0, r1, r2) = (
+                _mm512_loadu_pd(p),
+                _mm512_loadu_pd(p.add(8)),
+                _mm512_loadu_pd(p.add(16)),
+            );
+            let gather = |a: [i64; 8], b: [i64; 8]| {
+                let t = _mm512_permutex2var_pd(
+                    r0,
+                    _mm512_setr_epi64(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]),
+                    r1,
+                );
+                Avx512(_mm512_permutex2var_pd(
+                    t,
+                    _mm512_setr_epi64(b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]),
+                    r2,
+                ))
+            };
+            [
+                gather([0, 3, 6, 9, 12, 15, 0, 0], [0, 1, 2, 3, 4, 5, 10, 13]),
+                gather([1, 4, 7, 10, 13, 0, 0, 0], [0, 1, 2, 3, 4, 8, 11, 14]),
+                gather([2, 5, 8, 11, 14, 0, 0, 0], [0, 1, 2, 3, 4, 9, 12, 15]),
+            ]
+        }
+    }
+    #[inline(always)]
+    fn store_vectors(lanes: [Avx512; 3], vectors: &mut [DVec3; LANES]) {
+        use std::arch::x86_64::{_mm512_permutex2var_pd, _mm512_setr_epi64, _mm512_storeu_pd};
+        let [x, y, z] = lanes.map(|l| l.0);
+        // SAFETY: AVX-512F, see the type's docs; `vectors` is 24 contiguous f64, three
+        // unaligned 512-bit stores.
+        unsafe {
+            let index =
+                |i: [i64; 8]| _mm512_setr_epi64(i[0], i[1], i[2], i[3], i[4], i[5], i[6], i[7]);
+            // r0 = x0 y0 z0 x1 y1 z1 x2 y2
+            let t = _mm512_permutex2var_pd(x, index([0, 8, 0, 1, 9, 0, 2, 10]), y);
+            let r0 = _mm512_permutex2var_pd(t, index([0, 1, 8, 3, 4, 9, 6, 7]), z);
+            // r1 = z2 x3 y3 z3 x4 y4 z4 x5
+            let t = _mm512_permutex2var_pd(x, index([0, 3, 11, 0, 4, 12, 0, 5]), y);
+            let r1 = _mm512_permutex2var_pd(t, index([10, 1, 2, 11, 4, 5, 12, 7]), z);
+            // r2 = y5 z5 x6 y6 z6 x7 y7 z7
+            let t = _mm512_permutex2var_pd(y, index([5, 13, 0, 6, 14, 0, 7, 15]), z);
+            let r2 = _mm512_permutex2var_pd(t, index([0, 1, 14, 3, 4, 15, 6, 7]), x);
+            let p = vectors.as_mut_ptr().cast::<f64>();
+            _mm512_storeu_pd(p, r0);
+            _mm512_storeu_pd(p.add(8), r1);
+            _mm512_storeu_pd(p.add(16), r2);
         }
     }
 }
@@ -1233,6 +1815,36 @@ impl Lanes for Avx2 {
         }
     }
     #[inline(always)]
+    fn select(self, mask: u8) -> Avx2 {
+        use std::arch::x86_64::{
+            _mm256_and_pd, _mm256_and_si256, _mm256_castsi256_pd, _mm256_cmpeq_epi64,
+            _mm256_set1_epi64x, _mm256_setr_epi64x,
+        };
+        // SAFETY: AVX2, see the type's docs. Lane l of half h keeps its value when bit 4h + l
+        // of the mask is set: (mask & bit) == bit gives all-ones lanes there.
+        unsafe {
+            let bits = _mm256_set1_epi64x(i64::from(mask));
+            let keep = |lo: i64| {
+                let b = _mm256_setr_epi64x(lo, lo << 1, lo << 2, lo << 3);
+                _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(bits, b), b))
+            };
+            Avx2([
+                _mm256_and_pd(self.0[0], keep(1)),
+                _mm256_and_pd(self.0[1], keep(16)),
+            ])
+        }
+    }
+    #[inline(always)]
+    fn less_than(self, other: Avx2) -> u8 {
+        use std::arch::x86_64::{_CMP_LT_OQ, _mm256_cmp_pd, _mm256_movemask_pd};
+        // SAFETY: AVX2, see the type's docs; movemask gives one bit per lane.
+        unsafe {
+            let lo = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(self.0[0], other.0[0]));
+            let hi = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(self.0[1], other.0[1]));
+            (lo | (hi << 4)) as u8
+        }
+    }
+    #[inline(always)]
     fn where_positive(self, condition: Avx2) -> Avx2 {
         use std::arch::x86_64::{_CMP_GT_OQ, _mm256_and_pd, _mm256_cmp_pd, _mm256_setzero_pd};
         // SAFETY: AVX2, see the type's docs. The comparison gives all-ones lanes where
@@ -1270,14 +1882,14 @@ unsafe fn springs_avx512(
     w: &Window,
     i: usize,
     p: usize,
-) -> Forces<Avx512> {
+) -> (Forces<Avx512>, Avx512) {
     use std::arch::x86_64::{
         _CMP_GT_OQ, _mm512_cmp_pd_mask, _mm512_fmadd_pd, _mm512_fmsub_pd, _mm512_fnmadd_pd,
-        _mm512_loadu_pd, _mm512_maskz_rsqrt14_pd, _mm512_mul_pd, _mm512_set1_pd, _mm512_setzero_pd,
-        _mm512_sub_pd,
+        _mm512_loadu_pd, _mm512_maskz_mul_pd, _mm512_maskz_rsqrt14_pd, _mm512_mul_pd,
+        _mm512_set1_pd, _mm512_setzero_pd, _mm512_sub_pd,
     };
     let j = i + g.delta;
-    debug_assert!(j + LANES <= w.x[0].len() && p + LANES <= g.present.len());
+    debug_assert!(j + LANES <= w.x[0].len() && p + LANES <= g.rest_length.len());
     // SAFETY (the intrinsics): the caller guarantees AVX-512F, and that LANES = 8 values exist
     // from every index loaded below (window: `i` and `j = i + δ`; group arrays: `p`), which is
     // what one unaligned 512-bit load reads.
@@ -1294,10 +1906,8 @@ unsafe fn springs_avx512(
         let dvx = _mm512_sub_pd(load(w.v[0], j), first[3].0);
         let dvy = _mm512_sub_pd(load(w.v[1], j), first[4].0);
         let dvz = _mm512_sub_pd(load(w.v[2], j), first[5].0);
-        let damper = _mm512_mul_pd(
-            _mm512_set1_pd(g.damping),
-            _mm512_fmadd_pd(dvz, dz, _mm512_fmadd_pd(dvy, dy, _mm512_mul_pd(dvx, dx))),
-        );
+        let dv_d = _mm512_fmadd_pd(dvz, dz, _mm512_fmadd_pd(dvy, dy, _mm512_mul_pd(dvx, dx)));
+        let damper = _mm512_mul_pd(_mm512_set1_pd(g.damping), dv_d);
         // y₀ ≈ 1/√a to 2⁻¹⁴, and 0 where a = 0 (a zero-length spring has no direction, no force).
         let nonzero = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(a, _mm512_setzero_pd());
         let mut y = _mm512_maskz_rsqrt14_pd(nonzero, a);
@@ -1309,17 +1919,21 @@ unsafe fn springs_avx512(
         }
         // L = a / √a = a y; tension = k (L - L0) + k_d (v_b - v_a)·d / L
         let stretch = _mm512_fmsub_pd(a, y, load(&g.rest_length, p));
-        let tension = _mm512_fmadd_pd(
-            _mm512_set1_pd(g.stiffness),
-            stretch,
-            _mm512_mul_pd(damper, y),
-        );
-        // f = tension n = (tension / L) d, zero where there is no spring (present = 0).
-        let scale = _mm512_mul_pd(_mm512_mul_pd(tension, y), load(&g.present, p));
-        [
-            Avx512(_mm512_mul_pd(dx, scale)),
-            Avx512(_mm512_mul_pd(dy, scale)),
-            Avx512(_mm512_mul_pd(dz, scale)),
-        ]
+        let damper_n = _mm512_mul_pd(damper, y);
+        let tension = _mm512_fmadd_pd(_mm512_set1_pd(g.stiffness), stretch, damper_n);
+        // f = tension n = (tension / L) d, zero where there is no spring.
+        let present = g.present[p / LANES];
+        let scale = _mm512_maskz_mul_pd(present, tension, y);
+        // The damper's power k_d ((v_b - v_a)·n)² = (k_d (v_b - v_a)·n) ((v_b - v_a)·d / L);
+        // unused (and not computed) unless the caller asks for the power.
+        let power = _mm512_maskz_mul_pd(present, damper_n, _mm512_mul_pd(dv_d, y));
+        (
+            [
+                Avx512(_mm512_mul_pd(dx, scale)),
+                Avx512(_mm512_mul_pd(dy, scale)),
+                Avx512(_mm512_mul_pd(dz, scale)),
+            ],
+            Avx512(power),
+        )
     }
 }
