@@ -386,7 +386,7 @@ fn plain_step(body: &mut Body, work: &mut Workspace, dt: f64) -> u64 {
     changes.clear();
     collide::collide_spheres_logged(&body.model, &mut body.state, dt, Some(changes));
     collide::resolve_logged(&body.model, &mut body.state, dt, Some(changes));
-    changes.finish();
+    changes.finish(body.model.particle_count());
     work.dissipated.contacts -= energy_change(&body.model, &body.state, changes);
     work.dissipated = work.dissipated.summed();
     evals

@@ -682,7 +682,7 @@ fn the_energy_change_of_a_response_is_the_difference_of_the_energies() {
             let mut changes = Changes::default();
             collide_spheres_logged(model, &mut state, sim.dt(), Some(&mut changes));
             resolve_logged(model, &mut state, sim.dt(), Some(&mut changes));
-            changes.finish();
+            changes.finish(model.particle_count());
             let exact = energy(model, &state).total - before;
             let fast = energy_change(model, &state, &changes);
             let scale = energy(model, &state).kinetic.abs() + before.abs() + 1.0;

@@ -686,11 +686,19 @@ pub struct Changes {
     pub(crate) particles: Vec<(u32, DVec3, DVec3)>,
     /// Kinetic and gravitational energy of the non-kinematic spheres before (J).
     pub(crate) spheres_before: f64,
+    /// After [`Changes::finish`]: `slot[i]` is the index of particle `i` in `particles`, or
+    /// `u32::MAX` when it did not change (grown to the particle count on first use).
+    slot: Vec<u32>,
 }
 
 impl Changes {
     /// Forgets everything recorded.
     pub fn clear(&mut self) {
+        for &(i, ..) in &self.particles {
+            if let Some(s) = self.slot.get_mut(i as usize) {
+                *s = u32::MAX;
+            }
+        }
         self.particles.clear();
         self.spheres_before = 0.0;
     }
@@ -700,11 +708,23 @@ impl Changes {
     }
 
     /// Sorts the records by particle and keeps each particle's first (its state before any
-    /// change).
-    pub fn finish(&mut self) {
+    /// change); `particles` is the system's particle count.
+    pub fn finish(&mut self, particles: usize) {
         // A stable sort keeps the records of one particle in the order they were made.
         self.particles.sort_by_key(|p| p.0);
         self.particles.dedup_by_key(|p| p.0);
+        if self.slot.len() < particles {
+            self.slot.resize(particles, u32::MAX);
+        }
+        for (k, &(i, ..)) in self.particles.iter().enumerate() {
+            self.slot[i as usize] = k as u32;
+        }
+    }
+
+    /// The record of particle `i`, if it changed.
+    pub(crate) fn of(&self, i: usize) -> Option<&(u32, DVec3, DVec3)> {
+        let k = *self.slot.get(i)?;
+        self.particles.get(k as usize)
     }
 }
 
@@ -879,37 +899,93 @@ pub fn collide_spheres_logged(
             );
         }
     }
-    for s in spheres.iter_mut() {
-        let ws = s.inv_mass();
-        // Broad phase: a particle at |x - c|² ≥ r² (with a margin against rounding) does not
-        // touch, and needs no square root.
-        let reach2 = s.radius * s.radius * (1.0 + 1e-9);
-        for i in 0..x.len().min(model.particle_count()) {
-            if (x[i] - s.center).length_squared() >= reach2 {
-                continue;
-            }
-            let (x_old, v_old) = (x[i], v[i]);
-            let touched = impulse_pair(
-                Side {
-                    x: &mut s.center,
-                    v: &mut s.velocity,
-                    w: ws,
-                },
-                Side {
-                    x: &mut x[i],
-                    v: &mut v[i],
-                    w: model.inv_mass[i],
-                },
-                s.radius,
-                params.sphere_particle_restitution,
-            );
-            if touched {
-                keep_verlet_history(*history_valid, &mut x_prev[i], x[i], v[i], dt);
-                if let Some(log) = log.as_deref_mut() {
-                    log.record(i, x_old, v_old);
+    // Broad phase by bounds: the box of every chunk of `BOX` particles, grown when a particle
+    // is pushed, so that a sphere skips the chunks it cannot reach.
+    let n = x.len().min(model.particle_count());
+    BOXES.with(|boxes| {
+        let boxes = &mut *boxes.borrow_mut();
+        boxes.clear();
+        boxes.extend(x[..n].chunks(BOX).map(Aabb::of));
+        for s in spheres.iter_mut() {
+            let ws = s.inv_mass();
+            // A particle at |x - c|² ≥ r² (with a margin against rounding) does not touch and
+            // needs no square root.
+            let reach2 = s.radius * s.radius * (1.0 + 1e-9);
+            for (chunk, bounds) in boxes.iter_mut().enumerate() {
+                if bounds.distance_squared(s.center) >= reach2 {
+                    continue;
+                }
+                for i in chunk * BOX..((chunk + 1) * BOX).min(n) {
+                    if (x[i] - s.center).length_squared() >= reach2 {
+                        continue;
+                    }
+                    let (x_old, v_old) = (x[i], v[i]);
+                    let touched = impulse_pair(
+                        Side {
+                            x: &mut s.center,
+                            v: &mut s.velocity,
+                            w: ws,
+                        },
+                        Side {
+                            x: &mut x[i],
+                            v: &mut v[i],
+                            w: model.inv_mass[i],
+                        },
+                        s.radius,
+                        params.sphere_particle_restitution,
+                    );
+                    if touched {
+                        bounds.include(x[i]);
+                        keep_verlet_history(*history_valid, &mut x_prev[i], x[i], v[i], dt);
+                        if let Some(log) = log.as_deref_mut() {
+                            log.record(i, x_old, v_old);
+                        }
+                    }
                 }
             }
         }
+    });
+}
+
+/// Particles per box of the sphere–particle broad phase.
+const BOX: usize = 16;
+
+thread_local! {
+    /// The boxes of the broad phase (reused, so steps do not allocate).
+    static BOXES: std::cell::RefCell<Vec<Aabb>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// An axis-aligned bounding box (m).
+#[derive(Clone, Copy, Debug)]
+struct Aabb {
+    lo: DVec3,
+    hi: DVec3,
+}
+
+impl Aabb {
+    /// The box of `points` (NaN coordinates make it cover everything).
+    fn of(points: &[DVec3]) -> Aabb {
+        let mut b = Aabb {
+            lo: DVec3::INFINITY,
+            hi: DVec3::NEG_INFINITY,
+        };
+        for &p in points {
+            b.include(p);
+        }
+        b
+    }
+
+    /// Grows the box to hold `p`; a NaN coordinate makes it infinite on that axis.
+    fn include(&mut self, p: DVec3) {
+        let nan = p.is_nan_mask();
+        self.lo = DVec3::select(nan, DVec3::NEG_INFINITY, self.lo.min(p));
+        self.hi = DVec3::select(nan, DVec3::INFINITY, self.hi.max(p));
+    }
+
+    /// The squared distance (m²) from `c` to the nearest point of the box (0 inside).
+    fn distance_squared(&self, c: DVec3) -> f64 {
+        let d = (self.lo - c).max(c - self.hi).max(DVec3::ZERO);
+        d.length_squared()
     }
 }
 

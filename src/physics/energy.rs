@@ -77,15 +77,10 @@ pub fn energy(model: &Model, state: &State) -> Energy {
 /// calls of [`energy`] up to rounding, without a pass over every spring.
 #[must_use]
 pub fn energy_change(model: &Model, state: &State, changes: &Changes) -> f64 {
-    let changed = &changes.particles;
     // The position of particle j before the response.
-    let before = |j: usize| {
-        changed
-            .binary_search_by_key(&(j as u32), |c| c.0)
-            .map_or(state.x[j], |k| changed[k].1)
-    };
+    let before = |j: usize| changes.of(j).map_or(state.x[j], |c| c.1);
     let mut delta = 0.0;
-    for &(i, x_old, v_old) in changed {
+    for &(i, x_old, v_old) in &changes.particles {
         let i = i as usize;
         let m = model.mass[i];
         let (x, v) = (state.x[i], state.v[i]);
@@ -95,11 +90,7 @@ pub fn energy_change(model: &Model, state: &State, changes: &Changes) -> f64 {
             let s = &model.springs[s as usize];
             let (a, b) = (s.a as usize, s.b as usize);
             let other = if a == i { b } else { a };
-            if other < i
-                && changed
-                    .binary_search_by_key(&(other as u32), |c| c.0)
-                    .is_ok()
-            {
+            if other < i && changes.of(other).is_some() {
                 // Counted with the other end, which comes first.
                 continue;
             }

@@ -814,6 +814,12 @@ trait Lanes: Copy {
         other.store(&mut b);
         (0..LANES).fold(0, |m, l| m | (u8::from(a[l] < b[l]) << l))
     }
+    /// Bit `l` set where lane `l` is NaN.
+    fn nan_lanes(self) -> u8 {
+        let mut a = [0.0; LANES];
+        self.store(&mut a);
+        (0..LANES).fold(0, |m, l| m | (u8::from(a[l].is_nan()) << l))
+    }
     /// Eight vectors `[x, y, z]` as lanes (structure of arrays).
     #[inline(always)]
     fn load_vectors(vectors: &[DVec3; LANES]) -> [Self; 3] {
@@ -1238,13 +1244,14 @@ fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3]) -> u8 {
                 // φ = (x - p)·n < ε, with a margin for rounding.
                 let phi = dot(minus(point), normal);
                 let scale = point.abs().max_element() + 1.0;
-                phi.less_than(V::splat(epsilon + MARGIN * scale)) | !phi.less_than(phi) // NaN: let the exact test decide
+                // NaN: let the exact test decide.
+                phi.less_than(V::splat(epsilon + MARGIN * scale)) | phi.nan_lanes()
             }
             Collider::Sphere { center, radius } => {
                 // |x - c| - r < ε  ⇔  |x - c|² < (r + ε)².
                 let reach = (radius + epsilon).max(0.0);
                 let d2 = squared(minus(center));
-                d2.less_than(V::splat(reach * reach * (1.0 + MARGIN) + MARGIN)) | !d2.less_than(d2)
+                d2.less_than(V::splat(reach * reach * (1.0 + MARGIN) + MARGIN)) | d2.nan_lanes()
             }
             Collider::Bowl { center, radius, .. } => {
                 // r - |x - c| < ε  ⇔  |x - c|² > (r - ε)² (when r > ε; the rim is left to the
@@ -1263,7 +1270,7 @@ fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3]) -> u8 {
                 // only the shaft's wall band ρ > R - ε or the solid, so ρ² > (R - ε)².
                 let scale = point.abs().max_element() + hole_center.abs().max_element() + 1.0;
                 let h = dot(minus(point), normal);
-                let low = h.less_than(V::splat(epsilon + MARGIN * scale)) | !h.less_than(h);
+                let low = h.less_than(V::splat(epsilon + MARGIN * scale)) | h.nan_lanes();
                 let q = minus(hole_center);
                 let along = dot(q, normal);
                 let radial = [
@@ -1654,6 +1661,12 @@ impl Lanes for Avx512 {
         unsafe { _mm512_cmp_pd_mask::<_CMP_LT_OQ>(self.0, other.0) }
     }
     #[inline(always)]
+    fn nan_lanes(self) -> u8 {
+        use std::arch::x86_64::{_CMP_UNORD_Q, _mm512_cmp_pd_mask};
+        // SAFETY: AVX-512F, see the type's docs.
+        unsafe { _mm512_cmp_pd_mask::<_CMP_UNORD_Q>(self.0, self.0) }
+    }
+    #[inline(always)]
     fn load_vectors(vectors: &[DVec3; LANES]) -> [Avx512; 3] {
         use std::arch::x86_64::{_mm512_loadu_pd, _mm512_permutex2var_pd, _mm512_setr_epi64};
         // The 24 values x0 y0 z0 x1 … z7 are three registers r0, r1, r2; each component is
@@ -1841,6 +1854,16 @@ impl Lanes for Avx2 {
         unsafe {
             let lo = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(self.0[0], other.0[0]));
             let hi = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(self.0[1], other.0[1]));
+            (lo | (hi << 4)) as u8
+        }
+    }
+    #[inline(always)]
+    fn nan_lanes(self) -> u8 {
+        use std::arch::x86_64::{_CMP_UNORD_Q, _mm256_cmp_pd, _mm256_movemask_pd};
+        // SAFETY: AVX2, see the type's docs; movemask gives one bit per lane.
+        unsafe {
+            let lo = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_UNORD_Q>(self.0[0], self.0[0]));
+            let hi = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_UNORD_Q>(self.0[1], self.0[1]));
             (lo | (hi << 4)) as u8
         }
     }
