@@ -89,9 +89,11 @@ impl Simulation {
         let work = scene
             .bodies
             .iter()
-            .map(|_| Workspace {
-                account: true,
-                ..Workspace::new()
+            .map(|_| {
+                let mut work = Workspace::new();
+                work.account = true;
+                work.warm_start = true;
+                work
             })
             .collect();
         let mut sim = Simulation {

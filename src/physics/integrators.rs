@@ -25,6 +25,7 @@
 
 mod explicit_euler;
 mod implicit_euler;
+mod implicit_lattice;
 mod midpoint;
 mod predictor_corrector;
 mod rk4;
@@ -245,6 +246,16 @@ pub struct Workspace {
     pub(crate) projected: bool,
     /// What the last collision response changed (energy accounting; see `Simulation`).
     pub(crate) changes: super::collide::Changes,
+    /// Implicit Euler: start each solve from the last step's `Δv` (scaled by the ratio of the
+    /// steps) instead of zero. A step then depends on the steps before it (within the solve's
+    /// tolerance), so it is off by default: `Simulation` turns it on; finite differences of
+    /// single steps (the stability study) keep it off.
+    pub warm_start: bool,
+    /// Implicit Euler: the last step's `Δv` (m/s) and its `dt` (s), for the warm start.
+    pub(crate) last_dv: Vec<DVec3>,
+    pub(crate) last_dt: f64,
+    /// Implicit Euler's system on a lattice (`implicit_lattice`).
+    pub(crate) lattice: implicit_lattice::Lattice,
 }
 
 /// A per-particle rule on positions and velocities (m, m/s) applied at the end of every step
