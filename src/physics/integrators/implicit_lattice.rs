@@ -482,7 +482,10 @@ fn solve_body<V: Lanes>(
         let mut b2 = V::zero();
         for i in chunks() {
             let free: V = at(&sys.free, i);
-            let b = triple::<V>(&sys.rhs, i).map(|b| b.mul(free));
+            // Written out, not with `map`: its closure would not be inlined (nor the AVX-512
+            // operations inside it).
+            let [b0, b1, b2_] = triple::<V>(&sys.rhs, i);
+            let b = [b0.mul(free), b1.mul(free), b2_.mul(free)];
             let a = triple::<V>(&ap, i);
             b2 = b2
                 .add(b[0].mul(b[0]))

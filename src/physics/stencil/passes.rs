@@ -422,14 +422,22 @@ pub(super) fn finish<V: Lanes, const POWER: bool>(
                     let (two, sixth) = (V::splat(2.0), V::splat(sixth));
                     // x' = x_n + dt/6 (k1x + 2 k2x + 2 k3x + k4x), k1x = v_n, k4x = v;
                     // v' = v_n + dt/6 (k1v + 2 k2v + 2 k3v + k4v), k4v = a.
-                    let weighted =
-                        |k1: V, k2: V, k3: V, k4: V| k1.add(two.mul(k2)).add(two.mul(k3)).add(k4);
-                    let x_new: [V; 3] = std::array::from_fn(|c| {
-                        xn[c].add(sixth.mul(weighted(vn[c], v2[c], v3[c], v[c])))
-                    });
-                    let v_new: [V; 3] = std::array::from_fn(|c| {
-                        vn[c].add(sixth.mul(weighted(a1[c], a2[c], a3[c], a[c])))
-                    });
+                    // Written out per component, not with `array::from_fn`: its closure would
+                    // not be inlined, and the AVX-512 operations inside it would become calls.
+                    #[inline(always)]
+                    fn weighted<V: Lanes>(two: V, k1: V, k2: V, k3: V, k4: V) -> V {
+                        k1.add(two.mul(k2)).add(two.mul(k3)).add(k4)
+                    }
+                    let x_new: [V; 3] = [
+                        xn[0].add(sixth.mul(weighted(two, vn[0], v2[0], v3[0], v[0]))),
+                        xn[1].add(sixth.mul(weighted(two, vn[1], v2[1], v3[1], v[1]))),
+                        xn[2].add(sixth.mul(weighted(two, vn[2], v2[2], v3[2], v[2]))),
+                    ];
+                    let v_new: [V; 3] = [
+                        vn[0].add(sixth.mul(weighted(two, a1[0], a2[0], a3[0], a[0]))),
+                        vn[1].add(sixth.mul(weighted(two, a1[1], a2[1], a3[1], a[1]))),
+                        vn[2].add(sixth.mul(weighted(two, a1[2], a2[2], a3[2], a[2]))),
+                    ];
                     store_chunk(x_new, &mut xo[at..], count);
                     store_chunk(v_new, &mut vo[at..], count);
                 }
