@@ -552,6 +552,30 @@ impl Run {
         }
     }
 
+    /// `workload` at its initial state, stepped with `method` instead of its own, as
+    /// [`measure_method`] times it: Verlet without projection or damping (`iterations = 0`,
+    /// `verlet_damping = 0`) so that every method integrates the same spring forces; XPBD with
+    /// the library's default substeps.
+    #[must_use]
+    pub fn with_method(workload: Workload, method: Method) -> Run {
+        let mut run = Run::new(workload);
+        if method != workload.method() {
+            run.method = method;
+            run.params = MethodParams {
+                iterations: 0,
+                verlet_damping: 0.0,
+                ..MethodParams::default()
+            };
+        }
+        run
+    }
+
+    /// The method this run steps with.
+    #[must_use]
+    pub fn method(&self) -> Method {
+        self.method
+    }
+
     /// One step of the library's integrator followed by the workload's contact projection.
     #[inline]
     pub fn step(&mut self) {
@@ -748,13 +772,15 @@ pub fn measure_method(
 ) -> BenchResult {
     assert!(repeats > 0, "at least one run");
     let (model, state) = setup(workload);
-    let mut run = Run::from_setup(workload, model.clone(), state.clone());
-    run.method = method;
-    run.params = MethodParams {
-        iterations: 0,
-        verlet_damping: 0.0,
-        ..MethodParams::default()
-    };
+    let mut run = Run::with_method(workload, method);
+    if method == workload.method() {
+        // The workload's own method, timed like the others (Verlet without projection).
+        run.params = MethodParams {
+            iterations: 0,
+            verlet_damping: 0.0,
+            ..MethodParams::default()
+        };
+    }
     let mut rates = Vec::with_capacity(repeats as usize);
     let mut diverged_at = None;
     let mut last = (

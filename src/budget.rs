@@ -94,6 +94,16 @@ pub const WORKSPACE_PARTICLE_BYTES: f64 = (15 * size_of::<DVec3>() + size_of::<D
 /// XPBD's multipliers (`f64`).
 pub const WORKSPACE_SPRING_BYTES: f64 = (size_of::<DMat3>() + 8) as f64;
 
+/// Bytes per particle of implicit Euler's lattice solver (`physics::integrators::implicit_lattice`,
+/// when it steps): 32 `f64` arrays (inverse diagonal blocks, mass, free flags, x, v, the
+/// right-hand side and the five CG vectors, three components each) and three `DVec3` buffers
+/// (forces, the warm start's Δv, the solve's result).
+pub const IMPLICIT_PARTICLE_BYTES: f64 = (32 * 8 + 3 * size_of::<DVec3>()) as f64;
+
+/// Bytes per spring of implicit Euler's lattice solver: its block (six `f64`) and
+/// `dt² K (v_b - v_a)` (three `f64`) per spring slot.
+pub const IMPLICIT_SPRING_BYTES: f64 = (9 * 8) as f64;
+
 /// Bytes per spring of Verlet's rods (its projection list, [`Rod`]).
 pub const ROD_BYTES: f64 = size_of::<Rod>() as f64;
 
@@ -513,9 +523,15 @@ pub fn updates_per_step(scene: &Scene, method: Option<Method>) -> f64 {
 #[must_use]
 pub fn body_bytes(particles: f64, springs: f64, methods: &[Method], copies: f64) -> f64 {
     let verlet = methods.contains(&Method::Verlet);
+    let implicit = methods.contains(&Method::ImplicitEuler);
     copies * (particles * PARTICLE_BYTES + springs * SPRING_BYTES)
         + particles * WORKSPACE_PARTICLE_BYTES
         + springs * (WORKSPACE_SPRING_BYTES + if verlet { ROD_BYTES } else { 0.0 })
+        + if implicit {
+            particles * IMPLICIT_PARTICLE_BYTES + springs * IMPLICIT_SPRING_BYTES
+        } else {
+            0.0
+        }
 }
 
 /// Bytes of `scene` while being stepped, each body by its own method or by each of `methods`

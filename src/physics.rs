@@ -23,6 +23,7 @@ pub mod diverge;
 pub mod energy;
 pub mod forces;
 pub mod integrators;
+pub(crate) mod lanes;
 pub mod particles;
 pub mod pool;
 pub mod springs;

@@ -31,6 +31,7 @@
 use glam::DVec3;
 use serde::Serialize;
 
+use crate::physics::energy::energy_change;
 use crate::physics::{
     Dissipated, Divergence, Energy, Method, SolveStats, State, Workspace, collide, diverge, energy,
 };
@@ -88,9 +89,11 @@ impl Simulation {
         let work = scene
             .bodies
             .iter()
-            .map(|_| Workspace {
-                account: true,
-                ..Workspace::new()
+            .map(|_| {
+                let mut work = Workspace::new();
+                work.account = true;
+                work.warm_start = true;
+                work
             })
             .collect();
         let mut sim = Simulation {
@@ -375,13 +378,19 @@ fn plain_step(body: &mut Body, work: &mut Workspace, dt: f64) -> u64 {
     }
     // Colliders and dynamic spheres: the spheres move, then every response happens.
     collide::advance_spheres(&body.model, &mut body.state, dt);
-    let before = work.account.then(|| energy(&body.model, &body.state).total);
-    collide::collide_spheres(&body.model, &mut body.state, dt);
-    collide::resolve(&body.model, &mut body.state, dt);
-    if let Some(before) = before {
-        work.dissipated.contacts += before - energy(&body.model, &body.state).total;
-        work.dissipated = work.dissipated.summed();
+    if !work.account {
+        collide::collide_spheres(&body.model, &mut body.state, dt);
+        collide::resolve(&body.model, &mut body.state, dt);
+        return evals;
     }
+    // The energy the responses remove: the change of E over the particles they touched.
+    let changes = &mut work.changes;
+    changes.clear();
+    collide::collide_spheres_logged(&body.model, &mut body.state, dt, Some(changes));
+    collide::resolve_logged(&body.model, &mut body.state, dt, Some(changes));
+    changes.finish(body.model.particle_count());
+    work.dissipated.contacts -= energy_change(&body.model, &body.state, changes);
+    work.dissipated = work.dissipated.summed();
     evals
 }
 

@@ -652,3 +652,51 @@ fn spring_cube_lands_on_every_terrain_under_every_method() {
         }
     }
 }
+
+#[test]
+fn the_energy_change_of_a_response_is_the_difference_of_the_energies() {
+    use springlab::physics::collide::{
+        Changes, advance_spheres, collide_spheres_logged, resolve_logged,
+    };
+    use springlab::physics::energy::{energy, energy_change};
+    use springlab::simulation::Simulation;
+    for (name, method, steps) in [
+        ("cloth-spheres", springlab::Method::SemiImplicitEuler, 8_000),
+        ("jelly-bowl", springlab::Method::SemiImplicitEuler, 4_000),
+        ("cube-tilted", springlab::Method::SemiImplicitEuler, 3_000),
+    ] {
+        let mut scene = springlab::scene::load(name, &[]).expect("built-in");
+        scene.set_method(method);
+        let mut sim = Simulation::new(scene);
+        let mut checked = 0;
+        for _ in 0..steps / 20 {
+            sim.run(20, |_| {});
+            let body = &sim.scene.bodies[0];
+            let (model, mut state) = (&body.model, body.state.clone());
+            // One more step's integration, then the response measured both ways.
+            let mut work = springlab::physics::Workspace::new();
+            body.method
+                .step(model, &mut state, sim.dt(), &body.params, &mut work);
+            advance_spheres(model, &mut state, sim.dt());
+            let before = energy(model, &state).total;
+            let mut changes = Changes::default();
+            collide_spheres_logged(model, &mut state, sim.dt(), Some(&mut changes));
+            resolve_logged(model, &mut state, sim.dt(), Some(&mut changes));
+            changes.finish(model.particle_count());
+            let exact = energy(model, &state).total - before;
+            let fast = energy_change(model, &state, &changes);
+            let scale = energy(model, &state).kinetic.abs() + before.abs() + 1.0;
+            assert!(
+                (exact - fast).abs() <= 1e-11 * scale,
+                "{name}: {fast} J vs {exact} J"
+            );
+            if exact != 0.0 {
+                checked += 1;
+            }
+        }
+        assert!(
+            checked > 5,
+            "{name}: only {checked} responses changed the energy"
+        );
+    }
+}

@@ -437,3 +437,158 @@ fn random_springs_and_short_ropes_use_the_spring_list_and_long_ropes_the_stencil
         "pure constraints need no force loop"
     );
 }
+
+/// The colliders of the fused-pass tests: a plane through the middle of the shaken lattice, a
+/// sphere, a bowl and the 2023 floor with a hole, placed so that each touches some particles.
+fn test_colliders(state: &State) -> Vec<springlab::physics::collide::Collider> {
+    use springlab::physics::collide::Collider;
+    let n = state.len() as f64;
+    let centre = state.x.iter().fold(DVec3::ZERO, |a, b| a + *b) / n;
+    let far = state
+        .x
+        .iter()
+        .map(|x| (*x - centre).length())
+        .fold(0.0, f64::max);
+    vec![
+        Collider::plane(
+            centre + DVec3::new(0.0, 0.03, 0.0),
+            DVec3::new(0.1, 1.0, 0.0),
+        ),
+        Collider::sphere(centre + DVec3::new(0.5 * far, 0.0, 0.0), 0.4 * far),
+        Collider::bowl(
+            centre + DVec3::new(0.0, 0.6 * far, 0.0),
+            0.9 * far,
+            centre.y,
+        ),
+        Collider::hole_plane(
+            centre - DVec3::new(0.0, 0.1 * far, 0.0),
+            DVec3::Y,
+            centre - DVec3::new(0.3 * far, 0.1 * far, 0.0),
+            0.5 * far,
+        ),
+    ]
+}
+
+fn bits(p: &[DVec3]) -> Vec<u64> {
+    p.iter()
+        .flat_map(|p| p.to_array().map(f64::to_bits))
+        .collect()
+}
+
+#[test]
+fn contact_in_the_fused_pass_is_the_scalar_contact_bit_for_bit() {
+    use springlab::bench::Workload;
+    use springlab::physics::collide::{ContactParams, contact_forces};
+    use springlab::physics::forces::applied_forces;
+    let mut rng = Rng(0xc0_77ac_7000_0001);
+    for workload in [Workload::JellySe, Workload::Cloth64Se] {
+        let (model, state) = shaken(workload, &mut rng);
+        let colliders = test_colliders(&state);
+        let model = model.with_colliders(colliders, ContactParams::course_2023());
+        let n = state.len();
+        let (mut fused, mut plain) = (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
+        forces(&model, &state.x, &state.v, &mut fused);
+        applied_forces(&model, &state.x, &state.v, &mut plain);
+        let before = plain.clone();
+        contact_forces(&model, &state.x, &state.v, &mut plain);
+        let touched = plain.iter().zip(&before).filter(|(a, b)| a != b).count();
+        assert!(touched > n / 20, "{workload}: only {touched} contacts");
+        assert!(bits(&fused) == bits(&plain), "{workload}");
+    }
+}
+
+#[test]
+fn every_method_fused_into_the_stencil_is_its_textbook_loop_bit_for_bit() {
+    use springlab::bench::Workload;
+    use springlab::physics::collide::ContactParams;
+    let mut rng = Rng(0xf05e_d000_0000_0015);
+    for workload in [Workload::JellySe, Workload::Cloth64Se, Workload::RopeSe] {
+        let (mut model, state) = shaken(workload, &mut rng);
+        model.drag = 0.25;
+        for contact in [false, true] {
+            let model = if contact {
+                let colliders = test_colliders(&state);
+                model
+                    .clone()
+                    .with_colliders(colliders, ContactParams::course_2021())
+            } else {
+                model.clone()
+            };
+            for method in Method::ALL {
+                let run = |textbook: bool| {
+                    let mut s = state.clone();
+                    let mut work = Workspace::new();
+                    work.account = true;
+                    work.textbook = textbook;
+                    let mut dissipated = 0.0;
+                    for _ in 0..3 {
+                        method.step(&model, &mut s, 1e-4, &MethodParams::default(), &mut work);
+                        dissipated += work.dissipated.dampers_and_drag;
+                    }
+                    (s, dissipated)
+                };
+                let ((fused, d_fused), (textbook, d_textbook)) = (run(false), run(true));
+                let label = format!("{workload} {method} contact {contact}");
+                if method == Method::ImplicitEuler {
+                    // Its lattice path sums the same system in another order; the solves
+                    // agree to their tolerance (1e-10 of |b|).
+                    let scale = textbook.v.iter().map(|v| v.length()).fold(0.0, f64::max);
+                    for (a, b) in fused.v.iter().zip(&textbook.v) {
+                        assert!((*a - *b).length() <= 1e-8 * scale, "{label}: {a} vs {b}");
+                    }
+                } else {
+                    assert!(bits(&fused.x) == bits(&textbook.x), "{label}: positions");
+                    assert!(bits(&fused.v) == bits(&textbook.v), "{label}: velocities");
+                }
+                assert!(
+                    (d_fused - d_textbook).abs() <= 1e-12 * d_textbook.abs().max(1e-300),
+                    "{label}: dissipated {d_fused} vs {d_textbook}"
+                );
+                assert!(d_fused > 0.0, "{label}: no damper or drag power");
+            }
+        }
+    }
+}
+
+#[test]
+fn the_fused_dissipated_power_is_the_spring_list_power() {
+    use springlab::bench::Workload;
+    use springlab::physics::collide::ContactParams;
+    let mut rng = Rng(0x90e7_0000_0000_0001);
+    for workload in [Workload::JellySe, Workload::Cloth64Se] {
+        let (mut model, state) = shaken(workload, &mut rng);
+        model.drag = 0.25;
+        let colliders = test_colliders(&state);
+        let model = model.with_colliders(colliders, ContactParams::course_2021());
+        // Explicit Euler integrates P(x_n, v_n): one step from the same state compares the
+        // power of the stencil's pass with the spring list's loop.
+        let dissipated = |model: &Model| {
+            let mut s = state.clone();
+            let mut work = Workspace::new();
+            work.account = true;
+            Method::ExplicitEuler.step(model, &mut s, 1e-3, &MethodParams::default(), &mut work);
+            work.dissipated
+        };
+        let (fused, list) = (
+            dissipated(&model),
+            dissipated(&model.clone().without_stencil()),
+        );
+        assert!(
+            list.dampers_and_drag > 0.0 && list.contact_forces > 0.0,
+            "{workload}"
+        );
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-11 * b.abs();
+        assert!(
+            close(fused.dampers_and_drag, list.dampers_and_drag),
+            "{workload}: dampers {} vs {}",
+            fused.dampers_and_drag,
+            list.dampers_and_drag
+        );
+        assert!(
+            close(fused.contact_forces, list.contact_forces),
+            "{workload}: contact {} vs {}",
+            fused.contact_forces,
+            list.contact_forces
+        );
+    }
+}

@@ -110,6 +110,12 @@ use glam::DVec3;
 use super::forces::Model;
 use super::particles::State;
 
+mod spheres;
+
+pub use spheres::{
+    DynamicSphere, advance_spheres, collide_spheres, collide_spheres_logged, step_spheres,
+};
+
 /// `v·N` (m/s) up to which a particle counts as not moving away, so that the contact force still
 /// holds it: the velocity response sets `v·N = 0`, which rounding may turn into `+1e-17`.
 const ROUNDING_SPEED: f64 = 1e-9;
@@ -369,6 +375,54 @@ impl Collider {
     }
 }
 
+impl Collider {
+    /// False when `x` (m) is certainly farther than `epsilon` (m) from the collider's surface on
+    /// its free side, so that [`Collider::contact`] would give no `φ < epsilon`: a test without
+    /// square roots (squared distances, a height), with a relative margin of 10⁻⁹ against
+    /// rounding, for the broad phase of the contact loops. True also for NaN.
+    #[must_use]
+    pub fn may_touch(&self, x: DVec3, epsilon: f64) -> bool {
+        const MARGIN: f64 = 1e-9;
+        match *self {
+            // A plane's φ costs no more than any test.
+            Collider::Plane { .. } => true,
+            Collider::Sphere { center, radius } => {
+                // |x - c| - r < ε  ⇔  |x - c|² < (r + ε)²
+                let reach = (radius + epsilon).max(0.0);
+                let d2 = (x - center).length_squared();
+                d2 < reach * reach * (1.0 + MARGIN) + MARGIN || d2.is_nan()
+            }
+            Collider::Bowl { center, radius, .. } => {
+                // r - |x - c| < ε  ⇔  |x - c|² > (r - ε)²
+                let inner = (radius - epsilon).max(0.0);
+                let d2 = (x - center).length_squared();
+                d2 >= inner * inner * (1.0 - MARGIN) || d2.is_nan()
+            }
+            Collider::HolePlane {
+                point,
+                normal,
+                hole_center,
+                hole_radius,
+            } => {
+                // Every contact has the height h < ε; below the floor only the shaft's wall
+                // band (ρ > R - ε) and the solid (ρ ≥ R) touch.
+                let scale = point.abs().max_element() + hole_center.abs().max_element() + 1.0;
+                let h = (x - point).dot(normal);
+                if h >= epsilon + MARGIN * scale {
+                    return false;
+                }
+                if h >= -MARGIN * scale {
+                    return true;
+                }
+                let q = x - hole_center;
+                let rho2 = (q - q.dot(normal) * normal).length_squared();
+                let inner = (hole_radius - epsilon).max(0.0);
+                rho2 >= inner * inner * (1.0 - MARGIN) || rho2.is_nan()
+            }
+        }
+    }
+}
+
 /// `(|d|, d/|d|)`, with the direction `+y` when `d = 0`.
 fn distance_and_direction(d: DVec3) -> (f64, DVec3) {
     let length = d.length();
@@ -429,55 +483,6 @@ impl Default for ContactParams {
     }
 }
 
-/// A sphere that moves: pushed by gravity and collisions, or driven at a set velocity.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DynamicSphere {
-    /// Centre (m).
-    pub center: DVec3,
-    /// Velocity (m/s).
-    pub velocity: DVec3,
-    /// Radius (m).
-    pub radius: f64,
-    /// Mass (kg); ignored when `kinematic`.
-    pub mass: f64,
-    /// Moved only by its set velocity: infinite mass, no gravity (the 2024 arrow-key sphere).
-    pub kinematic: bool,
-}
-
-impl DynamicSphere {
-    /// A sphere at rest with the course's mass `1000 r³` kg (r = 0.5 m gives 125 kg).
-    #[must_use]
-    pub fn new(center: DVec3, radius: f64) -> DynamicSphere {
-        DynamicSphere {
-            center,
-            velocity: DVec3::ZERO,
-            radius,
-            mass: 1000.0 * radius.powi(3),
-            kinematic: false,
-        }
-    }
-
-    /// A kinematic sphere moving at `velocity` (m/s), not affected by anything.
-    #[must_use]
-    pub fn kinematic(center: DVec3, radius: f64, velocity: DVec3) -> DynamicSphere {
-        DynamicSphere {
-            velocity,
-            kinematic: true,
-            ..DynamicSphere::new(center, radius)
-        }
-    }
-
-    /// Inverse mass `1/m` (1/kg): zero when kinematic or of non-positive mass.
-    #[must_use]
-    pub fn inv_mass(&self) -> f64 {
-        if self.kinematic || self.mass <= 0.0 {
-            0.0
-        } else {
-            1.0 / self.mass
-        }
-    }
-}
-
 /// Adds the contact force and friction of the model's colliders to `f` (N); see the module
 /// documentation for the formulas. Called by [`super::forces()`] after the springs, only when
 /// the model has colliders. Pure and allocation-free.
@@ -518,10 +523,25 @@ pub fn contact_power(model: &Model, x: &[DVec3], v: &[DVec3], f_applied: &[DVec3
 /// and friction to the applied force `f` (N), each collider in order seeing what the previous
 /// ones left (module docs); `None` when no collider pushes it.
 fn with_contact(model: &Model, x: DVec3, v: DVec3, f: DVec3) -> Option<DVec3> {
-    let params = &model.contact;
+    contact_force(&model.colliders, &model.contact, x, v, f)
+}
+
+/// [`contact_forces`] for one particle at `x` (m) moving at `v` (m/s) with applied force `f`
+/// (N): the force after `colliders` added their contact force and friction, or `None` when no
+/// collider pushes it. The stencil's fused pass calls this for the particles that may touch.
+pub(crate) fn contact_force(
+    colliders: &[Collider],
+    params: &ContactParams,
+    x: DVec3,
+    v: DVec3,
+    f: DVec3,
+) -> Option<DVec3> {
     let mut f = f;
     let mut touched = false;
-    for collider in &model.colliders {
+    for collider in colliders {
+        if !collider.may_touch(x, params.epsilon) {
+            continue;
+        }
         let Some(Contact { phi, normal }) = collider.contact(x) else {
             continue;
         };
@@ -573,6 +593,11 @@ fn friction_force(limit: f64, f_t: DVec3, v_t: DVec3, rest_speed: f64) -> DVec3 
 /// colliders, after a step of `dt` seconds (module docs). Keeps position Verlet's history
 /// consistent: a particle whose velocity changed gets `x_prev = x - dt v`.
 pub fn resolve(model: &Model, state: &mut State, dt: f64) {
+    resolve_logged(model, state, dt, None);
+}
+
+/// [`resolve`], recording in `log` (when given) every particle it changes.
+pub fn resolve_logged(model: &Model, state: &mut State, dt: f64, mut log: Option<&mut Changes>) {
     if model.colliders.is_empty() {
         return;
     }
@@ -581,6 +606,7 @@ pub fn resolve(model: &Model, state: &mut State, dt: f64) {
         if model.inv_mass[i] == 0.0 {
             continue;
         }
+        let (x_old, v_old) = (state.x[i], state.v[i]);
         let mut touched = false;
         for collider in &model.colliders {
             touched |= respond(
@@ -600,8 +626,75 @@ pub fn resolve(model: &Model, state: &mut State, dt: f64) {
                 state.v[i],
                 dt,
             );
+            if let Some(log) = log.as_deref_mut() {
+                log.record(i, x_old, v_old);
+            }
         }
     }
+}
+
+/// What a collision response changed, for the energy it removed without a pass over the whole
+/// system ([`super::energy::energy_change`]): every particle it moved or slowed, with its
+/// position (m) and velocity (m/s) before the first change, and the dynamic spheres' energy
+/// before (J).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Changes {
+    /// `(particle, x before, v before)`, sorted by particle, each once after [`Changes::finish`].
+    pub(crate) particles: Vec<(u32, DVec3, DVec3)>,
+    /// Kinetic and gravitational energy of the non-kinematic spheres before (J).
+    pub(crate) spheres_before: f64,
+    /// After [`Changes::finish`]: `slot[i]` is the index of particle `i` in `particles`, or
+    /// `u32::MAX` when it did not change (grown to the particle count on first use).
+    slot: Vec<u32>,
+}
+
+impl Changes {
+    /// Forgets everything recorded.
+    pub fn clear(&mut self) {
+        for &(i, ..) in &self.particles {
+            if let Some(s) = self.slot.get_mut(i as usize) {
+                *s = u32::MAX;
+            }
+        }
+        self.particles.clear();
+        self.spheres_before = 0.0;
+    }
+
+    fn record(&mut self, i: usize, x: DVec3, v: DVec3) {
+        self.particles.push((i as u32, x, v));
+    }
+
+    /// Sorts the records by particle and keeps each particle's first (its state before any
+    /// change); `particles` is the system's particle count.
+    pub fn finish(&mut self, particles: usize) {
+        // A stable sort keeps the records of one particle in the order they were made.
+        self.particles.sort_by_key(|p| p.0);
+        self.particles.dedup_by_key(|p| p.0);
+        if self.slot.len() < particles {
+            self.slot.resize(particles, u32::MAX);
+        }
+        for (k, &(i, ..)) in self.particles.iter().enumerate() {
+            self.slot[i as usize] = k as u32;
+        }
+    }
+
+    /// The record of particle `i`, if it changed.
+    pub(crate) fn of(&self, i: usize) -> Option<&(u32, DVec3, DVec3)> {
+        let k = *self.slot.get(i)?;
+        self.particles.get(k as usize)
+    }
+}
+
+/// Kinetic and gravitational energy of the non-kinematic dynamic spheres (J), as
+/// [`super::energy::energy`] counts them.
+#[must_use]
+pub fn spheres_energy(model: &Model, state: &State) -> f64 {
+    state
+        .spheres
+        .iter()
+        .filter(|s| !s.kinematic)
+        .map(|s| 0.5 * s.mass * s.velocity.length_squared() - s.mass * model.gravity.dot(s.center))
+        .sum()
 }
 
 /// The response of one point (a particle, or a sphere's centre with `offset` its radius, m) to
@@ -615,6 +708,9 @@ fn respond(
     x: &mut DVec3,
     v: &mut DVec3,
 ) -> bool {
+    if !collider.may_touch(*x, params.epsilon + offset) {
+        return false;
+    }
     let Some(Contact { phi, normal }) = collider.contact(*x) else {
         return false;
     };
@@ -670,134 +766,6 @@ fn keep_verlet_history(history_valid: bool, x_prev: &mut DVec3, x: DVec3, v: DVe
     if history_valid {
         *x_prev = x - dt * v;
     }
-}
-
-/// Advances the dynamic spheres by `dt` seconds and resolves their collisions (module docs):
-///
-/// 1. semi-implicit Euler, `v += dt g; c += dt v` (kinematic spheres: `c += dt v` only);
-/// 2. sphere–sphere impulses and separation (restitution `sphere_sphere_restitution`);
-/// 3. spheres against the static colliders, with the particles' response and the surface
-///    offset by the radius (exact for planes and spheres, approximate at a bowl's rim and a
-///    hole's edge);
-/// 4. sphere–particle impulses and separation (restitution `sphere_particle_restitution`); a
-///    pinned particle counts as infinitely heavy.
-pub fn step_spheres(model: &Model, state: &mut State, dt: f64) {
-    advance_spheres(model, state, dt);
-    collide_spheres(model, state, dt);
-}
-
-/// Step 1 of [`step_spheres`]: moves every dynamic sphere by `dt` seconds (semi-implicit Euler
-/// under gravity; a kinematic sphere at its set velocity).
-pub fn advance_spheres(model: &Model, state: &mut State, dt: f64) {
-    for s in &mut state.spheres {
-        if !s.kinematic {
-            // Semi-implicit Euler: velocity first, then position with the new velocity.
-            s.velocity += dt * model.gravity;
-        }
-        s.center += dt * s.velocity;
-    }
-}
-
-/// Steps 2–4 of [`step_spheres`]: the impulses and separations between spheres, colliders and
-/// particles after the spheres moved. `dt` (s) keeps Verlet's history consistent.
-pub fn collide_spheres(model: &Model, state: &mut State, dt: f64) {
-    if state.spheres.is_empty() {
-        return;
-    }
-    let params = &model.contact;
-    let State {
-        x,
-        v,
-        x_prev,
-        history_valid,
-        spheres,
-    } = state;
-    for b in 1..spheres.len() {
-        let (before, rest) = spheres.split_at_mut(b);
-        let sb = &mut rest[0];
-        for sa in before.iter_mut() {
-            let (wa, wb) = (sa.inv_mass(), sb.inv_mass());
-            let reach = sa.radius + sb.radius;
-            impulse_pair(
-                Side {
-                    x: &mut sa.center,
-                    v: &mut sa.velocity,
-                    w: wa,
-                },
-                Side {
-                    x: &mut sb.center,
-                    v: &mut sb.velocity,
-                    w: wb,
-                },
-                reach,
-                params.sphere_sphere_restitution,
-            );
-        }
-    }
-    for s in spheres.iter_mut().filter(|s| !s.kinematic) {
-        for collider in &model.colliders {
-            respond(
-                collider,
-                s.radius,
-                params,
-                model.gravity,
-                &mut s.center,
-                &mut s.velocity,
-            );
-        }
-    }
-    for s in spheres.iter_mut() {
-        let ws = s.inv_mass();
-        for i in 0..x.len().min(model.particle_count()) {
-            let touched = impulse_pair(
-                Side {
-                    x: &mut s.center,
-                    v: &mut s.velocity,
-                    w: ws,
-                },
-                Side {
-                    x: &mut x[i],
-                    v: &mut v[i],
-                    w: model.inv_mass[i],
-                },
-                s.radius,
-                params.sphere_particle_restitution,
-            );
-            if touched {
-                keep_verlet_history(*history_valid, &mut x_prev[i], x[i], v[i], dt);
-            }
-        }
-    }
-}
-
-/// One side of a two-body contact: position (m), velocity (m/s), inverse mass (1/kg).
-struct Side<'a> {
-    x: &'a mut DVec3,
-    v: &'a mut DVec3,
-    w: f64,
-}
-
-/// Impulse and separation of two bodies whose centres should stay `reach` (m) apart, with
-/// restitution `e` (module docs). Returns whether they touched.
-fn impulse_pair(a: Side<'_>, b: Side<'_>, reach: f64, e: f64) -> bool {
-    let w = a.w + b.w;
-    let (distance, d) = distance_and_direction(*b.x - *a.x);
-    if distance >= reach || w == 0.0 {
-        return false;
-    }
-    // v_rel = (v_b - v_a)·d̂ < 0: approaching.
-    let v_rel = (*b.v - *a.v).dot(d);
-    if v_rel < 0.0 {
-        // J = -(1 + e) v_rel / (w_a + w_b), equal and opposite on the two bodies.
-        let j = -(1.0 + e) * v_rel / w;
-        *a.v -= (a.w * j) * d;
-        *b.v += (b.w * j) * d;
-    }
-    // Separate by the penetration p, shared in proportion to the inverse masses.
-    let p = reach - distance;
-    *a.x -= (a.w / w * p) * d;
-    *b.x += (b.w / w * p) * d;
-    true
 }
 
 /// Everything collisions do after an integrator step of `dt` seconds: [`step_spheres`], then

@@ -22,7 +22,7 @@ use glam::DVec3;
 
 use super::collide::{Collider, ContactParams, contact_forces};
 use super::springs::Spring;
-use super::stencil::{Kernel, Output, Stencil};
+use super::stencil::{Dynamics, Kernel, Output, Stencil};
 
 /// The physics of one system: masses, springs, gravity, drag and static colliders. It does not
 /// change during a step.
@@ -54,6 +54,12 @@ pub struct Model {
     /// False when every spring has zero stiffness and damping (pure distance constraints, as in
     /// a Verlet rope): the force loop then skips the springs.
     elastic: bool,
+    /// The springs at each particle: `incident[incident_start[i]..incident_start[i + 1]]` are
+    /// the indices of the springs with an end at particle `i` (for energy changes of a few
+    /// particles without a pass over all springs). Built by [`Model::new`].
+    incident: Vec<u32>,
+    /// See `incident`; `particles + 1` entries.
+    incident_start: Vec<u32>,
 }
 
 impl Model {
@@ -84,7 +90,10 @@ impl Model {
             .collect();
         let (projection_order, colour_starts) = colour_springs(n, &springs);
         let stencil = Stencil::detect(n, &springs);
+        let (incident, incident_start) = incidence(n, &springs);
         Model {
+            incident,
+            incident_start,
             elastic: any_elastic(&springs),
             stencil,
             mass,
@@ -107,6 +116,14 @@ impl Model {
         self.colour_starts = starts;
         self.stencil = Stencil::detect(self.particle_count(), &self.springs);
         self.elastic = any_elastic(&self.springs);
+        (self.incident, self.incident_start) = incidence(self.particle_count(), &self.springs);
+    }
+
+    /// The indices of the springs with an end at particle `i`, in spring order.
+    #[must_use]
+    pub fn springs_at(&self, i: usize) -> &[u32] {
+        let (start, end) = (self.incident_start[i], self.incident_start[i + 1]);
+        &self.incident[start as usize..end as usize]
     }
 
     /// Sets the stiffness (N/m) and damping (N·s/m) of every spring.
@@ -199,6 +216,28 @@ fn any_elastic(springs: &[Spring]) -> bool {
         .any(|s| s.stiffness != 0.0 || s.damping != 0.0)
 }
 
+/// For every particle, the indices of its springs (counting sort by end, in spring order):
+/// `(indices, starts)` with `starts[i]..starts[i + 1]` the range of particle `i`.
+fn incidence(particles: usize, springs: &[Spring]) -> (Vec<u32>, Vec<u32>) {
+    let mut starts = vec![0u32; particles + 1];
+    for s in springs {
+        starts[s.a as usize + 1] += 1;
+        starts[s.b as usize + 1] += 1;
+    }
+    for i in 0..particles {
+        starts[i + 1] += starts[i];
+    }
+    let mut fill = starts.clone();
+    let mut indices = vec![0u32; 2 * springs.len()];
+    for (k, s) in springs.iter().enumerate() {
+        for end in [s.a as usize, s.b as usize] {
+            indices[fill[end] as usize] = k as u32;
+            fill[end] += 1;
+        }
+    }
+    (indices, starts)
+}
+
 /// Greedy edge colouring in spring order: each spring takes the smallest colour not yet used at
 /// either end. A chain `(0,1), (1,2), ...` gets colours 0, 1, 0, 1, ... (red-black).
 fn colour_springs(particles: usize, springs: &[Spring]) -> (Vec<u32>, Vec<usize>) {
@@ -243,6 +282,17 @@ fn colour_springs(particles: usize, springs: &[Spring]) -> (Vec<u32>, Vec<usize>
 /// # Panics
 /// If `x`, `v` or `f` is shorter than the model's particle count.
 pub fn forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
+    if let Some(stencil) = &model.stencil {
+        // The same sums, contact included, in one pass per thread (see `stencil`).
+        stencil.write(
+            x,
+            v,
+            [f, &mut [], &mut []],
+            &mut [],
+            Output::Forces(model.dynamics(true)),
+        );
+        return;
+    }
     applied_forces(model, x, v, f);
     // Contact: it cancels what pushes into a surface, so it comes after everything else.
     if !model.colliders.is_empty() {
@@ -261,7 +311,13 @@ pub fn applied_forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) 
     if let Some(stencil) = &model.stencil {
         // The same sums, grouped by lattice offset for speed and split between the cores
         // (see `stencil`); weight and drag are added by each thread for its own particles.
-        stencil.write(x, v, f, &mut [], model.total(None));
+        stencil.write(
+            x,
+            v,
+            [f, &mut [], &mut []],
+            &mut [],
+            Output::Forces(model.dynamics(false)),
+        );
     } else {
         // External forces: weight m g and viscous drag -c v.
         for ((f_i, &m_i), &v_i) in f.iter_mut().zip(&model.mass).zip(v) {
@@ -286,11 +342,11 @@ pub fn applied_forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) 
 /// # Panics
 /// If `x`, `v` or `a` is shorter than the model's particle count.
 pub fn accelerations(model: &Model, x: &[DVec3], v: &[DVec3], a: &mut [DVec3]) {
-    if let Some(stencil) = &model.stencil
-        && model.colliders.is_empty()
-    {
-        // Forces and a = f w in one pass per thread (bit-identical to the two steps below).
-        stencil.write(x, v, a, &mut [], model.total(Some(&model.inv_mass)));
+    if let Some(stencil) = &model.stencil {
+        // Forces, contact and a = f w in one pass per thread (bit-identical to the two steps
+        // below).
+        let output = Output::Accelerations(model.dynamics(true));
+        stencil.write(x, v, [a, &mut [], &mut []], &mut [], output);
         return;
     }
     forces(model, x, v, a);
@@ -301,13 +357,15 @@ pub fn accelerations(model: &Model, x: &[DVec3], v: &[DVec3], a: &mut [DVec3]) {
 }
 
 impl Model {
-    /// The stencil output "weight + drag + springs", times `inv_mass` when given.
-    fn total<'a>(&'a self, inv_mass: Option<&'a [f64]>) -> Output<'a> {
-        Output::Total {
+    /// Weight, drag, masses and (when `contact`) the colliders, for the stencil's fused passes.
+    pub(crate) fn dynamics(&self, contact: bool) -> Dynamics<'_> {
+        Dynamics {
             mass: &self.mass,
+            inv_mass: &self.inv_mass,
             gravity: self.gravity,
             drag: self.drag,
-            inv_mass,
+            colliders: if contact { &self.colliders } else { &[] },
+            contact: &self.contact,
         }
     }
 }

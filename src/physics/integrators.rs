@@ -25,6 +25,7 @@
 
 mod explicit_euler;
 mod implicit_euler;
+mod implicit_lattice;
 mod midpoint;
 mod predictor_corrector;
 mod rk4;
@@ -35,12 +36,15 @@ mod xpbd;
 use std::fmt;
 use std::str::FromStr;
 
+use std::sync::Arc;
+
 use glam::{DMat3, DVec3};
 use serde::{Serialize, Serializer};
 
 use super::energy::{Dissipated, Power, dissipated_power};
 use super::forces::Model;
 use super::particles::State;
+use super::stencil::{After, Output, Stencil};
 
 pub use implicit_euler::{MAX_CONTACT_PASSES, SolveStats};
 
@@ -114,6 +118,7 @@ impl Method {
     ) -> u64 {
         work.resize(model.particle_count(), model.springs.len());
         work.dissipated = Dissipated::default();
+        work.projected = false;
         let evals = match self {
             Method::ExplicitEuler => explicit_euler::step(model, state, dt, work),
             Method::SemiImplicitEuler => semi_implicit_euler::step(model, state, dt, work),
@@ -125,6 +130,12 @@ impl Method {
             Method::Xpbd => xpbd::step(model, state, dt, params, work),
         };
         work.dissipated = work.dissipated.summed();
+        if let Some(projection) = &work.projection
+            && !work.projected
+        {
+            // The method has no fused last pass (or took the textbook loops): project here.
+            (projection.0)(&mut state.x, &mut state.v);
+        }
         evals
     }
 }
@@ -222,8 +233,60 @@ pub struct Workspace {
     /// The energy the last step dissipated (J), when `account` is set; contact responses after
     /// the step are not in it (the simulation adds them).
     pub dissipated: Dissipated,
-    /// Scratch forces of the dissipated power.
-    pub(crate) power_f: Vec<DVec3>,
+    /// Scratch space of the dissipated power.
+    pub(crate) power_f: PowerScratch,
+    /// When true, every method runs its textbook loops even on a lattice, where it otherwise
+    /// fuses its stages into the stencil's passes (same numbers, bit for bit: the tests
+    /// compare the two).
+    pub textbook: bool,
+    /// Applied to every particle's position and velocity at the end of each step, inside the
+    /// method's last pass where it has a fused one (the benchmark workloads' contact rules).
+    pub projection: Option<Projection>,
+    /// Set by a fused last pass that applied `projection` itself.
+    pub(crate) projected: bool,
+    /// What the last collision response changed (energy accounting; see `Simulation`).
+    pub(crate) changes: super::collide::Changes,
+    /// Implicit Euler: start each solve from the last step's `Δv` (scaled by the ratio of the
+    /// steps) instead of zero. A step then depends on the steps before it (within the solve's
+    /// tolerance), so it is off by default: `Simulation` turns it on; finite differences of
+    /// single steps (the stability study) keep it off.
+    pub warm_start: bool,
+    /// Implicit Euler: the last step's `Δv` (m/s) and its `dt` (s), for the warm start.
+    pub(crate) last_dv: Vec<DVec3>,
+    pub(crate) last_dt: f64,
+    /// Implicit Euler's system on a lattice (`implicit_lattice`).
+    pub(crate) lattice: implicit_lattice::Lattice,
+}
+
+/// A per-particle rule on positions and velocities (m, m/s) applied at the end of every step
+/// (see [`Workspace::projection`]). It must treat every particle on its own: it may be applied
+/// to any split of the particles, in any order.
+#[derive(Clone)]
+pub struct Projection(pub Arc<ProjectionFn>);
+
+/// The function of a [`Projection`].
+pub type ProjectionFn = dyn Fn(&mut [DVec3], &mut [DVec3]) + Send + Sync;
+
+impl std::fmt::Debug for Projection {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("Projection")
+    }
+}
+
+/// Scratch space of the dissipated power: forces before contact (spring-list models) and the
+/// stencil's per-chunk sums (lattices).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct PowerScratch {
+    forces: Vec<DVec3>,
+    chunks: Vec<f64>,
+}
+
+impl PowerScratch {
+    /// The stencil's power buffer, sized for `stencil`.
+    fn chunks(&mut self, stencil: &Stencil) -> &mut [f64] {
+        self.chunks.resize(stencil.power_len(), 0.0);
+        &mut self.chunks
+    }
 }
 
 impl Workspace {
@@ -249,7 +312,7 @@ impl Workspace {
         {
             buf.clone_from(&zeros);
         }
-        self.power_f.clone_from(&zeros);
+        self.power_f.forces.clone_from(&zeros);
         self.diag_inv = vec![DMat3::ZERO; particles];
         self.blocks = vec![DMat3::ZERO; springs];
         self.lambda = vec![0.0; springs];
@@ -257,17 +320,70 @@ impl Workspace {
 }
 
 /// The dissipated power at `(x, v)` when `account` is set, else zero (see
-/// [`dissipated_power`]).
+/// [`dissipated_power`]); on a lattice from one pass of the stencil (the same sums up to
+/// rounding).
 fn power_if(
     account: bool,
     model: &Model,
     x: &[DVec3],
     v: &[DVec3],
-    scratch: &mut [DVec3],
+    scratch: &mut PowerScratch,
 ) -> Power {
-    if account {
-        dissipated_power(model, x, v, scratch)
-    } else {
-        Power::default()
+    if !account {
+        return Power::default();
     }
+    if let Some(stencil) = model.stencil() {
+        let output = Output::Power(model.dynamics(true));
+        stencil.write(
+            x,
+            v,
+            [&mut [], &mut [], &mut []],
+            scratch.chunks(stencil),
+            output,
+        );
+        let (dampers_and_drag, contact) = Stencil::sum_power(&scratch.chunks);
+        return Power {
+            dampers_and_drag,
+            contact,
+        };
+    }
+    dissipated_power(model, x, v, &mut scratch.forces)
+}
+
+// ---------------------------------------------------------------------------------------------
+// The seam between the textbook loops and the fused passes
+// ---------------------------------------------------------------------------------------------
+
+/// The stencil, when the method should fuse its stages into the stencil's passes: a lattice,
+/// and `work.textbook` not set.
+fn fused<'m>(model: &'m Model, work: &Workspace) -> Option<&'m Stencil> {
+    if work.textbook { None } else { model.stencil() }
+}
+
+/// One fused pass: `output` at `(x, v)` into `outs` (see [`Stencil::write`]), and the
+/// dissipated power at `(x, v)` from the same pass when `account` (zero otherwise).
+fn fused_pass(
+    stencil: &Stencil,
+    x: &[DVec3],
+    v: &[DVec3],
+    outs: [&mut [DVec3]; 3],
+    output: Output,
+    account: bool,
+    scratch: &mut PowerScratch,
+) -> Power {
+    if !account {
+        stencil.write(x, v, outs, &mut [], output);
+        return Power::default();
+    }
+    stencil.write(x, v, outs, scratch.chunks(stencil), output);
+    let (dampers_and_drag, contact) = Stencil::sum_power(&scratch.chunks);
+    Power {
+        dampers_and_drag,
+        contact,
+    }
+}
+
+/// The projection as the stencil's per-tile hook.
+fn after(projection: &Option<Projection>) -> Option<After<'_>> {
+    projection.as_ref().map(|p| &*p.0 as After)
 }

@@ -50,8 +50,25 @@ use std::time::{Duration, Instant};
 /// starts yielding its time slice while waiting for the workers).
 pub const SPIN: Duration = Duration::from_micros(200);
 
-/// At most this many threads (caller included) in the global pool.
-pub const MAX_THREADS: usize = 2;
+/// At most this many threads (caller included) in the global pool: enough for a 64-core
+/// workstation; a pass never uses more parts than its work pays for (see
+/// `stencil::MIN_SLOTS_PER_PART`) nor more than `stencil::MAX_PARTS`.
+pub const MAX_THREADS: usize = 64;
+
+/// The environment variable that overrides the global pool's size (1 turns threading off).
+pub const THREADS_ENV: &str = "SPRINGLAB_THREADS";
+
+/// The global pool's size: `override_` (the value of [`THREADS_ENV`]) when it is a whole number
+/// ≥ 1, else the cores the operating system offers this process (`available_parallelism`,
+/// which honours CPU affinity and cgroup quotas); at most [`MAX_THREADS`].
+#[must_use]
+pub fn threads_for(override_: Option<&str>, available: Option<usize>) -> usize {
+    override_
+        .and_then(|s| s.trim().parse::<usize>().ok())
+        .filter(|&n| n >= 1)
+        .unwrap_or_else(|| available.unwrap_or(1))
+        .clamp(1, MAX_THREADS)
+}
 
 /// A job as the workers see it: the caller's closure with its lifetime erased (see
 /// [`Pool::run`] for why that is sound) and the number of parts.
@@ -129,20 +146,17 @@ impl Pool {
         }
     }
 
-    /// The process-wide pool: `min(available cores, MAX_THREADS)` threads, or the number in the
-    /// environment variable `SPRINGLAB_THREADS` (1 turns threading off). Started on first use.
+    /// The process-wide pool, started on first use: one thread per core the machine offers,
+    /// or the number in the environment variable `SPRINGLAB_THREADS` (see [`threads_for`];
+    /// 1 turns threading off). A pass uses only as many of them as its size pays for.
     pub fn global() -> &'static Pool {
         static POOL: OnceLock<Pool> = OnceLock::new();
         POOL.get_or_init(|| {
-            let threads = std::env::var("SPRINGLAB_THREADS")
-                .ok()
-                .and_then(|s| s.trim().parse::<usize>().ok())
-                .unwrap_or_else(|| {
-                    thread::available_parallelism()
-                        .map_or(1, usize::from)
-                        .min(MAX_THREADS)
-                });
-            Pool::new(threads.max(1))
+            let threads = threads_for(
+                std::env::var(THREADS_ENV).ok().as_deref(),
+                thread::available_parallelism().ok().map(usize::from),
+            );
+            Pool::new(threads)
         })
     }
 

@@ -106,7 +106,13 @@ impl Spring {
     /// Elastic energy `½ k (L - L0)²` (J) stored at positions `x`.
     #[must_use]
     pub fn energy(&self, x: &[DVec3]) -> f64 {
-        let stretch = (x[self.b as usize] - x[self.a as usize]).length() - self.rest_length;
+        self.energy_between(x[self.a as usize], x[self.b as usize])
+    }
+
+    /// Elastic energy `½ k (L - L0)²` (J) with its ends at `x_a` and `x_b` (m).
+    #[must_use]
+    pub fn energy_between(&self, x_a: DVec3, x_b: DVec3) -> f64 {
+        let stretch = (x_b - x_a).length() - self.rest_length;
         0.5 * self.stiffness * stretch * stretch
     }
 

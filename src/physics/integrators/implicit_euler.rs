@@ -65,8 +65,9 @@ use glam::{DMat3, DVec3};
 use serde::Serialize;
 
 use crate::physics::forces::{Model, forces};
-use crate::physics::integrators::{MethodParams, Workspace, power_if};
+use crate::physics::integrators::{MethodParams, Workspace, fused, power_if};
 use crate::physics::particles::State;
+use crate::physics::stencil::Stencil;
 
 /// At most this many solves per step: the first without contact constraints, each further one
 /// with the particles the previous solve carried into a collider.
@@ -123,12 +124,13 @@ impl SolveStats {
 /// One contact constraint: particle `i` gets the velocity change `dv_n` along the unit `normal`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Constraint {
-    i: usize,
-    normal: DVec3,
-    dv_n: f64,
+    pub(super) i: usize,
+    pub(super) normal: DVec3,
+    pub(super) dv_n: f64,
 }
 
-pub(super) fn step(
+/// The method as the formulas above write it: the spring list, 3×3 blocks, textbook CG.
+fn textbook(
     model: &Model,
     state: &mut State,
     dt: f64,
@@ -136,6 +138,7 @@ pub(super) fn step(
     work: &mut Workspace,
 ) -> u64 {
     let dt2 = dt * dt;
+    let warm = warm_start(work, dt);
     let Workspace {
         a: rhs,
         blocks,
@@ -146,6 +149,8 @@ pub(super) fn step(
         account,
         dissipated,
         power_f,
+        last_dv,
+        last_dt,
         ..
     } = work;
 
@@ -196,8 +201,9 @@ pub(super) fn step(
     constraints.clear();
     let mut stats = SolveStats::default();
     loop {
+        // Later passes start from the previous pass's Δv (it changed only near contacts).
         let (iterations, residual, converged) =
-            system.solve(constraints, params, cg, stats.passes > 0);
+            system.solve(constraints, params, cg, warm || stats.passes > 0);
         stats.iterations += iterations;
         stats.relative_residual = residual;
         stats.converged = converged;
@@ -224,6 +230,8 @@ pub(super) fn step(
     }
 
     let dv = &cg[0];
+    last_dv.clone_from(dv);
+    *last_dt = dt;
     for i in 0..state.x.len() {
         if model.inv_mass[i] != 0.0 {
             // v_{n+1} = v_n + Δv;  x_{n+1} = x_n + dt v_{n+1}
@@ -233,6 +241,117 @@ pub(super) fn step(
     }
     state.history_valid = false;
     // D_{n+1} = D_n + dt P(x_{n+1}, v_{n+1}): backward Euler on D' = P too, when accounting.
+    dissipated.add_power(dt, power_if(*account, model, &state.x, &state.v, power_f));
+    1
+}
+
+pub(super) fn step(
+    model: &Model,
+    state: &mut State,
+    dt: f64,
+    params: &MethodParams,
+    work: &mut Workspace,
+) -> u64 {
+    match fused(model, work) {
+        Some(stencil) => step_lattice(stencil, model, state, dt, params, work),
+        None => textbook(model, state, dt, params, work),
+    }
+}
+
+/// With `work.warm_start` and a last step of the same size: the last step's `Δv` scaled by
+/// the ratio of the steps (the velocity change of a step is about `dt a`), in `cg[0]`.
+fn warm_start(work: &mut Workspace, dt: f64) -> bool {
+    let n = work.cg[0].len();
+    if !(work.warm_start && work.last_dv.len() == n && work.last_dt > 0.0) {
+        return false;
+    }
+    let scale = dt / work.last_dt;
+    for (start, last) in work.cg[0].iter_mut().zip(&work.last_dv) {
+        *start = scale * *last;
+    }
+    true
+}
+
+/// The same step on a lattice (`implicit_lattice`): the same system, its blocks stored by
+/// offset group and its products computed eight springs at a time.
+fn step_lattice(
+    stencil: &Stencil,
+    model: &Model,
+    state: &mut State,
+    dt: f64,
+    params: &MethodParams,
+    work: &mut Workspace,
+) -> u64 {
+    let warm = warm_start(work, dt);
+    let Workspace {
+        a: f,
+        cg,
+        last_solve,
+        constraints,
+        account,
+        dissipated,
+        power_f,
+        last_dv,
+        last_dt,
+        lattice,
+        ..
+    } = work;
+    forces(model, &state.x, &state.v, f);
+    lattice.assemble(
+        stencil,
+        &model.mass,
+        &model.inv_mass,
+        model.drag,
+        dt,
+        &state.x,
+        &state.v,
+        f,
+    );
+    constraints.clear();
+    let mut stats = SolveStats::default();
+    let dv = &mut cg[0];
+    loop {
+        let start = (warm && stats.passes == 0).then_some(&dv[..]);
+        let (iterations, residual, converged) = lattice.solve(
+            constraints,
+            params.cg_tolerance,
+            params.cg_max_iterations,
+            stats.passes > 0,
+            start,
+        );
+        lattice.copy_dv(dv);
+        stats.iterations += iterations;
+        stats.relative_residual = residual;
+        stats.converged = converged;
+        stats.passes += 1;
+        if model.colliders.is_empty() || stats.passes >= MAX_CONTACT_PASSES || !converged {
+            break;
+        }
+        if !add_contacts(model, state, dt, dv, constraints) {
+            break;
+        }
+    }
+    stats.constrained = constraints.len() as u32;
+    *last_solve = stats;
+    if *account && !constraints.is_empty() {
+        // The constraint impulses (A Δv - b)·N, as in the textbook step.
+        let impulse = lattice.residual_force();
+        for c in constraints.iter() {
+            dissipated.contacts -=
+                impulse(c.i).dot(c.normal) * (state.v[c.i] + dv[c.i]).dot(c.normal);
+        }
+    }
+    last_dv.clone_from(dv);
+    *last_dt = dt;
+    for i in 0..state.x.len() {
+        if model.inv_mass[i] != 0.0 {
+            // v_{n+1} = v_n + Δv;  x_{n+1} = x_n + dt v_{n+1}
+            state.v[i] += dv[i];
+            state.x[i] += dt * state.v[i];
+        }
+    }
+    state.history_valid = false;
+    // D_{n+1} = D_n + dt P(x_{n+1}, v_{n+1}), when accounting.
     dissipated.add_power(dt, power_if(*account, model, &state.x, &state.v, power_f));
     1
 }
@@ -330,32 +449,41 @@ impl System<'_> {
                 v[c.i] -= v[c.i].dot(c.normal) * c.normal;
             }
         };
-        // Δv starts at z: the prescribed normal velocity changes, and elsewhere zero (first
-        // pass) or the previous pass's solution (a warm start: it changed only near contacts).
-        if !warm {
-            dv.fill(DVec3::ZERO);
-        }
-        for c in constraints {
-            let along = dv[c.i].dot(c.normal);
-            dv[c.i] += (c.dv_n - along) * c.normal;
-        }
-        // r = S (b - A z), pinned rows zero.
-        self.apply(dv, ap);
-        let mut b_norm2 = 0.0;
-        for i in 0..n {
-            let b = if self.model.inv_mass[i] != 0.0 {
-                self.rhs[i]
-            } else {
-                DVec3::ZERO
-            };
-            b_norm2 += b.length_squared();
-            r[i] = if self.model.inv_mass[i] != 0.0 {
-                b - ap[i]
-            } else {
-                DVec3::ZERO
-            };
-        }
-        filter(r);
+        // Δv starts at z: the prescribed normal velocity changes, and elsewhere zero, or a
+        // warm start (the previous pass's solution, which changed only near contacts, or the
+        // last step's Δv). A warm start whose residual is not below |b| is dropped for zero.
+        let mut warm = warm;
+        let b_norm2 = loop {
+            if !warm {
+                dv.fill(DVec3::ZERO);
+            }
+            for c in constraints {
+                let along = dv[c.i].dot(c.normal);
+                dv[c.i] += (c.dv_n - along) * c.normal;
+            }
+            // r = S (b - A z), pinned rows zero.
+            self.apply(dv, ap);
+            let mut b_norm2 = 0.0;
+            for i in 0..n {
+                let b = if self.model.inv_mass[i] != 0.0 {
+                    self.rhs[i]
+                } else {
+                    DVec3::ZERO
+                };
+                b_norm2 += b.length_squared();
+                r[i] = if self.model.inv_mass[i] != 0.0 {
+                    b - ap[i]
+                } else {
+                    DVec3::ZERO
+                };
+            }
+            filter(r);
+            if warm && r.iter().map(|r| r.length_squared()).sum::<f64>() >= b_norm2 {
+                warm = false;
+                continue;
+            }
+            break b_norm2;
+        };
         if !b_norm2.is_finite() {
             return (0, f64::NAN, false);
         }

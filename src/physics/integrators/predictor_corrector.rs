@@ -26,10 +26,12 @@
 //! (2021–2024), `integrator.cpp`.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, power_if};
+use crate::physics::integrators::{Workspace, after, fused, fused_pass, power_if};
 use crate::physics::particles::State;
+use crate::physics::stencil::{Base, Output, Stencil, Update};
 
-pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
+/// The method as the formula writes it: predictor, then corrector.
+fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
     let Workspace {
         a,
         x_stage,
@@ -53,6 +55,62 @@ pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspa
         state.x[i] += dt * v_stage[i];
         state.v[i] += dt * a[i];
     }
+    state.history_valid = false;
+    2
+}
+
+pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
+    match fused(model, work) {
+        Some(stencil) => step_fused(stencil, model, state, dt, work),
+        None => textbook(model, state, dt, work),
+    }
+}
+
+/// The same step on a lattice in two stencil passes: the first writes the predicted state
+/// `(x + dt v, v + dt a)`, the second applies the corrector's slope from the old state in
+/// place (the loops above, per particle, so the same numbers), with the dissipated power at
+/// the predicted state.
+fn step_fused(
+    stencil: &Stencil,
+    model: &Model,
+    state: &mut State,
+    dt: f64,
+    work: &mut Workspace,
+) -> u64 {
+    let Workspace {
+        x_stage,
+        v_stage,
+        account,
+        dissipated,
+        power_f,
+        projection,
+        projected,
+        ..
+    } = work;
+    let dynamics = model.dynamics(true);
+    let stage = Output::Step {
+        dynamics,
+        update: Update::Euler {
+            h: dt,
+            base: Base::Input,
+        },
+        after: None,
+    };
+    let outs = [&mut x_stage[..], &mut v_stage[..], &mut []];
+    fused_pass(stencil, &state.x, &state.v, outs, stage, false, power_f);
+    let last = Output::Step {
+        dynamics,
+        update: Update::Euler {
+            h: dt,
+            base: Base::InPlace,
+        },
+        after: after(projection),
+    };
+    let outs = [&mut state.x[..], &mut state.v[..], &mut []];
+    // D_{n+1} = D_n + dt P(x̃, ṽ), when accounting: from the corrector's pass.
+    let p = fused_pass(stencil, x_stage, v_stage, outs, last, *account, power_f);
+    dissipated.add_power(dt, p);
+    *projected = true;
     state.history_valid = false;
     2
 }

@@ -19,34 +19,15 @@
 //! Springer 2006, §I.1.2 and §VI.3; GAMES101 assignment 8 (2020), §1.2.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, power_if};
+use crate::physics::integrators::{Workspace, after, fused, fused_pass, power_if};
 use crate::physics::particles::State;
-use crate::physics::stencil::Output;
+use crate::physics::stencil::{Output, Stencil, Update};
 
-pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
+/// The method as the formula writes it: one force evaluation, then the two lines.
+fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
     // D_{n+1} = D_n + dt P(x_n, v_n), when accounting.
     let p = power_if(work.account, model, &state.x, &state.v, &mut work.power_f);
     work.dissipated.add_power(dt, p);
-    if let Some(stencil) = model.stencil()
-        && model.colliders.is_empty()
-    {
-        // A lattice: every thread computes the accelerations of its particles and advances
-        // them in the same pass, with the operations below (so the same numbers), into fresh
-        // buffers, because the other threads still read the old positions and velocities.
-        let output = Output::SemiImplicitEuler {
-            mass: &model.mass,
-            gravity: model.gravity,
-            drag: model.drag,
-            inv_mass: &model.inv_mass,
-            dt,
-        };
-        let (v_new, x_new) = (&mut work.v_stage, &mut work.x_stage);
-        stencil.write(&state.x, &state.v, v_new, x_new, output);
-        std::mem::swap(&mut state.v, v_new);
-        std::mem::swap(&mut state.x, x_new);
-        state.history_valid = false;
-        return 1;
-    }
     let a = &mut work.a;
     accelerations(model, &state.x, &state.v, a);
     for ((x, v), a) in state.x.iter_mut().zip(state.v.iter_mut()).zip(a.iter()) {
@@ -55,6 +36,48 @@ pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspa
         // Then position with the NEW velocity: x_{n+1} = x_n + dt v_{n+1}.
         *x += dt * *v;
     }
+    state.history_valid = false;
+    1
+}
+
+pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
+    match fused(model, work) {
+        Some(stencil) => step_fused(stencil, model, state, dt, work),
+        None => textbook(model, state, dt, work),
+    }
+}
+
+/// The same step on a lattice, fused into the stencil's pass (`physics::stencil`): every thread
+/// computes the accelerations of its particles and advances them with the two lines above (so
+/// the same numbers), the dissipated power and the projection in the same pass, into fresh
+/// buffers, because the other threads still read the old positions and velocities.
+fn step_fused(
+    stencil: &Stencil,
+    model: &Model,
+    state: &mut State,
+    dt: f64,
+    work: &mut Workspace,
+) -> u64 {
+    let output = Output::Step {
+        dynamics: model.dynamics(true),
+        update: Update::SemiImplicitEuler { dt },
+        after: after(&work.projection),
+    };
+    let (x_new, v_new) = (&mut work.x_stage, &mut work.v_stage);
+    let outs = [&mut x_new[..], &mut v_new[..], &mut []];
+    let p = fused_pass(
+        stencil,
+        &state.x,
+        &state.v,
+        outs,
+        output,
+        work.account,
+        &mut work.power_f,
+    );
+    work.dissipated.add_power(dt, p);
+    std::mem::swap(&mut state.x, x_new);
+    std::mem::swap(&mut state.v, v_new);
+    work.projected = true;
     state.history_valid = false;
     1
 }

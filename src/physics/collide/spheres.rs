@@ -1,0 +1,264 @@
+//! Dynamic spheres (see the parent module's docs, "Dynamic spheres"): their motion under
+//! gravity or at a set velocity, and their collisions with each other, with the static
+//! colliders and with the particles (a broad phase by boxes of particles, then impulses and
+//! separation).
+
+#[allow(clippy::wildcard_imports)]
+use super::*;
+
+/// A sphere that moves: pushed by gravity and collisions, or driven at a set velocity.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DynamicSphere {
+    /// Centre (m).
+    pub center: DVec3,
+    /// Velocity (m/s).
+    pub velocity: DVec3,
+    /// Radius (m).
+    pub radius: f64,
+    /// Mass (kg); ignored when `kinematic`.
+    pub mass: f64,
+    /// Moved only by its set velocity: infinite mass, no gravity (the 2024 arrow-key sphere).
+    pub kinematic: bool,
+}
+
+impl DynamicSphere {
+    /// A sphere at rest with the course's mass `1000 r³` kg (r = 0.5 m gives 125 kg).
+    #[must_use]
+    pub fn new(center: DVec3, radius: f64) -> DynamicSphere {
+        DynamicSphere {
+            center,
+            velocity: DVec3::ZERO,
+            radius,
+            mass: 1000.0 * radius.powi(3),
+            kinematic: false,
+        }
+    }
+
+    /// A kinematic sphere moving at `velocity` (m/s), not affected by anything.
+    #[must_use]
+    pub fn kinematic(center: DVec3, radius: f64, velocity: DVec3) -> DynamicSphere {
+        DynamicSphere {
+            velocity,
+            kinematic: true,
+            ..DynamicSphere::new(center, radius)
+        }
+    }
+
+    /// Inverse mass `1/m` (1/kg): zero when kinematic or of non-positive mass.
+    #[must_use]
+    pub fn inv_mass(&self) -> f64 {
+        if self.kinematic || self.mass <= 0.0 {
+            0.0
+        } else {
+            1.0 / self.mass
+        }
+    }
+}
+
+/// Advances the dynamic spheres by `dt` seconds and resolves their collisions (module docs):
+///
+/// 1. semi-implicit Euler, `v += dt g; c += dt v` (kinematic spheres: `c += dt v` only);
+/// 2. sphere–sphere impulses and separation (restitution `sphere_sphere_restitution`);
+/// 3. spheres against the static colliders, with the particles' response and the surface
+///    offset by the radius (exact for planes and spheres, approximate at a bowl's rim and a
+///    hole's edge);
+/// 4. sphere–particle impulses and separation (restitution `sphere_particle_restitution`); a
+///    pinned particle counts as infinitely heavy.
+pub fn step_spheres(model: &Model, state: &mut State, dt: f64) {
+    advance_spheres(model, state, dt);
+    collide_spheres(model, state, dt);
+}
+
+/// Step 1 of [`step_spheres`]: moves every dynamic sphere by `dt` seconds (semi-implicit Euler
+/// under gravity; a kinematic sphere at its set velocity).
+pub fn advance_spheres(model: &Model, state: &mut State, dt: f64) {
+    for s in &mut state.spheres {
+        if !s.kinematic {
+            // Semi-implicit Euler: velocity first, then position with the new velocity.
+            s.velocity += dt * model.gravity;
+        }
+        s.center += dt * s.velocity;
+    }
+}
+
+/// Steps 2–4 of [`step_spheres`]: the impulses and separations between spheres, colliders and
+/// particles after the spheres moved. `dt` (s) keeps Verlet's history consistent.
+pub fn collide_spheres(model: &Model, state: &mut State, dt: f64) {
+    collide_spheres_logged(model, state, dt, None);
+}
+
+/// [`collide_spheres`], recording in `log` (when given) the spheres' energy before and every
+/// particle it changes.
+pub fn collide_spheres_logged(
+    model: &Model,
+    state: &mut State,
+    dt: f64,
+    mut log: Option<&mut Changes>,
+) {
+    if state.spheres.is_empty() {
+        return;
+    }
+    if let Some(log) = log.as_deref_mut() {
+        log.spheres_before += spheres_energy(model, state);
+    }
+    let params = &model.contact;
+    let State {
+        x,
+        v,
+        x_prev,
+        history_valid,
+        spheres,
+    } = state;
+    for b in 1..spheres.len() {
+        let (before, rest) = spheres.split_at_mut(b);
+        let sb = &mut rest[0];
+        for sa in before.iter_mut() {
+            let (wa, wb) = (sa.inv_mass(), sb.inv_mass());
+            let reach = sa.radius + sb.radius;
+            impulse_pair(
+                Side {
+                    x: &mut sa.center,
+                    v: &mut sa.velocity,
+                    w: wa,
+                },
+                Side {
+                    x: &mut sb.center,
+                    v: &mut sb.velocity,
+                    w: wb,
+                },
+                reach,
+                params.sphere_sphere_restitution,
+            );
+        }
+    }
+    for s in spheres.iter_mut().filter(|s| !s.kinematic) {
+        for collider in &model.colliders {
+            respond(
+                collider,
+                s.radius,
+                params,
+                model.gravity,
+                &mut s.center,
+                &mut s.velocity,
+            );
+        }
+    }
+    // Broad phase by bounds: the box of every chunk of `BOX` particles, grown when a particle
+    // is pushed, so that a sphere skips the chunks it cannot reach.
+    let n = x.len().min(model.particle_count());
+    BOXES.with(|boxes| {
+        let boxes = &mut *boxes.borrow_mut();
+        boxes.clear();
+        boxes.extend(x[..n].chunks(BOX).map(Aabb::of));
+        for s in spheres.iter_mut() {
+            let ws = s.inv_mass();
+            // A particle at |x - c|² ≥ r² (with a margin against rounding) does not touch and
+            // needs no square root.
+            let reach2 = s.radius * s.radius * (1.0 + 1e-9);
+            for (chunk, bounds) in boxes.iter_mut().enumerate() {
+                if bounds.distance_squared(s.center) >= reach2 {
+                    continue;
+                }
+                for i in chunk * BOX..((chunk + 1) * BOX).min(n) {
+                    if (x[i] - s.center).length_squared() >= reach2 {
+                        continue;
+                    }
+                    let (x_old, v_old) = (x[i], v[i]);
+                    let touched = impulse_pair(
+                        Side {
+                            x: &mut s.center,
+                            v: &mut s.velocity,
+                            w: ws,
+                        },
+                        Side {
+                            x: &mut x[i],
+                            v: &mut v[i],
+                            w: model.inv_mass[i],
+                        },
+                        s.radius,
+                        params.sphere_particle_restitution,
+                    );
+                    if touched {
+                        bounds.include(x[i]);
+                        keep_verlet_history(*history_valid, &mut x_prev[i], x[i], v[i], dt);
+                        if let Some(log) = log.as_deref_mut() {
+                            log.record(i, x_old, v_old);
+                        }
+                    }
+                }
+            }
+        }
+    });
+}
+
+/// Particles per box of the sphere–particle broad phase.
+const BOX: usize = 16;
+
+thread_local! {
+    /// The boxes of the broad phase (reused, so steps do not allocate).
+    static BOXES: std::cell::RefCell<Vec<Aabb>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// An axis-aligned bounding box (m).
+#[derive(Clone, Copy, Debug)]
+struct Aabb {
+    lo: DVec3,
+    hi: DVec3,
+}
+
+impl Aabb {
+    /// The box of `points` (NaN coordinates make it cover everything).
+    fn of(points: &[DVec3]) -> Aabb {
+        let mut b = Aabb {
+            lo: DVec3::INFINITY,
+            hi: DVec3::NEG_INFINITY,
+        };
+        for &p in points {
+            b.include(p);
+        }
+        b
+    }
+
+    /// Grows the box to hold `p`; a NaN coordinate makes it infinite on that axis.
+    fn include(&mut self, p: DVec3) {
+        let nan = p.is_nan_mask();
+        self.lo = DVec3::select(nan, DVec3::NEG_INFINITY, self.lo.min(p));
+        self.hi = DVec3::select(nan, DVec3::INFINITY, self.hi.max(p));
+    }
+
+    /// The squared distance (m²) from `c` to the nearest point of the box (0 inside).
+    fn distance_squared(&self, c: DVec3) -> f64 {
+        let d = (self.lo - c).max(c - self.hi).max(DVec3::ZERO);
+        d.length_squared()
+    }
+}
+
+/// One side of a two-body contact: position (m), velocity (m/s), inverse mass (1/kg).
+struct Side<'a> {
+    x: &'a mut DVec3,
+    v: &'a mut DVec3,
+    w: f64,
+}
+
+/// Impulse and separation of two bodies whose centres should stay `reach` (m) apart, with
+/// restitution `e` (module docs). Returns whether they touched.
+fn impulse_pair(a: Side<'_>, b: Side<'_>, reach: f64, e: f64) -> bool {
+    let w = a.w + b.w;
+    let (distance, d) = distance_and_direction(*b.x - *a.x);
+    if distance >= reach || w == 0.0 {
+        return false;
+    }
+    // v_rel = (v_b - v_a)·d̂ < 0: approaching.
+    let v_rel = (*b.v - *a.v).dot(d);
+    if v_rel < 0.0 {
+        // J = -(1 + e) v_rel / (w_a + w_b), equal and opposite on the two bodies.
+        let j = -(1.0 + e) * v_rel / w;
+        *a.v -= (a.w * j) * d;
+        *b.v += (b.w * j) * d;
+    }
+    // Separate by the penetration p, shared in proportion to the inverse masses.
+    let p = reach - distance;
+    *a.x -= (a.w / w * p) * d;
+    *b.x += (b.w / w * p) * d;
+    true
+}

@@ -1,0 +1,603 @@
+//! Implicit Euler's linear system on a lattice: the matrix of `implicit_euler` with its spring
+//! blocks stored by offset group as structure of arrays, so that the assembly and the product
+//! `A p` run eight springs at a time (AVX-512 or AVX2 where the CPU has them), and the
+//! conjugate-gradient vectors stored as structure of arrays too.
+//!
+//! On a lattice every spring joins `p` and `p + δ` for one of a few offsets `δ`
+//! (`physics::stencil`). With `B_δ[p] = dt D_s + dt² K_s` the symmetric 3×3 block of the spring
+//! `(p, p + δ)` (zero where there is none, kg), the product of the textbook's `System::apply`
+//! is, per particle `q`,
+//!
+//! ```text
+//! (A p)_q = (m_q + dt c) p_q + Σ_δ [ B_δ[q] (p_q - p_{q+δ})  -  B_δ[q-δ] (p_{q-δ} - p_q) ]
+//! ```
+//! where `p` is a velocity change (m/s), `m` the mass (kg) and `c` the drag (N·s/m). Each chunk of
+//! eight particles gathers its own terms (a spring's block product is computed for each of its
+//! two ends), so no chunk writes another's values and the loops have no scattered stores. The
+//! diagonal blocks and the right-hand side are gathered the same way from the springs' blocks
+//! and their `dt² K_s (v_b - v_a)`. The arrays carry a zero margin of at least the largest `δ`
+//! before and after the particles, so the chunks near either end need no special case.
+//!
+//! The sums run in another order than the spring-list loops, so the matrix and the solution
+//! agree with the textbook system to rounding, not bit for bit (the solve stops at the same
+//! relative residual).
+
+use glam::DVec3;
+
+use super::implicit_euler::Constraint;
+#[cfg(target_arch = "x86_64")]
+use crate::physics::lanes::{Avx2, Avx512};
+use crate::physics::lanes::{LANES, Lanes, Plain, lanes};
+use crate::physics::stencil::{Kernel, Stencil};
+
+/// The blocks of one offset group.
+#[derive(Clone, Debug, Default)]
+struct Blocks {
+    delta: usize,
+    /// `B_δ[p]`: entries xx, xy, xz, yy, yz, zz (kg) at index `front + p`.
+    b: [Vec<f64>; 6],
+    /// `dt² K_s (v_b - v_a)` (N·s) at index `front + p`.
+    kv: [Vec<f64>; 3],
+}
+
+/// Three components as structure of arrays, indexed `front + particle`.
+type Soa = [Vec<f64>; 3];
+
+/// The assembled system `A Δv = b` of one step and the conjugate-gradient vectors.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Lattice {
+    /// Particles.
+    n: usize,
+    /// Zero margin before particle 0 (a multiple of `LANES`, at least the largest offset).
+    front: usize,
+    /// Length of every array.
+    len: usize,
+    kernel: Option<Kernel>,
+    groups: Vec<Blocks>,
+    /// The inverse diagonal blocks (xx, xy, xz, yy, yz, zz; 1/kg); zero in the margins.
+    diag_inv: [Vec<f64>; 6],
+    /// `m + dt c` (kg); zero in the margins.
+    mass: Vec<f64>,
+    /// 1 for a free particle, 0 for a pinned one and in the margins.
+    free: Vec<f64>,
+    /// Positions (m) and velocities (m/s) of the step's start.
+    x: Soa,
+    v: Soa,
+    /// The right-hand side `b = dt f_n + dt² ∂f/∂x v_n` (N·s).
+    rhs: Soa,
+    /// Δv (m/s) and the CG vectors r, p, A p, z.
+    dv: Soa,
+    r: Soa,
+    p: Soa,
+    ap: Soa,
+    z: Soa,
+}
+
+impl Lattice {
+    /// Sizes the arrays for `stencil` (no allocation when they already fit).
+    fn resize(&mut self, stencil: &Stencil) {
+        let n = stencil.particles();
+        let front = stencil.reach().next_multiple_of(LANES);
+        let len = front + n.next_multiple_of(LANES) + front + LANES;
+        let groups = stencil.group_count();
+        if self.n == n && self.len == len && self.groups.len() == groups {
+            return;
+        }
+        let zeros = vec![0.0; len];
+        let soa = || [zeros.clone(), zeros.clone(), zeros.clone()];
+        self.n = n;
+        self.front = front;
+        self.len = len;
+        self.groups = stencil
+            .group_views()
+            .map(|g| Blocks {
+                delta: g.delta,
+                b: std::array::from_fn(|_| zeros.clone()),
+                kv: soa(),
+            })
+            .collect();
+        self.diag_inv = std::array::from_fn(|_| zeros.clone());
+        self.mass = zeros.clone();
+        self.free = zeros.clone();
+        (self.x, self.v, self.rhs) = (soa(), soa(), soa());
+        (self.dv, self.r, self.p, self.ap, self.z) = (soa(), soa(), soa(), soa(), soa());
+    }
+
+    /// Assembles the system of a step of `dt` (s) at `(x, v)` with the forces `f` (N) (the
+    /// textbook's assembly loop, by offset group; see the module docs).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn assemble(
+        &mut self,
+        stencil: &Stencil,
+        mass: &[f64],
+        inv_mass: &[f64],
+        drag: f64,
+        dt: f64,
+        x: &[DVec3],
+        v: &[DVec3],
+        f: &[DVec3],
+    ) {
+        self.resize(stencil);
+        self.kernel = Some(stencil.kernel());
+        let (n, front) = (self.n, self.front);
+        for i in 0..n {
+            let k = front + i;
+            self.mass[k] = mass[i] + dt * drag;
+            self.free[k] = if inv_mass[i] != 0.0 { 1.0 } else { 0.0 };
+            for c in 0..3 {
+                self.x[c][k] = x[i][c];
+                self.v[c][k] = v[i][c];
+                // b = dt f_n (then + dt² ∂f/∂x v_n).
+                self.rhs[c][k] = dt * f[i][c];
+            }
+        }
+        match stencil.kernel() {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the stencil chooses AVX-512 only on a CPU that has it.
+            Kernel::Avx512 => unsafe { assemble_avx512(self, stencil, dt) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the stencil chooses AVX2 only on a CPU that has it.
+            Kernel::Avx2 => unsafe { assemble_avx2(self, stencil, dt) },
+            _ => assemble_body::<Plain>(self, stencil, dt),
+        }
+    }
+
+    /// Preconditioned conjugate gradients, as the textbook's `System::solve`: writes Δv,
+    /// starting from `start` when given, else from the last solve's Δv when `warm`, else from
+    /// zero, with the constrained particles' normal components prescribed. Returns the
+    /// iterations, the final relative residual and whether it reached `tolerance`.
+    pub(crate) fn solve(
+        &mut self,
+        constraints: &[Constraint],
+        tolerance: f64,
+        max_iterations: u32,
+        warm: bool,
+        start: Option<&[DVec3]>,
+    ) -> (u32, f64, bool) {
+        if let Some(start) = start {
+            for (i, s) in start.iter().enumerate().take(self.n) {
+                for c in 0..3 {
+                    self.dv[c][self.front + i] = s[c];
+                }
+            }
+        }
+        let warm = warm || start.is_some();
+        match self.kernel {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `assemble` recorded the stencil's kernel, chosen for this CPU.
+            Some(Kernel::Avx512) => unsafe {
+                solve_avx512(self, constraints, tolerance, max_iterations, warm)
+            },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as above.
+            Some(Kernel::Avx2) => unsafe {
+                solve_avx2(self, constraints, tolerance, max_iterations, warm)
+            },
+            _ => solve_body::<Plain>(self, constraints, tolerance, max_iterations, warm),
+        }
+    }
+
+    /// Δv of the last solve (m/s), particle `i`.
+    pub(crate) fn dv(&self, i: usize) -> DVec3 {
+        let k = self.front + i;
+        DVec3::new(self.dv[0][k], self.dv[1][k], self.dv[2][k])
+    }
+
+    /// Copies Δv into `out` (m/s).
+    pub(crate) fn copy_dv(&self, out: &mut [DVec3]) {
+        for (i, o) in out.iter_mut().enumerate().take(self.n) {
+            *o = self.dv(i);
+        }
+    }
+
+    /// The constraint impulses' `(A Δv - b)_i` (N·s) of the last solve, particle `i` (the
+    /// product is computed once, into the scratch vector `ap`).
+    pub(crate) fn residual_force(&mut self) -> impl Fn(usize) -> DVec3 + '_ {
+        let dv = std::mem::take(&mut self.dv);
+        let mut ap = std::mem::take(&mut self.ap);
+        apply_dispatch(self, &dv, &mut ap);
+        self.dv = dv;
+        self.ap = ap;
+        move |i| {
+            let k = self.front + i;
+            DVec3::new(
+                self.ap[0][k] - self.rhs[0][k],
+                self.ap[1][k] - self.rhs[1][k],
+                self.ap[2][k] - self.rhs[2][k],
+            )
+        }
+    }
+}
+
+/// `A p` into `out` with the kernel of the last assembly.
+fn apply_dispatch(sys: &Lattice, p: &Soa, out: &mut Soa) {
+    match sys.kernel {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the kernel was chosen for this CPU.
+        Some(Kernel::Avx512) => unsafe { apply_avx512(sys, p, out) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as above.
+        Some(Kernel::Avx2) => unsafe { apply_avx2(sys, p, out) },
+        _ => apply::<Plain>(sys, p, out),
+    }
+}
+
+/// `LANES` values of `a` from index `i`.
+#[inline(always)]
+fn at<V: Lanes>(a: &[f64], i: usize) -> V {
+    V::load(lanes(a, i))
+}
+
+/// Writes `value` to `a[i..i + LANES]`.
+#[inline(always)]
+fn put<V: Lanes>(a: &mut [f64], i: usize, value: V) {
+    value.store((&mut a[i..i + LANES]).try_into().expect("a chunk"));
+}
+
+/// The symmetric block `b` (xx, xy, xz, yy, yz, zz) times `d`.
+#[inline(always)]
+fn sym_mul<V: Lanes>(b: &[V; 6], d: [V; 3]) -> [V; 3] {
+    [
+        b[0].mul(d[0]).add(b[1].mul(d[1])).add(b[2].mul(d[2])),
+        b[1].mul(d[0]).add(b[3].mul(d[1])).add(b[4].mul(d[2])),
+        b[2].mul(d[0]).add(b[4].mul(d[1])).add(b[5].mul(d[2])),
+    ]
+}
+
+/// The six entries of the block at index `i`.
+#[inline(always)]
+fn block<V: Lanes>(b: &[Vec<f64>; 6], i: usize) -> [V; 6] {
+    [
+        at(&b[0], i),
+        at(&b[1], i),
+        at(&b[2], i),
+        at(&b[3], i),
+        at(&b[4], i),
+        at(&b[5], i),
+    ]
+}
+
+#[inline(always)]
+fn triple<V: Lanes>(a: &Soa, i: usize) -> [V; 3] {
+    [at(&a[0], i), at(&a[1], i), at(&a[2], i)]
+}
+
+#[inline(always)]
+fn put_triple<V: Lanes>(a: &mut Soa, i: usize, value: [V; 3]) {
+    for (c, v) in value.into_iter().enumerate() {
+        put(&mut a[c], i, v);
+    }
+}
+
+/// The assembly: the springs' blocks and `dt² K_s (v_b - v_a)` group by group, then the
+/// diagonal blocks (inverted) and the right-hand side gathered particle by particle.
+#[inline(always)]
+fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64) {
+    let front = sys.front;
+    let dt2 = dt * dt;
+    let (one, zero) = (V::splat(1.0), V::zero());
+    for (blocks, g) in sys.groups.iter_mut().zip(stencil.group_views()) {
+        let (k_dt2, kd_dt) = (V::splat(g.stiffness * dt2), V::splat(g.damping * dt));
+        for p in (0..g.starts).step_by(LANES) {
+            let (i, j) = (front + p, front + p + g.delta);
+            let d = [
+                at::<V>(&sys.x[0], j).sub(at(&sys.x[0], i)),
+                at::<V>(&sys.x[1], j).sub(at(&sys.x[1], i)),
+                at::<V>(&sys.x[2], j).sub(at(&sys.x[2], i)),
+            ];
+            let length = d[0]
+                .mul(d[0])
+                .add(d[1].mul(d[1]))
+                .add(d[2].mul(d[2]))
+                .sqrt();
+            // n = d / L; a zero-length spring gets no block (as in the textbook loop).
+            let keep = g.present[p / LANES] & zero.less_than(length);
+            let inv = one.div(length).select(keep);
+            let n = [d[0].mul(inv), d[1].mul(inv), d[2].mul(inv)];
+            // K = k [n nᵀ + t (I - n nᵀ)], t = max(0, 1 - L0/L); D = k_d n nᵀ;
+            // B = dt D + dt² K = (dt k_d + dt² k (1 - t)) n nᵀ + dt² k t I.
+            let t = one.sub(at::<V>(g.rest_length, p).mul(inv));
+            let t = t.where_positive(t);
+            let c_nn = kd_dt.add(k_dt2.mul(one.sub(t)));
+            let c_id = k_dt2.mul(t);
+            let entries = [
+                c_nn.mul(n[0].mul(n[0])).add(c_id),
+                c_nn.mul(n[0].mul(n[1])),
+                c_nn.mul(n[0].mul(n[2])),
+                c_nn.mul(n[1].mul(n[1])).add(c_id),
+                c_nn.mul(n[1].mul(n[2])),
+                c_nn.mul(n[2].mul(n[2])).add(c_id),
+            ];
+            for (b, e) in blocks.b.iter_mut().zip(entries) {
+                put(b, i, e.select(keep));
+            }
+            // dt² K (v_b - v_a) = dt² k ((1 - t) n (n·dv) + t dv).
+            let dv = [
+                at::<V>(&sys.v[0], j).sub(at(&sys.v[0], i)),
+                at::<V>(&sys.v[1], j).sub(at(&sys.v[1], i)),
+                at::<V>(&sys.v[2], j).sub(at(&sys.v[2], i)),
+            ];
+            let along = n[0].mul(dv[0]).add(n[1].mul(dv[1])).add(n[2].mul(dv[2]));
+            let s = one.sub(t).mul(along);
+            for c in 0..3 {
+                let kv = k_dt2.mul(s.mul(n[c]).add(t.mul(dv[c])));
+                put(&mut blocks.kv[c], i, kv.select(keep));
+            }
+        }
+    }
+    // Per particle: A_qq = (m + dt c) I + Σ (B_δ[q] + B_δ[q-δ]); b_q += Σ (kv_δ[q] - kv_δ[q-δ]).
+    for q in (0..sys.n.next_multiple_of(LANES)).step_by(LANES) {
+        let i = front + q;
+        let m: V = at(&sys.mass, i);
+        let mut a = [m, zero, zero, m, zero, m];
+        let mut b = triple::<V>(&sys.rhs, i);
+        for g in &sys.groups {
+            let (here, before) = (block::<V>(&g.b, i), block::<V>(&g.b, i - g.delta));
+            for e in 0..6 {
+                a[e] = a[e].add(here[e]).add(before[e]);
+            }
+            for (c, b) in b.iter_mut().enumerate() {
+                *b = b.add(at(&g.kv[c], i)).sub(at(&g.kv[c], i - g.delta));
+            }
+        }
+        put_triple(&mut sys.rhs, i, b);
+        // The inverse of the symmetric block by cofactors; zero past the last particle.
+        let [xx, xy, xz, yy, yz, zz] = a;
+        let c_xx = yy.mul(zz).sub(yz.mul(yz));
+        let c_xy = xz.mul(yz).sub(xy.mul(zz));
+        let c_xz = xy.mul(yz).sub(xz.mul(yy));
+        let det = xx.mul(c_xx).add(xy.mul(c_xy)).add(xz.mul(c_xz));
+        let real = zero.less_than(m);
+        let inv_det = one.div(det).select(real);
+        let inverse = [
+            c_xx,
+            c_xy,
+            c_xz,
+            xx.mul(zz).sub(xz.mul(xz)),
+            xy.mul(xz).sub(xx.mul(yz)),
+            xx.mul(yy).sub(xy.mul(xy)),
+        ];
+        for (d, e) in sys.diag_inv.iter_mut().zip(inverse) {
+            put(d, i, e.mul(inv_det));
+        }
+    }
+}
+
+/// `out = A p` (see the module docs), zero at pinned particles and in the margins.
+#[inline(always)]
+fn apply<V: Lanes>(sys: &Lattice, p: &Soa, out: &mut Soa) {
+    for q in (0..sys.n.next_multiple_of(LANES)).step_by(LANES) {
+        let i = sys.front + q;
+        let pq = triple::<V>(p, i);
+        let m: V = at(&sys.mass, i);
+        let mut acc = [m.mul(pq[0]), m.mul(pq[1]), m.mul(pq[2])];
+        for g in &sys.groups {
+            let ahead = triple::<V>(p, i + g.delta);
+            let behind = triple::<V>(p, i - g.delta);
+            let y1 = sym_mul(
+                &block::<V>(&g.b, i),
+                [
+                    pq[0].sub(ahead[0]),
+                    pq[1].sub(ahead[1]),
+                    pq[2].sub(ahead[2]),
+                ],
+            );
+            let y2 = sym_mul(
+                &block::<V>(&g.b, i - g.delta),
+                [
+                    behind[0].sub(pq[0]),
+                    behind[1].sub(pq[1]),
+                    behind[2].sub(pq[2]),
+                ],
+            );
+            for c in 0..3 {
+                acc[c] = acc[c].add(y1[c]).sub(y2[c]);
+            }
+        }
+        let free: V = at(&sys.free, i);
+        put_triple(
+            out,
+            i,
+            [acc[0].mul(free), acc[1].mul(free), acc[2].mul(free)],
+        );
+    }
+}
+
+/// `Σ a·b` over all particles, in lanes, added in a fixed order.
+#[inline(always)]
+fn dot<V: Lanes>(sys: &Lattice, a: &Soa, b: &Soa) -> f64 {
+    let mut sum = V::zero();
+    for q in (0..sys.n.next_multiple_of(LANES)).step_by(LANES) {
+        let i = sys.front + q;
+        for c in 0..3 {
+            sum = sum.add(at::<V>(&a[c], i).mul(at(&b[c], i)));
+        }
+    }
+    let mut values = [0.0; LANES];
+    sum.store(&mut values);
+    values.iter().sum()
+}
+
+/// `z = P⁻¹ r` with the inverse diagonal blocks.
+#[inline(always)]
+fn precondition<V: Lanes>(sys: &Lattice, r: &Soa, z: &mut Soa) {
+    for q in (0..sys.n.next_multiple_of(LANES)).step_by(LANES) {
+        let i = sys.front + q;
+        let y = sym_mul(&block::<V>(&sys.diag_inv, i), triple(r, i));
+        put_triple(z, i, y);
+    }
+}
+
+/// `S v`: removes the constrained normal components.
+fn filter(front: usize, constraints: &[Constraint], v: &mut Soa) {
+    for c in constraints {
+        let k = front + c.i;
+        let n = c.normal;
+        let along = v[0][k] * n.x + v[1][k] * n.y + v[2][k] * n.z;
+        v[0][k] -= along * n.x;
+        v[1][k] -= along * n.y;
+        v[2][k] -= along * n.z;
+    }
+}
+
+/// The textbook's preconditioned conjugate gradients on the lattice system.
+#[inline(always)]
+fn solve_body<V: Lanes>(
+    sys: &mut Lattice,
+    constraints: &[Constraint],
+    tolerance: f64,
+    max_iterations: u32,
+    warm: bool,
+) -> (u32, f64, bool) {
+    let front = sys.front;
+    let chunks = || {
+        (0..sys.n.next_multiple_of(LANES))
+            .step_by(LANES)
+            .map(|q| front + q)
+    };
+    let mut dv = std::mem::take(&mut sys.dv);
+    let mut r = std::mem::take(&mut sys.r);
+    let mut p = std::mem::take(&mut sys.p);
+    let mut ap = std::mem::take(&mut sys.ap);
+    let mut z = std::mem::take(&mut sys.z);
+    // Δv starts at z_0: the prescribed normal velocity changes, elsewhere zero or a warm
+    // start; a warm start whose residual is not below |b| is dropped for zero.
+    let mut warm = warm;
+    let b_norm2 = loop {
+        if !warm {
+            for c in &mut dv {
+                c.fill(0.0);
+            }
+        }
+        for c in constraints {
+            let k = front + c.i;
+            let n = c.normal;
+            let along = dv[0][k] * n.x + dv[1][k] * n.y + dv[2][k] * n.z;
+            dv[0][k] += (c.dv_n - along) * n.x;
+            dv[1][k] += (c.dv_n - along) * n.y;
+            dv[2][k] += (c.dv_n - along) * n.z;
+        }
+        // r = S (b - A z_0), pinned rows zero; |b|² over the free particles.
+        apply::<V>(sys, &dv, &mut ap);
+        let mut b2 = V::zero();
+        for i in chunks() {
+            let free: V = at(&sys.free, i);
+            // Written out, not with `map`: its closure would not be inlined (nor the AVX-512
+            // operations inside it).
+            let [b0, b1, b2_] = triple::<V>(&sys.rhs, i);
+            let b = [b0.mul(free), b1.mul(free), b2_.mul(free)];
+            let a = triple::<V>(&ap, i);
+            b2 = b2
+                .add(b[0].mul(b[0]))
+                .add(b[1].mul(b[1]))
+                .add(b[2].mul(b[2]));
+            put_triple(&mut r, i, [b[0].sub(a[0]), b[1].sub(a[1]), b[2].sub(a[2])]);
+        }
+        let b_norm2 = {
+            let mut values = [0.0; LANES];
+            b2.store(&mut values);
+            values.iter().sum::<f64>()
+        };
+        filter(front, constraints, &mut r);
+        if warm && dot::<V>(sys, &r, &r) >= b_norm2 {
+            warm = false;
+            continue;
+        }
+        break b_norm2;
+    };
+    let mut outcome = (0, f64::NAN, false);
+    if b_norm2.is_finite() {
+        let tol2 = (tolerance * tolerance * b_norm2).max(f64::MIN_POSITIVE);
+        precondition::<V>(sys, &r, &mut p);
+        filter(front, constraints, &mut p);
+        let mut rz = dot::<V>(sys, &r, &p);
+        let mut r_norm2 = dot::<V>(sys, &r, &r);
+        let mut iterations = 0;
+        while r_norm2 > tol2 && iterations < max_iterations {
+            apply::<V>(sys, &p, &mut ap);
+            filter(front, constraints, &mut ap);
+            let p_ap = dot::<V>(sys, &p, &ap);
+            if p_ap.is_nan() || p_ap <= 0.0 {
+                break;
+            }
+            let alpha = V::splat(rz / p_ap);
+            for i in chunks() {
+                for c in 0..3 {
+                    let d = at::<V>(&dv[c], i).add(alpha.mul(at(&p[c], i)));
+                    put(&mut dv[c], i, d);
+                    let e = at::<V>(&r[c], i).sub(alpha.mul(at(&ap[c], i)));
+                    put(&mut r[c], i, e);
+                }
+            }
+            r_norm2 = dot::<V>(sys, &r, &r);
+            precondition::<V>(sys, &r, &mut z);
+            filter(front, constraints, &mut z);
+            let rz_new = dot::<V>(sys, &r, &z);
+            let beta = V::splat(rz_new / rz);
+            rz = rz_new;
+            for i in chunks() {
+                for c in 0..3 {
+                    let d = at::<V>(&z[c], i).add(beta.mul(at(&p[c], i)));
+                    put(&mut p[c], i, d);
+                }
+            }
+            iterations += 1;
+        }
+        let residual = if b_norm2 > 0.0 {
+            (r_norm2 / b_norm2).sqrt()
+        } else {
+            0.0
+        };
+        outcome = (iterations, residual, r_norm2.is_finite() && r_norm2 <= tol2);
+    }
+    (sys.dv, sys.r, sys.p, sys.ap, sys.z) = (dv, r, p, ap, z);
+    outcome
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn assemble_avx512(sys: &mut Lattice, stencil: &Stencil, dt: f64) {
+    assemble_body::<Avx512>(sys, stencil, dt);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn assemble_avx2(sys: &mut Lattice, stencil: &Stencil, dt: f64) {
+    assemble_body::<Avx2>(sys, stencil, dt);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn solve_avx512(
+    sys: &mut Lattice,
+    constraints: &[Constraint],
+    tolerance: f64,
+    max_iterations: u32,
+    warm: bool,
+) -> (u32, f64, bool) {
+    solve_body::<Avx512>(sys, constraints, tolerance, max_iterations, warm)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn solve_avx2(
+    sys: &mut Lattice,
+    constraints: &[Constraint],
+    tolerance: f64,
+    max_iterations: u32,
+    warm: bool,
+) -> (u32, f64, bool) {
+    solve_body::<Avx2>(sys, constraints, tolerance, max_iterations, warm)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn apply_avx512(sys: &Lattice, p: &Soa, out: &mut Soa) {
+    apply::<Avx512>(sys, p, out);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn apply_avx2(sys: &Lattice, p: &Soa, out: &mut Soa) {
+    apply::<Avx2>(sys, p, out);
+}

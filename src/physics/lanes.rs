@@ -1,0 +1,473 @@
+//! `LANES` f64 computed together: the small SIMD vocabulary of the fast paths (the stencil's
+//! passes, implicit Euler's lattice system), in three implementations: a plain array, two AVX2
+//! registers and one AVX-512 register.
+//!
+//! The AVX2 and AVX-512 types call their instructions without checking the CPU: values of them
+//! are only created inside functions compiled with the matching `target_feature`, which the
+//! callers run only where the feature was detected ([`super::stencil::Kernel`]).
+
+use glam::DVec3;
+
+/// Values computed together: one AVX-512 register of f64 (two AVX2 registers).
+pub(crate) const LANES: usize = 8;
+
+/// `LANES` values of `values` from index `i`.
+#[inline(always)]
+pub(crate) fn lanes(values: &[f64], i: usize) -> &[f64; LANES] {
+    values[i..i + LANES]
+        .try_into()
+        .expect("a slice of LANES values")
+}
+
+/// `LANES` f64 computed together, and the few operations the streaming loop needs on them.
+/// Three implementations: [`Plain`] (an array; the compiler vectorises what it can) and, on
+/// x86-64, [`Avx2`] (two AVX2 registers) and [`Avx512`] (one AVX-512 register).
+pub(crate) trait Lanes: Copy {
+    /// All lanes zero.
+    fn zero() -> Self;
+    /// `LANES` values.
+    fn load(values: &[f64; LANES]) -> Self;
+    /// Writes the lanes to `out`.
+    fn store(self, out: &mut [f64; LANES]);
+    /// Lane-wise `self + other`.
+    fn add(self, other: Self) -> Self;
+    /// Lane-wise `self - other`.
+    fn sub(self, other: Self) -> Self;
+    /// Lane-wise `self · other`.
+    fn mul(self, other: Self) -> Self;
+    /// `value` in every lane.
+    fn splat(value: f64) -> Self;
+    /// The same lanes with lanes `0..k` set to zero.
+    fn clear_below(self, k: usize) -> Self;
+    /// Lane-wise square root (correctly rounded, IEEE 754).
+    fn sqrt(self) -> Self;
+    /// Lane-wise `self / other` (correctly rounded).
+    fn div(self, other: Self) -> Self;
+    /// `self` in the lanes where `condition > 0`, zero elsewhere (also where it is NaN).
+    fn where_positive(self, condition: Self) -> Self;
+    /// `self` in the lanes whose bit is set in `mask` (bit `l` is lane `l`), zero elsewhere.
+    fn select(self, mask: u8) -> Self {
+        let mut values = [0.0; LANES];
+        self.store(&mut values);
+        for (l, value) in values.iter_mut().enumerate() {
+            if mask & (1 << l) == 0 {
+                *value = 0.0;
+            }
+        }
+        Self::load(&values)
+    }
+    /// Bit `l` set where lane `l` of `self` is less than that of `other` (false for NaN).
+    fn less_than(self, other: Self) -> u8 {
+        let (mut a, mut b) = ([0.0; LANES], [0.0; LANES]);
+        self.store(&mut a);
+        other.store(&mut b);
+        (0..LANES).fold(0, |m, l| m | (u8::from(a[l] < b[l]) << l))
+    }
+    /// Bit `l` set where lane `l` is NaN.
+    fn nan_lanes(self) -> u8 {
+        let mut a = [0.0; LANES];
+        self.store(&mut a);
+        (0..LANES).fold(0, |m, l| m | (u8::from(a[l].is_nan()) << l))
+    }
+    /// Eight vectors `[x, y, z]` as lanes (structure of arrays).
+    #[inline(always)]
+    fn load_vectors(vectors: &[DVec3; LANES]) -> [Self; 3] {
+        to_lanes(vectors)
+    }
+    /// Lanes `[x, y, z]` into eight vectors.
+    #[inline(always)]
+    fn store_vectors(lanes: [Self; 3], vectors: &mut [DVec3; LANES]) {
+        from_lanes(lanes, vectors);
+    }
+}
+
+/// [`Lanes`] as a plain array.
+#[derive(Clone, Copy)]
+pub(crate) struct Plain([f64; LANES]);
+
+impl Lanes for Plain {
+    #[inline(always)]
+    fn zero() -> Plain {
+        Plain([0.0; LANES])
+    }
+    #[inline(always)]
+    fn load(values: &[f64; LANES]) -> Plain {
+        Plain(*values)
+    }
+    #[inline(always)]
+    fn store(self, out: &mut [f64; LANES]) {
+        *out = self.0;
+    }
+    #[inline(always)]
+    fn add(self, other: Plain) -> Plain {
+        Plain(std::array::from_fn(|l| self.0[l] + other.0[l]))
+    }
+    #[inline(always)]
+    fn sub(self, other: Plain) -> Plain {
+        Plain(std::array::from_fn(|l| self.0[l] - other.0[l]))
+    }
+    #[inline(always)]
+    fn mul(self, other: Plain) -> Plain {
+        Plain(std::array::from_fn(|l| self.0[l] * other.0[l]))
+    }
+    #[inline(always)]
+    fn splat(value: f64) -> Plain {
+        Plain([value; LANES])
+    }
+    #[inline(always)]
+    fn clear_below(self, k: usize) -> Plain {
+        Plain(std::array::from_fn(|l| if l < k { 0.0 } else { self.0[l] }))
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Plain {
+        Plain(self.0.map(f64::sqrt))
+    }
+    #[inline(always)]
+    fn div(self, other: Plain) -> Plain {
+        Plain(std::array::from_fn(|l| self.0[l] / other.0[l]))
+    }
+    #[inline(always)]
+    fn where_positive(self, condition: Plain) -> Plain {
+        Plain(std::array::from_fn(|l| {
+            if condition.0[l] > 0.0 { self.0[l] } else { 0.0 }
+        }))
+    }
+    #[inline(always)]
+    fn select(self, mask: u8) -> Plain {
+        Plain(std::array::from_fn(|l| {
+            if mask & (1 << l) != 0 { self.0[l] } else { 0.0 }
+        }))
+    }
+}
+
+/// The components of up to `LANES` vectors as lanes `[x, y, z]` (zero past the end).
+#[inline(always)]
+pub(crate) fn to_lanes<V: Lanes>(vectors: &[DVec3]) -> [V; 3] {
+    let mut soa = [[0.0; LANES]; 3];
+    for (l, p) in vectors.iter().enumerate().take(LANES) {
+        soa[0][l] = p.x;
+        soa[1][l] = p.y;
+        soa[2][l] = p.z;
+    }
+    [V::load(&soa[0]), V::load(&soa[1]), V::load(&soa[2])]
+}
+
+/// Writes lanes `[x, y, z]` into up to `LANES` vectors.
+#[inline(always)]
+pub(crate) fn from_lanes<V: Lanes>(lanes: [V; 3], vectors: &mut [DVec3]) {
+    let mut soa = [[0.0; LANES]; 3];
+    lanes[0].store(&mut soa[0]);
+    lanes[1].store(&mut soa[1]);
+    lanes[2].store(&mut soa[2]);
+    for (l, p) in vectors.iter_mut().enumerate().take(LANES) {
+        *p = DVec3::new(soa[0][l], soa[1][l], soa[2][l]);
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::__m512d;
+
+/// [`Lanes`] as one AVX-512 register.
+///
+/// Its methods call AVX-512F instructions without checking the CPU: an `Avx512` value is only
+/// ever created inside `range_avx512` (a `target_feature(enable = "avx512f")` function, which
+/// runs only where AVX-512F was detected) or by the methods of a value that already exists, so
+/// their code only runs where AVX-512F was detected.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+pub(crate) struct Avx512(pub(crate) __m512d);
+
+#[cfg(target_arch = "x86_64")]
+impl Lanes for Avx512 {
+    #[inline(always)]
+    fn zero() -> Avx512 {
+        // SAFETY: see the type's docs (the streaming loop asks for zero only where it also
+        // computes springs, i.e. on a CPU with AVX-512F).
+        Avx512(unsafe { std::arch::x86_64::_mm512_setzero_pd() })
+    }
+    #[inline(always)]
+    fn load(values: &[f64; LANES]) -> Avx512 {
+        // SAFETY: AVX-512F, see the type's docs; `values` is 8 f64, one unaligned 512-bit load.
+        Avx512(unsafe { std::arch::x86_64::_mm512_loadu_pd(values.as_ptr()) })
+    }
+    #[inline(always)]
+    fn store(self, out: &mut [f64; LANES]) {
+        // SAFETY: AVX-512F, see the type's docs; `out` is 8 f64, one unaligned 512-bit store.
+        unsafe { std::arch::x86_64::_mm512_storeu_pd(out.as_mut_ptr(), self.0) }
+    }
+    #[inline(always)]
+    fn add(self, other: Avx512) -> Avx512 {
+        // SAFETY: AVX-512F, see the type's docs.
+        Avx512(unsafe { std::arch::x86_64::_mm512_add_pd(self.0, other.0) })
+    }
+    #[inline(always)]
+    fn sub(self, other: Avx512) -> Avx512 {
+        // SAFETY: AVX-512F, see the type's docs.
+        Avx512(unsafe { std::arch::x86_64::_mm512_sub_pd(self.0, other.0) })
+    }
+    #[inline(always)]
+    fn mul(self, other: Avx512) -> Avx512 {
+        // SAFETY: AVX-512F, see the type's docs.
+        Avx512(unsafe { std::arch::x86_64::_mm512_mul_pd(self.0, other.0) })
+    }
+    #[inline(always)]
+    fn splat(value: f64) -> Avx512 {
+        // SAFETY: AVX-512F, see the type's docs.
+        Avx512(unsafe { std::arch::x86_64::_mm512_set1_pd(value) })
+    }
+    #[inline(always)]
+    fn clear_below(self, k: usize) -> Avx512 {
+        // Keep lanes k.. : bit l of the mask is lane l.
+        let keep = (0xFF_u32 << k.min(LANES)) as u8;
+        self.select(keep)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Avx512 {
+        // SAFETY: AVX-512F, see the type's docs.
+        Avx512(unsafe { std::arch::x86_64::_mm512_sqrt_pd(self.0) })
+    }
+    #[inline(always)]
+    fn div(self, other: Avx512) -> Avx512 {
+        // SAFETY: AVX-512F, see the type's docs.
+        Avx512(unsafe { std::arch::x86_64::_mm512_div_pd(self.0, other.0) })
+    }
+    #[inline(always)]
+    fn where_positive(self, condition: Avx512) -> Avx512 {
+        self.select(Avx512::zero().less_than(condition))
+    }
+    #[inline(always)]
+    fn select(self, mask: u8) -> Avx512 {
+        // SAFETY: AVX-512F, see the type's docs.
+        Avx512(unsafe { std::arch::x86_64::_mm512_maskz_mov_pd(mask, self.0) })
+    }
+    #[inline(always)]
+    fn less_than(self, other: Avx512) -> u8 {
+        use std::arch::x86_64::{_CMP_LT_OQ, _mm512_cmp_pd_mask};
+        // SAFETY: AVX-512F, see the type's docs.
+        unsafe { _mm512_cmp_pd_mask::<_CMP_LT_OQ>(self.0, other.0) }
+    }
+    #[inline(always)]
+    fn nan_lanes(self) -> u8 {
+        use std::arch::x86_64::{_CMP_UNORD_Q, _mm512_cmp_pd_mask};
+        // SAFETY: AVX-512F, see the type's docs.
+        unsafe { _mm512_cmp_pd_mask::<_CMP_UNORD_Q>(self.0, self.0) }
+    }
+    #[inline(always)]
+    fn load_vectors(vectors: &[DVec3; LANES]) -> [Avx512; 3] {
+        use std::arch::x86_64::{_mm512_loadu_pd, _mm512_permutex2var_pd, _mm512_setr_epi64};
+        // The 24 values x0 y0 z0 x1 … z7 are three registers r0, r1, r2; each component is
+        // gathered from two of them, then completed from the third (index i < 8: the first
+        // operand's lane i, i ≥ 8: the second's lane i - 8).
+        // SAFETY: AVX-512F, see the type's docs; `vectors` is 24 contiguous f64 (`DVec3` is
+        // `repr(C)` with three f64), three unaligned 512-bit loads.
+        unsafe {
+            let p = vectors.as_ptr().cast::<f64>();
+            let (r0, r1, r2) = (
+                _mm512_loadu_pd(p),
+                _mm512_loadu_pd(p.add(8)),
+                _mm512_loadu_pd(p.add(16)),
+            );
+            let gather = |a: [i64; 8], b: [i64; 8]| {
+                let t = _mm512_permutex2var_pd(
+                    r0,
+                    _mm512_setr_epi64(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]),
+                    r1,
+                );
+                Avx512(_mm512_permutex2var_pd(
+                    t,
+                    _mm512_setr_epi64(b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]),
+                    r2,
+                ))
+            };
+            [
+                gather([0, 3, 6, 9, 12, 15, 0, 0], [0, 1, 2, 3, 4, 5, 10, 13]),
+                gather([1, 4, 7, 10, 13, 0, 0, 0], [0, 1, 2, 3, 4, 8, 11, 14]),
+                gather([2, 5, 8, 11, 14, 0, 0, 0], [0, 1, 2, 3, 4, 9, 12, 15]),
+            ]
+        }
+    }
+    #[inline(always)]
+    fn store_vectors(lanes: [Avx512; 3], vectors: &mut [DVec3; LANES]) {
+        use std::arch::x86_64::{_mm512_permutex2var_pd, _mm512_setr_epi64, _mm512_storeu_pd};
+        let [x, y, z] = lanes.map(|l| l.0);
+        // SAFETY: AVX-512F, see the type's docs; `vectors` is 24 contiguous f64, three
+        // unaligned 512-bit stores.
+        unsafe {
+            let index =
+                |i: [i64; 8]| _mm512_setr_epi64(i[0], i[1], i[2], i[3], i[4], i[5], i[6], i[7]);
+            // r0 = x0 y0 z0 x1 y1 z1 x2 y2
+            let t = _mm512_permutex2var_pd(x, index([0, 8, 0, 1, 9, 0, 2, 10]), y);
+            let r0 = _mm512_permutex2var_pd(t, index([0, 1, 8, 3, 4, 9, 6, 7]), z);
+            // r1 = z2 x3 y3 z3 x4 y4 z4 x5
+            let t = _mm512_permutex2var_pd(x, index([0, 3, 11, 0, 4, 12, 0, 5]), y);
+            let r1 = _mm512_permutex2var_pd(t, index([10, 1, 2, 11, 4, 5, 12, 7]), z);
+            // r2 = y5 z5 x6 y6 z6 x7 y7 z7
+            let t = _mm512_permutex2var_pd(y, index([5, 13, 0, 6, 14, 0, 7, 15]), z);
+            let r2 = _mm512_permutex2var_pd(t, index([0, 1, 14, 3, 4, 15, 6, 7]), x);
+            let p = vectors.as_mut_ptr().cast::<f64>();
+            _mm512_storeu_pd(p, r0);
+            _mm512_storeu_pd(p.add(8), r1);
+            _mm512_storeu_pd(p.add(16), r2);
+        }
+    }
+}
+
+/// [`Lanes`] as two AVX2 registers of four f64 each.
+///
+/// Its methods call AVX2 instructions without checking the CPU: an `Avx2` value is only ever
+/// created inside `range_avx2` (a `target_feature(enable = "avx2")` function, which runs only
+/// where AVX2 was detected) or by the methods of a value that already exists.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+pub(crate) struct Avx2([std::arch::x86_64::__m256d; 2]);
+
+#[cfg(target_arch = "x86_64")]
+impl Lanes for Avx2 {
+    #[inline(always)]
+    fn zero() -> Avx2 {
+        // SAFETY: AVX2, see the type's docs.
+        let zero = unsafe { std::arch::x86_64::_mm256_setzero_pd() };
+        Avx2([zero, zero])
+    }
+    #[inline(always)]
+    fn load(values: &[f64; LANES]) -> Avx2 {
+        use std::arch::x86_64::_mm256_loadu_pd;
+        // SAFETY: AVX2, see the type's docs; two unaligned 256-bit loads of 4 f64 each, inside
+        // the 8 values of `values`.
+        unsafe {
+            Avx2([
+                _mm256_loadu_pd(values.as_ptr()),
+                _mm256_loadu_pd(values.as_ptr().add(4)),
+            ])
+        }
+    }
+    #[inline(always)]
+    fn store(self, out: &mut [f64; LANES]) {
+        use std::arch::x86_64::_mm256_storeu_pd;
+        // SAFETY: AVX2, see the type's docs; two 256-bit stores inside the 8 values of `out`.
+        unsafe {
+            _mm256_storeu_pd(out.as_mut_ptr(), self.0[0]);
+            _mm256_storeu_pd(out.as_mut_ptr().add(4), self.0[1]);
+        }
+    }
+    #[inline(always)]
+    fn add(self, other: Avx2) -> Avx2 {
+        use std::arch::x86_64::_mm256_add_pd;
+        // SAFETY: AVX2, see the type's docs.
+        unsafe {
+            Avx2([
+                _mm256_add_pd(self.0[0], other.0[0]),
+                _mm256_add_pd(self.0[1], other.0[1]),
+            ])
+        }
+    }
+    #[inline(always)]
+    fn sub(self, other: Avx2) -> Avx2 {
+        use std::arch::x86_64::_mm256_sub_pd;
+        // SAFETY: AVX2, see the type's docs.
+        unsafe {
+            Avx2([
+                _mm256_sub_pd(self.0[0], other.0[0]),
+                _mm256_sub_pd(self.0[1], other.0[1]),
+            ])
+        }
+    }
+    #[inline(always)]
+    fn mul(self, other: Avx2) -> Avx2 {
+        use std::arch::x86_64::_mm256_mul_pd;
+        // SAFETY: AVX2, see the type's docs.
+        unsafe {
+            Avx2([
+                _mm256_mul_pd(self.0[0], other.0[0]),
+                _mm256_mul_pd(self.0[1], other.0[1]),
+            ])
+        }
+    }
+    #[inline(always)]
+    fn splat(value: f64) -> Avx2 {
+        // SAFETY: AVX2, see the type's docs.
+        let v = unsafe { std::arch::x86_64::_mm256_set1_pd(value) };
+        Avx2([v, v])
+    }
+    #[inline(always)]
+    fn clear_below(self, k: usize) -> Avx2 {
+        let mut values = [0.0; LANES];
+        self.store(&mut values);
+        values[..k.min(LANES)].fill(0.0);
+        Avx2::load(&values)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Avx2 {
+        use std::arch::x86_64::_mm256_sqrt_pd;
+        // SAFETY: AVX2, see the type's docs.
+        unsafe { Avx2([_mm256_sqrt_pd(self.0[0]), _mm256_sqrt_pd(self.0[1])]) }
+    }
+    #[inline(always)]
+    fn div(self, other: Avx2) -> Avx2 {
+        use std::arch::x86_64::_mm256_div_pd;
+        // SAFETY: AVX2, see the type's docs.
+        unsafe {
+            Avx2([
+                _mm256_div_pd(self.0[0], other.0[0]),
+                _mm256_div_pd(self.0[1], other.0[1]),
+            ])
+        }
+    }
+    #[inline(always)]
+    fn select(self, mask: u8) -> Avx2 {
+        use std::arch::x86_64::{
+            _mm256_and_pd, _mm256_and_si256, _mm256_castsi256_pd, _mm256_cmpeq_epi64,
+            _mm256_set1_epi64x, _mm256_setr_epi64x,
+        };
+        // SAFETY: AVX2, see the type's docs. Lane l of half h keeps its value when bit 4h + l
+        // of the mask is set: (mask & bit) == bit gives all-ones lanes there.
+        unsafe {
+            let bits = _mm256_set1_epi64x(i64::from(mask));
+            let keep = |lo: i64| {
+                let b = _mm256_setr_epi64x(lo, lo << 1, lo << 2, lo << 3);
+                _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(bits, b), b))
+            };
+            Avx2([
+                _mm256_and_pd(self.0[0], keep(1)),
+                _mm256_and_pd(self.0[1], keep(16)),
+            ])
+        }
+    }
+    #[inline(always)]
+    fn less_than(self, other: Avx2) -> u8 {
+        use std::arch::x86_64::{_CMP_LT_OQ, _mm256_cmp_pd, _mm256_movemask_pd};
+        // SAFETY: AVX2, see the type's docs; movemask gives one bit per lane.
+        unsafe {
+            let lo = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(self.0[0], other.0[0]));
+            let hi = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(self.0[1], other.0[1]));
+            (lo | (hi << 4)) as u8
+        }
+    }
+    #[inline(always)]
+    fn nan_lanes(self) -> u8 {
+        use std::arch::x86_64::{_CMP_UNORD_Q, _mm256_cmp_pd, _mm256_movemask_pd};
+        // SAFETY: AVX2, see the type's docs; movemask gives one bit per lane.
+        unsafe {
+            let lo = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_UNORD_Q>(self.0[0], self.0[0]));
+            let hi = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_UNORD_Q>(self.0[1], self.0[1]));
+            (lo | (hi << 4)) as u8
+        }
+    }
+    #[inline(always)]
+    fn where_positive(self, condition: Avx2) -> Avx2 {
+        use std::arch::x86_64::{_CMP_GT_OQ, _mm256_and_pd, _mm256_cmp_pd, _mm256_setzero_pd};
+        // SAFETY: AVX2, see the type's docs. The comparison gives all-ones lanes where
+        // `condition > 0` (false for NaN), and `and` keeps `self` there.
+        unsafe {
+            let zero = _mm256_setzero_pd();
+            let keep = [
+                _mm256_cmp_pd::<_CMP_GT_OQ>(condition.0[0], zero),
+                _mm256_cmp_pd::<_CMP_GT_OQ>(condition.0[1], zero),
+            ];
+            Avx2([
+                _mm256_and_pd(self.0[0], keep[0]),
+                _mm256_and_pd(self.0[1], keep[1]),
+            ])
+        }
+    }
+}

@@ -1,0 +1,115 @@
+//! Contacts inside pass 2 of the stencil: a broad phase on a whole chunk in registers
+//! (`may_touch`, no square roots) and the scalar contact code of [`super::super::collide`] for
+//! the few particles that may touch (`contact_lanes`).
+
+#[allow(clippy::wildcard_imports)]
+use super::*;
+
+/// The chunk's particles (bit `l` for lane `l`) that may touch one of `colliders` (closer than
+/// `epsilon`, m, or inside): a test without square roots with a relative margin of 10⁻⁹, so
+/// that it never leaves out a particle that [`Collider::contact`] would put within `epsilon`.
+#[inline(always)]
+pub(super) fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3]) -> u8 {
+    const MARGIN: f64 = 1e-9;
+    let dot = |p: [V; 3], n: DVec3| {
+        p[0].mul(V::splat(n.x))
+            .add(p[1].mul(V::splat(n.y)))
+            .add(p[2].mul(V::splat(n.z)))
+    };
+    let minus = |p: DVec3| {
+        [
+            x[0].sub(V::splat(p.x)),
+            x[1].sub(V::splat(p.y)),
+            x[2].sub(V::splat(p.z)),
+        ]
+    };
+    let squared = |d: [V; 3]| d[0].mul(d[0]).add(d[1].mul(d[1])).add(d[2].mul(d[2]));
+    let mut mask = 0u8;
+    for collider in colliders {
+        mask |= match *collider {
+            Collider::Plane { point, normal } => {
+                // φ = (x - p)·n < ε, with a margin for rounding.
+                let phi = dot(minus(point), normal);
+                let scale = point.abs().max_element() + 1.0;
+                // NaN: let the exact test decide.
+                phi.less_than(V::splat(epsilon + MARGIN * scale)) | phi.nan_lanes()
+            }
+            Collider::Sphere { center, radius } => {
+                // |x - c| - r < ε  ⇔  |x - c|² < (r + ε)².
+                let reach = (radius + epsilon).max(0.0);
+                let d2 = squared(minus(center));
+                d2.less_than(V::splat(reach * reach * (1.0 + MARGIN) + MARGIN)) | d2.nan_lanes()
+            }
+            Collider::Bowl { center, radius, .. } => {
+                // r - |x - c| < ε  ⇔  |x - c|² > (r - ε)² (when r > ε; the rim is left to the
+                // exact test).
+                let inner = (radius - epsilon).max(0.0);
+                let d2 = squared(minus(center));
+                !d2.less_than(V::splat(inner * inner * (1.0 - MARGIN)))
+            }
+            Collider::HolePlane {
+                point,
+                normal,
+                hole_center,
+                hole_radius,
+            } => {
+                // Every contact needs the height h = (x - p)·n < ε; below the floor (h < 0)
+                // only the shaft's wall band ρ > R - ε or the solid, so ρ² > (R - ε)².
+                let scale = point.abs().max_element() + hole_center.abs().max_element() + 1.0;
+                let h = dot(minus(point), normal);
+                let low = h.less_than(V::splat(epsilon + MARGIN * scale)) | h.nan_lanes();
+                let q = minus(hole_center);
+                let along = dot(q, normal);
+                let radial = [
+                    q[0].sub(along.mul(V::splat(normal.x))),
+                    q[1].sub(along.mul(V::splat(normal.y))),
+                    q[2].sub(along.mul(V::splat(normal.z))),
+                ];
+                let rho2 = squared(radial);
+                let inner = (hole_radius - epsilon).max(0.0);
+                let near_wall = !rho2.less_than(V::splat(inner * inner * (1.0 - MARGIN)));
+                let above = !h.less_than(V::splat(-MARGIN * scale));
+                low & (above | near_wall)
+            }
+        };
+    }
+    mask
+}
+
+/// The contact force of `d`'s colliders on the `candidates` lanes of a chunk (positions `x`,
+/// velocities `v`, forces before contact `f`), with [`contact_force`], the function of
+/// [`super::collide::contact_forces`]: the new forces, and the contact power
+/// `-(f_contact)·v` (W) per lane.
+#[inline(always)]
+pub(super) fn contact_lanes<V: Lanes>(
+    d: &Dynamics,
+    x: [V; 3],
+    v: [V; 3],
+    f: [V; 3],
+    candidates: u8,
+) -> ([V; 3], V) {
+    let unpack = |lanes: [V; 3]| {
+        let mut values = [[0.0; LANES]; 3];
+        for (c, lane) in lanes.into_iter().enumerate() {
+            lane.store(&mut values[c]);
+        }
+        values
+    };
+    let (xs, vs, mut fs) = (unpack(x), unpack(v), unpack(f));
+    let mut power = [0.0; LANES];
+    for l in (0..LANES).filter(|l| candidates & (1 << l) != 0) {
+        let at = |a: &[[f64; LANES]; 3]| DVec3::new(a[0][l], a[1][l], a[2][l]);
+        let (xl, vl, fl) = (at(&xs), at(&vs), at(&fs));
+        if let Some(total) = contact_force(d.colliders, d.contact, xl, vl, fl) {
+            // P = -f_contact · v (see `collide::contact_power`).
+            power[l] = -(total - fl).dot(vl);
+            fs[0][l] = total.x;
+            fs[1][l] = total.y;
+            fs[2][l] = total.z;
+        }
+    }
+    (
+        [V::load(&fs[0]), V::load(&fs[1]), V::load(&fs[2])],
+        V::load(&power),
+    )
+}

@@ -1,0 +1,211 @@
+//! The spring kernels of the stencil, one per instruction set (see the parent module's docs,
+//! "One reciprocal square root" and "Three kernels"): the exact one (`sqrt`, then `1/L`) in
+//! plain Rust and on AVX2 registers, and the AVX-512F one with the reciprocal square root
+//! estimate and two Newton steps. Each instantiates the streaming loop of [`super::passes`].
+
+use super::passes::*;
+#[allow(clippy::wildcard_imports)]
+use super::*;
+
+/// The springs of one chunk with correctly rounded operations only: `sqrt`, then `1/L`, in the
+/// order of [`Spring::force_on_a`](super::springs::Spring::force_on_a) (the result does not
+/// depend on the lane type: [`Plain`] and [`Avx2`] give the same bits); and the dampers' power
+/// `k_d ((v_b - v_a)·n)²` (W).
+#[inline(always)]
+pub(super) fn springs_exact<V: Lanes>(
+    g: &Group,
+    first: &[V; 6],
+    w: &Window,
+    i: usize,
+    p: usize,
+) -> (Forces<V>, V) {
+    let j = i + g.delta;
+    // d = x_b - x_a, L = |d|
+    let dx = V::load(lanes(w.x[0], j)).sub(first[0]);
+    let dy = V::load(lanes(w.x[1], j)).sub(first[1]);
+    let dz = V::load(lanes(w.x[2], j)).sub(first[2]);
+    let length = dx.mul(dx).add(dy.mul(dy)).add(dz.mul(dz)).sqrt();
+    // n = d / L; a zero-length spring has no direction and no force.
+    let inv = V::splat(1.0).div(length).where_positive(length);
+    let (nx, ny, nz) = (dx.mul(inv), dy.mul(inv), dz.mul(inv));
+    // Hooke k (L - L0) plus the damper k_d (v_b - v_a)·n, zero where there is no spring.
+    let dvx = V::load(lanes(w.v[0], j)).sub(first[3]);
+    let dvy = V::load(lanes(w.v[1], j)).sub(first[4]);
+    let dvz = V::load(lanes(w.v[2], j)).sub(first[5]);
+    let rel = dvx.mul(nx).add(dvy.mul(ny)).add(dvz.mul(nz));
+    let rest = V::load(lanes(&g.rest_length, p));
+    let hooke = V::splat(g.stiffness).mul(length.sub(rest));
+    let damper = V::splat(g.damping).mul(rel);
+    let present = g.present[p / LANES];
+    let tension = hooke.add(damper).select(present);
+    let power = damper.mul(rel).select(present);
+    ([tension.mul(nx), tension.mul(ny), tension.mul(nz)], power)
+}
+
+/// The streaming loop in plain Rust with the exact springs.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn range_portable<const POWER: bool>(
+    st: &Stencil,
+    s: &mut Scratch,
+    x: &[DVec3],
+    v: &[DVec3],
+    q0: usize,
+    q1: usize,
+    part: &mut Part,
+    output: &Output,
+) {
+    range_body::<Plain, POWER>(
+        st,
+        s,
+        x,
+        v,
+        q0,
+        q1,
+        part,
+        output,
+        // A closure, not the function item: the item would be called through a shim that is
+        // not inlined.
+        #[inline(always)]
+        #[allow(clippy::redundant_closure)]
+        |g, first, w, i, p| springs_exact::<Plain>(g, first, w, i, p),
+    );
+}
+
+/// The streaming loop on AVX2 registers with the exact springs (the same operations as the
+/// portable loop, no fused multiply-add: bit-identical results).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn range_avx2<const POWER: bool>(
+    st: &Stencil,
+    s: &mut Scratch,
+    x: &[DVec3],
+    v: &[DVec3],
+    q0: usize,
+    q1: usize,
+    part: &mut Part,
+    output: &Output,
+) {
+    range_body::<Avx2, POWER>(
+        st,
+        s,
+        x,
+        v,
+        q0,
+        q1,
+        part,
+        output,
+        // A closure, not the function item: only a closure is inlined (and with it the AVX2
+        // instructions, which cannot be inlined into a function without AVX2).
+        #[inline(always)]
+        #[allow(clippy::redundant_closure)]
+        |g, first, w, i, p| springs_exact::<Avx2>(g, first, w, i, p),
+    );
+}
+
+/// The streaming loop with the AVX-512 springs.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn range_avx512<const POWER: bool>(
+    st: &Stencil,
+    s: &mut Scratch,
+    x: &[DVec3],
+    v: &[DVec3],
+    q0: usize,
+    q1: usize,
+    part: &mut Part,
+    output: &Output,
+) {
+    range_body::<Avx512, POWER>(
+        st,
+        s,
+        x,
+        v,
+        q0,
+        q1,
+        part,
+        output,
+        #[inline(always)]
+        |g, first, w, i, p| {
+            // SAFETY: this function only runs on a CPU with AVX-512F (see `Stencil::range`), and
+            // `range_body` calls with chunks inside the window and the group's arrays.
+            unsafe { springs_avx512(g, first, w, i, p) }
+        },
+    );
+}
+
+/// The springs of one chunk with AVX-512F: `1/L` from the reciprocal square root estimate and
+/// two Newton steps (see the module docs), fused multiply-adds.
+///
+/// Not itself a `target_feature` function, so that the compiler inlines it (a function with
+/// more target features than its caller is never inlined); it is only called from
+/// `range_avx512`, which has them.
+///
+/// # Safety
+/// The CPU must support AVX-512F, and the window and `g`'s arrays must hold the chunk (see
+/// `range_body`): `i + g.delta + LANES` at most the window's length, `p + LANES` at most
+/// the length of `g.rest_length` and `g.present`. These are not checked in release builds.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(super) unsafe fn springs_avx512(
+    g: &Group,
+    first: &[Avx512; 6],
+    w: &Window,
+    i: usize,
+    p: usize,
+) -> (Forces<Avx512>, Avx512) {
+    use std::arch::x86_64::{
+        _CMP_GT_OQ, _mm512_cmp_pd_mask, _mm512_fmadd_pd, _mm512_fmsub_pd, _mm512_fnmadd_pd,
+        _mm512_loadu_pd, _mm512_maskz_mul_pd, _mm512_maskz_rsqrt14_pd, _mm512_mul_pd,
+        _mm512_set1_pd, _mm512_setzero_pd, _mm512_sub_pd,
+    };
+    let j = i + g.delta;
+    debug_assert!(j + LANES <= w.x[0].len() && p + LANES <= g.rest_length.len());
+    // SAFETY (the intrinsics): the caller guarantees AVX-512F, and that LANES = 8 values exist
+    // from every index loaded below (window: `i` and `j = i + δ`; group arrays: `p`), which is
+    // what one unaligned 512-bit load reads.
+    unsafe {
+        let load = |values: &[f64], at: usize| _mm512_loadu_pd(values.as_ptr().add(at));
+        // d = x_b - x_a
+        let dx = _mm512_sub_pd(load(w.x[0], j), first[0].0);
+        let dy = _mm512_sub_pd(load(w.x[1], j), first[1].0);
+        let dz = _mm512_sub_pd(load(w.x[2], j), first[2].0);
+        // a = d·d = L²
+        let a = _mm512_fmadd_pd(dz, dz, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dx, dx)));
+        // k_d (v_b - v_a)·d, computed while the square root is refined: (v_b - v_a)·n is
+        // this times 1/L.
+        let dvx = _mm512_sub_pd(load(w.v[0], j), first[3].0);
+        let dvy = _mm512_sub_pd(load(w.v[1], j), first[4].0);
+        let dvz = _mm512_sub_pd(load(w.v[2], j), first[5].0);
+        let dv_d = _mm512_fmadd_pd(dvz, dz, _mm512_fmadd_pd(dvy, dy, _mm512_mul_pd(dvx, dx)));
+        let damper = _mm512_mul_pd(_mm512_set1_pd(g.damping), dv_d);
+        // y₀ ≈ 1/√a to 2⁻¹⁴, and 0 where a = 0 (a zero-length spring has no direction, no force).
+        let nonzero = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(a, _mm512_setzero_pd());
+        let mut y = _mm512_maskz_rsqrt14_pd(nonzero, a);
+        let (one, half) = (_mm512_set1_pd(1.0), _mm512_set1_pd(0.5));
+        for _ in 0..2 {
+            // e = 1 - a y², y ← y + ½ y e (Newton–Raphson for 1/√a).
+            let e = _mm512_fnmadd_pd(_mm512_mul_pd(a, y), y, one);
+            y = _mm512_fmadd_pd(_mm512_mul_pd(half, y), e, y);
+        }
+        // L = a / √a = a y; tension = k (L - L0) + k_d (v_b - v_a)·d / L
+        let stretch = _mm512_fmsub_pd(a, y, load(&g.rest_length, p));
+        let damper_n = _mm512_mul_pd(damper, y);
+        let tension = _mm512_fmadd_pd(_mm512_set1_pd(g.stiffness), stretch, damper_n);
+        // f = tension n = (tension / L) d, zero where there is no spring.
+        let present = g.present[p / LANES];
+        let scale = _mm512_maskz_mul_pd(present, tension, y);
+        // The damper's power k_d ((v_b - v_a)·n)² = (k_d (v_b - v_a)·n) ((v_b - v_a)·d / L);
+        // unused (and not computed) unless the caller asks for the power.
+        let power = _mm512_maskz_mul_pd(present, damper_n, _mm512_mul_pd(dv_d, y));
+        (
+            [
+                Avx512(_mm512_mul_pd(dx, scale)),
+                Avx512(_mm512_mul_pd(dy, scale)),
+                Avx512(_mm512_mul_pd(dz, scale)),
+            ],
+            Avx512(power),
+        )
+    }
+}

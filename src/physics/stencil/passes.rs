@@ -1,0 +1,552 @@
+//! The streaming loop of the stencil (see the parent module's docs): the per-thread scratch
+//! buffers, the structure-of-arrays window, pass 1 and pass 2 of each tile (`range_body`), and
+//! the end of pass 2 for each chunk (`finish`: total force, acceleration, an integrator's stage,
+//! the dissipated power), with the loads and stores of chunks and force rings.
+
+use super::contacts::*;
+#[allow(clippy::wildcard_imports)]
+use super::*;
+
+impl Output<'_> {
+    /// How many of `outs` this output writes (always the first ones), and whether `outs[2]`
+    /// is optional (written when not empty).
+    pub(super) fn outputs(&self) -> (usize, bool) {
+        match self {
+            Output::Add | Output::Forces(_) | Output::Accelerations(_) => (1, false),
+            Output::Power(_) => (0, false),
+            Output::Step {
+                update: Update::Euler { .. },
+                ..
+            } => (2, true),
+            Output::Step { .. } => (2, false),
+        }
+    }
+
+    /// Panics when a slice this output reads is shorter than `n`.
+    pub(super) fn check(&self, n: usize) {
+        let dynamics = match self {
+            Output::Add => return,
+            Output::Forces(d) | Output::Accelerations(d) | Output::Power(d) => d,
+            Output::Step {
+                dynamics, update, ..
+            } => {
+                match update {
+                    Update::SemiImplicitEuler { .. }
+                    | Update::Euler {
+                        base: Base::Input, ..
+                    } => {}
+                    Update::Euler {
+                        base: Base::InPlace,
+                        ..
+                    } => {}
+                    Update::Euler {
+                        base: Base::Slices(x, v),
+                        ..
+                    } => assert!(x.len() >= n && v.len() >= n, "base state too short"),
+                    Update::Rk4 { a, v, .. } => assert!(
+                        a.iter().chain(v).all(|s| s.len() >= n),
+                        "RK4 slopes too short"
+                    ),
+                }
+                dynamics
+            }
+        };
+        assert!(
+            dynamics.mass.len() >= n && dynamics.inv_mass.len() >= n,
+            "masses too short"
+        );
+    }
+}
+
+/// The first `len` values of `rest` (all of them when shorter), which keeps the others.
+pub(super) fn take<'a>(rest: &mut &'a mut [DVec3], len: usize) -> &'a mut [DVec3] {
+    let len = len.min(rest.len());
+    let (mine, others) = std::mem::take(rest).split_at_mut(len);
+    *rest = others;
+    mine
+}
+
+/// `o[..n]` when `keep`, else `o[..0]`.
+pub(super) fn cut(o: &mut [DVec3], keep: bool, n: usize) -> &mut [DVec3] {
+    if keep { &mut o[..n] } else { &mut o[..0] }
+}
+
+/// One part's pieces of the outputs: `outs[k][i]` and `power[2 i..]` belong to the part's
+/// particle `q0 + i`.
+pub(super) struct Part<'o> {
+    pub(super) outs: [&'o mut [DVec3]; 3],
+    pub(super) power: &'o mut [f64],
+}
+
+/// Scratch buffers of one thread (reused, so steps do not allocate).
+#[derive(Default)]
+pub(super) struct Scratch {
+    /// Positions `x`, `y`, `z` of the particles `base..` (m), zero past the last particle.
+    pub(super) x: [Aligned; 3],
+    /// Velocities (m/s), the same layout.
+    pub(super) v: [Aligned; 3],
+    /// Every group's force ring (N), see [`Group::ring_offset`].
+    pub(super) ring: Aligned,
+}
+
+/// A buffer of f64 whose used part starts at a 64-byte boundary, so that a chunk of `LANES`
+/// values at a multiple of `LANES` is one cache line (a load that straddles two lines costs
+/// two).
+#[derive(Default)]
+pub(super) struct Aligned(pub(super) Vec<f64>);
+
+impl Aligned {
+    /// `len` values starting at a 64-byte boundary; grows the buffer (with zeros) if needed.
+    pub(super) fn get_mut(&mut self, len: usize) -> &mut [f64] {
+        if self.0.len() < len + LANES {
+            self.0.resize(len + LANES, 0.0);
+        }
+        // At most LANES - 1 values to the next 64-byte boundary (f64 are 8-byte aligned).
+        let offset = self.0.as_ptr().align_offset(64).min(LANES);
+        &mut self.0[offset..offset + len]
+    }
+}
+
+thread_local! {
+    pub(super) static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
+}
+
+/// One chunk of spring forces: `[fx, fy, fz]` (N), one spring per lane.
+pub(super) type Forces<V> = [V; 3];
+
+/// The structure-of-arrays copy of the particles `base..base + len` of one range (zero past
+/// the last particle): what the kernels read.
+pub(super) struct Window<'a> {
+    /// Positions `x`, `y`, `z` (m), each of length `len`.
+    pub(super) x: [&'a [f64]; 3],
+    /// Velocities (m/s), each of length `len`.
+    pub(super) v: [&'a [f64]; 3],
+}
+
+impl Window<'_> {
+    /// Positions and velocities `[x, y, z, v_x, v_y, v_z]` of the `LANES` particles from window
+    /// index `i`: the first ends of every group's springs starting there (loaded once per
+    /// chunk, not once per group).
+    #[inline(always)]
+    pub(super) fn first_ends<V: Lanes>(&self, i: usize) -> [V; 6] {
+        // Written out, not with `map`: the closure of `map` would not be inlined, and neither
+        // would the AVX-512 loads inside it.
+        let [x, y, z] = self.x;
+        let [vx, vy, vz] = self.v;
+        [
+            V::load(lanes(x, i)),
+            V::load(lanes(y, i)),
+            V::load(lanes(z, i)),
+            V::load(lanes(vx, i)),
+            V::load(lanes(vy, i)),
+            V::load(lanes(vz, i)),
+        ]
+    }
+}
+
+/// The streaming loop of the module docs for particles `q0..q1`, with `springs` computing each
+/// chunk of springs (forces, and their dampers' power when `POWER`). Inlined into one copy per
+/// instruction set.
+///
+/// Every call `springs(g, first, w, i, p)` has `p` a multiple of `LANES`, `p < g.starts` and
+/// `i = p - base` with `i + g.delta + LANES <= len`: the `LANES` springs starting at `p` and
+/// both their ends are inside the window and inside `g`'s padded arrays.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn range_body<V: Lanes, const POWER: bool>(
+    st: &Stencil,
+    s: &mut Scratch,
+    x: &[DVec3],
+    v: &[DVec3],
+    q0: usize,
+    q1: usize,
+    part: &mut Part,
+    output: &Output,
+    // The `LANES` springs of a group starting at window index `i` (particle `p`), given the
+    // positions and velocities of their first ends: their forces, and their dampers' power.
+    springs: impl Fn(&Group, &[V; 6], &Window, usize, usize) -> (Forces<V>, V),
+) {
+    if q0 >= q1 {
+        return;
+    }
+    let n = st.particles;
+    // Structure of arrays for particles base..base + len: the springs starting in the halo
+    // (from q0 - reach) up to the chunk that contains q1 - 1, and their second ends.
+    let base = q0.saturating_sub(st.reach) / LANES * LANES;
+    let len = q1.next_multiple_of(LANES) + st.reach - base;
+    let Scratch { x: xs, v: vs, ring } = s;
+    let [xs0, xs1, xs2] = xs;
+    let [vs0, vs1, vs2] = vs;
+    let mut xs = [xs0.get_mut(len), xs1.get_mut(len), xs2.get_mut(len)];
+    let mut vs = [vs0.get_mut(len), vs1.get_mut(len), vs2.get_mut(len)];
+    let ring = ring.get_mut(st.ring_len);
+    let real = n.min(base + len) - base;
+    let whole = real / LANES * LANES;
+    for i in (0..whole).step_by(LANES) {
+        let p = base + i;
+        let xc = V::load_vectors(x[p..p + LANES].try_into().expect("a chunk"));
+        let vc = V::load_vectors(v[p..p + LANES].try_into().expect("a chunk"));
+        for c in 0..3 {
+            xc[c].store((&mut xs[c][i..i + LANES]).try_into().expect("a chunk"));
+            vc[c].store((&mut vs[c][i..i + LANES]).try_into().expect("a chunk"));
+        }
+    }
+    for (i, (x, v)) in x[base + whole..base + real]
+        .iter()
+        .zip(&v[base + whole..base + real])
+        .enumerate()
+    {
+        let i = whole + i;
+        xs[0][i] = x.x;
+        xs[1][i] = x.y;
+        xs[2][i] = x.z;
+        vs[0][i] = v.x;
+        vs[1][i] = v.y;
+        vs[2][i] = v.z;
+    }
+    for c in xs.iter_mut().chain(vs.iter_mut()) {
+        c[real..].fill(0.0);
+    }
+    let w = Window {
+        x: [&*xs[0], &*xs[1], &*xs[2]],
+        v: [&*vs[0], &*vs[1], &*vs[2]],
+    };
+    // Halo: the springs that start before q0 and end at q0 or later, into the rings.
+    for g in &st.groups {
+        let first = q0.saturating_sub(g.delta) / LANES * LANES;
+        for p in (first..q0.min(g.starts)).step_by(LANES) {
+            let (f, _) = springs(g, &w.first_ends(p - base), &w, p - base, p);
+            ring_store(ring, g, p, f);
+        }
+    }
+    const CHUNKS: usize = TILE / LANES;
+    for t0 in (q0..q1).step_by(TILE) {
+        let t1 = (t0 + TILE).min(q1);
+        // Pass 1, chunk by chunk: the springs that start here, offset by offset (the groups
+        // a chunk has are a prefix of the list), into the rings, and their sum `plus`.
+        let mut plus = [[V::zero(); 3]; CHUNKS];
+        let mut spring_power = [V::zero(); CHUNKS];
+        for (c, p) in (t0..t1).step_by(LANES).enumerate() {
+            let first = w.first_ends::<V>(p - base);
+            let mut sum = [V::zero(); 3];
+            let mut power = V::zero();
+            for g in st.groups.iter().take_while(|g| p < g.starts) {
+                let (f, pw) = springs(g, &first, &w, p - base, p);
+                ring_store(ring, g, p, f);
+                for (total, part) in sum.iter_mut().zip(f) {
+                    *total = total.add(part);
+                }
+                if POWER {
+                    power = power.add(pw);
+                }
+            }
+            plus[c] = sum;
+            spring_power[c] = power;
+        }
+        // Pass 2, chunk by chunk: minus the springs that end here (they started δ earlier).
+        // The ring of δ holds at least the last δ + TILE + LANES forces.
+        for (c, q) in (t0..t1).step_by(LANES).enumerate() {
+            let mut minus = [V::zero(); 3];
+            for g in &st.groups {
+                let mut f: Forces<V> = ring_load(ring, g, q.wrapping_sub(g.delta));
+                if q < g.delta {
+                    // Near particle 0 the first lanes have no such spring (it would start
+                    // before particle 0); their ring slots hold other values.
+                    let k = g.delta - q;
+                    f = [
+                        f[0].clear_below(k),
+                        f[1].clear_below(k),
+                        f[2].clear_below(k),
+                    ];
+                }
+                for (total, part) in minus.iter_mut().zip(f) {
+                    *total = total.add(part);
+                }
+            }
+            let sum = [
+                plus[c][0].sub(minus[0]),
+                plus[c][1].sub(minus[1]),
+                plus[c][2].sub(minus[2]),
+            ];
+            let i = q - base;
+            let chunk = Chunk {
+                q,
+                at: q - q0,
+                count: (q1 - q).min(LANES),
+                x: components(w.x, i),
+                v: components(w.v, i),
+            };
+            finish::<V, POWER>(output, &chunk, sum, spring_power[c], part);
+        }
+        if let Output::Step {
+            after: Some(after), ..
+        } = output
+        {
+            let (a, b) = (t0 - q0, t1 - q0);
+            let [xo, vo, _] = &mut part.outs;
+            after(&mut xo[a..b], &mut vo[a..b]);
+        }
+    }
+}
+
+/// One chunk of particles in pass 2: particle `q` (a multiple of `LANES`) is index `at` of the
+/// part's outputs; `count` of its `LANES` particles exist; `x`, `v` are the pass's input.
+pub(super) struct Chunk<V> {
+    pub(super) q: usize,
+    pub(super) at: usize,
+    pub(super) count: usize,
+    pub(super) x: [V; 3],
+    pub(super) v: [V; 3],
+}
+
+/// Pass 2's end for one chunk: from the spring forces `sum` (N) to what `output` asks for,
+/// and the chunk's dissipated power when `POWER`.
+#[inline(always)]
+pub(super) fn finish<V: Lanes, const POWER: bool>(
+    output: &Output,
+    chunk: &Chunk<V>,
+    sum: [V; 3],
+    spring_power: V,
+    part: &mut Part,
+) {
+    let Chunk { q, at, count, x, v } = *chunk;
+    let d = match *output {
+        Output::Add => {
+            let out = &mut part.outs[0][at..];
+            let old = load_chunk::<V>(out, count);
+            let new = [old[0].add(sum[0]), old[1].add(sum[1]), old[2].add(sum[2])];
+            store_chunk(new, out, count);
+            return;
+        }
+        Output::Forces(d) | Output::Accelerations(d) | Output::Power(d) => d,
+        Output::Step { dynamics, .. } => dynamics,
+    };
+    // f = (m g - c v) + F_springs, in the order of `forces`; then the contact force.
+    let m = load_padded::<V>(d.mass, q, count);
+    let mut f = weight_drag_springs(m, d.gravity, d.drag, v, sum);
+    let w = load_padded::<V>(d.inv_mass, q, count);
+    let free = V::zero().less_than(w);
+    let mut contact_power = V::zero();
+    if !d.colliders.is_empty() {
+        let candidates = free & may_touch(d.colliders, d.contact.epsilon, x);
+        if candidates != 0 {
+            (f, contact_power) = contact_lanes(&d, x, v, f, candidates);
+        }
+    }
+    if POWER {
+        // Drag c |v|² of the free particles, added to the dampers of the springs that start
+        // here (see `energy::dissipated_power`).
+        let drag = if d.drag == 0.0 {
+            V::zero()
+        } else {
+            let v2 = v[0].mul(v[0]).add(v[1].mul(v[1])).add(v[2].mul(v[2]));
+            V::splat(d.drag).mul(v2).select(free)
+        };
+        let power = &mut part.power[2 * at..2 * at + 2 * LANES];
+        let (dampers, contact) = power.split_at_mut(LANES);
+        spring_power
+            .add(drag)
+            .store(dampers.try_into().expect("a chunk"));
+        contact_power.store(contact.try_into().expect("a chunk"));
+    }
+    let a = [f[0].mul(w), f[1].mul(w), f[2].mul(w)];
+    match *output {
+        Output::Add | Output::Power(_) => {}
+        Output::Forces(_) => store_chunk(f, &mut part.outs[0][at..], count),
+        Output::Accelerations(_) => store_chunk(a, &mut part.outs[0][at..], count),
+        Output::Step { update, .. } => {
+            let [xo, vo, ao] = &mut part.outs;
+            match update {
+                Update::SemiImplicitEuler { dt } => {
+                    let dt = V::splat(dt);
+                    // v' = v + dt a; then x' = x + dt v'.
+                    let v_new = [
+                        v[0].add(dt.mul(a[0])),
+                        v[1].add(dt.mul(a[1])),
+                        v[2].add(dt.mul(a[2])),
+                    ];
+                    let x_new = [
+                        x[0].add(dt.mul(v_new[0])),
+                        x[1].add(dt.mul(v_new[1])),
+                        x[2].add(dt.mul(v_new[2])),
+                    ];
+                    store_chunk(x_new, &mut xo[at..], count);
+                    store_chunk(v_new, &mut vo[at..], count);
+                }
+                Update::Euler { h, base } => {
+                    let (bx, bv) = match base {
+                        Base::Input => (x, v),
+                        Base::Slices(bx, bv) => {
+                            (load_chunk(&bx[q..], count), load_chunk(&bv[q..], count))
+                        }
+                        Base::InPlace => {
+                            (load_chunk(&xo[at..], count), load_chunk(&vo[at..], count))
+                        }
+                    };
+                    let h = V::splat(h);
+                    // x' = x_b + h v;  v' = v_b + h a.
+                    let x_new = [
+                        bx[0].add(h.mul(v[0])),
+                        bx[1].add(h.mul(v[1])),
+                        bx[2].add(h.mul(v[2])),
+                    ];
+                    let v_new = [
+                        bv[0].add(h.mul(a[0])),
+                        bv[1].add(h.mul(a[1])),
+                        bv[2].add(h.mul(a[2])),
+                    ];
+                    store_chunk(x_new, &mut xo[at..], count);
+                    store_chunk(v_new, &mut vo[at..], count);
+                    if !ao.is_empty() {
+                        store_chunk(a, &mut ao[at..], count);
+                    }
+                }
+                Update::Rk4 {
+                    sixth,
+                    a: [a1, a2, a3],
+                    v: [v2, v3],
+                } => {
+                    let (xn, vn) = (
+                        load_chunk::<V>(&xo[at..], count),
+                        load_chunk::<V>(&vo[at..], count),
+                    );
+                    let (a1, a2, a3) = (
+                        load_chunk::<V>(&a1[q..], count),
+                        load_chunk::<V>(&a2[q..], count),
+                        load_chunk::<V>(&a3[q..], count),
+                    );
+                    let (v2, v3) = (
+                        load_chunk::<V>(&v2[q..], count),
+                        load_chunk::<V>(&v3[q..], count),
+                    );
+                    let (two, sixth) = (V::splat(2.0), V::splat(sixth));
+                    // x' = x_n + dt/6 (k1x + 2 k2x + 2 k3x + k4x), k1x = v_n, k4x = v;
+                    // v' = v_n + dt/6 (k1v + 2 k2v + 2 k3v + k4v), k4v = a.
+                    // Written out per component, not with `array::from_fn`: its closure would
+                    // not be inlined, and the AVX-512 operations inside it would become calls.
+                    #[inline(always)]
+                    fn weighted<V: Lanes>(two: V, k1: V, k2: V, k3: V, k4: V) -> V {
+                        k1.add(two.mul(k2)).add(two.mul(k3)).add(k4)
+                    }
+                    let x_new: [V; 3] = [
+                        xn[0].add(sixth.mul(weighted(two, vn[0], v2[0], v3[0], v[0]))),
+                        xn[1].add(sixth.mul(weighted(two, vn[1], v2[1], v3[1], v[1]))),
+                        xn[2].add(sixth.mul(weighted(two, vn[2], v2[2], v3[2], v[2]))),
+                    ];
+                    let v_new: [V; 3] = [
+                        vn[0].add(sixth.mul(weighted(two, a1[0], a2[0], a3[0], a[0]))),
+                        vn[1].add(sixth.mul(weighted(two, a1[1], a2[1], a3[1], a[1]))),
+                        vn[2].add(sixth.mul(weighted(two, a1[2], a2[2], a3[2], a[2]))),
+                    ];
+                    store_chunk(x_new, &mut xo[at..], count);
+                    store_chunk(v_new, &mut vo[at..], count);
+                }
+            }
+        }
+    }
+}
+
+/// The `x`, `y`, `z` lanes of window arrays (positions or velocities) from index `i`.
+#[inline(always)]
+pub(super) fn components<V: Lanes>(arrays: [&[f64]; 3], i: usize) -> [V; 3] {
+    [
+        V::load(lanes(arrays[0], i)),
+        V::load(lanes(arrays[1], i)),
+        V::load(lanes(arrays[2], i)),
+    ]
+}
+
+/// `(m g - c v) + F_springs` (N), lane by lane, in the order of `forces`.
+#[inline(always)]
+pub(super) fn weight_drag_springs<V: Lanes>(
+    m: V,
+    g: DVec3,
+    c: f64,
+    v: [V; 3],
+    spring: [V; 3],
+) -> [V; 3] {
+    let c = V::splat(c);
+    [
+        m.mul(V::splat(g.x)).sub(c.mul(v[0])).add(spring[0]),
+        m.mul(V::splat(g.y)).sub(c.mul(v[1])).add(spring[1]),
+        m.mul(V::splat(g.z)).sub(c.mul(v[2])).add(spring[2]),
+    ]
+}
+
+/// `values[q..q + count]` as lanes, zero past `count`.
+#[inline(always)]
+pub(super) fn load_padded<V: Lanes>(values: &[f64], q: usize, count: usize) -> V {
+    if count == LANES {
+        V::load(lanes(values, q))
+    } else {
+        // The last chunk of a range that does not end on a multiple of LANES.
+        let mut chunk = [0.0; LANES];
+        chunk[..count].copy_from_slice(&values[q..q + count]);
+        V::load(&chunk)
+    }
+}
+
+/// The first `count` (at most `LANES`) vectors of `vectors` as lanes `[x, y, z]`, zero past
+/// `count`.
+#[inline(always)]
+pub(super) fn load_chunk<V: Lanes>(vectors: &[DVec3], count: usize) -> [V; 3] {
+    if count == LANES {
+        V::load_vectors(vectors[..LANES].try_into().expect("a chunk"))
+    } else {
+        to_lanes(&vectors[..count])
+    }
+}
+
+/// Writes lanes `[x, y, z]` into the first `count` (at most `LANES`) vectors of `vectors`.
+#[inline(always)]
+pub(super) fn store_chunk<V: Lanes>(lanes: [V; 3], vectors: &mut [DVec3], count: usize) {
+    if count == LANES {
+        V::store_vectors(lanes, (&mut vectors[..LANES]).try_into().expect("a chunk"));
+    } else {
+        from_lanes(lanes, &mut vectors[..count]);
+    }
+}
+
+/// Keeps the forces of the chunk of springs starting at `p` (a multiple of `LANES`) in the
+/// ring of `g`: component `c` of particle `p` at `ring_offset + c (R + LANES) + p mod R`.
+///
+/// # Panics
+/// If `ring` is shorter than the stencil's `ring_len` (never: `range_body` sizes it).
+#[inline(always)]
+pub(super) fn ring_store<V: Lanes>(ring: &mut [f64], g: &Group, p: usize, f: Forces<V>) {
+    let slot = p & (g.ring - 1);
+    let stride = g.ring + LANES;
+    // One check for all the stores below: the group's three components. Within them,
+    // slot + LANES <= R + LANES = stride, and the mirror is the last LANES of a component.
+    let ring = &mut ring[g.ring_offset..g.ring_offset + 3 * stride];
+    for (c, part) in f.into_iter().enumerate() {
+        let at = c * stride + slot;
+        debug_assert!(at + LANES <= ring.len());
+        // SAFETY: `at + LANES <= 3 * stride = ring.len()` because `c <= 2` and
+        // `slot < R`; `Lanes::store` writes exactly LANES values.
+        part.store(unsafe { &mut *ring.as_mut_ptr().add(at).cast::<[f64; LANES]>() });
+        if slot == 0 {
+            // The mirror after the end, so that reads can run across the wrap.
+            let mirror = c * stride + g.ring;
+            // SAFETY: `mirror + LANES = (c + 1) * stride <= ring.len()`.
+            part.store(unsafe { &mut *ring.as_mut_ptr().add(mirror).cast::<[f64; LANES]>() });
+        }
+    }
+}
+
+/// The forces of the `LANES` springs of `g` starting at `p` (any `p`, taken modulo `R`), from
+/// the ring.
+///
+/// # Panics
+/// If `ring` is shorter than the stencil's `ring_len` (never: `range_body` sizes it).
+#[inline(always)]
+pub(super) fn ring_load<V: Lanes>(ring: &[f64], g: &Group, p: usize) -> Forces<V> {
+    let slot = p & (g.ring - 1);
+    let stride = g.ring + LANES;
+    let ring = &ring[g.ring_offset..g.ring_offset + 3 * stride];
+    debug_assert!(2 * stride + slot + LANES <= ring.len());
+    // SAFETY: `c * stride + slot + LANES <= 3 * stride = ring.len()` for `c <= 2`, because
+    // `slot < R = stride - LANES`; `Lanes::load` reads exactly LANES values.
+    let load = |c: usize| unsafe { V::load(&*ring.as_ptr().add(c * stride + slot).cast()) };
+    [load(0), load(1), load(2)]
+}
