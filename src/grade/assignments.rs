@@ -1,6 +1,6 @@
 //! The homework a student implements: one trait per assignment and the plain data they use.
 //!
-//! Each trait mirrors the TODO list of a course (SEEDS.md): [`RopeHomework`] is GAMES101
+//! Each trait mirrors the TODO list of a course (`docs/course.md`): [`RopeHomework`] is GAMES101
 //! assignment 8 (2020), [`JellyHomework`] is NYCU Computer Animation HW1 (2023, the jelly in a
 //! bowl), [`ClothHomework`] is NYCU Computer Animation HW1 (2022, the cloth and the spheres). A
 //! student crate (`springlab homework new`) implements one trait for its `Student` struct;
