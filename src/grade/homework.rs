@@ -12,7 +12,7 @@
 //! DIR/.gitignore              /target
 //! ```
 //! The crate builds offline in about a second and does not depend on springlab's source tree.
-//! `tests/grade.rs` finds springlab through `$SPRINGLAB`, else the absolute path of the binary
+//! `DIR/tests/grade.rs` finds springlab through `$SPRINGLAB`, else the absolute path of the binary
 //! that wrote the crate ([`std::env::current_exe`]), else `springlab` on PATH.
 
 use std::fs;
@@ -100,7 +100,7 @@ fn sources(assignment: Assignment) -> (&'static str, &'static str, &'static str)
 }
 
 /// The files of a student crate for `assignment`, as `(relative path, contents)`; `springlab`
-/// is the binary its `tests/grade.rs` runs.
+/// is the binary its `DIR/tests/grade.rs` runs.
 #[must_use]
 pub fn files(assignment: Assignment, springlab: &Path) -> Vec<(String, String)> {
     let (lib, readme, title) = sources(assignment);
