@@ -313,13 +313,13 @@ impl Collider {
                 rim_height,
             } => {
                 // At most a hemisphere: the rim circle is the widest part of the bowl.
-                let rim = rim_height.min(center.y);
+                let bowl_rim = super::bowl::Rim::of(center, radius, rim_height);
+                let (rim, a2) = (bowl_rim.height, bowl_rim.radius_squared);
                 if x.y > rim {
                     return None;
                 }
                 // ρ² = horizontal distance² from the axis; a² = r² - (c_y - rim)².
                 let rho2 = (x.x - center.x).powi(2) + (x.z - center.z).powi(2);
-                let a2 = radius * radius - (center.y - rim).powi(2);
                 // A floor's shaft of radius a (the 2023 terrain) projects a particle that
                 // crossed the floor beside the hole onto ρ = a just below the rim, where the
                 // bowl's wall has already turned inwards; ρ² then exceeds a² by rounding only.
