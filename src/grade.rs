@@ -58,6 +58,7 @@ pub mod build;
 mod checks;
 mod cloth;
 mod collision;
+mod data;
 pub mod external;
 pub mod homework;
 mod jelly;
