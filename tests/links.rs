@@ -120,12 +120,33 @@ fn relative(root: &Path, path: &Path) -> String {
         .to_string()
 }
 
+/// References checked so far and the broken ones, as `file:line: missing target`.
+#[derive(Default)]
+struct Findings {
+    checked: usize,
+    broken: Vec<String>,
+}
+
+impl Findings {
+    /// Counts the reference `target` on line `index` (0-based) of `file`; records it when the
+    /// file it names does not exist.
+    fn check(&mut self, root: &Path, file: &Path, index: usize, target: &str, exists: bool) {
+        self.checked += 1;
+        if !exists {
+            self.broken.push(format!(
+                "{}:{}: missing {target}",
+                relative(root, file),
+                index + 1
+            ));
+        }
+    }
+}
+
 /// Broken links in every Markdown file of the repository, as `file:line: missing target`.
 fn broken_markdown_links(root: &Path) -> (usize, Vec<String>) {
     let mut files = Vec::new();
     files_with_suffix(root, ".md", &mut files);
-    let mut checked = 0;
-    let mut broken = Vec::new();
+    let mut found = Findings::default();
     for file in &files {
         let text = fs::read_to_string(file).expect("Markdown files are UTF-8");
         let dir = file.parent().expect("a file has a folder");
@@ -146,26 +167,18 @@ fn broken_markdown_links(root: &Path) -> (usize, Vec<String>) {
                 if path.is_empty() {
                     continue;
                 }
-                checked += 1;
-                if !dir.join(path).exists() {
-                    broken.push(format!(
-                        "{}:{}: missing {target}",
-                        relative(root, file),
-                        index + 1
-                    ));
-                }
+                found.check(root, file, index, &target, dir.join(path).exists());
             }
         }
     }
-    (checked, broken)
+    (found.checked, found.broken)
 }
 
 /// Broken file references in the doc comments of `src/`, as `file:line: missing path`.
 fn broken_doc_references(root: &Path) -> (usize, Vec<String>) {
     let mut files = Vec::new();
     files_with_suffix(&root.join("src"), ".rs", &mut files);
-    let mut checked = 0;
-    let mut broken = Vec::new();
+    let mut found = Findings::default();
     for file in &files {
         let text = fs::read_to_string(file).expect("sources are UTF-8");
         for (index, line) in text.lines().enumerate() {
@@ -177,18 +190,11 @@ fn broken_doc_references(root: &Path) -> (usize, Vec<String>) {
                 let Some(path) = repository_path(root, token) else {
                     continue;
                 };
-                checked += 1;
-                if !root.join(path).exists() {
-                    broken.push(format!(
-                        "{}:{}: missing {path}",
-                        relative(root, file),
-                        index + 1
-                    ));
-                }
+                found.check(root, file, index, path, root.join(path).exists());
             }
         }
     }
-    (checked, broken)
+    (found.checked, found.broken)
 }
 
 #[test]
