@@ -300,35 +300,44 @@ pub(super) fn draw_floor(
         );
         pixmap.fill_path(&path, paint, FillRule::EvenOdd, Transform::identity(), None);
     }
-    let grid = colour::GROUND_GRID;
     for &(a, b) in &floor.grid {
-        if let Some((ca, cb)) = view.clip_segment(view.to_camera(a), view.to_camera(b))
-            && let (Some(pa), Some(pb)) = (view.project_camera(ca), view.project_camera(cb))
-        {
-            stroke_line(
-                pixmap,
-                paint,
-                point(pa.x, pa.y),
-                point(pb.x, pb.y),
-                0.8 * s,
-                grid,
-            );
-        }
+        stroke_world_segment(pixmap, paint, view, a, b, 0.8 * s, colour::GROUND_GRID);
     }
     let n = floor.hole.len();
     for k in 0..n {
         let (a, b) = (floor.hole[k], floor.hole[(k + 1) % n]);
-        if let Some((ca, cb)) = view.clip_segment(view.to_camera(a), view.to_camera(b))
-            && let (Some(pa), Some(pb)) = (view.project_camera(ca), view.project_camera(cb))
-        {
-            stroke_line(
-                pixmap,
-                paint,
-                point(pa.x, pa.y),
-                point(pb.x, pb.y),
-                1.5 * s,
-                colour::GROUND.scaled(0.45),
-            );
-        }
+        stroke_world_segment(
+            pixmap,
+            paint,
+            view,
+            a,
+            b,
+            1.5 * s,
+            colour::GROUND.scaled(0.45),
+        );
+    }
+}
+
+/// The world segment `a`–`b`, clipped to the view and stroked `width` px wide.
+fn stroke_world_segment(
+    pixmap: &mut Pixmap,
+    paint: &mut Paint,
+    view: &View,
+    a: DVec3,
+    b: DVec3,
+    width: f32,
+    c: colour::Colour,
+) {
+    if let Some((ca, cb)) = view.clip_segment(view.to_camera(a), view.to_camera(b))
+        && let (Some(pa), Some(pb)) = (view.project_camera(ca), view.project_camera(cb))
+    {
+        stroke_line(
+            pixmap,
+            paint,
+            point(pa.x, pa.y),
+            point(pb.x, pb.y),
+            width,
+            c,
+        );
     }
 }
