@@ -23,8 +23,12 @@ use super::Assignment;
 
 /// The student API crate (`homework-api/` in springlab's repository) as `(relative path,
 /// contents)`: written into every homework crate and into the grader's build directory.
-pub const API_FILES: [(&str, &str); 7] = [
+pub const API_FILES: [(&str, &str); 8] = [
     ("Cargo.toml", include_str!("../../homework-api/Cargo.toml")),
+    (
+        "src/channel.rs",
+        include_str!("../../homework-api/src/channel.rs"),
+    ),
     ("src/lib.rs", include_str!("../../homework-api/src/lib.rs")),
     (
         "src/matrix.rs",
