@@ -239,7 +239,7 @@ fn the_scanners_find_what_they_should() {
     let root = root();
     assert_eq!(repository_path(&root, "docs/x.md"), Some("docs/x.md"));
     assert_eq!(repository_path(&root, "DIR/src/lib.rs"), None);
-    assert_eq!(repository_path(&root, "DESIGN.md"), Some("DESIGN.md"));
+    assert_eq!(repository_path(&root, "NOWHERE.md"), Some("NOWHERE.md"));
     assert_eq!(repository_path(&root, "out.png"), None);
-    assert!(!root.join("DESIGN.md").exists());
+    assert!(!root.join("NOWHERE.md").exists());
 }
