@@ -248,18 +248,25 @@ pub fn draw_with(chart: &Chart, width: u32, height: u32, quality: Quality) -> Pi
     draw_y_ticks(&mut pixmap, &mut paint, &m, &plot);
     draw_axis_labels(&mut pixmap, chart, &m, &layout);
     let mask = plot_mask(width, height, &layout);
+    let mut canvas = SeriesCanvas {
+        pixmap: &mut pixmap,
+        paint: &mut paint,
+        m: &m,
+        plot: &plot,
+        mask: &mask,
+    };
     for (series, &c) in chart.series.iter().zip(&colours) {
         if let Some(lower) = &series.band {
-            draw_band(&mut pixmap, &mut paint, &plot, &mask, series, lower, c);
+            canvas.band(series, lower, c);
         }
         if matches!(series.style, SeriesStyle::Line | SeriesStyle::LineAndPoints) {
-            draw_series_line(&mut pixmap, &mut paint, &m, &plot, &mask, series, c);
+            canvas.line(series, c);
         }
         if matches!(
             series.style,
             SeriesStyle::Scatter | SeriesStyle::LineAndPoints
         ) {
-            draw_series_points(&mut pixmap, &mut paint, &m, &plot, &mask, series, c);
+            canvas.points(series, c);
         }
     }
     draw_frame(&mut pixmap, &mut paint, &m, &layout);
@@ -573,111 +580,107 @@ fn plot_mask(width: u32, height: u32, layout: &Layout) -> Mask {
     mask
 }
 
-/// A shaded band: the polygon along the series' points and back along `lower`.
-fn draw_band(
-    pixmap: &mut Pixmap,
-    paint: &mut Paint,
-    plot: &Plot<'_>,
-    mask: &Mask,
-    series: &Series,
-    lower: &[(f64, f64)],
-    c: Colour,
-) {
-    let mut pb = PathBuilder::new();
-    let mut started = false;
-    for &(x, y) in series.points.iter().chain(lower.iter().rev()) {
-        if let Some((u, v)) = plot.to_px(x, y)
-            && u.is_finite()
-            && v.is_finite()
-        {
-            if started {
-                pb.line_to(u, v);
-            } else {
-                pb.move_to(u, v);
-                started = true;
-            }
-        }
-    }
-    pb.close();
-    if let Some(path) = pb.finish() {
-        let mut fill = c.to_skia();
-        fill.set_alpha(0.25);
-        paint.set_color(fill);
-        pixmap.fill_path(
-            &path,
-            paint,
-            FillRule::Winding,
-            Transform::identity(),
-            Some(mask),
-        );
-    }
+/// What every series is drawn with: the image, its paint, the sizes, the plot and the clip mask
+/// of the plot rectangle.
+struct SeriesCanvas<'a, 'p> {
+    pixmap: &'a mut Pixmap,
+    paint: &'a mut Paint<'p>,
+    m: &'a Metrics,
+    plot: &'a Plot<'a>,
+    mask: &'a Mask,
 }
 
-/// The series as a polyline; the pen lifts over points that cannot be placed.
-fn draw_series_line(
-    pixmap: &mut Pixmap,
-    paint: &mut Paint,
-    m: &Metrics,
-    plot: &Plot<'_>,
-    mask: &Mask,
-    series: &Series,
-    c: Colour,
-) {
-    let mut pb = PathBuilder::new();
-    let mut pen_down = false;
-    for &(x, y) in &series.points {
-        match plot.to_px(x, y) {
-            Some((u, v)) if u.is_finite() && v.is_finite() => {
-                if pen_down {
+impl SeriesCanvas<'_, '_> {
+    /// Fills `path` with `colour`, inside the plot.
+    fn fill(&mut self, path: &tiny_skia::Path, colour: tiny_skia::Color) {
+        self.paint.set_color(colour);
+        self.pixmap.fill_path(
+            path,
+            self.paint,
+            FillRule::Winding,
+            Transform::identity(),
+            Some(self.mask),
+        );
+    }
+
+    /// Strokes `path` with `colour` and `stroke`, inside the plot.
+    fn stroke(&mut self, path: &tiny_skia::Path, colour: tiny_skia::Color, stroke: &Stroke) {
+        self.paint.set_color(colour);
+        self.pixmap.stroke_path(
+            path,
+            self.paint,
+            stroke,
+            Transform::identity(),
+            Some(self.mask),
+        );
+    }
+
+    /// A shaded band: the polygon along the series' points and back along `lower`.
+    fn band(&mut self, series: &Series, lower: &[(f64, f64)], c: Colour) {
+        let mut pb = PathBuilder::new();
+        let mut started = false;
+        for &(x, y) in series.points.iter().chain(lower.iter().rev()) {
+            if let Some((u, v)) = self.plot.to_px(x, y)
+                && u.is_finite()
+                && v.is_finite()
+            {
+                if started {
                     pb.line_to(u, v);
                 } else {
                     pb.move_to(u, v);
-                    pen_down = true;
+                    started = true;
                 }
             }
-            _ => pen_down = false,
+        }
+        pb.close();
+        if let Some(path) = pb.finish() {
+            let mut fill = c.to_skia();
+            fill.set_alpha(0.25);
+            self.fill(&path, fill);
         }
     }
-    if let Some(path) = pb.finish() {
-        paint.set_color(c.to_skia());
-        let stroke = Stroke {
-            width: 2.0 * m.s,
-            line_cap: LineCap::Round,
-            line_join: LineJoin::Round,
-            ..Stroke::default()
-        };
-        pixmap.stroke_path(&path, paint, &stroke, Transform::identity(), Some(mask));
-    }
-}
 
-/// The series' points as discs with a white outline.
-fn draw_series_points(
-    pixmap: &mut Pixmap,
-    paint: &mut Paint,
-    m: &Metrics,
-    plot: &Plot<'_>,
-    mask: &Mask,
-    series: &Series,
-    c: Colour,
-) {
-    for &(x, y) in &series.points {
-        if let Some((u, v)) = plot.to_px(x, y)
-            && let Some(path) = PathBuilder::from_circle(u, v, 3.2 * m.s)
-        {
-            paint.set_color(c.to_skia());
-            pixmap.fill_path(
-                &path,
-                paint,
-                FillRule::Winding,
-                Transform::identity(),
-                Some(mask),
-            );
-            paint.set_color(Colour::rgb(255, 255, 255).to_skia());
+    /// The series as a polyline; the pen lifts over points that cannot be placed.
+    fn line(&mut self, series: &Series, c: Colour) {
+        let mut pb = PathBuilder::new();
+        let mut pen_down = false;
+        for &(x, y) in &series.points {
+            match self.plot.to_px(x, y) {
+                Some((u, v)) if u.is_finite() && v.is_finite() => {
+                    if pen_down {
+                        pb.line_to(u, v);
+                    } else {
+                        pb.move_to(u, v);
+                        pen_down = true;
+                    }
+                }
+                _ => pen_down = false,
+            }
+        }
+        if let Some(path) = pb.finish() {
             let stroke = Stroke {
-                width: 0.9 * m.s,
+                width: 2.0 * self.m.s,
+                line_cap: LineCap::Round,
+                line_join: LineJoin::Round,
                 ..Stroke::default()
             };
-            pixmap.stroke_path(&path, paint, &stroke, Transform::identity(), Some(mask));
+            self.stroke(&path, c.to_skia(), &stroke);
+        }
+    }
+
+    /// The series' points as discs with a white outline.
+    fn points(&mut self, series: &Series, c: Colour) {
+        for &(x, y) in &series.points {
+            if let Some((u, v)) = self.plot.to_px(x, y)
+                && let Some(path) = PathBuilder::from_circle(u, v, 3.2 * self.m.s)
+            {
+                self.fill(&path, c.to_skia());
+                let stroke = Stroke {
+                    width: 0.9 * self.m.s,
+                    ..Stroke::default()
+                };
+                self.stroke(&path, Colour::rgb(255, 255, 255).to_skia(), &stroke);
+            }
         }
     }
 }
