@@ -63,6 +63,9 @@ use crate::physics::constraints::Rod;
 use crate::physics::{Method, MethodParams, Spring};
 use crate::scene::Scene;
 
+mod search;
+pub use search::{advise, runs};
+
 /// Updates per second assumed when an estimate is turned into a time.
 pub const RATE: f64 = 1e8;
 

@@ -3,9 +3,9 @@
 //! The command-line contract:
 //! ```text
 //! springlab [--lessons DIR] [--view raster|halfblocks|braille]   the lesson menu (terminal app)
-//! springlab lesson <N|slug> [--view …]                            one lesson
+//! springlab lesson <N|slug> [--view …] [--no-save]                one lesson
 //! springlab lessons                  list the lessons
-//! springlab scenes
+//! springlab scenes [scene] [--method M]
 //! springlab run <scene|file.toml> [--method M] [--dt S] [--steps N | --time T]
 //!               [--set key=value ...] [--json] [--csv FILE]
 //! springlab bench [workload ...] [--json] [--repeats R]
@@ -13,12 +13,17 @@
 //!                 [--apng F] [--energy-chart F] [--method M] [--dt S] [--set key=value ...]
 //! springlab study stability <scene|file.toml> [--methods a,b] [--horizon T] [--set key=value ...]
 //!               [--json]
+//! springlab study resolution <scene> [--n 4,6,8] [--method M] [--time T] [--tolerance X]
+//!               [--no-kinds] [--set key=value ...] [--json] [--png F]
+//! springlab advise <scene|file.toml> --tolerance X [--time T] [--methods a,b] [--n 4,6,8]
+//!               [--no-kinds] [--set key=value ...] [--json]
 //! springlab homework new <DIR> --assignment rope|jelly|cloth
 //! springlab homework autograder --assignment A --out autograder.zip
 //! springlab grade <DIR> [DIR ...] [--assignment A] [--json F] [--gradescope F] [--csv F]
 //!               [--jobs N] [--target-dir DIR] [--time-limit-ms MS] [--memory-mb MB] [--seed S]
 //! ```
 
+mod advise;
 mod bench;
 mod grade;
 mod lessons;
@@ -51,6 +56,10 @@ pub struct Cli {
     /// terminal answers a graphics protocol, else halfblocks.
     #[arg(long, global = true, value_name = "VIEW", value_parser = parse_view)]
     pub view: Option<crate::tui::ViewMode>,
+    /// Keep the lesson progress (goals met, predictions) in memory only: nothing is written to
+    /// the user's data directory (a classroom machine).
+    #[arg(long, global = true)]
+    pub no_save: bool,
 }
 
 fn parse_view(s: &str) -> Result<crate::tui::ViewMode, String> {
@@ -70,13 +79,16 @@ pub enum Command {
     Lessons,
     /// Run a scene headless and print a summary (or JSON).
     Run(run::RunArgs),
-    /// List the built-in scenes with their parameters.
-    Scenes,
+    /// List the built-in scenes with their own parameters (`--method M`: that method's too).
+    Scenes(scenes::ScenesArgs),
     /// Time the peer-benchmark workloads and check their checksums.
     Bench(bench::BenchArgs),
     /// Draw a scene's frames as PNG files, a GIF or an APNG, and its energy chart.
     Render(render::RenderArgs),
-    /// Studies: stability limits, convergence orders, work-precision.
+    /// The cheapest resolution, method and time step whose error on the scene's observable is
+    /// within a tolerance, with a stability margin of 1.5, verified by a run.
+    Advise(advise::AdviseArgs),
+    /// Studies: stability limits, convergence orders, work-precision, resolution.
     Study {
         /// The study to run.
         #[command(subcommand)]
@@ -94,16 +106,17 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let dir = cli.lessons.as_deref();
     let result = match cli.command {
-        Some(Command::Lesson { which }) => lessons::open(dir, &which, cli.view),
+        Some(Command::Lesson { which }) => lessons::open(dir, &which, cli.view, cli.no_save),
         Some(Command::Lessons) => lessons::list(dir),
         Some(Command::Run(args)) => run::run(&args),
-        Some(Command::Scenes) => scenes::list(),
+        Some(Command::Scenes(args)) => scenes::list(&args),
         Some(Command::Bench(args)) => bench::run(&args),
         Some(Command::Render(args)) => render::run(&args),
         Some(Command::Study { command }) => study::run(&command),
+        Some(Command::Advise(args)) => advise::run(&args),
         Some(Command::Homework(args)) => grade::homework(&args),
         Some(Command::Grade(args)) => grade::grade(&args),
-        None => lessons::menu(dir, cli.view),
+        None => lessons::menu(dir, cli.view, cli.no_save),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -149,6 +162,7 @@ pub fn estimate(command: &Command) -> anyhow::Result<Option<Estimate>> {
         Command::Run(args) => Some(run::prepare(args, &none)?.3),
         Command::Render(args) => Some(render::prepare(args, &none)?.2),
         Command::Study { command } => Some(study::estimate(command, &none)?),
+        Command::Advise(args) => Some(advise::prepare(args, &none)?.1),
         Command::Bench(args) => Some(bench::estimate(
             &bench::selected(&args.workloads)?,
             args.repeats,

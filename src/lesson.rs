@@ -19,21 +19,44 @@
 //! params = { nodes = 3 }            # scene parameters, as with --set
 //! method = "semi-implicit-euler"    # optional: the method to start with (default: the scene's)
 //! dt = 0.01                         # optional: the time step (s)
-//! plots = ["energy", "speed"]       # optional: energy | exact | speed | error | convergence
-//!                                   # | stability | work-precision
-//! try = ["Press space to run.", "Press k to stiffen the springs."]
+//! plots = ["energy", "speed"]       # optional: energy | exact | speed | error | stretch
+//!                                   # | convergence | stability | work-precision
+//! try = [
+//!     "Watch the middle node.",                                  # text only
+//!     { text = "Stiffen the springs and run.", keys = "K K space" },   # text and its keys
+//! ]
 //! goal = { kind = "settle", time = 2.0, speed = 0.05, text = "Make it settle within 2 s." }
+//! predict = { question = "Which method keeps it bounded?", keys = "+ + +", expect = "survive",
+//!             time = 30.0, answer = 2, options = [
+//!                 { text = "explicit Euler", keys = "m e + + + space" },
+//!                 { text = "semi-implicit Euler", keys = "m s + + + space" } ] }
 //! +++
 //! The text of the step, in Markdown. Formulas go in code blocks:
 //!
 //!     f = -k (|b - a| - L0) (b - a)/|b - a|
 //! ```
 //!
+//! The keys of a "try" item ([`keys`]) are shown beside its text; the tests play them.
+//!
 //! A goal is one of
-//! - `settle`: every particle slower than `speed` (m/s, default 0.05) from a moment before `time`
-//!   (s) on, for at least half a second;
+//! - `settle`: every particle (of body `body`, 1-based, when given) slower than `speed` (m/s,
+//!   default 0.05) from a moment before `time` (s) on, for at least half a second;
 //! - `diverge`: the run blows up (NaN or |v| > 1000 m/s) before `time` (s);
 //! - `survive`: the run reaches `time` (s) without diverging.
+//!
+//! A goal is reached by the keys of one "try" item: `try = N` (1-based) names it, else the last
+//! item with keys. A step with a goal must have such an item (the tests play it and check that
+//! the goal is met, and, when the keys do more than start the run, that idling does not meet it).
+//!
+//! A prediction (`predict`) asks a multiple-choice question before the run. Each option is a
+//! claim about a run: its keys (else the prediction's `keys`) played from the step's start, and
+//! the outcome `expect` (`survive`, `diverge` or `settle`, with `time`, `speed` and `body` as for
+//! a goal; per option or for all). `answer` (1-based) is the option whose claim a run confirms;
+//! the tests play every option and check that exactly that one holds. The app asks before the
+//! first run, records the answer, and shows who was right when a run is decided.
+//!
+//! Numbers in the text can be computed when the step opens: `{{omega_max}}`,
+//! `{{limit_dt:rk4}}`, `{{order:verlet@oscillator damping=2}}` (see [`numbers`]).
 //!
 //! Every error names the file and the line (and the column where TOML gives one).
 
@@ -41,6 +64,11 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
+
+pub mod keys;
+pub mod numbers;
+
+pub use keys::{Key, Keys, Stroke};
 
 use crate::budget::Limits;
 use crate::physics::Method;
@@ -58,6 +86,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
         "07-speed-accuracy.md",
         include_str!("../lessons/07-speed-accuracy.md"),
     ),
+    ("08-model.md", include_str!("../lessons/08-model.md")),
 ];
 
 /// A plot the lesson screen can show beside the scene.
@@ -79,6 +108,20 @@ pub enum Plot {
     /// Error against force evaluations per method, log-log (`study work-precision`).
     #[serde(rename = "work-precision")]
     WorkPrecision,
+    /// The largest stretch of a spring, `max |L/L0 - 1|`, per body over time.
+    Stretch,
+}
+
+impl Plot {
+    /// True for the plots of a study (convergence, stability, work-precision), whose methods
+    /// the number keys show and hide.
+    #[must_use]
+    pub fn is_study(self) -> bool {
+        matches!(
+            self,
+            Plot::Convergence | Plot::Stability | Plot::WorkPrecision
+        )
+    }
 }
 
 /// What the student is asked to achieve in a step.
@@ -92,6 +135,12 @@ pub struct Goal {
     /// For `settle`: the speed below which a particle counts as at rest (m/s).
     #[serde(default = "default_settle_speed")]
     pub speed: f64,
+    /// For `settle`: only this body (1-based) must come to rest; `None`: every body.
+    #[serde(default)]
+    pub body: Option<usize>,
+    /// The "try" item (1-based) whose keys reach the goal; `None`: the last item with keys.
+    #[serde(default, rename = "try")]
+    pub try_item: Option<usize>,
     /// What to tell the student.
     pub text: String,
 }
@@ -174,10 +223,12 @@ pub struct Step {
     pub dt: Option<f64>,
     /// Plots to show.
     pub plots: Vec<Plot>,
-    /// Things to try, one per line.
-    pub try_list: Vec<String>,
+    /// Things to try, one per line, each with the keys that do it.
+    pub try_list: Vec<TryItem>,
     /// An optional goal the app detects.
     pub goal: Option<Goal>,
+    /// An optional prediction asked before the run.
+    pub predict: Option<Prediction>,
     /// The Markdown text.
     pub text: String,
     /// Where scene file paths are resolved from.
@@ -272,8 +323,75 @@ struct StepToml {
     #[serde(default)]
     plots: Vec<Plot>,
     #[serde(default, rename = "try")]
-    try_list: Vec<String>,
+    try_list: Vec<toml::Spanned<TryToml>>,
     goal: Option<toml::Spanned<Goal>>,
+    predict: Option<toml::Spanned<PredictToml>>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum TryToml {
+    Text(String),
+    Keyed { text: String, keys: String },
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PredictToml {
+    question: String,
+    options: Vec<OptionToml>,
+    answer: usize,
+    keys: Option<String>,
+    expect: Option<GoalKind>,
+    time: Option<f64>,
+    speed: Option<f64>,
+    body: Option<usize>,
+    #[serde(default)]
+    explain: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OptionToml {
+    text: String,
+    keys: Option<String>,
+    expect: Option<GoalKind>,
+    time: Option<f64>,
+    speed: Option<f64>,
+    body: Option<usize>,
+}
+
+/// One item of a step's "try" list.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TryItem {
+    /// What to do or watch.
+    pub text: String,
+    /// The keys that do it, when it is done with keys.
+    pub keys: Option<Keys>,
+}
+
+/// A multiple-choice question asked before the run (module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prediction {
+    /// The question.
+    pub question: String,
+    /// The options, each a claim about a run.
+    pub options: Vec<PredictOption>,
+    /// The index (0-based) of the option a run confirms.
+    pub answer: usize,
+    /// Said after the answer is revealed.
+    pub explain: String,
+}
+
+/// One option of a [`Prediction`]: its text and the run that decides it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PredictOption {
+    /// What the student chooses.
+    pub text: String,
+    /// The keys of the run, from the step's start.
+    pub keys: Keys,
+    /// The claim: this outcome (kind, time, speed, body) of that run. Its `text` is the option's.
+    pub claim: Goal,
 }
 
 /// Parses lesson text; `file` names it in errors and `base_dir` resolves scene file paths.
@@ -395,6 +513,64 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
             .iter()
             .map(|(k, v)| format!("{k}={}", value_text(v)))
             .collect();
+        let mut try_list = Vec::new();
+        for item in st.try_list {
+            let (l, c) = at(item.span().start);
+            try_list.push(match item.into_inner() {
+                TryToml::Text(text) => TryItem { text, keys: None },
+                TryToml::Keyed { text, keys } => {
+                    let parsed = Keys::parse(&keys).map_err(|m| err(l, Some(c), m))?;
+                    TryItem {
+                        text,
+                        keys: Some(parsed),
+                    }
+                }
+            });
+        }
+        let goal_span = st.goal.as_ref().map(|g| at(g.span().start));
+        let goal = st.goal.map(toml::Spanned::into_inner);
+        if let (Some(g), Some((l, c))) = (&goal, goal_span) {
+            let keyed = |i: usize| try_list.get(i).is_some_and(|t| t.keys.is_some());
+            match g.try_item {
+                Some(n) if n == 0 || !keyed(n - 1) => {
+                    return Err(err(
+                        l,
+                        Some(c),
+                        format!(
+                            "goal: try = {n}: expected the number (from 1) of a try item with keys"
+                        ),
+                    ));
+                }
+                None if !(0..try_list.len()).any(keyed) => {
+                    return Err(err(
+                        l,
+                        Some(c),
+                        "goal: expected a try item with `keys` that reaches it (the tests play it)"
+                            .into(),
+                    ));
+                }
+                _ => {}
+            }
+            if g.body.is_some() && g.kind != GoalKind::Settle {
+                return Err(err(
+                    l,
+                    Some(c),
+                    "goal: `body` applies to `settle` only".into(),
+                ));
+            }
+        }
+        let predict = match st.predict {
+            None => None,
+            Some(p) => {
+                let (l, c) = at(p.span().start);
+                Some(prediction(p.into_inner()).map_err(|m| err(l, Some(c), m))?)
+            }
+        };
+        // Placeholders: known names, methods and scenes (computed when the step opens).
+        if let Some((offset, message)) = numbers::check(body).into_iter().next() {
+            let line = body_line(&lines, *start, offset);
+            return Err(err(line, None, message));
+        }
         let step = Step {
             title: st.title,
             scene: st.scene,
@@ -402,8 +578,9 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
             method,
             dt: st.dt.map(|d| *d.get_ref()),
             plots: st.plots,
-            try_list: st.try_list,
-            goal: st.goal.map(toml::Spanned::into_inner),
+            try_list,
+            goal,
+            predict,
             text: body.clone(),
             base_dir: base_dir.map(Path::to_path_buf),
         };
@@ -475,6 +652,102 @@ fn reject_duplicates(lessons: &mut [Result<Lesson, LessonError>]) {
                 format!("{}:{}", lesson.source, lesson.header_lines.1),
             )),
         }
+    }
+}
+
+/// The 1-based file line of byte `offset` of the body of the block whose front matter starts at
+/// line index `start`.
+fn body_line(lines: &[&str], start: usize, offset: usize) -> usize {
+    // The body starts after the closing `+++`; leading blank lines were trimmed.
+    let close = (start..lines.len())
+        .find(|&j| lines[j].trim_end() == "+++")
+        .unwrap_or(start);
+    let first = (close + 1..lines.len())
+        .find(|&j| !lines[j].trim().is_empty())
+        .unwrap_or(close + 1);
+    let mut rest = offset;
+    for (j, line) in lines.iter().enumerate().skip(first) {
+        if rest <= line.len() {
+            return j + 1;
+        }
+        rest -= line.len() + 1;
+    }
+    lines.len()
+}
+
+/// A prediction from its front matter, each option's claim resolved.
+fn prediction(p: PredictToml) -> Result<Prediction, String> {
+    if p.options.len() < 2 || p.options.len() > 6 {
+        return Err("predict: expected 2 to 6 options".into());
+    }
+    if p.answer == 0 || p.answer > p.options.len() {
+        return Err(format!(
+            "predict: answer = {}: expected the number (from 1) of an option, at most {}",
+            p.answer,
+            p.options.len()
+        ));
+    }
+    let mut options = Vec::new();
+    for (i, o) in p.options.into_iter().enumerate() {
+        let n = i + 1;
+        let keys = o.keys.or_else(|| p.keys.clone()).ok_or_else(|| {
+            format!("predict: option {n}: expected `keys` (on the option or the prediction)")
+        })?;
+        let keys = Keys::parse(&keys).map_err(|m| format!("predict: option {n}: {m}"))?;
+        let kind = o.expect.or(p.expect).ok_or_else(|| {
+            format!("predict: option {n}: expected `expect` = survive, diverge or settle")
+        })?;
+        let time = o.time.or(p.time).ok_or_else(|| {
+            format!("predict: option {n}: expected `time` (s) of the run that decides it")
+        })?;
+        let speed = o.speed.or(p.speed).unwrap_or_else(default_settle_speed);
+        if !(time > 0.0 && time.is_finite() && speed > 0.0) {
+            return Err(format!(
+                "predict: option {n}: expected time > 0 (s) and speed > 0 (m/s)"
+            ));
+        }
+        let body = o.body.or(p.body);
+        if body.is_some() && kind != GoalKind::Settle {
+            return Err(format!(
+                "predict: option {n}: `body` applies to `settle` only"
+            ));
+        }
+        options.push(PredictOption {
+            claim: Goal {
+                kind,
+                time,
+                speed,
+                body,
+                try_item: None,
+                text: o.text.clone(),
+            },
+            text: o.text,
+            keys,
+        });
+    }
+    Ok(Prediction {
+        question: p.question,
+        options,
+        answer: p.answer - 1,
+        explain: p.explain,
+    })
+}
+
+impl Step {
+    /// The keys that reach the step's goal (see the module docs), if it has a goal.
+    #[must_use]
+    pub fn goal_keys(&self) -> Option<&Keys> {
+        let goal = self.goal.as_ref()?;
+        match goal.try_item {
+            Some(n) => self.try_list.get(n.checked_sub(1)?)?.keys.as_ref(),
+            None => self.try_list.iter().rev().find_map(|t| t.keys.as_ref()),
+        }
+    }
+
+    /// Body `body` (1-based) of the settle check, if any.
+    #[must_use]
+    pub fn goal_body(&self) -> Option<usize> {
+        self.goal.as_ref().and_then(|g| g.body)
     }
 }
 

@@ -14,9 +14,12 @@
 //!
 //! Every study is deterministic: the same scene and options give the same numbers, run to run.
 
+pub mod advise;
 pub mod convergence;
 pub mod linear;
 pub mod modes;
+pub mod observe;
+pub mod resolution;
 pub mod stability;
 pub mod theory;
 
@@ -50,6 +53,14 @@ pub enum StudyError {
     /// Too few time steps to fit an order.
     #[error("--levels {0}: expected at least 2 time steps to fit an order")]
     Levels(u32),
+    /// A tolerance that is not positive and finite.
+    #[error(
+        "--tolerance {0}: expected a positive number (metres for positions and lengths, seconds for times)"
+    )]
+    Tolerance(f64),
+    /// Bad resolutions for a resolution study or advise.
+    #[error("--n: {0}")]
+    Resolutions(String),
     /// A horizon that is not a positive, finite duration.
     #[error("--horizon {0}: expected a duration in seconds > 0")]
     Horizon(f64),

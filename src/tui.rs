@@ -25,6 +25,7 @@ pub mod lesson_view;
 pub mod markdown;
 pub mod menu;
 pub mod plots;
+pub mod progress;
 pub mod raster;
 pub mod sim_view;
 pub mod status;
@@ -50,6 +51,7 @@ use crate::lesson::{Lesson, LessonError};
 pub use graphics::{Graphics, Protocol, ViewMode};
 pub use halfblocks::ColourDepth;
 pub use lesson_view::LessonRun;
+pub use progress::Progress;
 use raster::{Encoder, Job, PaneRenderer};
 use sim_view::Painter;
 
@@ -155,6 +157,10 @@ pub struct App {
     opened: u64,
     /// Raster images shown per second (measured by [`App::run`]).
     raster_fps: Option<f64>,
+    /// What the student has done (in memory unless given a file).
+    progress: Progress,
+    /// The `--lessons` directory the lessons came from (`None`: the built-in ones).
+    lessons_dir: Option<std::path::PathBuf>,
 }
 
 impl App {
@@ -186,6 +192,71 @@ impl App {
             last_raster: None,
             raster_fps: None,
             opened: 0,
+            progress: Progress::in_memory(),
+            lessons_dir: None,
+        }
+    }
+
+    /// Keeps the student's progress in `progress` (a file, or memory only).
+    #[must_use]
+    pub fn with_progress(mut self, progress: Progress) -> App {
+        self.progress = progress;
+        self
+    }
+
+    /// Names the `--lessons` directory the lessons came from (the menu's commands use it).
+    #[must_use]
+    pub fn with_lessons_dir(mut self, dir: Option<std::path::PathBuf>) -> App {
+        self.lessons_dir = dir;
+        self
+    }
+
+    /// The `--lessons` directory, if the lessons came from one.
+    #[must_use]
+    pub fn lessons_dir(&self) -> Option<&std::path::Path> {
+        self.lessons_dir.as_deref()
+    }
+
+    /// The student's progress.
+    #[must_use]
+    pub fn progress(&self) -> &Progress {
+        &self.progress
+    }
+
+    /// Steps done and steps of entry `index` of the menu (see [`Progress::done`]).
+    #[must_use]
+    pub fn lesson_done(&self, index: usize) -> Option<(usize, usize)> {
+        let steps = self.lesson_steps_done(index)?;
+        Some((steps.iter().filter(|d| **d).count(), steps.len()))
+    }
+
+    /// Per step of lesson `index`: done (opened, its goal met, its prediction answered), from
+    /// the kept progress; `None` for a lesson that did not load.
+    #[must_use]
+    pub fn lesson_steps_done(&self, index: usize) -> Option<Vec<bool>> {
+        let l = self.lessons.get(index)?.as_ref().ok()?;
+        let goals: Vec<bool> = l.steps.iter().map(|s| s.goal.is_some()).collect();
+        let predictions: Vec<bool> = l.steps.iter().map(|s| s.predict.is_some()).collect();
+        let key = Progress::key(&l.source, &l.slug);
+        Some(self.progress.steps_done(&key, &goals, &predictions))
+    }
+
+    /// Saves what the open lesson's run changed (met goals, visits, predictions).
+    fn sync_progress(&mut self) {
+        let Screen::Lesson(run) = &mut self.screen else {
+            return;
+        };
+        if !run.take_progress_changed() {
+            return;
+        }
+        let key = Progress::key(&run.lesson().source, &run.lesson().slug);
+        let record = progress::LessonProgress {
+            visited: run.visited_steps().to_vec(),
+            met: run.met_goals().to_vec(),
+            answers: run.answers().to_vec(),
+        };
+        if let Some(e) = self.progress.update(&key, record) {
+            run.set_message(e);
         }
     }
 
@@ -380,8 +451,13 @@ impl App {
             None => return Err(format!("there is no lesson {}", index + 1)),
         };
         self.selected = index;
-        let run = LessonRun::new(lesson, 0)?;
+        let key = Progress::key(&lesson.source, &lesson.slug);
+        let mut run = LessonRun::new(lesson, 0)?;
+        if let Some(r) = self.progress.lesson(&key) {
+            run.restore(&r.met, &r.visited, &r.answers);
+        }
         self.screen = Screen::Lesson(Box::new(run));
+        self.sync_progress();
         self.menu_message = None;
         self.clear = true;
         // A new run counts its versions from 0 again: forget the last lesson's frame.
@@ -416,6 +492,7 @@ impl App {
                 run.tick_until(wall_dt, deadline);
             }
         }
+        self.sync_progress();
     }
 
     /// Handles one terminal event; returns true when the screen needs redrawing.
@@ -454,7 +531,7 @@ impl App {
             self.submitted = None;
             return;
         }
-        if key.code == KeyCode::Char('?') {
+        if key.code == KeyCode::Char('?') && self.lesson().is_none_or(|r| r.chooser().is_none()) {
             self.help = true;
             return;
         }
@@ -462,7 +539,10 @@ impl App {
         match &mut self.screen {
             Screen::Menu => self.menu_key(key.code),
             Screen::Lesson(run) => {
-                if matches!(key.code, KeyCode::Char('q') | KeyCode::Esc) {
+                if run.chooser().is_some() {
+                    // The method chooser takes every key (its own `v`, `q`, Esc, numbers).
+                    run.handle_key_with(key.code, key.modifiers);
+                } else if matches!(key.code, KeyCode::Char('q') | KeyCode::Esc) {
                     self.screen = Screen::Menu;
                     self.clear = true;
                 } else if key.code == KeyCode::Char('v') {
@@ -479,6 +559,25 @@ impl App {
                         " (no raster view: the terminal answered no graphics protocol)"
                     };
                     run.set_message(format!("view: {}{note}", self.view.name()));
+                } else if key.code == KeyCode::Char('n')
+                    && run.chooser().is_none()
+                    && run.step_index() + 1 == run.lesson().steps.len()
+                {
+                    // `n` on the last step opens the next lesson that loads.
+                    let next =
+                        (self.selected + 1..self.lessons.len()).find(|&i| self.lessons[i].is_ok());
+                    match next {
+                        Some(i) => {
+                            if let Err(e) = self.open_lesson(i)
+                                && let Some(run) = self.lesson_mut()
+                            {
+                                run.set_message(e);
+                            }
+                        }
+                        None => {
+                            run.set_message("this was the last lesson: q goes back to the menu")
+                        }
+                    }
                 } else {
                     let step = run.step_index();
                     run.handle_key_with(key.code, key.modifiers);
@@ -489,6 +588,7 @@ impl App {
                 }
             }
         }
+        self.sync_progress();
     }
 
     fn menu_key(&mut self, code: KeyCode) {
@@ -530,10 +630,12 @@ impl App {
         if self.help {
             return false;
         }
-        match &mut self.screen {
+        let changed = match &mut self.screen {
             Screen::Lesson(run) => run.handle_mouse(mouse, area),
             Screen::Menu => false,
-        }
+        };
+        self.sync_progress();
+        changed
     }
 
     /// Sets the canvas rectangle the mouse maps to (normally recorded when drawing).
@@ -786,6 +888,15 @@ fn too_small(area: Rect, buf: &mut Buffer, theme: Theme) {
         .render(rect, buf);
 }
 
+/// Where the app keeps progress and where its lessons came from.
+#[derive(Debug, Default)]
+pub struct RunOptions {
+    /// The student's progress (a file, or memory only with `--no-save`).
+    pub progress: Progress,
+    /// The `--lessons` directory, if any.
+    pub lessons_dir: Option<std::path::PathBuf>,
+}
+
 /// Opens the app on the menu, or on lesson `open` (an index into `lessons`), and runs it until
 /// the user quits. The terminal is restored on return, on error and on panic.
 ///
@@ -795,6 +906,7 @@ pub fn run(
     lessons: Vec<Result<Lesson, LessonError>>,
     open: Option<usize>,
     view: Option<ViewMode>,
+    options: RunOptions,
 ) -> anyhow::Result<()> {
     if !stdout().is_terminal() || !std::io::stdin().is_terminal() {
         bail!(
@@ -803,7 +915,7 @@ pub fn run(
         );
     }
     let theme = Theme::from_env();
-    let mut terminal = ratatui::try_init().context("cannot set up the terminal")?;
+    let mut terminal = init_terminal().context("cannot set up the terminal")?;
     // Ask the terminal before anything else reads its input (raw mode is on).
     let graphics = Graphics::detect();
     let default = if graphics.protocol.is_some() {
@@ -811,18 +923,17 @@ pub fn run(
     } else {
         ViewMode::HalfBlocks
     };
-    let mut app = App::new(lessons, theme).with_display(
-        view.unwrap_or(default),
-        graphics,
-        ColourDepth::from_env(),
-    );
+    let mut app = App::new(lessons, theme)
+        .with_display(view.unwrap_or(default), graphics, ColourDepth::from_env())
+        .with_progress(options.progress)
+        .with_lessons_dir(options.lessons_dir);
     if let Ok(size) = terminal.size() {
         app.resize(size.width, size.height);
     }
     if let Some(i) = open
         && let Err(e) = app.open_lesson(i)
     {
-        ratatui::restore();
+        restore_terminal();
         bail!(e);
     }
     if view == Some(ViewMode::Raster)
@@ -831,20 +942,52 @@ pub fn run(
     {
         run.set_message("no raster view: the terminal answered no graphics protocol (halfblocks)");
     }
-    // ratatui's panic hook restores raw mode and the screen; turn the mouse off first.
-    let hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        let _ = execute!(stdout(), DisableMouseCapture);
-        hook(info);
-    }));
     let result = execute!(stdout(), EnableMouseCapture)
         .map_err(anyhow::Error::from)
         .and_then(|()| app.run(&mut terminal));
-    let _ = execute!(stdout(), DisableMouseCapture);
     if graphics.protocol == Some(Protocol::Kitty) {
         use std::io::Write as _;
         let _ = write!(stdout(), "{}", raster::kitty_delete(graphics.tmux_wrap));
     }
-    ratatui::restore();
+    restore_terminal();
     result
+}
+
+/// Sets the terminal up for the app: raw mode, the alternate screen, and a panic hook that
+/// restores it (see [`restore_terminal`]) before the panic message is printed.
+///
+/// # Errors
+/// The terminal cannot be set up.
+pub fn init_terminal() -> std::io::Result<DefaultTerminal> {
+    let terminal = ratatui::try_init()?;
+    // ratatui's hook (installed by `try_init`) leaves raw mode and the alternate screen; ours
+    // runs first and empties the screen and turns the mouse off.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        leave_clean();
+        hook(info);
+    }));
+    Ok(terminal)
+}
+
+/// Restores the terminal: the alternate screen emptied and left, raw mode and the mouse off.
+///
+/// The alternate screen is emptied first because tmux, when the window changed size while the
+/// app ran, reflows what the alternate screen holds into the shell's screen on leaving it
+/// (lines wider than the shell's old width wrap into its history and come back above the prompt);
+/// an empty screen leaves nothing.
+pub fn restore_terminal() {
+    leave_clean();
+    ratatui::restore();
+}
+
+fn leave_clean() {
+    use ratatui::crossterm::cursor::MoveTo;
+    use ratatui::crossterm::terminal::{Clear, ClearType};
+    let _ = execute!(
+        stdout(),
+        DisableMouseCapture,
+        Clear(ClearType::All),
+        MoveTo(0, 0)
+    );
 }

@@ -234,4 +234,57 @@ fn scenes_lists_every_builtin_with_parameters() {
     }
     assert!(text.contains("stiffness"));
     assert!(text.contains("N/m"));
+    // The scenes list their own parameters; the method parameters are listed once, by method.
+    let param_lines: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("    ") && l.contains(" = "))
+        .collect();
+    for method_param in ["verlet_damping", "iterations", "substeps", "cg_tolerance"] {
+        assert!(
+            !param_lines
+                .iter()
+                .any(|l| l.trim_start().starts_with(&format!("{method_param} "))),
+            "{method_param} listed as a scene parameter"
+        );
+    }
+    assert!(
+        text.contains("  verlet               verlet_damping, verlet_damping_rate, iterations")
+    );
+    assert!(text.contains("  xpbd                 iterations, substeps"));
+    assert!(text.contains("  implicit-euler       cg_tolerance"));
+}
+
+#[test]
+fn scenes_shows_a_methods_parameters_only_for_that_method() {
+    let text = |args: &[&str]| {
+        let out = springlab(args);
+        assert!(out.status.success(), "{args:?}");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let verlet = text(&["scenes", "rope", "--method", "verlet"]);
+    assert!(verlet.contains("verlet parameters (they change only a run with verlet):"));
+    assert!(
+        verlet.contains("    verlet_damping       = 5e-5"),
+        "{verlet}"
+    );
+    assert!(verlet.contains("    iterations           = 1"), "{verlet}");
+    assert!(!verlet.contains("substeps") && !verlet.contains("cg_tolerance"));
+    assert!(verlet.contains("  scene parameters:") && verlet.contains("    nodes "));
+    // The course cubes run Verlet without projection or damping.
+    let jelly = text(&["scenes", "jelly-bowl", "--method", "verlet"]);
+    assert!(jelly.contains("    iterations           = 0"), "{jelly}");
+    let rk4 = text(&["scenes", "rope", "--method", "rk4"]);
+    assert!(rk4.contains("  rk4: no parameters"));
+    assert!(!rk4.contains("verlet_damping"));
+    let one = text(&["scenes", "jelly-bowl"]);
+    assert!(one.contains("default method semi-implicit-euler, dt = 0.001 s, duration 5 s"));
+    assert!(one.contains("verlet: verlet_damping = 0, verlet_damping_rate = 0, iterations = 0"));
+    let xpbd = text(&["scenes", "--method", "xpbd"]);
+    assert_eq!(
+        xpbd.matches("  xpbd parameters").count(),
+        springlab::scene::BUILTIN.len()
+    );
+    let out = springlab(&["scenes", "nosuch"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown scene `nosuch`"));
 }

@@ -72,7 +72,7 @@ fn steps_carry_scene_parameters_method_plots_and_goal() {
     assert!(scene.bodies[0].model.is_pinned(8));
     assert_eq!(bridge.plots, vec![Plot::Energy, Plot::Speed]);
     let text = format!(
-        "{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\ngoal = {{ kind = \"settle\", time = 8.0, text = \"t\" }}\n+++\ntext\n"
+        "{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\ntry = [{{ text = \"run\", keys = \"D*2 space\" }}]\ngoal = {{ kind = \"settle\", time = 8.0, text = \"t\" }}\n+++\ntext\n"
     );
     let parsed = lesson::parse(&text, "goal.md", None).expect("a lesson with a goal");
     let goal = parsed.steps[0].goal.as_ref().expect("goal");
@@ -190,7 +190,54 @@ fn malformed_lessons_name_the_file_and_line() {
             "bad.md:7: expected `+++ step`",
         ),
     ];
-    for (text, expected) in cases {
+    let step = |front: &str| {
+        format!("{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\n{front}\n+++\ntext\n")
+    };
+    let more: Vec<(String, &str)> = vec![
+        (
+            step("try = [{ text = \"x\", keys = \"space blah\" }]"),
+            "bad.md:10:8: keys: unknown key `blah`",
+        ),
+        (
+            step("try = [{ text = \"x\", keys = \"D*0\" }]"),
+            "a repeat count is 1 to 100",
+        ),
+        (
+            step("goal = { kind = \"diverge\", time = 1.0, text = \"t\" }"),
+            "goal: expected a try item with `keys` that reaches it",
+        ),
+        (
+            step(
+                "try = [\"plain\"]\ngoal = { kind = \"diverge\", time = 1.0, try = 1, text = \"t\" }",
+            ),
+            "goal: try = 1: expected the number (from 1) of a try item with keys",
+        ),
+        (
+            step(
+                "try = [{ text = \"x\", keys = \"space\" }]\ngoal = { kind = \"diverge\", time = 1.0, body = 1, text = \"t\" }",
+            ),
+            "goal: `body` applies to `settle` only",
+        ),
+        (
+            step(
+                "predict = { question = \"q\", answer = 3, expect = \"survive\", time = 1.0, keys = \"space\", options = [{ text = \"a\" }, { text = \"b\" }] }",
+            ),
+            "predict: answer = 3: expected the number (from 1) of an option, at most 2",
+        ),
+        (
+            step(
+                "predict = { question = \"q\", answer = 1, time = 1.0, keys = \"space\", options = [{ text = \"a\" }, { text = \"b\" }] }",
+            ),
+            "predict: option 1: expected `expect` = survive, diverge or settle",
+        ),
+        (
+            step(
+                "predict = { question = \"q\", answer = 1, expect = \"survive\", time = 1.0, options = [{ text = \"a\" }, { text = \"b\" }] }",
+            ),
+            "predict: option 1: expected `keys` (on the option or the prediction)",
+        ),
+    ];
+    for (text, expected) in cases.into_iter().chain(more) {
         let message = error_of(&text);
         assert!(
             message.contains(expected),

@@ -572,3 +572,19 @@ fn bad_input_gives_clear_messages() {
         assert!(!err.contains("panicked"), "{args:?} panicked:\n{err}");
     }
 }
+
+/// A confirmation run called on its own names `dt·ω_max` with the scene's own `ω_max`: the
+/// oscillator's `ω = √(k/m) = √(500/2)` rad/s.
+#[test]
+fn confirm_steps_reports_dt_omega_of_the_scene() {
+    let scene = scene::load("oscillator", &["stiffness=500".into(), "mass=2".into()]).unwrap();
+    let dt = 0.01;
+    let c = stability::confirm_steps(&scene, Method::Rk4, dt, 100, 1.0);
+    let exact = dt * (500.0_f64 / 2.0).sqrt();
+    assert!(
+        (c.dt_omega - exact).abs() < 1e-9 * exact,
+        "dt·ω = {} instead of {exact}",
+        c.dt_omega
+    );
+    assert!(c.passed && c.steps == 100);
+}

@@ -97,16 +97,111 @@ fn single_step_advances_time_by_dt_and_pauses() {
 }
 
 #[test]
-fn m_cycles_the_method() {
+fn m_opens_the_method_chooser_which_picks_by_key_number_or_enter() {
     let mut app = open("hooke");
     let method = |app: &App| run(app).sim().scene.bodies[0].method;
     assert_eq!(method(&app), Method::Rk4, "the step asks for rk4");
     key(&mut app, KeyCode::Char('m'));
-    assert_eq!(method(&app), Method::Rk4.next());
-    for _ in 1..Method::ALL.len() {
-        key(&mut app, KeyCode::Char('m'));
+    assert!(run(&app).chooser().is_some(), "m opens the chooser");
+    assert_eq!(method(&app), Method::Rk4, "opening it changes nothing");
+    let text = screen_text(&app, 100, 32);
+    for m in Method::ALL {
+        assert!(text.contains(m.name()), "the chooser lists {m}:\n{text}");
     }
-    assert_eq!(method(&app), Method::Rk4, "back after a full cycle");
+    // Esc closes it (and stays in the lesson); each method's key picks it and closes it.
+    key(&mut app, KeyCode::Esc);
+    assert!(run(&app).chooser().is_none());
+    for m in Method::ALL {
+        key(&mut app, KeyCode::Char('m'));
+        key(
+            &mut app,
+            KeyCode::Char(springlab::tui::lesson_view::method_key(m)),
+        );
+        assert_eq!(method(&app), m);
+        assert!(run(&app).chooser().is_none());
+    }
+    // Numbers pick by position; arrows and Enter too; Esc closes without a change.
+    keys(&mut app, "m2");
+    assert_eq!(method(&app), Method::ALL[1]);
+    key(&mut app, KeyCode::Char('m'));
+    key(&mut app, KeyCode::Down);
+    key(&mut app, KeyCode::Enter);
+    assert_eq!(method(&app), Method::ALL[2]);
+    key(&mut app, KeyCode::Char('m'));
+    key(&mut app, KeyCode::Esc);
+    assert_eq!(method(&app), Method::ALL[2]);
+    assert!(run(&app).chooser().is_none());
+    assert!(
+        app.lesson().is_some(),
+        "Esc in the chooser does not leave the lesson"
+    );
+}
+
+#[test]
+fn the_chooser_gives_a_method_to_one_body_with_tab() {
+    let mut app = open("verlet");
+    let methods = |app: &App| -> Vec<Method> {
+        run(app)
+            .sim()
+            .scene
+            .bodies
+            .iter()
+            .map(|b| b.method)
+            .collect()
+    };
+    assert_eq!(methods(&app), [Method::SemiImplicitEuler, Method::Verlet]);
+    // Tab: the first body only.
+    key(&mut app, KeyCode::Char('m'));
+    key(&mut app, KeyCode::Tab);
+    key(&mut app, KeyCode::Char('r'));
+    assert_eq!(methods(&app), [Method::Rk4, Method::Verlet]);
+    // Without Tab: every body.
+    keys(&mut app, "mx");
+    assert_eq!(methods(&app), [Method::Xpbd, Method::Xpbd]);
+}
+
+#[test]
+fn drag_gamma_and_passes_keys_change_the_model_and_rebase_the_energy() {
+    let mut app = open("verlet");
+    keys(&mut app, " ");
+    for _ in 0..10 {
+        app.tick(0.1);
+    }
+    keys(&mut app, " ");
+    let body = |app: &App, b: usize| run(app).sim().scene.bodies[b].clone();
+    assert_eq!(body(&app, 0).model.drag, 0.0);
+    // A: the first press sets c/m = 0.25 1/s, then ×2; a: ÷2 down to 0.
+    keys(&mut app, "A");
+    assert_eq!(body(&app, 0).model.drag, 0.25);
+    assert_eq!(body(&app, 1).model.drag, 0.25);
+    assert_eq!(
+        run(&app).sim().energy_residual(),
+        0.0,
+        "rebased after the edit"
+    );
+    keys(&mut app, "AA");
+    assert_eq!(body(&app, 0).model.drag, 1.0);
+    keys(&mut app, "aaa");
+    assert_eq!(body(&app, 0).model.drag, 0.0);
+    // G: γ × 10 from the scene's 5e-5, capped at 0.5; g: ÷ 10, to 0 below 5e-5.
+    keys(&mut app, "G");
+    assert!((body(&app, 1).params.verlet_damping - 5e-4).abs() < 1e-15);
+    keys(&mut app, "GGGG");
+    assert_eq!(body(&app, 1).params.verlet_damping, 0.5);
+    assert!(
+        run(&app).message().is_some_and(|m| m.contains("1/s")),
+        "the rate γ/dt is shown"
+    );
+    keys(&mut app, "ggggg");
+    assert_eq!(body(&app, 1).params.verlet_damping, 0.0);
+    // J: passes × 2 (0 → 1); j: ÷ 2.
+    assert_eq!(body(&app, 1).params.iterations, 1);
+    keys(&mut app, "JJJ");
+    assert_eq!(body(&app, 1).params.iterations, 8);
+    keys(&mut app, "jjjj");
+    assert_eq!(body(&app, 1).params.iterations, 0);
+    keys(&mut app, "J");
+    assert_eq!(body(&app, 1).params.iterations, 1);
 }
 
 #[test]
@@ -160,10 +255,10 @@ fn reset_restores_the_initial_state_bit_for_bit() {
 #[test]
 fn reset_keeps_the_chosen_method_and_dt() {
     let mut app = open("euler");
-    keys(&mut app, "m+ss");
+    keys(&mut app, "ms+ss");
     key(&mut app, KeyCode::Char('r'));
     let sim = run(&app).sim();
-    assert_eq!(sim.scene.bodies[0].method, Method::ExplicitEuler.next());
+    assert_eq!(sim.scene.bodies[0].method, Method::SemiImplicitEuler);
     assert_eq!(sim.dt(), 0.04);
     assert_eq!(sim.time(), 0.0);
 }
@@ -179,16 +274,33 @@ fn n_and_p_move_between_steps() {
     assert_eq!(run(&app).step_index(), 1);
     // Step 2 of lesson 1 is the rope with 3 nodes.
     assert_eq!(run(&app).sim().scene.particle_count(), 3);
-    for _ in 0..count + 2 {
+    for _ in 0..count - 2 {
         key(&mut app, KeyCode::Char('n'));
     }
-    assert_eq!(run(&app).step_index(), count - 1, "no step after the last");
-    key(&mut app, KeyCode::Char('p'));
-    assert_eq!(run(&app).step_index(), count - 2);
+    assert_eq!(run(&app).step_index(), count - 1);
     // A new step starts paused at t = 0 with the step's own dt (step 4 asks for 0.004).
-    key(&mut app, KeyCode::Char('n'));
     assert_eq!(run(&app).sim().dt(), 0.004);
     assert_eq!(run(&app).sim().time(), 0.0);
+    key(&mut app, KeyCode::Char('p'));
+    assert_eq!(run(&app).step_index(), count - 2);
+    key(&mut app, KeyCode::Char('n'));
+    // `n` on the last step opens the next lesson.
+    key(&mut app, KeyCode::Char('n'));
+    assert_eq!(run(&app).lesson().slug, "hooke");
+    assert_eq!(run(&app).step_index(), 0);
+    // And on the last step of the last lesson it says so.
+    let last = app.lessons().len() - 1;
+    app.open_lesson(last).expect("opens");
+    let steps = run(&app).lesson().steps.len();
+    for _ in 0..steps + 1 {
+        key(&mut app, KeyCode::Char('n'));
+    }
+    assert_eq!(app.selected(), last);
+    assert!(
+        run(&app)
+            .message()
+            .is_some_and(|m| m.contains("last lesson"))
+    );
 }
 
 #[test]
@@ -339,6 +451,12 @@ fn divergence_stops_the_run_and_meets_the_diverge_goal() {
     assert!(!run.is_running());
     assert_eq!(run.goal_state(), Some(true), "goal: make it blow up");
     assert!(d.time <= 60.0);
+    // The diverging sample is recorded: the history ends at the divergence with its speed
+    // (the 7th quantity of a sample), the largest of the run.
+    let last = run.history().bins.last().expect("samples");
+    assert_eq!(last.t1, d.time);
+    assert_eq!(last.hi[6], d.max_speed);
+    assert!(run.history().bins.iter().all(|b| b.hi[6] <= d.max_speed));
     let text = screen_text(&app, 100, 32);
     assert!(
         text.contains(&format!("unstable at step {}", d.step)),
@@ -349,7 +467,12 @@ fn divergence_stops_the_run_and_meets_the_diverge_goal() {
     assert!(!self::run(&app).is_running());
     key(&mut app, KeyCode::Char('r'));
     assert!(self::run(&app).sim().diverged.is_none());
-    assert_eq!(self::run(&app).goal_state(), None);
+    assert_eq!(self::run(&app).run_verdict(), None, "r starts a new run");
+    assert_eq!(
+        self::run(&app).goal_state(),
+        Some(true),
+        "a met goal stays met"
+    );
 }
 
 #[test]
@@ -852,4 +975,238 @@ fn a_raster_frame_of_another_lesson_is_never_shown() {
     assert!(app.submit_raster(), "the new run's first frame is sent");
     wait(&mut app);
     assert!(placeholder(&app));
+}
+
+/// The braille view puts a particle's mark in the cell its spring is drawn through: the pinned
+/// ■ of lesson 1's first step has the spring's braille dots beside it in its own row.
+#[test]
+fn particle_marks_sit_on_the_braille_line() {
+    let mut app = App::new(lesson::builtin(), Theme { color: false }).with_display(
+        springlab::tui::ViewMode::Braille,
+        springlab::tui::Graphics::NONE,
+        springlab::tui::ColourDepth::None,
+    );
+    for (w, h) in [(100, 32), (120, 40), (80, 24), (97, 31)] {
+        app.resize(w, h);
+        app.open_lesson(0).expect("opens");
+        let text = screen_text(&app, w, h);
+        let (row, line) = text
+            .lines()
+            .enumerate()
+            .find(|(_, l)| l.contains('■'))
+            .expect("the pinned particle is marked");
+        let chars: Vec<char> = line.chars().collect();
+        let at = chars.iter().position(|&c| c == '■').expect("■");
+        let braille = |c: char| ('\u{2801}'..='\u{28ff}').contains(&c);
+        assert!(
+            braille(chars[at - 1]) || braille(chars[at + 1]),
+            "{w}×{h}: the spring passes through the row of ■ (row {row}):\n{text}"
+        );
+    }
+}
+
+/// Progress goes to the file given, survives a restart, and a met goal is met again when the
+/// lesson is opened anew; `Progress::in_memory` writes nothing.
+#[test]
+fn progress_is_saved_and_restored() {
+    use springlab::tui::Progress;
+    let dir = temp_dir("progress");
+    let path = dir.join("progress.json");
+    let hooke = |progress: Progress| {
+        let mut app = App::new(lesson::builtin(), Theme { color: false }).with_progress(progress);
+        let i = app.find_lesson("hooke").expect("lesson 2");
+        app.open_lesson(i).expect("opens");
+        app
+    };
+    let mut app = hooke(Progress::load(&path));
+    // Step 3: bring the oscillator to rest by raising the damping (its try keys).
+    keys(&mut app, "nn");
+    for _ in 0..5 {
+        key(&mut app, KeyCode::Char('D'));
+    }
+    key(&mut app, KeyCode::Char(' '));
+    for _ in 0..40 {
+        app.tick(0.1);
+    }
+    assert_eq!(run(&app).goal_state(), Some(true));
+    assert!(path.exists(), "written when the goal was met");
+    let text = std::fs::read_to_string(&path).expect("readable");
+    assert!(text.contains("\"hooke\""), "{text}");
+    // A new app with the same file: lesson 2 shows its three steps done and the goal met.
+    let app = hooke(Progress::load(&path));
+    assert_eq!(app.lesson_done(1), Some((3, 3)));
+    let mut app = app;
+    keys(&mut app, "nn");
+    assert_eq!(
+        run(&app).goal_state(),
+        Some(true),
+        "re-entering keeps the met goal"
+    );
+    assert_eq!(
+        run(&app).run_verdict(),
+        None,
+        "while this run has not decided"
+    );
+    // In memory: nothing is written.
+    let other = dir.join("other.json");
+    let mut app = hooke(Progress::in_memory());
+    keys(&mut app, "nn");
+    assert!(!other.exists() && app.progress().path().is_none());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A step with a prediction waits for the answer before it runs, records it, and shows the
+/// answer once a run is decided.
+#[test]
+fn a_prediction_is_asked_before_the_run_and_answered_after_it() {
+    let mut app = open("euler");
+    key(&mut app, KeyCode::Char('n'));
+    assert!(run(&app).awaiting_prediction());
+    key(&mut app, KeyCode::Char(' '));
+    assert!(!run(&app).is_running(), "no run before the answer");
+    assert!(run(&app).message().is_some_and(|m| m.contains("predict")));
+    // Option 1 (explicit Euler), then the experiment of option 1.
+    key(&mut app, KeyCode::Char('1'));
+    assert_eq!(run(&app).answer(), Some(0));
+    assert!(!run(&app).awaiting_prediction());
+    keys(&mut app, "me+++ ");
+    for _ in 0..300 {
+        app.tick(0.1);
+        if run(&app).revealed().is_some() {
+            break;
+        }
+    }
+    let revealed = run(&app)
+        .revealed()
+        .expect("revealed after the run decided")
+        .to_string();
+    assert!(revealed.contains("blew up"), "{revealed}");
+    assert!(revealed.contains("2) semi-implicit Euler"), "{revealed}");
+    assert!(revealed.contains("✗ you predicted 1)"), "{revealed}");
+    let text = screen_text(&app, 120, 40);
+    assert!(text.contains("✗ you predicted"), "{text}");
+}
+
+/// The status line shows the method's limit on the scene by the damped theory, and marks a dt
+/// beyond it.
+#[test]
+fn status_line_shows_the_damped_limit() {
+    use springlab::tui::lesson_view::Limit;
+    // The oscillator under semi-implicit Euler: dt·ω < 2, ω = 10 rad/s.
+    let mut app = open("euler");
+    key(&mut app, KeyCode::Char('n'));
+    let (limit, omega) = run(&app).limit().expect("a limit").clone();
+    assert!((omega - 10.0).abs() < 1e-9);
+    let Limit::Below(dt) = limit else {
+        panic!("conditional: {limit:?}")
+    };
+    assert!((dt - 0.2).abs() < 1e-3, "{dt}");
+    assert!(screen_text(&app, 120, 40).contains("limit 0.200 s"));
+    keys(&mut app, "1++++");
+    assert!(screen_text(&app, 120, 40).contains("✗ over limit"));
+    // Explicit Euler without damping: unstable at every dt; with the damper, a limit.
+    let mut app = open("euler");
+    assert_eq!(run(&app).limit().map(|l| l.0.clone()), Some(Limit::Never));
+    keys(&mut app, "DDDDDDDDDD");
+    assert!(matches!(
+        run(&app).limit().map(|l| l.0.clone()),
+        Some(Limit::Below(_))
+    ));
+    // The jelly: the dampers set semi-implicit Euler's limit far below dt·ω = 2.
+    let mut app = open("jelly");
+    keys(&mut app, "nn");
+    let (limit, omega) = run(&app).limit().expect("a limit").clone();
+    let Limit::Below(dt) = limit else {
+        panic!("conditional: {limit:?}")
+    };
+    assert!(dt * omega < 0.5, "dt·ω = {}", dt * omega);
+}
+
+/// Lesson 1's first step says particle 0, the pinned one, is on the right: it is, in the step's
+/// first view.
+#[test]
+fn lesson_1_pins_the_particle_on_the_right() {
+    let app = App::new(lesson::builtin(), Theme { color: false }).with_display(
+        springlab::tui::ViewMode::Braille,
+        springlab::tui::Graphics::NONE,
+        springlab::tui::ColourDepth::None,
+    );
+    let mut app = app;
+    app.open_lesson(0).expect("opens");
+    let text = screen_text(&app, 100, 32);
+    let column = |mark: char| {
+        text.lines()
+            .find_map(|l| l.chars().position(|c| c == mark))
+            .unwrap_or_else(|| panic!("{mark} drawn:\n{text}"))
+    };
+    assert!(
+        column('■') > column('•'),
+        "the pinned ■ right of the free •:\n{text}"
+    );
+    assert!(run(&app).text().contains("on the **right**"));
+    assert!(run(&app).sim().scene.bodies[0].model.is_pinned(0));
+}
+
+/// Every live edit of the model (stiffness, damping, drag, γ, passes, dt, the method, a pin)
+/// restarts the energy accounting from the present state: right after the key the energy
+/// error `E + D - E_0` is zero, where the run before it had accumulated one (so the plot of
+/// the method's energy error does not jump by the edit's change of energy).
+#[test]
+fn every_live_edit_rebases_the_energy_accounting() {
+    for (slug, edits) in [
+        (
+            "verlet",
+            &["K", "k", "D", "d", "A", "a", "G", "g", "J", "j", "+", "-"][..],
+        ),
+        ("euler", &["me", "ms", "mr", "mi"][..]),
+        ("cloth", &["1", "2"][..]),
+    ] {
+        let mut app = open(slug);
+        for edit in edits {
+            keys(&mut app, " ");
+            for _ in 0..3 {
+                app.tick(0.1);
+            }
+            keys(&mut app, " ");
+            let sim = run(&app).sim();
+            assert!(sim.diverged.is_none(), "{slug} {edit}");
+            let before = sim.energy_residual();
+            assert!(
+                before != 0.0,
+                "{slug} before {edit}: the run has an energy error"
+            );
+            keys(&mut app, edit);
+            let after = run(&app).sim().energy_residual();
+            assert!(
+                after.abs() <= 1e-12 * run(&app).sim().energy().total.abs().max(1.0),
+                "{slug} {edit}: energy error {after} J right after the edit (was {before} J)"
+            );
+        }
+    }
+}
+
+/// A prediction about the bodies of one run (lesson 4 step 3: which rope comes to rest) is
+/// revealed with what each body did in the student's run, not a bare "kept going".
+#[test]
+fn a_per_body_prediction_reveals_each_body() {
+    let mut app = open("verlet");
+    keys(&mut app, "nn");
+    assert!(run(&app).awaiting_prediction());
+    keys(&mut app, "2GGG ");
+    for _ in 0..300 {
+        app.tick(0.1);
+        if run(&app).revealed().is_some() {
+            break;
+        }
+    }
+    let revealed = run(&app).revealed().expect("revealed").to_string();
+    assert!(
+        revealed.contains("the semi-implicit Euler rope (left) still moving"),
+        "{revealed}"
+    );
+    assert!(
+        revealed.contains("the Verlet rope (right) at rest"),
+        "{revealed}"
+    );
+    assert!(revealed.contains("✓ you predicted it"), "{revealed}");
 }

@@ -277,3 +277,127 @@ fn half_blocks_jelly_in_the_bowl_256_colours() {
     );
     insta::assert_snapshot!("half_blocks_jelly_bowl_256", cells);
 }
+
+/// The menu after lesson 1 was completed (every step opened, its goal met) and lesson 2 begun:
+/// ✓ beside lesson 1, the steps done beside each.
+#[test]
+fn menu_with_progress_marks() {
+    use springlab::tui::Progress;
+    use springlab::tui::progress::LessonProgress;
+    let lessons = lesson::builtin();
+    let rope = lessons[0].as_ref().expect("lesson 1");
+    let n = rope.steps.len();
+    let mut progress = Progress::in_memory();
+    progress.update(
+        &Progress::key(&rope.source, &rope.slug),
+        LessonProgress {
+            visited: vec![true; n],
+            met: vec![true; n],
+            answers: vec![None; n],
+        },
+    );
+    progress.update(
+        "hooke",
+        LessonProgress {
+            visited: vec![true],
+            met: vec![],
+            answers: vec![],
+        },
+    );
+    let app = app().with_progress(progress);
+    assert_eq!(app.lesson_done(0), Some((n, n)));
+    assert_eq!(app.lesson_done(1), Some((1, 3)));
+    let text = draw(&app, 100, 32);
+    // Lesson 1: the lesson's ✓ and one per step (4); lesson 2: its first step.
+    assert_eq!(text.matches('✓').count(), 1 + n + 1, "{text}");
+    insta::assert_snapshot!("menu_progress", text);
+}
+
+/// Lesson 7, step 1 at 120 × 40: the convergence chart and the stability table with explicit
+/// Euler, semi-implicit Euler and the predictor–corrector hidden (keys 1, 2, 6).
+#[test]
+fn lesson_7_charts_with_a_method_subset() {
+    let mut app = app();
+    let i = app.find_lesson("speed-accuracy").expect("lesson 7");
+    app.open_lesson(i).expect("opens");
+    for c in ['1', '2', '6'] {
+        key(&mut app, KeyCode::Char(c));
+    }
+    let shown = app.lesson().expect("open").shown_methods();
+    assert_eq!(shown, [false, false, true, true, true, false, true, true]);
+    let text = draw(&app, 120, 40);
+    assert!(
+        !text.contains("explicit-euler"),
+        "hidden in the table:\n{text}"
+    );
+    assert!(
+        text.contains("3mid 1.") && text.contains("4RK4 3.") && !text.contains("1EE"),
+        "fitted orders of the shown methods in the legend:\n{text}"
+    );
+    assert!(text.contains("1e-"), "decade labels:\n{text}");
+    insta::assert_snapshot!("lesson_7_subset", text);
+}
+
+/// A table wider than the text column at 80 × 24 is clipped with › and scrolls sideways with
+/// `l` (then starts with ‹); nothing wraps.
+#[test]
+fn clipped_code_block_at_80x24() {
+    let mut app = app();
+    let i = app.find_lesson("speed-accuracy").expect("lesson 7");
+    app.open_lesson(i).expect("opens");
+    key(&mut app, KeyCode::Char('n'));
+    // The step asks for a prediction first; the text is there already.
+    key(&mut app, KeyCode::PageDown);
+    let text = draw(&app, 80, 24);
+    assert!(text.contains('›'), "a clipped line ends in ›:\n{text}");
+    insta::assert_snapshot!("code_clipped_80x24", text);
+    key(&mut app, KeyCode::Char('l'));
+    let text = draw(&app, 80, 24);
+    assert!(text.contains('‹'), "scrolled lines start with ‹:\n{text}");
+    insta::assert_snapshot!("code_scrolled_80x24", text);
+}
+
+/// The speed plot of a run that diverged ends at the diverging sample: its top label is at
+/// least the speed the status line reports.
+#[test]
+fn divergence_plot_draws_the_last_sample() {
+    let mut app = app();
+    let euler = app.find_lesson("euler").expect("lesson 3");
+    app.open_lesson(euler).expect("opens");
+    key(&mut app, KeyCode::Char('n'));
+    key(&mut app, KeyCode::Char('n'));
+    key(&mut app, KeyCode::Char(' '));
+    for _ in 0..100 {
+        app.tick(0.1);
+    }
+    let d = app
+        .lesson()
+        .expect("open")
+        .sim()
+        .diverged
+        .clone()
+        .expect("diverged");
+    let text = draw(&app, 100, 32);
+    // The speed chart's top y label: the cell after its left border, one row below its title.
+    let lines: Vec<Vec<char>> = text.lines().map(|l| l.chars().collect()).collect();
+    let (row, col) = lines
+        .iter()
+        .enumerate()
+        .find_map(|(r, l)| {
+            let s: String = l.iter().collect();
+            let at = s.find("┌max |v|")?;
+            Some((r, s[..at].chars().count()))
+        })
+        .expect("a speed chart");
+    let label: String = lines[row + 1][col + 1..]
+        .iter()
+        .take_while(|c| **c != '│')
+        .collect();
+    let top: f64 = label.trim().parse().expect("a number");
+    assert!(
+        top >= d.max_speed,
+        "axis top {top} below the divergence speed {}\n{text}",
+        d.max_speed
+    );
+    insta::assert_snapshot!("divergence_plot", text);
+}

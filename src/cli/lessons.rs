@@ -24,18 +24,35 @@ pub fn load(dir: Option<&Path>) -> anyhow::Result<Vec<Result<Lesson, LessonError
 ///
 /// # Errors
 /// No terminal, an unreadable `--lessons` directory, or a terminal failure.
-pub fn menu(dir: Option<&Path>, view: Option<tui::ViewMode>) -> anyhow::Result<()> {
-    tui::run(load(dir)?, None, view)
+pub fn menu(dir: Option<&Path>, view: Option<tui::ViewMode>, no_save: bool) -> anyhow::Result<()> {
+    tui::run(load(dir)?, None, view, options(dir, no_save))
+}
+
+/// Where progress goes (`--no-save`: nowhere) and the lessons' directory.
+fn options(dir: Option<&Path>, no_save: bool) -> tui::RunOptions {
+    let progress = match tui::Progress::default_path() {
+        Some(path) if !no_save => tui::Progress::load(&path),
+        _ => tui::Progress::in_memory(),
+    };
+    tui::RunOptions {
+        progress,
+        lessons_dir: dir.map(Path::to_path_buf),
+    }
 }
 
 /// `springlab lesson <N|slug>`: the app, opened on that lesson.
 ///
 /// # Errors
 /// No such lesson (the message lists them), a lesson that failed to load, no terminal.
-pub fn open(dir: Option<&Path>, which: &str, view: Option<tui::ViewMode>) -> anyhow::Result<()> {
+pub fn open(
+    dir: Option<&Path>,
+    which: &str,
+    view: Option<tui::ViewMode>,
+    no_save: bool,
+) -> anyhow::Result<()> {
     let lessons = load(dir)?;
     let index = find(&lessons, which)?;
-    tui::run(lessons, Some(index), view)
+    tui::run(lessons, Some(index), view, options(dir, no_save))
 }
 
 /// The index of lesson `which` (a number or a slug) in `lessons`.

@@ -703,9 +703,8 @@ impl Context<'_> {
 
     /// One confirmation run of the whole scene with `method` at `dt` (s).
     fn confirmation(&self, method: Method, dt: f64) -> Confirmation {
-        let mut c = confirm_run(self.scene, method, dt, self.horizon, self.scale);
-        c.dt_omega = dt * self.omega;
-        c
+        let steps = confirm_step_count(dt, self.horizon);
+        confirm_with_omega(self.scene, method, dt, steps, self.scale, self.omega)
     }
 }
 
@@ -720,12 +719,16 @@ pub fn confirm_run(
     horizon: f64,
     scale: f64,
 ) -> Confirmation {
-    let steps = ((CONFIRM_HORIZONS * horizon / dt).ceil() as u64)
-        .clamp(CONFIRM_MIN_STEPS, CONFIRM_MAX_STEPS);
-    confirm_steps(scene, method, dt, steps, scale)
+    confirm_steps(scene, method, dt, confirm_step_count(dt, horizon), scale)
 }
 
-/// [`confirm_run`] for a given number of steps.
+/// `min(⌈50 horizon/dt⌉, 20 000)` steps, at least 100.
+fn confirm_step_count(dt: f64, horizon: f64) -> u64 {
+    ((CONFIRM_HORIZONS * horizon / dt).ceil() as u64).clamp(CONFIRM_MIN_STEPS, CONFIRM_MAX_STEPS)
+}
+
+/// [`confirm_run`] for a given number of steps; `dt_omega` uses the stiffest body's `ω_max`
+/// ([`omega_max`]).
 #[must_use]
 pub fn confirm_steps(
     scene: &Scene,
@@ -734,7 +737,24 @@ pub fn confirm_steps(
     steps: u64,
     scale: f64,
 ) -> Confirmation {
-    let omega = 0.0;
+    let omega = scene
+        .bodies
+        .iter()
+        .map(|b| omega_max(&b.model, &b.state).omega)
+        .filter(|w| w.is_finite())
+        .fold(0.0, f64::max);
+    confirm_with_omega(scene, method, dt, steps, scale, omega)
+}
+
+/// [`confirm_steps`] with `ω_max` (rad/s) already known.
+fn confirm_with_omega(
+    scene: &Scene,
+    method: Method,
+    dt: f64,
+    steps: u64,
+    scale: f64,
+    omega: f64,
+) -> Confirmation {
     {
         let mut scene = scene.clone();
         scene.set_method(method);

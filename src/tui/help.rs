@@ -17,18 +17,39 @@ pub const LESSON_KEYS: &[(&str, &str)] = &[
         "r",
         "back to t = 0 and the first view (keeps method, dt, k, pins)",
     ),
-    ("m", "next method"),
-    ("+ / -", "dt × 2 / ÷ 2"),
+    (
+        "m",
+        "choose a method: its key (e s m r i p v x), 1–8 or Enter; Tab: one body",
+    ),
+    (
+        "+ / -",
+        "dt × 2 / ÷ 2 (the status line shows the method's limit)",
+    ),
     ("] / [", "cap on steps per frame × 2 / ÷ 2"),
     ("> / <", "speed × 2 / ÷ 2 (simulated s per wall s)"),
-    ("", "Springs and pins"),
+    ("", "Springs, damping and pins"),
     ("K / k", "stiffness × 1.5 / ÷ 1.5, every spring"),
     ("D / d", "damping × 1.5 / ÷ 1.5 (from 1 % of critical)"),
+    (
+        "A / a",
+        "air drag on every particle × 2 / ÷ 2 (from c/m = 0.25 1/s)",
+    ),
+    (
+        "G / g",
+        "Verlet's damping γ per step × 10 / ÷ 10 (from 5e-5)",
+    ),
+    (
+        "J / j",
+        "projection passes per step × 2 / ÷ 2 (Verlet, XPBD)",
+    ),
     ("1 – 4", "pin / free a cloth corner"),
     (
         "mouse",
         "drag a particle (held still); drag empty space: pan",
     ),
+    ("", "Predictions and charts"),
+    ("1 – 6", "answer a prediction (before the run)"),
+    ("1 – 8", "show / hide a method in lesson 7's charts"),
     ("", "View"),
     ("arrows", "orbit the camera; Shift + arrows: pan"),
     ("i / o", "zoom in / out (also the mouse wheel)"),
@@ -38,10 +59,10 @@ pub const LESSON_KEYS: &[(&str, &str)] = &[
     ),
     ("v", "view: raster (graphics), half-blocks, braille"),
     ("t", "springs shown: all, struct, shear, bend, none"),
-    ("PgUp/PgDn", "scroll the step's text"),
+    ("PgUp/PgDn", "scroll the step's text; h / l: code sideways"),
     ("e", "export the view as PNG"),
     ("", "Lesson"),
-    ("n / p", "next / previous step"),
+    ("n / p", "next / previous step (n on the last: next lesson)"),
     ("q / Esc", "back to the menu"),
     ("Ctrl-C", "quit"),
 ];
@@ -81,7 +102,7 @@ pub fn render(menu: bool, theme: Theme, area: Rect, buf: &mut Buffer) {
     if !menu && roomy {
         lines.push(Line::from(""));
         lines.push(Line::from(Span::styled(
-            "dt·ω: ω bounds the fastest spring mode, √(k/m) for one spring.",
+            "limit: the method's largest stable dt here, dampers and drag included.",
             theme.dim(),
         )));
     }

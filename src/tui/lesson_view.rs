@@ -18,7 +18,7 @@ use super::sim_view::{self, ORBIT_STEP_DEGREES, Painter};
 use super::{Theme, export, markdown, status};
 use crate::lesson::{GoalKind, GoalProgress, Lesson, Step};
 use crate::physics::particles::pin_particle;
-use crate::physics::{SpringKind, State, diverge};
+use crate::physics::{Method, SpringKind, State, diverge};
 use crate::render::camera::ZOOM_STEP;
 use crate::render::{Camera, Projection};
 use crate::scene::lattice;
@@ -41,6 +41,23 @@ pub const COEFFICIENT_FACTOR: f64 = 1.5;
 
 /// `D` on an undamped spring starts at this fraction of its critical damping `2√(k m)`.
 pub const FIRST_DAMPING: f64 = 0.01;
+
+/// `A` on a scene without drag starts it at this rate `c/m` (1/s, `m` the mean particle mass);
+/// then ×2 per press (`a`: ÷2, to zero below the first value).
+pub const FIRST_DRAG_RATE: f64 = 0.25;
+
+/// `G` on Verlet without damping starts γ here; then ×10 per press up to [`MAX_VERLET_GAMMA`]
+/// (`g`: ÷10, to zero below the first value).
+pub const FIRST_VERLET_GAMMA: f64 = 5e-5;
+
+/// The largest γ `G` reaches (per step; 1 would stop every motion at once).
+pub const MAX_VERLET_GAMMA: f64 = 0.5;
+
+/// Largest number of projection passes `J` reaches (×2 per press; `j`: ÷2).
+pub const MAX_PASSES: u32 = 1024;
+
+/// Columns one press of `h` / `l` scrolls the step's code blocks and tables.
+pub const HSCROLL_STEP: u16 = 8;
 
 /// Fraction of the visible height one press of Shift + arrow moves the view.
 pub const PAN_STEP: f64 = 0.1;
@@ -155,6 +172,44 @@ struct Cloth {
     n: usize,
 }
 
+/// The method chooser (`m`): a list of the methods, one of them highlighted, and which bodies a
+/// choice applies to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Chooser {
+    /// The highlighted entry of [`Method::ALL`].
+    pub selected: usize,
+    /// The body a choice applies to (`None`: every body); Tab cycles it.
+    pub target: Option<usize>,
+}
+
+/// The key that picks each method in the chooser (beside the numbers 1–8).
+#[must_use]
+pub fn method_key(method: Method) -> char {
+    match method {
+        Method::ExplicitEuler => 'e',
+        Method::SemiImplicitEuler => 's',
+        Method::Midpoint => 'm',
+        Method::Rk4 => 'r',
+        Method::ImplicitEuler => 'i',
+        Method::PredictorCorrector => 'p',
+        Method::Verlet => 'v',
+        Method::Xpbd => 'x',
+    }
+}
+
+/// What the status line says about the method's stability limit at the present scene.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Limit {
+    /// Stable below this dt (s), by the damped theory of the scene (dampers and drag included).
+    Below(f64),
+    /// No dt is stable (explicit Euler or midpoint without damping).
+    Never,
+    /// Stable at any dt.
+    Always,
+    /// The theory does not cover the method (projection, XPBD).
+    NotCovered,
+}
+
 /// An open lesson at one step, with its simulation running or paused.
 #[derive(Clone, Debug)]
 pub struct LessonRun {
@@ -201,6 +256,28 @@ pub struct LessonRun {
     message: Option<String>,
     drag: Option<Drag>,
     text_scroll: u16,
+    /// Columns the code blocks and tables of the text are scrolled to the left.
+    hscroll: u16,
+    /// The step's text with its numbers filled in (computed when the step opens).
+    text: String,
+    /// The method chooser, when open.
+    chooser: Option<Chooser>,
+    /// Per step: its goal was met (in this visit or an earlier one, see [`LessonRun::restore`]).
+    met: Vec<bool>,
+    /// Per step: the student opened it.
+    visited: Vec<bool>,
+    /// Per step: the option the student predicted (0-based).
+    answers: Vec<Option<usize>>,
+    /// The prediction's result is shown: a run after the answer was decided.
+    revealed: Option<String>,
+    /// Something that the progress file keeps changed (met goals, visits, answers).
+    progress_changed: bool,
+    /// Which methods the study charts show (by index into [`Method::ALL`]).
+    shown: [bool; 8],
+    /// Per body: the linearised spectrum at the step's initial state (for the status line).
+    spectra: Vec<Option<crate::study::theory::Spectrum>>,
+    /// The stability limit of the present methods, dampers and drag included.
+    limit: Option<(Limit, f64)>,
 }
 
 impl LessonRun {
@@ -239,9 +316,65 @@ impl LessonRun {
             message: None,
             drag: None,
             text_scroll: 0,
+            hscroll: 0,
+            text: String::new(),
+            chooser: None,
+            met: Vec::new(),
+            visited: Vec::new(),
+            answers: Vec::new(),
+            revealed: None,
+            progress_changed: false,
+            shown: [true; 8],
+            spectra: Vec::new(),
+            limit: None,
         };
+        let n = run.lesson.steps.len();
+        run.met = vec![false; n];
+        run.visited = vec![false; n];
+        run.answers = vec![None; n];
         run.start_step();
         Ok(run)
+    }
+
+    /// Restores what the student did before (met goals, visited steps, predictions), for
+    /// example from the progress file; lengths that do not match the lesson are cut or padded.
+    pub fn restore(&mut self, met: &[bool], visited: &[bool], answers: &[Option<usize>]) {
+        let n = self.lesson.steps.len();
+        for i in 0..n {
+            self.met[i] |= met.get(i).copied().unwrap_or(false);
+            self.visited[i] |= visited.get(i).copied().unwrap_or(false);
+            if self.answers[i].is_none() {
+                self.answers[i] = answers.get(i).copied().flatten().filter(|&a| {
+                    self.lesson.steps[i]
+                        .predict
+                        .as_ref()
+                        .is_some_and(|p| a < p.options.len())
+                });
+            }
+        }
+    }
+
+    /// Per step: its goal was met.
+    #[must_use]
+    pub fn met_goals(&self) -> &[bool] {
+        &self.met
+    }
+
+    /// Per step: the student opened it.
+    #[must_use]
+    pub fn visited_steps(&self) -> &[bool] {
+        &self.visited
+    }
+
+    /// Per step: the option predicted (0-based).
+    #[must_use]
+    pub fn answers(&self) -> &[Option<usize>] {
+        &self.answers
+    }
+
+    /// True once since the last call when met goals, visits or answers changed.
+    pub fn take_progress_changed(&mut self) -> bool {
+        std::mem::take(&mut self.progress_changed)
     }
 
     /// Replaces the step's scene with `scene` (a scene built in code, for tests and tools), paused
@@ -263,11 +396,91 @@ impl LessonRun {
         self.oscillator = Oscillator::detect(&self.sim.scene);
         let step = &self.lesson.steps[self.step];
         self.studies = Studies::compute(&step.plots, &step.scene, &step.params);
+        self.text = crate::lesson::numbers::fill(
+            &step.text,
+            &step.scene,
+            &step.params,
+            Some(self.scene_at_start()),
+        );
         self.cloth = find_cloth(&self.sim);
         self.running = false;
         self.drag = None;
         self.text_scroll = 0;
+        self.hscroll = 0;
+        self.chooser = None;
+        self.revealed = None;
+        if let Some(v) = self.visited.get_mut(self.step)
+            && !*v
+        {
+            *v = true;
+            self.progress_changed = true;
+        }
+        self.refresh_spectra();
         self.restart_records();
+    }
+
+    /// The step's text with its computed numbers.
+    #[must_use]
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+
+    /// Recomputes every body's spectrum (after a change of stiffness, damping, drag or pins)
+    /// and the limit.
+    fn refresh_spectra(&mut self) {
+        use crate::study::{omega_max, theory};
+        self.spectra = self
+            .sim
+            .scene
+            .bodies
+            .iter()
+            .zip(&self.initial)
+            .map(|(b, initial)| {
+                let omega = omega_max(&b.model, initial).omega;
+                (omega > 0.0 && omega.is_finite())
+                    .then(|| theory::spectrum(&b.model, initial, omega))
+            })
+            .collect();
+        self.refresh_limit();
+    }
+
+    /// The limit of the present methods and method settings over the bodies' spectra.
+    fn refresh_limit(&mut self) {
+        use crate::study::theory;
+        let mut limit: Option<Limit> = None;
+        let mut omega = 0.0f64;
+        for (b, spectrum) in self.sim.scene.bodies.iter().zip(&self.spectra) {
+            let Some(spectrum) = spectrum else { continue };
+            omega = omega.max(spectrum.omega_max);
+            let l = theory::limit(b.method, &b.params, spectrum);
+            let this = match (l.stability, l.dt) {
+                ("conditional", Some(dt)) => Limit::Below(dt),
+                ("none", _) => Limit::Never,
+                ("unconditional", _) => Limit::Always,
+                _ => Limit::NotCovered,
+            };
+            // The most restrictive body decides.
+            let rank = |l: &Limit| match l {
+                Limit::Never => 0,
+                Limit::Below(_) => 1,
+                Limit::NotCovered => 2,
+                Limit::Always => 3,
+            };
+            limit = Some(match limit {
+                None => this,
+                Some(Limit::Below(a)) if matches!(this, Limit::Below(b) if b < a) => this,
+                Some(prev) if rank(&this) < rank(&prev) => this,
+                Some(prev) => prev,
+            });
+        }
+        self.limit = limit.map(|l| (l, omega));
+    }
+
+    /// The stability limit of the present methods on this scene by the damped theory (dampers
+    /// and drag included), and ω_max (rad/s); `None` when no spring holds a free particle.
+    #[must_use]
+    pub fn limit(&self) -> Option<&(Limit, f64)> {
+        self.limit.as_ref()
     }
 
     /// Clears what belongs to one run from `t = 0`: accumulator, history, goal, rates.
@@ -498,10 +711,57 @@ impl LessonRun {
         self.oscillator.as_ref()
     }
 
-    /// The goal's state: `Some(true)` met, `Some(false)` failed, `None` pending (or no goal).
+    /// The goal's state: `Some(true)` met (in this run or an earlier one: a met goal stays
+    /// met), `Some(false)` failed in this run, `None` pending (or no goal).
     #[must_use]
     pub fn goal_state(&self) -> Option<bool> {
+        if self.met.get(self.step).copied().unwrap_or(false) {
+            Some(true)
+        } else {
+            self.goal
+        }
+    }
+
+    /// This run's verdict on the goal alone (`r` clears it), whatever earlier runs did.
+    #[must_use]
+    pub fn run_verdict(&self) -> Option<bool> {
         self.goal
+    }
+
+    /// The method chooser, when open.
+    #[must_use]
+    pub fn chooser(&self) -> Option<&Chooser> {
+        self.chooser.as_ref()
+    }
+
+    /// The option predicted at this step (0-based), if any.
+    #[must_use]
+    pub fn answer(&self) -> Option<usize> {
+        self.answers.get(self.step).copied().flatten()
+    }
+
+    /// What a decided run showed after the prediction (`None` until then).
+    #[must_use]
+    pub fn revealed(&self) -> Option<&str> {
+        self.revealed.as_deref()
+    }
+
+    /// True while the step's prediction waits for an answer (the run waits too).
+    #[must_use]
+    pub fn awaiting_prediction(&self) -> bool {
+        self.step().predict.is_some() && self.answer().is_none()
+    }
+
+    /// Which methods the study charts show.
+    #[must_use]
+    pub fn shown_methods(&self) -> [bool; 8] {
+        self.shown
+    }
+
+    /// Columns the text's code blocks are scrolled to the left.
+    #[must_use]
+    pub fn hscroll(&self) -> u16 {
+        self.hscroll
     }
 
     /// The last message of a key (for example why it did nothing).
@@ -625,7 +885,11 @@ impl LessonRun {
     /// One step, then the history, the goal and the divergence check; true when it diverged.
     fn step_once(&mut self) -> bool {
         let diverged = self.sim.step().is_some() || self.sim.diverged.is_some();
-        if !diverged {
+        if diverged {
+            // The diverging sample is drawn too (the plot ends where the status line says).
+            self.history
+                .record_divergence(&self.sim, self.oscillator.as_ref());
+        } else {
             self.history.record(&self.sim, self.oscillator.as_ref());
         }
         self.check_goal(diverged);
@@ -636,6 +900,12 @@ impl LessonRun {
     }
 
     fn check_goal(&mut self, diverged: bool) {
+        let time = self
+            .sim
+            .diverged
+            .as_ref()
+            .map_or(self.sim.time(), |d| d.time);
+        self.check_prediction(diverged, time);
         if self.goal.is_some() {
             return;
         }
@@ -643,19 +913,89 @@ impl LessonRun {
             return;
         };
         let speed = if goal.kind == GoalKind::Settle && !diverged {
-            self.sim
-                .states()
-                .map(diverge::max_speed)
-                .fold(0.0f64, f64::max)
+            self.body_speed(goal.body)
         } else {
             0.0
         };
-        let time = self
-            .sim
-            .diverged
-            .as_ref()
-            .map_or(self.sim.time(), |d| d.time);
         self.goal = goal.check(&mut self.goal_progress, time, speed, diverged);
+        if self.goal == Some(true) && !self.met[self.step] {
+            self.met[self.step] = true;
+            self.progress_changed = true;
+        }
+    }
+
+    /// The largest particle speed of body `body` (1-based), or of every body (m/s).
+    fn body_speed(&self, body: Option<usize>) -> f64 {
+        self.sim
+            .states()
+            .enumerate()
+            .filter(|(i, _)| body.is_none_or(|b| b == i + 1))
+            .map(|(_, s)| diverge::max_speed(s))
+            .fold(0.0f64, f64::max)
+    }
+
+    /// After an answer, a run that diverged or passed the longest option's time reveals the
+    /// prediction's answer beside what this run did.
+    fn check_prediction(&mut self, diverged: bool, time: f64) {
+        if self.revealed.is_some() {
+            return;
+        }
+        let Some(chosen) = self.answer() else { return };
+        let Some(p) = &self.lesson.steps[self.step].predict else {
+            return;
+        };
+        let horizon = p
+            .options
+            .iter()
+            .map(|o| o.claim.time + crate::lesson::SETTLE_HOLD)
+            .fold(0.0, f64::max);
+        if !diverged && time < horizon {
+            return;
+        }
+        let per_body = p
+            .options
+            .iter()
+            .all(|o| o.claim.kind == crate::lesson::GoalKind::Settle && o.claim.body.is_some());
+        let what = if diverged {
+            format!("this run blew up at t = {} s", super::plots::number(time))
+        } else if per_body {
+            // Options about different bodies of one run: say what each body did in this one.
+            let bodies: Vec<String> = p
+                .options
+                .iter()
+                .map(|o| {
+                    let v = self.body_speed(o.claim.body);
+                    let state = if v < o.claim.speed {
+                        "at rest"
+                    } else {
+                        "still moving"
+                    };
+                    format!(
+                        "{} {state} (max |v| {} m/s)",
+                        o.text,
+                        super::plots::number(v)
+                    )
+                })
+                .collect();
+            format!(
+                "at t = {} s in this run: {}",
+                super::plots::number(time),
+                bodies.join(", ")
+            )
+        } else {
+            format!("this run kept going for {} s", super::plots::number(time))
+        };
+        let right = &p.options[p.answer];
+        let verdict = if chosen == p.answer {
+            "✓ you predicted it".to_string()
+        } else {
+            format!("✗ you predicted {}) {}", chosen + 1, p.options[chosen].text)
+        };
+        self.revealed = Some(format!(
+            "{what}. Answer: {}) {}. {verdict}.",
+            p.answer + 1,
+            right.text
+        ));
     }
 
     /// Handles a key of the lesson screen (the app handles `q`, Esc, `?`, `v` and Ctrl-C).
@@ -667,6 +1007,21 @@ impl LessonRun {
     pub fn handle_key_with(&mut self, code: KeyCode, modifiers: KeyModifiers) {
         self.message = None;
         self.version += 1;
+        if self.chooser.is_some() {
+            self.chooser_key(code);
+            return;
+        }
+        if let KeyCode::Char(c @ '1'..='9') = code {
+            let n = c as usize - '1' as usize;
+            if self.awaiting_prediction() {
+                self.predict(n);
+                return;
+            }
+            if self.step().plots.iter().any(|p| p.is_study()) {
+                self.toggle_shown(n);
+                return;
+            }
+        }
         if modifiers.contains(KeyModifiers::SHIFT) {
             let moved = match code {
                 KeyCode::Left => Some((-PAN_STEP, 0.0)),
@@ -684,7 +1039,15 @@ impl LessonRun {
             KeyCode::Char(' ') => self.toggle_run(),
             KeyCode::Char('s') => self.single_step(),
             KeyCode::Char('r') => self.reset(),
-            KeyCode::Char('m') => self.next_method(),
+            KeyCode::Char('m') => self.open_chooser(),
+            KeyCode::Char('A') => self.scale_drag(true),
+            KeyCode::Char('a') => self.scale_drag(false),
+            KeyCode::Char('G') => self.scale_gamma(true),
+            KeyCode::Char('g') => self.scale_gamma(false),
+            KeyCode::Char('J') => self.scale_passes(true),
+            KeyCode::Char('j') => self.scale_passes(false),
+            KeyCode::Char('l') => self.hscroll = self.hscroll.saturating_add(HSCROLL_STEP).min(400),
+            KeyCode::Char('h') => self.hscroll = self.hscroll.saturating_sub(HSCROLL_STEP),
             KeyCode::Char('+' | '=') => self.scale_dt(2.0),
             KeyCode::Char('-' | '_') => self.scale_dt(0.5),
             KeyCode::Char(']') => self.scale_steps_per_frame(true),
@@ -735,6 +1098,10 @@ impl LessonRun {
     }
 
     fn toggle_run(&mut self) {
+        if !self.running && self.awaiting_prediction() {
+            self.message = Some(self.prediction_prompt());
+            return;
+        }
         if let Some(d) = &self.sim.diverged {
             self.message = Some(format!(
                 "unstable at step {}: press r to start over",
@@ -748,6 +1115,10 @@ impl LessonRun {
     }
 
     fn single_step(&mut self) {
+        if self.awaiting_prediction() {
+            self.message = Some(self.prediction_prompt());
+            return;
+        }
         self.running = false;
         if self.sim.diverged.is_some() {
             self.message = Some("the run diverged: press r to start over".into());
@@ -776,17 +1147,261 @@ impl LessonRun {
         self.restart_records();
     }
 
-    fn next_method(&mut self) {
+    fn prediction_prompt(&self) -> String {
+        let n = self.step().predict.as_ref().map_or(0, |p| p.options.len());
+        format!("predict first: press 1–{n} (the run starts after your answer)")
+    }
+
+    /// Records option `n` (0-based) as the student's prediction.
+    fn predict(&mut self, n: usize) {
+        let Some(p) = &self.lesson.steps[self.step].predict else {
+            return;
+        };
+        let Some(option) = p.options.get(n) else {
+            self.message = Some(self.prediction_prompt());
+            return;
+        };
+        self.message = Some(format!(
+            "you predicted {}) {}: now run it and see",
+            n + 1,
+            option.text
+        ));
+        self.answers[self.step] = Some(n);
+        self.progress_changed = true;
+    }
+
+    /// Number keys in a step with study charts: show or hide method `n` (0-based).
+    fn toggle_shown(&mut self, n: usize) {
+        let Some(&method) = Method::ALL.get(n) else {
+            return;
+        };
+        self.shown[n] = !self.shown[n];
+        self.message = Some(format!(
+            "{method} {}",
+            if self.shown[n] { "shown" } else { "hidden" }
+        ));
+    }
+
+    /// `m`: opens the method chooser on the first body's method.
+    fn open_chooser(&mut self) {
         let current = self
             .sim
             .scene
             .bodies
             .first()
-            .map(|b| b.method)
-            .unwrap_or(crate::physics::Method::SemiImplicitEuler);
-        let next = current.next();
-        self.sim.set_method(next);
-        self.message = Some(format!("method: {next}"));
+            .map_or(Method::SemiImplicitEuler, |b| b.method);
+        self.chooser = Some(Chooser {
+            selected: Method::ALL.iter().position(|&m| m == current).unwrap_or(0),
+            target: None,
+        });
+    }
+
+    fn chooser_key(&mut self, code: KeyCode) {
+        let Some(mut c) = self.chooser else { return };
+        let n = Method::ALL.len();
+        let pick = match code {
+            KeyCode::Esc | KeyCode::Char('q') => {
+                self.chooser = None;
+                return;
+            }
+            KeyCode::Up => {
+                c.selected = (c.selected + n - 1) % n;
+                None
+            }
+            KeyCode::Down => {
+                c.selected = (c.selected + 1) % n;
+                None
+            }
+            KeyCode::Tab => {
+                let bodies = self.sim.scene.bodies.len();
+                c.target = match c.target {
+                    _ if bodies < 2 => None,
+                    None => Some(0),
+                    Some(b) if b + 1 < bodies => Some(b + 1),
+                    Some(_) => None,
+                };
+                None
+            }
+            KeyCode::Enter | KeyCode::Char(' ') => Some(Method::ALL[c.selected]),
+            KeyCode::Char(d @ '1'..='8') => Some(Method::ALL[d as usize - '1' as usize]),
+            KeyCode::Char(k) => Method::ALL.into_iter().find(|&m| method_key(m) == k),
+            _ => None,
+        };
+        self.chooser = Some(c);
+        if let Some(method) = pick {
+            self.chooser = None;
+            self.set_method(method, c.target);
+        }
+    }
+
+    /// Gives `method` to body `target` (every body when `None`).
+    pub fn set_method(&mut self, method: Method, target: Option<usize>) {
+        match target {
+            None => self.sim.set_method(method),
+            Some(b) => {
+                let mut methods: Vec<Method> =
+                    self.sim.scene.bodies.iter().map(|b| b.method).collect();
+                if let Some(m) = methods.get_mut(b) {
+                    *m = method;
+                }
+                for (body, m) in self.sim.scene.bodies.iter_mut().zip(methods) {
+                    body.method = m;
+                }
+                // Verlet's history belongs to the previous method.
+                if let Some(body) = self.sim.scene.bodies.get_mut(b) {
+                    body.state.history_valid = false;
+                }
+            }
+        }
+        self.sim.rebase_energy();
+        self.refresh_limit();
+        self.message = Some(match target {
+            None => format!("method: {method}"),
+            Some(b) => format!(
+                "method of {}: {method}",
+                self.sim
+                    .scene
+                    .bodies
+                    .get(b)
+                    .map_or("?", |b| b.label.as_str())
+            ),
+        });
+    }
+
+    /// `A` / `a`: the viscous drag `f = -c v` on every particle, ×2 / ÷2 (module constants).
+    fn scale_drag(&mut self, up: bool) {
+        for body in &mut self.sim.scene.bodies {
+            let count = body.model.mass.len().max(1) as f64;
+            let mean = body.model.mass.iter().sum::<f64>() / count;
+            let first = FIRST_DRAG_RATE * mean;
+            let c = body.model.drag;
+            body.model.drag = if up {
+                if c <= 0.0 { first } else { c * 2.0 }
+            } else if c / 2.0 < first * (1.0 - 1e-9) {
+                0.0
+            } else {
+                c / 2.0
+            };
+        }
+        self.sim.rebase_energy();
+        self.refresh_spectra();
+        let drags: Vec<f64> = self.sim.scene.bodies.iter().map(|b| b.model.drag).collect();
+        self.message = Some(match uniform(drags.iter().copied()) {
+            Some(0.0) => "no air drag".into(),
+            Some(c) => format!(
+                "air drag c = {} N·s/m on every particle (f = -c v)",
+                plots::number(c)
+            ),
+            None => "air drag changed on every body".into(),
+        });
+    }
+
+    /// The drag coefficient (N·s/m) when every body has the same.
+    #[must_use]
+    pub fn uniform_drag(&self) -> Option<f64> {
+        uniform(self.sim.scene.bodies.iter().map(|b| b.model.drag))
+    }
+
+    /// The Verlet bodies' γ, when every Verlet body has the same.
+    #[must_use]
+    pub fn verlet_gamma(&self) -> Option<f64> {
+        uniform(
+            self.sim
+                .scene
+                .bodies
+                .iter()
+                .filter(|b| b.method == Method::Verlet)
+                .map(|b| b.params.verlet_damping),
+        )
+    }
+
+    /// The Verlet bodies' projection passes, when every Verlet body has the same.
+    #[must_use]
+    pub fn verlet_passes(&self) -> Option<u32> {
+        let mut it = self
+            .sim
+            .scene
+            .bodies
+            .iter()
+            .filter(|b| matches!(b.method, Method::Verlet | Method::Xpbd))
+            .map(|b| b.params.iterations);
+        let first = it.next()?;
+        it.all(|p| p == first).then_some(first)
+    }
+
+    /// `G` / `g`: Verlet's damping factor γ per step of every body, ×10 / ÷10.
+    fn scale_gamma(&mut self, up: bool) {
+        for body in &mut self.sim.scene.bodies {
+            let g = body.params.verlet_damping;
+            body.params.verlet_damping = if up {
+                if g <= 0.0 {
+                    FIRST_VERLET_GAMMA
+                } else {
+                    (g * 10.0).min(MAX_VERLET_GAMMA)
+                }
+            } else if g / 10.0 < FIRST_VERLET_GAMMA * (1.0 - 1e-9) {
+                0.0
+            } else {
+                g / 10.0
+            };
+        }
+        self.sim.rebase_energy();
+        self.refresh_limit();
+        let dt = self.sim.dt();
+        let g = self
+            .sim
+            .scene
+            .bodies
+            .first()
+            .map_or(0.0, |b| b.params.verlet_damping);
+        let verlet = self
+            .sim
+            .scene
+            .bodies
+            .iter()
+            .any(|b| b.method == Method::Verlet);
+        self.message = Some(format!(
+            "Verlet damping γ = {} per step: a decay rate γ/dt = {} 1/s at this dt{}",
+            plots::number(g),
+            plots::number(g / dt),
+            if verlet {
+                ""
+            } else {
+                " (no body uses Verlet now: m v)"
+            }
+        ));
+    }
+
+    /// `J` / `j`: Verlet's projection passes (XPBD's solver passes) per step, ×2 / ÷2.
+    fn scale_passes(&mut self, up: bool) {
+        for body in &mut self.sim.scene.bodies {
+            let p = body.params.iterations;
+            body.params.iterations = if up {
+                (p.max(1) * 2)
+                    .min(MAX_PASSES)
+                    .max(if p == 0 { 1 } else { 0 })
+            } else {
+                p / 2
+            };
+            if up && p == 0 {
+                body.params.iterations = 1;
+            }
+            if body.method == Method::Xpbd {
+                body.params.iterations = body.params.iterations.max(1);
+            }
+        }
+        self.sim.rebase_energy();
+        self.refresh_limit();
+        let p = self
+            .sim
+            .scene
+            .bodies
+            .first()
+            .map_or(0, |b| b.params.iterations);
+        self.message = Some(format!(
+            "{p} projection pass{} per step (Verlet; XPBD: solver passes per substep)",
+            if p == 1 { "" } else { "es" }
+        ));
     }
 
     fn scale_dt(&mut self, factor: f64) {
@@ -799,6 +1414,7 @@ impl LessonRun {
             return;
         }
         self.sim.set_dt(dt);
+        self.sim.rebase_energy();
         self.accumulator = 0.0;
         self.message = Some(format!("dt = {} s", plots::number(dt)));
     }
@@ -874,6 +1490,8 @@ impl LessonRun {
         if let Some(o) = &mut self.oscillator {
             *o = o.restarted(&self.sim);
         }
+        self.sim.rebase_energy();
+        self.refresh_spectra();
     }
 
     /// Keys 1–4: pins or frees corner `corner` of the cloth.
@@ -901,6 +1519,8 @@ impl LessonRun {
             pin_particle(&mut body.model, &mut body.state, p);
             self.message = Some(format!("corner {} (particle {p}) is pinned", corner + 1));
         }
+        self.sim.rebase_energy();
+        self.refresh_spectra();
     }
 
     fn export(&mut self) {
@@ -980,6 +1600,7 @@ impl LessonRun {
                 let b = &mut self.sim.scene.bodies[body];
                 let inv_mass = b.model.inv_mass[index];
                 pin_particle(&mut b.model, &mut b.state, index);
+                self.sim.rebase_energy();
                 self.drag = Some(Drag {
                     body,
                     index,
@@ -1037,6 +1658,7 @@ impl LessonRun {
             body.state.v[d.index] = DVec3::ZERO;
             body.state.x_prev[d.index] = body.state.x[d.index];
             self.message = Some(format!("let go of particle {}", d.index));
+            self.sim.rebase_energy();
         }
     }
 
@@ -1127,6 +1749,7 @@ pub fn render(
             run.history(),
             run.oscillator(),
             &run.studies,
+            run.shown_methods(),
             run.sim().time(),
             theme,
             plot_area,
@@ -1143,7 +1766,13 @@ fn split_right(step: &Step, right: Rect) -> (Rect, Option<Rect>) {
     if step.plots.is_empty() {
         return (right, None);
     }
-    let plot_height = (right.height * 2 / 5)
+    // Study charts (log-log, several methods) get more of the column than time plots.
+    let share = if step.plots.iter().any(|p| p.is_study()) {
+        3
+    } else {
+        2
+    };
+    let plot_height = (right.height * share / 5)
         .max(8)
         .min(right.height.saturating_sub(6));
     let [scene, plot_area] =
@@ -1195,7 +1824,8 @@ fn render_header(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
     }
 }
 
-/// The step text (scrollable with PgUp / PgDn) above the "try" list and the goal.
+/// The step text (scrollable with PgUp / PgDn; code sideways with h / l) above the "try"
+/// list, the prediction and the goal.
 fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
     let area = Rect {
         width: area.width.saturating_sub(1),
@@ -1203,17 +1833,78 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
     };
     let width = area.width.saturating_sub(1).max(10);
     let step = run.step();
-    // The try list and the goal, at most half of the column.
+    let bold_green = Style::new()
+        .add_modifier(Modifier::BOLD)
+        .patch(theme.fg(Color::Green));
+    let key_style = theme.fg(Color::Cyan).add_modifier(Modifier::BOLD);
+    // The try list, the prediction and the goal, at most half of the column.
     let mut tail: Vec<Line<'static>> = Vec::new();
+    if let Some(p) = &step.predict {
+        tail.push(Line::from(vec![
+            Span::styled("Predict ", bold_green),
+            Span::styled(
+                match run.answer() {
+                    None => format!("1–{} first", p.options.len()),
+                    Some(a) => format!("you chose {}", a + 1),
+                },
+                theme.fg(Color::Yellow),
+            ),
+        ]));
+        tail.extend(markdown::wrap_text(&p.question, width, theme));
+        for (i, o) in p.options.iter().enumerate() {
+            let mark = match (run.answer(), run.revealed()) {
+                (_, Some(_)) if i == p.answer => "✓",
+                (Some(a), _) if a == i => "▸",
+                _ => " ",
+            };
+            let mut lines =
+                markdown::wrap_text(&format!("{}) {}", i + 1, o.text), width - 2, theme);
+            for (j, l) in lines.iter_mut().enumerate() {
+                let mut spans = vec![Span::styled(
+                    if j == 0 {
+                        format!("{mark} ")
+                    } else {
+                        "  ".into()
+                    },
+                    key_style,
+                )];
+                spans.append(&mut l.spans);
+                *l = Line::from(spans);
+            }
+            tail.extend(lines);
+        }
+        if let Some(r) = run.revealed() {
+            tail.extend(
+                markdown::wrap_text(r, width, theme)
+                    .into_iter()
+                    .map(|l| l.patch_style(theme.fg(Color::LightGreen))),
+            );
+            if !p.explain.is_empty() {
+                tail.extend(markdown::wrap_text(&p.explain, width, theme));
+            }
+        }
+    }
     if !step.try_list.is_empty() {
-        tail.push(Line::from(Span::styled(
-            "Try",
-            Style::new()
-                .add_modifier(Modifier::BOLD)
-                .patch(theme.fg(Color::Green)),
-        )));
+        tail.push(Line::from(Span::styled("Try", bold_green)));
         for item in &step.try_list {
-            tail.extend(markdown::bullet(item, width, theme));
+            let mut lines = markdown::bullet(&item.text, width, theme);
+            if let Some(keys) = &item.keys {
+                let k = format!("  keys: {keys}");
+                let fits = lines
+                    .last()
+                    .is_some_and(|l| l.width() + k.chars().count() <= usize::from(width));
+                if fits {
+                    if let Some(l) = lines.last_mut() {
+                        l.spans.push(Span::styled(k, key_style));
+                    }
+                } else {
+                    lines.push(Line::from(Span::styled(
+                        format!("  keys: {keys}"),
+                        key_style,
+                    )));
+                }
+            }
+            tail.extend(lines);
         }
     }
     if let Some(goal) = &step.goal {
@@ -1223,12 +1914,7 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
             None => ("… pending", theme.fg(Color::Yellow)),
         };
         tail.push(Line::from(vec![
-            Span::styled(
-                "Goal ",
-                Style::new()
-                    .add_modifier(Modifier::BOLD)
-                    .patch(theme.fg(Color::Green)),
-            ),
+            Span::styled("Goal ", bold_green),
             Span::styled(mark, style.add_modifier(Modifier::BOLD)),
         ]));
         tail.extend(markdown::wrap_text(&goal.text, width, theme));
@@ -1239,20 +1925,49 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
         Constraint::Length(if tail.is_empty() { 0 } else { tail_height + 1 }),
     ])
     .areas(area);
-    let text = markdown::render(&step.text, width, theme);
-    let total = text.len() as u16;
-    let max_scroll = total.saturating_sub(text_area.height);
+    let marked = markdown::render_marked(run.text(), width, theme);
+    let total = marked.len() as u16;
+    // When the text does not fit, its last row holds the scroll hint (never over the text).
+    let overflow = total > text_area.height;
+    let rows = if overflow {
+        text_area.height.saturating_sub(1)
+    } else {
+        text_area.height
+    };
+    let max_scroll = total.saturating_sub(rows);
     let scroll = run.text_scroll().min(max_scroll);
-    Paragraph::new(text)
-        .scroll((scroll, 0))
-        .render(text_area, buf);
-    if scroll < max_scroll && text_area.height > 0 {
-        let more = " ↓ more: PgDn ";
-        let w = more.chars().count() as u16;
+    let marker = theme.fg(Color::Yellow).add_modifier(Modifier::BOLD);
+    let offset = usize::from(run.hscroll());
+    let shown: Vec<Line<'static>> = marked
+        .into_iter()
+        .skip(usize::from(scroll))
+        .take(usize::from(rows))
+        .map(|(line, code)| {
+            if code {
+                markdown::clip(&line, offset, usize::from(text_area.width), marker)
+            } else {
+                line
+            }
+        })
+        .collect();
+    Paragraph::new(shown).render(
+        Rect {
+            height: rows,
+            ..text_area
+        },
+        buf,
+    );
+    if overflow && text_area.height > 0 {
+        let hint = match (scroll > 0, scroll < max_scroll) {
+            (false, _) => " ↓ more: PgDn ",
+            (true, true) => " ↑ PgUp · ↓ PgDn ",
+            (true, false) => " ↑ PgUp: back ",
+        };
+        let w = hint.chars().count() as u16;
         buf.set_string(
             text_area.x + text_area.width.saturating_sub(w),
             text_area.y + text_area.height - 1,
-            more,
+            hint,
             theme.fg(Color::Yellow).add_modifier(Modifier::REVERSED),
         );
     }
@@ -1266,16 +1981,82 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
         };
         Paragraph::new(tail).render(rest, buf);
     }
+    if let Some(c) = run.chooser() {
+        render_chooser(run, c, theme, area, buf);
+    }
+}
+
+/// The method chooser over the bottom of the text column.
+fn render_chooser(run: &LessonRun, c: &Chooser, theme: Theme, area: Rect, buf: &mut Buffer) {
+    let bodies = &run.sim().scene.bodies;
+    let current = |m: Method| match c.target {
+        Some(b) => bodies.get(b).is_some_and(|b| b.method == m),
+        None => bodies.iter().all(|b| b.method == m),
+    };
+    let mut lines: Vec<Line> = Method::ALL
+        .iter()
+        .enumerate()
+        .map(|(i, &m)| {
+            let style = if i == c.selected {
+                Style::new().add_modifier(Modifier::REVERSED)
+            } else {
+                Style::new()
+            };
+            Line::from(vec![
+                Span::styled(
+                    format!(" {} {} ", i + 1, method_key(m)),
+                    theme.fg(Color::Cyan).add_modifier(Modifier::BOLD),
+                ),
+                Span::styled(
+                    format!("{}{}", m.name(), if current(m) { " (now)" } else { "" }),
+                    style,
+                ),
+            ])
+        })
+        .collect();
+    if bodies.len() > 1 {
+        let target = c
+            .target
+            .and_then(|b| bodies.get(b))
+            .map_or("every body".to_string(), |b| b.label.clone());
+        lines.push(Line::styled(
+            format!(" Tab: for {target}"),
+            theme.fg(Color::Yellow),
+        ));
+    }
+    lines.push(Line::styled(" key, number or Enter · Esc", theme.dim()));
+    let height = (lines.len() as u16 + 2).min(area.height);
+    let width = 36.min(area.width);
+    let rect = Rect::new(area.x, area.y + area.height - height, width, height);
+    ratatui::widgets::Clear.render(rect, buf);
+    Paragraph::new(lines)
+        .block(
+            ratatui::widgets::Block::bordered()
+                .title(" method (m) ")
+                .border_style(theme.fg(Color::Cyan)),
+        )
+        .render(rect, buf);
 }
 
 fn render_hints(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
     let line = match run.message() {
         Some(m) => Line::from(Span::styled(format!(" {m}"), theme.fg(Color::Yellow))),
-        None => Line::from(Span::styled(
-            " space run · s step · r reset · m method · +/- dt · k/K d/D · v view · n/p step · \
-             ? help · q menu",
-            theme.dim(),
-        )),
+        None => {
+            // The longest hint that fits, so that "? help · q menu" is never cut off.
+            let hints = [
+                " space run · s step · r reset · m method · +/- dt · k/K d/D a/A · v view · \
+                 n/p step · ? help · q menu",
+                " space run · s step · r reset · m method · +/- dt · v view · n/p step · ? help \
+                 · q menu",
+                " space run · r reset · m method · +/- dt · n/p step · ? help · q menu",
+                " space run · ? help · q menu",
+            ];
+            let fits = hints
+                .iter()
+                .find(|h| h.chars().count() <= usize::from(area.width))
+                .unwrap_or(&hints[hints.len() - 1]);
+            Line::from(Span::styled(*fits, theme.dim()))
+        }
     };
     buf.set_line(area.x, area.y, &line, area.width);
 }

@@ -4,7 +4,9 @@
 //! - paragraphs: consecutive lines joined and word-wrapped to the width;
 //! - `- ` / `* ` / `1. ` list items: wrapped with a hanging indent;
 //! - code: lines indented by four spaces (after a blank line) and ```` ``` ```` fences, kept
-//!   verbatim (formulas line up as written), indented by two;
+//!   verbatim (formulas line up as written), indented by two, never wrapped: the lesson screen
+//!   clips a long one with a marker and scrolls code sideways ([`clip`]);
+//! - tables: lines starting with `|`, kept verbatim like code;
 //! - inline `**bold**` and `` `code` ``; everything else is shown as written.
 
 use ratatui::style::{Color, Modifier, Style};
@@ -15,11 +17,26 @@ use super::Theme;
 /// A piece of text with one style, before wrapping.
 type Piece = (String, Style);
 
-/// Renders `text` into lines of at most `width` columns (code lines are not wrapped).
+/// Renders `text` into lines of at most `width` columns; code and table lines are kept whole
+/// (see [`render_marked`]).
 #[must_use]
 pub fn render(text: &str, width: u16, theme: Theme) -> Vec<Line<'static>> {
+    render_marked(text, width, theme)
+        .into_iter()
+        .map(|(l, _)| l)
+        .collect()
+}
+
+/// A line and whether it is code or a table row (kept whole, to be clipped and scrolled).
+pub type Marked = (Line<'static>, bool);
+
+/// As [`render`], each line marked true when it is code or a table row.
+#[must_use]
+pub fn render_marked(text: &str, width: u16, theme: Theme) -> Vec<Marked> {
     let width = usize::from(width.max(8));
     let mut out: Vec<Line<'static>> = Vec::new();
+    // Indices of `out` that are code or table lines.
+    let mut code_at: Vec<usize> = Vec::new();
     let mut paragraph: Vec<String> = Vec::new();
     // The open list item: its marker and its text lines.
     let mut item: Option<(String, Vec<String>)> = None;
@@ -57,7 +74,8 @@ pub fn render(text: &str, width: u16, theme: Theme) -> Vec<Line<'static>> {
             continue;
         }
         if fenced {
-            out.extend(code_line(line, width, code_style));
+            code_at.push(out.len());
+            out.push(code_line(line, code_style));
             continue;
         }
         if line.trim().is_empty() {
@@ -74,13 +92,20 @@ pub fn render(text: &str, width: u16, theme: Theme) -> Vec<Line<'static>> {
             let code = line
                 .strip_prefix("    ")
                 .unwrap_or_else(|| line.trim_start_matches('\t'));
-            out.extend(code_line(code, width, code_style));
+            code_at.push(out.len());
+            out.push(code_line(code, code_style));
             previous_blank = false;
             in_code = true;
             continue;
         }
         in_code = false;
         let trimmed = line.trim_start();
+        if trimmed.starts_with('|') && paragraph.is_empty() && item.is_none() {
+            code_at.push(out.len());
+            out.push(code_line(trimmed, Style::new()));
+            previous_blank = false;
+            continue;
+        }
         if let Some(heading) = heading(trimmed) {
             flush(&mut out, &mut paragraph, &mut item);
             let (level, title) = heading;
@@ -108,90 +133,55 @@ pub fn render(text: &str, width: u16, theme: Theme) -> Vec<Line<'static>> {
     while out.last().is_some_and(|l| l.width() == 0) {
         out.pop();
     }
-    out
+    out.into_iter()
+        .enumerate()
+        .map(|(i, l)| (l, code_at.contains(&i)))
+        .collect()
 }
 
-/// A code line indented by two, verbatim when it fits. A longer one is broken where the author
-/// left a gap of two or more spaces (between the parts of a formula), else at single spaces, else
-/// anywhere; continuation lines are indented by four more.
-fn code_line(line: &str, width: usize, style: Style) -> Vec<Line<'static>> {
-    let indent = "  ";
-    let fits = |t: &str| Span::raw(t).width() + indent.len() <= width;
-    if fits(line) {
-        return vec![Line::from(Span::styled(format!("{indent}{line}"), style))];
-    }
-    // Parts separated by runs of 2+ spaces (the runs are dropped at a break).
-    let mut parts: Vec<String> = Vec::new();
-    let mut rest = line.trim_end();
-    while let Some(i) = rest.find("  ") {
-        let (part, tail) = rest.split_at(i);
-        if !part.trim().is_empty() {
-            parts.push(part.to_string());
-        }
-        rest = tail.trim_start();
-    }
-    if !rest.is_empty() {
-        parts.push(rest.to_string());
-    }
-    let leading = line.len() - line.trim_start().len();
-    if let Some(first) = parts.first_mut()
-        && leading > 0
-        && !first.starts_with(' ')
-    {
-        first.insert_str(0, &line[..leading]);
-    }
-    let continuation = "      ";
-    let mut lines: Vec<String> = Vec::new();
-    let mut current = String::new();
-    let limit = |first: bool| width.saturating_sub(if first { 2 } else { 6 }).max(4);
-    for part in parts {
-        let candidate = if current.is_empty() {
-            part.clone()
-        } else {
-            format!("{current}  {part}")
-        };
-        if Span::raw(candidate.as_str()).width() <= limit(lines.is_empty()) {
-            current = candidate;
-            continue;
-        }
-        if !current.is_empty() {
-            lines.push(std::mem::take(&mut current));
-        }
-        // The part alone: break at single spaces, or anywhere.
-        for word in part.split(' ') {
-            let candidate = if current.is_empty() {
-                word.to_string()
-            } else {
-                format!("{current} {word}")
-            };
-            if Span::raw(candidate.as_str()).width() <= limit(lines.is_empty()) {
-                current = candidate;
-            } else {
-                if !current.is_empty() {
-                    lines.push(std::mem::take(&mut current));
-                }
-                let mut chunk = String::new();
-                for c in word.chars() {
-                    if chunk.chars().count() >= limit(lines.is_empty()) {
-                        lines.push(std::mem::take(&mut chunk));
-                    }
-                    chunk.push(c);
-                }
-                current = chunk;
-            }
+/// The columns `offset ..` of `line` in at most `width` columns: a line that goes on to the
+/// right ends in `›`, one scrolled past its start begins with `‹` (both in `marker` style).
+#[must_use]
+pub fn clip(line: &Line<'static>, offset: usize, width: usize, marker: Style) -> Line<'static> {
+    // Cells: (symbol, style), one per column (wide characters take their width).
+    let mut cells: Vec<(String, Style, usize)> = Vec::new();
+    for span in &line.spans {
+        for c in span.content.chars() {
+            let w = Span::raw(c.to_string()).width();
+            cells.push((c.to_string(), line.style.patch(span.style), w));
         }
     }
-    if !current.is_empty() {
-        lines.push(current);
+    let total: usize = cells.iter().map(|c| c.2).sum();
+    if total <= width && offset == 0 {
+        return line.clone();
     }
-    lines
-        .into_iter()
-        .enumerate()
-        .map(|(i, l)| {
-            let prefix = if i == 0 { indent } else { continuation };
-            Line::from(Span::styled(format!("{prefix}{l}"), style))
-        })
-        .collect()
+    let offset = offset.min(total.saturating_sub(1));
+    let mut spans: Vec<Span<'static>> = Vec::new();
+    let mut col = 0;
+    let mut used = 0;
+    let left = offset > 0;
+    let right = total > offset + width;
+    let room = width.saturating_sub(usize::from(left) + usize::from(right));
+    if left {
+        spans.push(Span::styled("‹", marker));
+    }
+    for (sym, style, w) in cells {
+        if col >= offset && used + w <= room {
+            spans.push(Span::styled(sym, style));
+            used += w;
+        }
+        col += w;
+    }
+    if right {
+        spans.push(Span::raw(" ".repeat(room - used)));
+        spans.push(Span::styled("›", marker));
+    }
+    Line::from(spans)
+}
+
+/// A code line indented by two, verbatim (never wrapped: see [`clip`]).
+fn code_line(line: &str, style: Style) -> Line<'static> {
+    Line::from(Span::styled(format!("  {line}"), style))
 }
 
 /// One "try" item as a bulleted, wrapped block.

@@ -47,14 +47,49 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
                     if selected {
                         head = head.add_modifier(Modifier::REVERSED);
                     }
-                    lines.push(Line::from(vec![
-                        Span::styled(pointer, theme.fg(Color::Yellow)),
-                        Span::styled(format!("{:>2}. {}", l.number, l.title), head),
+                    let per_step = app
+                        .lesson_steps_done(i)
+                        .unwrap_or_else(|| vec![false; l.steps.len()]);
+                    let (done, steps) = (per_step.iter().filter(|d| **d).count(), per_step.len());
+                    let mark = if done == steps && steps > 0 {
                         Span::styled(
-                            format!("  ({} steps, `springlab lesson {}`)", l.steps.len(), l.slug),
+                            " ✓ ",
+                            theme.fg(Color::LightGreen).add_modifier(Modifier::BOLD),
+                        )
+                    } else {
+                        Span::raw("   ")
+                    };
+                    // One mark per step: ✓ done (opened, goal met, prediction made), · not yet.
+                    let strip: Vec<Span> = per_step
+                        .iter()
+                        .map(|&d| {
+                            if d {
+                                Span::styled("✓", theme.fg(Color::LightGreen))
+                            } else {
+                                Span::styled("·", theme.dim())
+                            }
+                        })
+                        .collect();
+                    let command = match app.lessons_dir() {
+                        Some(dir) => {
+                            format!("springlab --lessons {} lesson {}", dir.display(), l.slug)
+                        }
+                        None => format!("springlab lesson {}", l.slug),
+                    };
+                    lines.push(Line::from(
+                        vec![
+                            Span::styled(pointer, theme.fg(Color::Yellow)),
+                            Span::styled(format!("{:>2}. {}", l.number, l.title), head),
+                            mark,
+                        ]
+                        .into_iter()
+                        .chain(strip)
+                        .chain([Span::styled(
+                            format!(" {done}/{steps} steps · `{command}`"),
                             theme.dim(),
-                        ),
-                    ]));
+                        )])
+                        .collect::<Vec<_>>(),
+                    ));
                     for line in markdown::wrap_text(&l.summary, width, theme) {
                         let mut spans = vec![Span::raw("       ")];
                         spans.extend(line.spans);

@@ -314,16 +314,39 @@ fn braille(run: &LessonRun, theme: Theme, inner: Rect, buf: &mut Buffer) {
             if crowded {
                 free.clear();
             }
-            for (x, y) in free {
+            // A mark goes in the cell whose braille dots hold its point: ratatui maps text
+            // labels with (cells - 1) and dots with (dots - 1) per extent, which puts a label up
+            // to a cell away from its dot; snap the label to the dot's cell.
+            let (cols, rows) = (f64::from(inner.width), f64::from(inner.height));
+            let snap = |(x, y): (f64, f64)| {
+                let dot_x = (x * (2.0 * cols - 1.0) / w).round().max(0.0);
+                let dot_y = ((h - y) * (4.0 * rows - 1.0) / h).round().max(0.0);
+                let (cx, cy) = ((dot_x / 2.0).floor(), (dot_y / 4.0).floor());
+                let lx = if cols > 1.0 {
+                    (cx + 0.5) * w / (cols - 1.0)
+                } else {
+                    x
+                };
+                let ly = if rows > 1.0 {
+                    h - (cy + 0.5) * h / (rows - 1.0)
+                } else {
+                    y
+                };
+                (lx.min(w), ly.max(0.0))
+            };
+            for p in free {
+                let (x, y) = snap(p);
                 ctx.print(x, y, Span::styled("•", theme.fg(Color::White)));
             }
-            for (x, y) in pinned {
+            for p in pinned {
+                let (x, y) = snap(p);
                 ctx.print(x, y, Span::styled("■", theme.fg(Color::Yellow)));
             }
             if let Some((b, i)) = drag
                 && let Some(p) = sim.scene.bodies.get(b).and_then(|body| body.state.x.get(i))
-                && let Some((x, y)) = dots.point(*p)
+                && let Some(c) = dots.point(*p)
             {
+                let (x, y) = snap(c);
                 ctx.print(x, y, Span::styled("●", theme.fg(Color::LightRed)));
             }
         })

@@ -6,13 +6,18 @@
 //! ```
 //! The first line ends with the scene pane's view (`view: raster (sixel, 30 images/s) (v)`,
 //! `view: halfblocks (v)`, `view: braille (v)`).
-//! `ω` is the upper bound of [`LessonRun::omega_max`]: exact for one spring, `2√(k/m)` for a
-//! chain. Times are simulated times; the real-time factor, steps per second and frames per
-//! second are measured (a dash until measured).
+//! `ω` is the stiffest mode ω_max (power iteration, as the stability study); beside it the
+//! present method's largest stable dt on this scene by the damped theory
+//! ([`crate::study::theory`]: dampers and drag included, the bodies' initial state), yellow
+//! above 80 % of it and red with ✗ beyond; "unstable at every dt" (explicit Euler or midpoint
+//! with nothing damping), "stable at any dt", or "limit: no theory" (projection, XPBD). Then
+//! the drag c, Verlet's γ and projection passes when they apply. Times are simulated times;
+//! the real-time factor, steps per second and frames per second are measured (a dash until
+//! measured).
 
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
-use ratatui::style::{Color, Modifier};
+use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
 
 use super::Theme;
@@ -41,17 +46,49 @@ pub fn render(
         sep(),
         Span::raw(format!("dt {} s", number(dt))),
     ];
-    if let Some(omega) = run.omega_max() {
-        let product = dt * omega;
-        let style = if product > 2.0 {
-            theme.fg(Color::LightRed)
-        } else if product > 1.0 {
-            theme.fg(Color::Yellow)
-        } else {
-            Default::default()
+    // dt against the method's limit on this scene: the damped theory (dampers and drag
+    // included) of the bodies at their initial state.
+    if let Some((limit, omega)) = run.limit() {
+        use super::lesson_view::Limit;
+        first.push(sep());
+        first.push(Span::raw(format!("dt·ω {}", number(dt * omega))));
+        let (text, style) = match limit {
+            Limit::Below(max) => {
+                let ratio = dt / max;
+                let style = if ratio >= 1.0 {
+                    theme.fg(Color::LightRed).add_modifier(Modifier::BOLD)
+                } else if ratio > 0.8 {
+                    theme.fg(Color::Yellow)
+                } else {
+                    Style::default()
+                };
+                let mark = if ratio >= 1.0 { "✗ over " } else { "" };
+                (format!("{mark}limit {} s", number(*max)), style)
+            }
+            Limit::Never => (
+                "unstable at every dt".to_string(),
+                theme.fg(Color::LightRed).add_modifier(Modifier::BOLD),
+            ),
+            Limit::Always => ("stable at any dt".to_string(), Style::default()),
+            Limit::NotCovered => ("limit: no theory".to_string(), theme.dim()),
         };
         first.push(sep());
-        first.push(Span::styled(format!("dt·ω {}", number(product)), style));
+        first.push(Span::styled(text, style));
+    }
+    if let Some(c) = run.uniform_drag().filter(|c| *c > 0.0) {
+        first.push(sep());
+        first.push(Span::raw(format!("c {} N·s/m", number(c))));
+    }
+    if let Some(g) = run.verlet_gamma().filter(|g| *g > 0.0) {
+        first.push(sep());
+        first.push(Span::raw(format!("γ {}", number(g))));
+    }
+    if let Some(p) = run.verlet_passes() {
+        first.push(sep());
+        first.push(Span::raw(format!(
+            "{p} pass{}",
+            if p == 1 { "" } else { "es" }
+        )));
     }
     if let Some(k) = run.uniform_stiffness() {
         first.push(sep());

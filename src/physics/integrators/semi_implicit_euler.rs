@@ -12,7 +12,8 @@
 //!
 //! **Stability on the harmonic oscillator** `x'' = -ω² x`: the step matrix
 //! `[[1 - dt²ω², dt], [-dt ω², 1]]` has determinant 1 and trace `2 - dt²ω²`; its eigenvalues stay
-//! on the unit circle while `|trace| ≤ 2`, that is while **dt·ω ≤ 2**. Beyond, one grows.
+//! on the unit circle while `|trace| < 2`, that is while **dt·ω < 2**; at dt·ω = 2 they meet at
+//! -1 as a double root and the amplitude grows linearly; beyond, one grows exponentially.
 //!
 //! Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,
 //! Springer 2006, §I.1.2 and §VI.3; GAMES101 assignment 8 (2020), §1.2.

@@ -31,7 +31,8 @@
 //! `x_{-1} = x_0 - dt v_0 + ½ dt² a_0` (Taylor, error O(dt³)).
 //!
 //! **Stability on the harmonic oscillator** (γ = 0, r = 0, no projection): the same recurrence
-//! as semi-implicit Euler, `x_{n+1} - (2 - dt²ω²) x_n + x_{n-1} = 0`, stable while **dt·ω ≤ 2**.
+//! as semi-implicit Euler, `x_{n+1} - (2 - dt²ω²) x_n + x_{n-1} = 0`, stable while **dt·ω < 2**
+//! (at 2 a double root at -1: linear growth).
 //! With a damper (rate μ on the mode), `x_{n+1} = (1 + c - dt²ω²/(1 + h)) x_n - c x_{n-1}`,
 //! `c = (1 - γ)(1 - h)/(1 + h) - dt μ/(1 + h)`: stable while both roots lie in the unit circle
 //! (see `study::theory`).

@@ -1,0 +1,207 @@
+//! Every lesson keeps its promises: for every step with a goal, the keys of its "try" item
+//! (played through the app with simulated wall time) meet the goal, and when those keys do more
+//! than start the run, idling for the goal's time does not; for every prediction, exactly the
+//! option the lesson names as the answer is confirmed by a run of its keys.
+//!
+//! The runs use the app's fixed-dt accumulator with frames of 0.1 s of wall time, as a student
+//! would see them (release mode keeps this to seconds).
+
+use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
+use springlab::lesson::{self, Goal, GoalProgress, Key, Keys, Lesson, Stroke};
+use springlab::physics::diverge;
+use springlab::tui::{App, Theme};
+
+/// Wall time of one frame (s).
+const FRAME: f64 = 0.1;
+
+fn code(key: Key) -> KeyCode {
+    match key {
+        Key::Char(c) => KeyCode::Char(c),
+        Key::Space => KeyCode::Char(' '),
+        Key::Enter => KeyCode::Enter,
+        Key::Esc => KeyCode::Esc,
+        Key::Tab => KeyCode::Tab,
+        Key::Up => KeyCode::Up,
+        Key::Down => KeyCode::Down,
+        Key::Left => KeyCode::Left,
+        Key::Right => KeyCode::Right,
+        Key::PageUp => KeyCode::PageUp,
+        Key::PageDown => KeyCode::PageDown,
+    }
+}
+
+/// The app at step `step` (0-based) of lesson `index`, its prediction answered with option 1
+/// (a step with a prediction waits for an answer before it runs).
+fn open_at(index: usize, step: usize) -> App {
+    let mut app = App::new(lesson::builtin(), Theme { color: false });
+    app.open_lesson(index).expect("the lesson opens");
+    for _ in 0..step {
+        app.handle_key(KeyEvent::new(KeyCode::Char('n'), KeyModifiers::NONE));
+    }
+    let run = app.lesson().expect("open");
+    assert_eq!(run.step_index(), step);
+    if run.awaiting_prediction() {
+        app.handle_key(KeyEvent::new(KeyCode::Char('1'), KeyModifiers::NONE));
+    }
+    app
+}
+
+/// Plays `keys` through the app; waits advance the run in frames.
+fn play(app: &mut App, keys: &Keys) {
+    for stroke in &keys.strokes {
+        match *stroke {
+            Stroke::Key(k) => app.handle_key(KeyEvent::new(code(k), KeyModifiers::NONE)),
+            Stroke::Wait(s) => {
+                let mut left = s;
+                while left > 1e-9 {
+                    app.tick(FRAME.min(left));
+                    left -= FRAME;
+                }
+            }
+        }
+    }
+}
+
+/// Runs frames until `claim` is decided for this run (checked after every frame, against the
+/// run's time, the speed of its body or bodies and its divergence); its verdict.
+fn decide(app: &mut App, claim: &Goal) -> Option<bool> {
+    let mut progress = GoalProgress::default();
+    let limit = claim.time + 2.0;
+    loop {
+        let run = app.lesson().expect("open");
+        let sim = run.sim();
+        let diverged = sim.diverged.is_some();
+        let time = sim.diverged.as_ref().map_or(sim.time(), |d| d.time);
+        let speed = sim
+            .states()
+            .enumerate()
+            .filter(|(i, _)| claim.body.is_none_or(|b| b == i + 1))
+            .map(|(_, s)| diverge::max_speed(s))
+            .fold(0.0f64, f64::max);
+        if let Some(v) = claim.check(&mut progress, time, speed, diverged) {
+            return Some(v);
+        }
+        if !run.is_running() || time > limit {
+            return None;
+        }
+        app.tick(FRAME);
+    }
+}
+
+/// Runs frames until the app's own goal verdict is decided (or the run stops or passes its
+/// time); the verdict.
+fn goal_verdict(app: &mut App, goal: &Goal) -> Option<bool> {
+    loop {
+        let run = app.lesson().expect("open");
+        if let Some(v) = run.run_verdict() {
+            return Some(v);
+        }
+        if !run.is_running() || run.sim().time() > goal.time + 2.0 {
+            return None;
+        }
+        app.tick(FRAME);
+    }
+}
+
+fn lessons() -> Vec<Lesson> {
+    lesson::builtin()
+        .into_iter()
+        .map(|l| l.expect("built-in lessons load"))
+        .collect()
+}
+
+#[test]
+fn every_goal_is_met_by_its_try_keys_and_action_goals_not_by_idling() {
+    let mut checked = 0;
+    for (li, l) in lessons().iter().enumerate() {
+        for (si, step) in l.steps.iter().enumerate() {
+            let Some(goal) = &step.goal else { continue };
+            let keys = step
+                .goal_keys()
+                .expect("a goal has its keys (checked at load)");
+            let at = format!(
+                "lesson {} step {} \"{}\" ({keys})",
+                l.number,
+                si + 1,
+                step.title
+            );
+            let mut app = open_at(li, si);
+            play(&mut app, keys);
+            assert!(
+                app.lesson().expect("open").is_running()
+                    || app.lesson().expect("open").run_verdict().is_some(),
+                "{at}: the keys leave the run paused"
+            );
+            let verdict = goal_verdict(&mut app, goal);
+            let run = app.lesson().expect("open");
+            assert_eq!(
+                verdict,
+                Some(true),
+                "{at}: goal not met (t = {:.3} s, diverged {:?})",
+                run.sim().time(),
+                run.sim().diverged
+            );
+            assert_eq!(
+                run.goal_state(),
+                Some(true),
+                "{at}: the screen shows it met"
+            );
+            if keys.is_action() {
+                let mut idle = open_at(li, si);
+                play(&mut idle, &Keys::parse("space").expect("space"));
+                let verdict = goal_verdict(&mut idle, goal);
+                assert_ne!(
+                    verdict,
+                    Some(true),
+                    "{at}: idling for {} s meets a goal that asks for an action",
+                    goal.time
+                );
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked >= 8, "only {checked} goals checked");
+}
+
+#[test]
+fn every_prediction_is_confirmed_by_a_run_of_its_answer_and_only_that() {
+    let mut predictions = Vec::new();
+    for (li, l) in lessons().iter().enumerate() {
+        for (si, step) in l.steps.iter().enumerate() {
+            let Some(p) = &step.predict else { continue };
+            predictions.push(l.number);
+            for (oi, option) in p.options.iter().enumerate() {
+                let at = format!(
+                    "lesson {} step {} option {} \"{}\" ({})",
+                    l.number,
+                    si + 1,
+                    oi + 1,
+                    option.text,
+                    option.keys
+                );
+                let mut app = open_at(li, si);
+                play(&mut app, &option.keys);
+                let holds = decide(&mut app, &option.claim);
+                let t = app.lesson().expect("open").sim().time();
+                assert!(
+                    holds.is_some(),
+                    "{at}: the run did not decide (t = {t:.3} s)"
+                );
+                assert_eq!(
+                    holds == Some(true),
+                    oi == p.answer,
+                    "{at}: the claim {} at t = {t:.3} s, but the answer is option {}",
+                    if holds == Some(true) {
+                        "holds"
+                    } else {
+                        "fails"
+                    },
+                    p.answer + 1
+                );
+            }
+        }
+    }
+    for n in [3, 4, 5, 7] {
+        assert!(predictions.contains(&n), "lesson {n} has a prediction");
+    }
+}
