@@ -136,7 +136,6 @@ fn csv_has_a_header_and_one_row_per_recorded_step() {
         "residual {} expected {expected}",
         last[7]
     );
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
