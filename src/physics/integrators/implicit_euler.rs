@@ -64,6 +64,7 @@
 use glam::{DMat3, DVec3};
 use serde::Serialize;
 
+use crate::physics::collide::Contact;
 use crate::physics::forces::{Model, forces};
 use crate::physics::integrators::{MethodParams, Workspace, fused, power_if};
 use crate::physics::particles::State;
@@ -127,6 +128,8 @@ pub(crate) struct Constraint {
     pub(super) i: usize,
     pub(super) normal: DVec3,
     pub(super) dv_n: f64,
+    /// The dynamic sphere it touches (index into `State::spheres`), `None` for a collider.
+    pub(super) sphere: Option<usize>,
 }
 
 /// The method as the formulas above write it: the spring list, 3×3 blocks, textbook CG.
@@ -208,7 +211,7 @@ fn textbook(
         stats.relative_residual = residual;
         stats.converged = converged;
         stats.passes += 1;
-        if model.colliders.is_empty() || stats.passes >= MAX_CONTACT_PASSES || !converged {
+        if !has_contacts(model, state) || stats.passes >= MAX_CONTACT_PASSES || !converged {
             break;
         }
         // Particles this solve carries into a collider: prescribe their normal velocity.
@@ -218,14 +221,14 @@ fn textbook(
     }
     stats.constrained = constraints.len() as u32;
     *last_solve = stats;
-    if *account && !constraints.is_empty() {
+    if !constraints.is_empty() && (*account || constraints.iter().any(|c| c.sphere.is_some())) {
         // The constraint impulses J = (A Δv - b)·N (N·s) do the work J (v_{n+1}·N) on the
         // particles; minus that is what the contacts inside the solve removed (J).
         let [dv, _, _, ap] = &mut *cg;
         system.apply(dv, ap);
-        for c in constraints.iter() {
-            let impulse = (ap[c.i] - system.rhs[c.i]).dot(c.normal);
-            dissipated.contacts -= impulse * (state.v[c.i] + dv[c.i]).dot(c.normal);
+        let removed = contact_impulses(state, constraints, dv, |i| ap[i] - system.rhs[i]);
+        if *account {
+            dissipated.contacts += removed;
         }
     }
 
@@ -324,7 +327,7 @@ fn step_lattice(
         stats.relative_residual = residual;
         stats.converged = converged;
         stats.passes += 1;
-        if model.colliders.is_empty() || stats.passes >= MAX_CONTACT_PASSES || !converged {
+        if !has_contacts(model, state) || stats.passes >= MAX_CONTACT_PASSES || !converged {
             break;
         }
         if !add_contacts(model, state, dt, dv, constraints) {
@@ -333,12 +336,13 @@ fn step_lattice(
     }
     stats.constrained = constraints.len() as u32;
     *last_solve = stats;
-    if *account && !constraints.is_empty() {
-        // The constraint impulses (A Δv - b)·N, as in the textbook step.
+    if !constraints.is_empty() && (*account || constraints.iter().any(|c| c.sphere.is_some())) {
+        // The constraint impulses (A Δv - b)·N and the spheres' reactions, as in the textbook
+        // step.
         let impulse = lattice.residual_force();
-        for c in constraints.iter() {
-            dissipated.contacts -=
-                impulse(c.i).dot(c.normal) * (state.v[c.i] + dv[c.i]).dot(c.normal);
+        let removed = contact_impulses(state, constraints, dv, impulse);
+        if *account {
+            dissipated.contacts += removed;
         }
     }
     last_dv.clone_from(dv);
@@ -369,6 +373,19 @@ fn add_contacts(
 ) -> bool {
     // Deeper than this (m) counts as inside: rounding of a landing exactly on the surface is not.
     const DEPTH: f64 = 1e-12;
+    // Where each sphere ends this step (`collide::advance_spheres`: gravity, then the move).
+    let ends: Vec<(DVec3, f64)> = state
+        .spheres
+        .iter()
+        .map(|s| {
+            let velocity = if s.kinematic {
+                s.velocity
+            } else {
+                s.velocity + dt * model.gravity
+            };
+            (s.center + dt * velocity, s.radius)
+        })
+        .collect();
     let mut changed = false;
     for i in 0..state.x.len() {
         if model.inv_mass[i] == 0.0 {
@@ -376,13 +393,27 @@ fn add_contacts(
         }
         let v = state.v[i] + dv[i];
         let x = state.x[i] + dt * v;
-        let deepest = model
+        let colliders = model
             .colliders
             .iter()
             .filter_map(|c| c.contact(x))
-            .filter(|c| c.phi < -DEPTH)
-            .min_by(|a, b| a.phi.total_cmp(&b.phi));
-        let Some(contact) = deepest else {
+            .map(|c| (c, None));
+        let spheres = ends
+            .iter()
+            .enumerate()
+            .filter_map(|(k, &(center, radius))| {
+                let d = x - center;
+                let distance = d.length();
+                (distance > 0.0).then(|| {
+                    let (phi, normal) = (distance - radius, d / distance);
+                    (Contact { phi, normal }, Some(k))
+                })
+            });
+        let deepest = colliders
+            .chain(spheres)
+            .filter(|(c, _)| c.phi < -DEPTH)
+            .min_by(|a, b| a.0.phi.total_cmp(&b.0.phi));
+        let Some((contact, sphere)) = deepest else {
             continue;
         };
         // (v_n + Δv)·N - φ̃/dt is the normal velocity that ends on the surface.
@@ -391,6 +422,7 @@ fn add_contacts(
             i,
             normal: contact.normal,
             dv_n: target - state.v[i].dot(contact.normal),
+            sphere,
         };
         match constraints.binary_search_by_key(&i, |c| c.i) {
             Ok(k) => constraints[k] = constraint,
@@ -399,6 +431,53 @@ fn add_contacts(
         changed = true;
     }
     changed
+}
+
+/// True when the step may need contact constraints: colliders or spheres.
+fn has_contacts(model: &Model, state: &State) -> bool {
+    !model.colliders.is_empty() || !state.spheres.is_empty()
+}
+
+/// The constraint impulses of a solve and what they did (module docs, "Contacts with
+/// spheres"): `impulse(i)` is `(A Δv - b)_i` (N·s) of the constrained particle `i`; its part
+/// along the normal, `J_i = (A Δv - b)_i·N_i`, acts on the particle, and `-J_i N_i` on the
+/// dynamic sphere it touches (a kinematic one takes nothing):
+///
+/// ```text
+/// V_s ← V_s - Σ_{i on s} J_i N_i / M_s
+/// removed = -Σ_i J_i (v_n + Δv)_i·N_i  -  Σ_s ½ M_s (|V_s'|² - |V_s|²)
+/// ```
+/// where `V_s` (m/s) and `M_s` (kg) are the sphere's velocity and mass. Returns `removed` (J):
+/// the energy the contacts inside the solve took out (the work of the impulses on the
+/// particles and the spheres' change of kinetic energy, negated).
+fn contact_impulses(
+    state: &mut State,
+    constraints: &[Constraint],
+    dv: &[DVec3],
+    impulse: impl Fn(usize) -> DVec3,
+) -> f64 {
+    let before: f64 = state.spheres.iter().map(sphere_kinetic).sum();
+    let mut removed = 0.0;
+    for c in constraints {
+        let j = impulse(c.i).dot(c.normal);
+        removed -= j * (state.v[c.i] + dv[c.i]).dot(c.normal);
+        if let Some(s) = c.sphere.map(|k| &mut state.spheres[k])
+            && !s.kinematic
+        {
+            s.velocity -= (j / s.mass) * c.normal;
+        }
+    }
+    let after: f64 = state.spheres.iter().map(sphere_kinetic).sum();
+    removed - (after - before)
+}
+
+/// A dynamic sphere's kinetic energy (J); a kinematic one's is not counted.
+fn sphere_kinetic(s: &crate::physics::collide::DynamicSphere) -> f64 {
+    if s.kinematic {
+        0.0
+    } else {
+        0.5 * s.mass * s.velocity.length_squared()
+    }
 }
 
 /// The assembled system `A Δv = b` of one step.
