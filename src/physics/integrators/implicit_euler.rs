@@ -202,22 +202,32 @@ fn textbook(
         rhs,
     };
     constraints.clear();
+    let contacts = has_contacts(model, state);
+    let mut tolerance = first_tolerance(contacts, params.cg_tolerance);
     let mut stats = SolveStats::default();
     loop {
         // Later passes start from the previous pass's Δv (it changed only near contacts).
-        let (iterations, residual, converged) =
-            system.solve(constraints, params, cg, warm || stats.passes > 0);
+        let (iterations, residual, converged) = system.solve(
+            constraints,
+            (tolerance, params.cg_max_iterations),
+            cg,
+            warm || stats.passes > 0,
+        );
         stats.iterations += iterations;
         stats.relative_residual = residual;
         stats.converged = converged;
         stats.passes += 1;
-        if !has_contacts(model, state) || stats.passes >= MAX_CONTACT_PASSES || !converged {
+        if !converged {
             break;
         }
         // Particles this solve carries into a collider: prescribe their normal velocity.
-        if !add_contacts(model, state, dt, &cg[0], constraints) {
+        let added = contacts
+            && stats.passes < MAX_CONTACT_PASSES
+            && add_contacts(model, state, dt, &cg[0], constraints);
+        if !added && tolerance == params.cg_tolerance {
             break;
         }
+        tolerance = params.cg_tolerance;
     }
     stats.constrained = constraints.len() as u32;
     *last_solve = stats;
@@ -311,13 +321,15 @@ fn step_lattice(
         f,
     );
     constraints.clear();
+    let contacts = has_contacts(model, state);
+    let mut tolerance = first_tolerance(contacts, params.cg_tolerance);
     let mut stats = SolveStats::default();
     let dv = &mut cg[0];
     loop {
         let start = (warm && stats.passes == 0).then_some(&dv[..]);
         let (iterations, residual, converged) = lattice.solve(
             constraints,
-            params.cg_tolerance,
+            tolerance,
             params.cg_max_iterations,
             stats.passes > 0,
             start,
@@ -327,12 +339,16 @@ fn step_lattice(
         stats.relative_residual = residual;
         stats.converged = converged;
         stats.passes += 1;
-        if !has_contacts(model, state) || stats.passes >= MAX_CONTACT_PASSES || !converged {
+        if !converged {
             break;
         }
-        if !add_contacts(model, state, dt, dv, constraints) {
+        let added = contacts
+            && stats.passes < MAX_CONTACT_PASSES
+            && add_contacts(model, state, dt, dv, constraints);
+        if !added && tolerance == params.cg_tolerance {
             break;
         }
+        tolerance = params.cg_tolerance;
     }
     stats.constrained = constraints.len() as u32;
     *last_solve = stats;
@@ -433,6 +449,20 @@ fn add_contacts(
     changed
 }
 
+/// The relative residual (dimensionless) at which a solve that only finds contacts stops
+/// (module docs, "Contacts inside the solve").
+pub const FIND_TOLERANCE: f64 = 1e-5;
+
+/// The first pass's tolerance: [`FIND_TOLERANCE`] where contacts may be found (unless the
+/// user's is looser), else the user's `tolerance`.
+fn first_tolerance(contacts: bool, tolerance: f64) -> f64 {
+    if contacts {
+        tolerance.max(FIND_TOLERANCE)
+    } else {
+        tolerance
+    }
+}
+
 /// True when the step may need contact constraints: colliders or spheres.
 fn has_contacts(model: &Model, state: &State) -> bool {
     !model.colliders.is_empty() || !state.spheres.is_empty()
@@ -516,7 +546,7 @@ impl System<'_> {
     fn solve(
         &self,
         constraints: &[Constraint],
-        params: &MethodParams,
+        (tolerance, max_iterations): (f64, u32),
         cg: &mut [Vec<DVec3>; 4],
         warm: bool,
     ) -> (u32, f64, bool) {
@@ -568,7 +598,7 @@ impl System<'_> {
         }
         // Relative to |b|, but never below the smallest normal number: a state so close to rest
         // that |b|² underflows has nothing left to solve for.
-        let tol2 = (params.cg_tolerance * params.cg_tolerance * b_norm2).max(f64::MIN_POSITIVE);
+        let tol2 = (tolerance * tolerance * b_norm2).max(f64::MIN_POSITIVE);
         // z = S P⁻¹ r, stored in p as the first search direction.
         let mut rz = 0.0;
         for i in 0..n {
@@ -580,7 +610,7 @@ impl System<'_> {
         }
         let mut r_norm2: f64 = r.iter().map(|r| r.length_squared()).sum();
         let mut iterations = 0;
-        while r_norm2 > tol2 && iterations < params.cg_max_iterations {
+        while r_norm2 > tol2 && iterations < max_iterations {
             self.apply(p, ap);
             filter(ap);
             let p_ap: f64 = p.iter().zip(ap.iter()).map(|(p, q)| p.dot(*q)).sum();
