@@ -21,10 +21,12 @@ pub mod export;
 pub mod graphics;
 pub mod halfblocks;
 pub mod help;
+pub mod lesson_run;
 pub mod lesson_view;
 pub mod markdown;
 pub mod menu;
 pub mod plots;
+pub mod pane;
 pub mod progress;
 pub mod raster;
 pub mod sim_view;
@@ -50,7 +52,7 @@ use ratatui::widgets::{Paragraph, Widget, Wrap};
 use crate::lesson::{Lesson, LessonError};
 pub use graphics::{Graphics, Protocol, ViewMode};
 pub use halfblocks::ColourDepth;
-pub use lesson_view::LessonRun;
+pub use lesson_run::LessonRun;
 pub use progress::Progress;
 use raster::{Encoder, Job, PaneRenderer};
 use sim_view::Painter;
@@ -317,7 +319,7 @@ impl App {
                 u32::from(self.graphics.cell.1),
             )
         } else {
-            sim_view::DOTS
+            pane::DOTS
         };
         if let Screen::Lesson(run) = &mut self.screen {
             run.set_grid(grid);
