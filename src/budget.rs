@@ -671,24 +671,15 @@ pub fn convergence(
 }
 
 /// An upper bound on the fastest angular frequency of `scene` (rad/s), by Gershgorin's theorem:
-/// `ω² ≤ max_i (1/m_i) Σ_{springs at i} k (1 + [other end free])` over free particles `i`.
+/// `ω² ≤` the largest [`spring_gershgorin`](crate::study::modes::spring_gershgorin) of its bodies.
 #[must_use]
 pub fn omega_bound(scene: &Scene) -> f64 {
-    let mut omega2: f64 = 0.0;
-    for b in &scene.bodies {
-        let model = &b.model;
-        let mut sum = vec![0.0; model.particle_count()];
-        for s in &model.springs {
-            let (a, bb) = (s.a as usize, s.b as usize);
-            let free = |i: usize| if model.inv_mass[i] > 0.0 { 1.0 } else { 0.0 };
-            sum[a] += s.stiffness * (1.0 + free(bb));
-            sum[bb] += s.stiffness * (1.0 + free(a));
-        }
-        for (i, k) in sum.iter().enumerate() {
-            omega2 = omega2.max(model.inv_mass[i] * k);
-        }
-    }
-    omega2.sqrt()
+    scene
+        .bodies
+        .iter()
+        .map(|b| crate::study::modes::spring_gershgorin(&b.model))
+        .fold(0.0, f64::max)
+        .sqrt()
 }
 
 /// The theoretical stability limit `dt·ω` of `method` on the undamped oscillator, where there

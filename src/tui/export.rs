@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 use super::pane::SpringFilter;
 use super::raster::PaneRenderer;
 use crate::render::Camera;
-use crate::simulation::Simulation;
 use crate::render::{Overlay, export};
+use crate::simulation::Simulation;
 
 /// Width of an exported frame (pixels); the height follows the pane's aspect ratio.
 pub const EXPORT_WIDTH: u32 = 1280;

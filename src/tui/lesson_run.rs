@@ -13,8 +13,8 @@ use std::time::Instant;
 
 use glam::DVec3;
 
-use super::plots::{self, History, Oscillator, Studies};
 use super::pane::{DOTS, SpringFilter};
+use super::plots::{self, History, Oscillator, Studies};
 use crate::lesson::{GoalProgress, Lesson, Step};
 use crate::physics::{Method, SpringKind, State};
 use crate::render::{Camera, Projection};
@@ -725,33 +725,19 @@ impl LessonRun {
         self.drag.map(|d| (d.body, d.index))
     }
 
-    /// An upper bound on the highest angular frequency of the springs (rad/s), by Gershgorin's
-    /// theorem on `M⁻¹K`:
-    ///
-    /// ```text
-    /// ω_max² ≤ max_i (1/m_i) Σ_{springs s at i} k_s (1 + [the other end is free])
-    /// ```
-    /// over free particles `i` (pinned ones have `1/m = 0`). Exact for one spring with a pinned
-    /// end (`ω = √(k/m)`); `2√(k/m)` for a long chain, the value of its fastest mode. Damping,
-    /// gravity and collisions are left out. `None` when no spring moves a free particle.
+    /// An upper bound on the highest angular frequency of the springs (rad/s): the square root
+    /// of the largest [`spring_gershgorin`](crate::study::modes::spring_gershgorin) bound of the
+    /// bodies. Exact for one spring with a pinned end (`ω = √(k/m)`); `2√(k/m)` for a long chain,
+    /// the value of its fastest mode. Damping, gravity and collisions are left out. `None` when no
+    /// spring moves a free particle.
     #[must_use]
     pub fn omega_max(&self) -> Option<f64> {
-        let mut max = 0.0f64;
-        let mut any = false;
-        for body in &self.sim.scene.bodies {
-            let m = &body.model;
-            let mut row = vec![0.0f64; m.particle_count()];
-            for s in &m.springs {
-                let (a, b) = (s.a as usize, s.b as usize);
-                let (free_a, free_b) = (m.inv_mass[a] > 0.0, m.inv_mass[b] > 0.0);
-                row[a] += s.stiffness * (1.0 + f64::from(u8::from(free_b)));
-                row[b] += s.stiffness * (1.0 + f64::from(u8::from(free_a)));
-                any = true;
-            }
-            for (r, inv) in row.iter().zip(&m.inv_mass) {
-                max = max.max(r * inv);
-            }
-        }
+        let bodies = &self.sim.scene.bodies;
+        let any = bodies.iter().any(|b| !b.model.springs.is_empty());
+        let max = bodies
+            .iter()
+            .map(|b| crate::study::modes::spring_gershgorin(&b.model))
+            .fold(0.0, f64::max);
         (any && max > 0.0).then(|| max.sqrt())
     }
 
@@ -885,4 +871,3 @@ fn find_cloth(sim: &Simulation) -> Option<Cloth> {
         (structural == 2 * n * (n - 1)).then_some(Cloth { body: b, n })
     })
 }
-

@@ -2,7 +2,6 @@
 //! below it, the scene and the step's plots on the right, and two status lines at the bottom.
 //! It reads the run ([`LessonRun`]) and changes nothing.
 
-
 use ratatui::buffer::Buffer;
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Color, Modifier, Style};
@@ -14,7 +13,6 @@ use super::sim_view::{self, Painter};
 use super::{Theme, markdown, status};
 use crate::lesson::Step;
 use crate::physics::Method;
-
 
 use super::lesson_run::{Chooser, LessonRun, method_key};
 

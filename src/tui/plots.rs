@@ -24,18 +24,10 @@ use crate::study::convergence::{self, ConvergenceOptions, ConvergenceReport};
 use crate::study::stability::{self, StabilityOptions};
 use crate::study::{Stability, StabilityReport};
 
-/// The harmonic oscillator of the `oscillator` scene and its exact motion along the spring.
-///
-/// ```text
-/// m u'' = -k u - k_d u'                 u = x - L0, the stretch along the spring (m)
-/// γ = k_d / (2 m),  ω0 = √(k/m)
-/// γ < ω0:  u = e^{-γ τ} (u0 cos ω_d τ + (v0 + γ u0)/ω_d sin ω_d τ),   ω_d = √(ω0² - γ²)
-/// γ = ω0:  u = e^{-γ τ} (u0 + (v0 + γ u0) τ)
-/// γ > ω0:  u = (u0 r2 - v0) e^{r1 τ}/(r2 - r1) + (v0 - u0 r1) e^{r2 τ}/(r2 - r1),   r1,2 = -γ ± √(γ² - ω0²)
-/// ```
-/// where `τ = t - t0` (s) is the time since the reference state `(u0, v0)` at `t0`, `k` the
-/// stiffness (N/m), `k_d` the damping (N·s/m), `m` the free particle's mass (kg). Undamped and
-/// from rest at `t0 = 0` this is `x(t) = L0 + A cos(√(k/m) t)`.
+/// The harmonic oscillator of the `oscillator` scene and its exact motion along the spring:
+/// `x(t) = L0 + u(t - t0)`, `u` the damped harmonic motion from the reference state `(u0, v0)` at
+/// `t0` ([`convergence::damped_oscillator`], the study's formula). Undamped and from rest at
+/// `t0 = 0` this is `x(t) = L0 + A cos(√(k/m) t)`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Oscillator {
     /// Rest length `L0` (m).
@@ -132,27 +124,14 @@ impl Oscillator {
     /// The exact position `L0 + u(t)` (m) at time `t` (s); see the type's documentation.
     #[must_use]
     pub fn exact(&self, t: f64) -> f64 {
-        let tau = t - self.t0;
-        let (u0, v0) = (self.u0, self.v0);
-        let omega0 = self.omega();
-        let gamma = self.damping / (2.0 * self.mass);
-        let u = if gamma == 0.0 {
-            if omega0 == 0.0 {
-                u0 + v0 * tau
-            } else {
-                u0 * (omega0 * tau).cos() + v0 / omega0 * (omega0 * tau).sin()
-            }
-        } else if (gamma - omega0).abs() <= 1e-12 * omega0.max(gamma) {
-            (-gamma * tau).exp() * (u0 + (v0 + gamma * u0) * tau)
-        } else if gamma < omega0 {
-            let omega_d = (omega0 * omega0 - gamma * gamma).sqrt();
-            (-gamma * tau).exp()
-                * (u0 * (omega_d * tau).cos() + (v0 + gamma * u0) / omega_d * (omega_d * tau).sin())
-        } else {
-            let root = (gamma * gamma - omega0 * omega0).sqrt();
-            let (r1, r2) = (-gamma + root, -gamma - root);
-            ((u0 * r2 - v0) * (r1 * tau).exp() + (v0 - u0 * r1) * (r2 * tau).exp()) / (r2 - r1)
-        };
+        let u = convergence::damped_oscillator(
+            self.stiffness,
+            self.damping,
+            self.mass,
+            self.u0,
+            self.v0,
+            t - self.t0,
+        );
         self.rest_length + u
     }
 }

@@ -1,30 +1,27 @@
 //! The controller of the lesson screen: what each key and mouse action does to the run.
 
-
 use glam::DVec3;
 use ratatui::crossterm::event::{KeyCode, KeyModifiers, MouseButton, MouseEvent, MouseEventKind};
 use ratatui::layout::Rect;
 
 use crate::tui::plots::{self, Oscillator};
 
-use crate::tui::export;
-use crate::physics::particles::pin_particle;
 use crate::physics::Method;
+use crate::physics::particles::pin_particle;
 use crate::render::camera::ZOOM_STEP;
 use crate::scene::lattice;
 use crate::simulation::Simulation;
-
+use crate::tui::export;
 
 use super::{
-    COEFFICIENT_FACTOR, Chooser, DT_RANGE, Drag, FIRST_DAMPING, FIRST_DRAG_RATE, FIRST_VERLET_GAMMA,
-    HSCROLL_STEP, LessonRun, MAX_PASSES, MAX_VERLET_GAMMA, PAN_STEP, Rates, SPEED_RANGE, build,
-    method_key, uniform,
+    COEFFICIENT_FACTOR, Chooser, DT_RANGE, Drag, FIRST_DAMPING, FIRST_DRAG_RATE,
+    FIRST_VERLET_GAMMA, HSCROLL_STEP, LessonRun, MAX_PASSES, MAX_VERLET_GAMMA, PAN_STEP, Rates,
+    SPEED_RANGE, build, method_key, uniform,
 };
 use crate::tui::pane::{self, SpringFilter, contains};
 
 /// Degrees the arrow keys turn the camera.
 pub const ORBIT_STEP_DEGREES: f64 = 15.0;
-
 
 impl LessonRun {
     /// Handles a key of the lesson screen (the app handles `q`, Esc, `?`, `v` and Ctrl-C).
@@ -559,17 +556,19 @@ impl LessonRun {
             self.step + 1,
             self.sim.steps
         ));
-        self.message = Some(match export::export_png(
-            &self.sim,
-            self.generation,
-            &self.camera,
-            self.filter,
-            self.aspect,
-            &path,
-        ) {
-            Ok(p) => format!("wrote {}", p.display()),
-            Err(e) => e,
-        });
+        self.message = Some(
+            match export::export_png(
+                &self.sim,
+                self.generation,
+                &self.camera,
+                self.filter,
+                self.aspect,
+                &path,
+            ) {
+                Ok(p) => format!("wrote {}", p.display()),
+                Err(e) => e,
+            },
+        );
     }
 
     /// Opens step `step` (0-based) of the lesson.

@@ -1,11 +1,7 @@
 //! After each step: the history, the goal's verdict and the prediction's reveal.
 
-
-
-
 use crate::lesson::GoalKind;
 use crate::physics::diverge;
-
 
 use super::LessonRun;
 
