@@ -21,7 +21,7 @@ pub use history::{Bin, History, Oscillator, Sample};
 pub use study::Studies;
 
 /// Draws the charts for `plots` side by side in `area`; `shown` picks the methods of the study
-/// charts (by index into [`Method::ALL`]).
+/// charts (by index into [`Method::ALL`](crate::physics::Method::ALL)).
 #[allow(clippy::too_many_arguments)]
 pub fn render(
     plots: &[Plot],
