@@ -301,13 +301,7 @@ impl LessonRun {
             let mean = body.model.mass.iter().sum::<f64>() / count;
             let first = FIRST_DRAG_RATE * mean;
             let c = body.model.drag;
-            body.model.drag = if up {
-                if c <= 0.0 { first } else { c * 2.0 }
-            } else if c / 2.0 < first * (1.0 - 1e-9) {
-                0.0
-            } else {
-                c / 2.0
-            };
+            body.model.drag = ladder(c, up, first, 2.0, f64::INFINITY);
         }
         self.sim.rebase_energy();
         self.refresh_spectra();
@@ -359,17 +353,7 @@ impl LessonRun {
     fn scale_gamma(&mut self, up: bool) {
         for body in &mut self.sim.scene.bodies {
             let g = body.params.verlet_damping;
-            body.params.verlet_damping = if up {
-                if g <= 0.0 {
-                    FIRST_VERLET_GAMMA
-                } else {
-                    (g * 10.0).min(MAX_VERLET_GAMMA)
-                }
-            } else if g / 10.0 < FIRST_VERLET_GAMMA * (1.0 - 1e-9) {
-                0.0
-            } else {
-                g / 10.0
-            };
+            body.params.verlet_damping = ladder(g, up, FIRST_VERLET_GAMMA, 10.0, MAX_VERLET_GAMMA);
         }
         self.sim.rebase_energy();
         self.refresh_limit();
@@ -695,5 +679,22 @@ impl LessonRun {
             self.message = Some(format!("let go of particle {}", d.index));
             self.sim.rebase_energy();
         }
+    }
+}
+
+/// One press of a coefficient key (`A`/`a`, `G`/`g`) on the value `c`: up from zero starts at
+/// `first`, else ×`factor` (at most `max`); down ÷`factor`, and to zero once below `first` (with a
+/// relative slack of 10⁻⁹ for round-off).
+fn ladder(c: f64, up: bool, first: f64, factor: f64, max: f64) -> f64 {
+    if up {
+        if c <= 0.0 {
+            first
+        } else {
+            (c * factor).min(max)
+        }
+    } else if c / factor < first * (1.0 - 1e-9) {
+        0.0
+    } else {
+        c / factor
     }
 }

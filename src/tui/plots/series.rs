@@ -73,15 +73,7 @@ pub(super) fn render_one(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
             ("E (J):", false)
         }
         Plot::Speed if bodies > 1 => {
-            let colours = [Color::Green, Color::Yellow, Color::Cyan, Color::Magenta];
-            for (b, label) in history.labels.iter().enumerate() {
-                curves.push((
-                    label.clone(),
-                    format!("{}", b + 1),
-                    colours[b % 4],
-                    body_index(b, 2),
-                ));
-            }
+            curves.extend(per_body(history, 2));
             ("max |v| (m/s):", true)
         }
         Plot::Speed => {
@@ -89,15 +81,7 @@ pub(super) fn render_one(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
             ("max |v| (m/s)", true)
         }
         Plot::Stretch => {
-            let colours = [Color::Green, Color::Yellow, Color::Cyan, Color::Magenta];
-            for (b, label) in history.labels.iter().enumerate() {
-                curves.push((
-                    label.clone(),
-                    format!("{}", b + 1),
-                    colours[b % 4],
-                    body_index(b, 3),
-                ));
-            }
+            curves.extend(per_body(history, 3));
             ("max |L/L0 - 1|:", true)
         }
         Plot::Error => {
@@ -236,4 +220,23 @@ pub(super) fn render_exact(v: &View, area: Rect, buf: &mut Buffer) {
         area,
         buf,
     );
+}
+
+/// One curve per body of the history's per-body quantity `q` (2: speed, 3: stretch), coloured
+/// in turn green, yellow, cyan, magenta.
+fn per_body(history: &History, q: usize) -> Vec<(String, String, Color, usize)> {
+    const COLOURS: [Color; 4] = [Color::Green, Color::Yellow, Color::Cyan, Color::Magenta];
+    history
+        .labels
+        .iter()
+        .enumerate()
+        .map(|(b, label)| {
+            (
+                label.clone(),
+                format!("{}", b + 1),
+                COLOURS[b % 4],
+                body_index(b, q),
+            )
+        })
+        .collect()
 }
