@@ -9,7 +9,7 @@
 //!
 //! # Time
 //!
-//! Simulated time is decoupled from drawing (ARCHITECTURE.md). Each frame the loop measures the wall
+//! Simulated time is decoupled from drawing. Each frame the loop measures the wall
 //! time since the previous frame and calls [`App::tick`]; the lesson adds that time (times the
 //! speed factor) to an accumulator and takes as many steps of the fixed `dt` as fit, at most the
 //! cap on steps per frame (`[` / `]`). When the cap (or the frame's time budget) is hit, the
@@ -17,43 +17,39 @@
 //! real-time factor below 1, instead of falling ever further behind. Frames are drawn at most
 //! 60 times a second; while nothing animates the loop blocks on input and uses no CPU.
 
+mod app_loop;
+mod app_view;
 pub mod export;
 pub mod graphics;
 pub mod halfblocks;
 pub mod help;
+pub mod lesson_run;
 pub mod lesson_view;
 pub mod markdown;
 pub mod menu;
+pub mod pane;
 pub mod plots;
 pub mod progress;
 pub mod raster;
 pub mod sim_view;
 pub mod status;
+mod terminal;
 
 use std::cell::{Cell, RefCell};
-use std::io::{IsTerminal, stdout};
 use std::time::{Duration, Instant};
 
-use anyhow::{Context as _, bail};
-use ratatui::DefaultTerminal;
-use ratatui::buffer::Buffer;
-use ratatui::crossterm::event::{
-    self, DisableMouseCapture, EnableMouseCapture, Event, KeyCode, KeyEvent, KeyEventKind,
-    KeyModifiers, MouseEvent,
-};
-use ratatui::crossterm::execute;
-use ratatui::layout::{Alignment, Rect};
+use ratatui::crossterm::event::{Event, KeyCode, KeyEvent, KeyEventKind, KeyModifiers, MouseEvent};
+use ratatui::layout::Rect;
 use ratatui::style::{Color, Modifier, Style};
-use ratatui::text::Line;
-use ratatui::widgets::{Paragraph, Widget, Wrap};
 
 use crate::lesson::{Lesson, LessonError};
+use app_view::raster_stamp;
 pub use graphics::{Graphics, Protocol, ViewMode};
 pub use halfblocks::ColourDepth;
-pub use lesson_view::LessonRun;
+pub use lesson_run::LessonRun;
 pub use progress::Progress;
 use raster::{Encoder, Job, PaneRenderer};
-use sim_view::Painter;
+pub use terminal::{RunOptions, init_terminal, restore_terminal, run};
 
 /// The smallest terminal the app draws into (columns, rows).
 pub const MIN_SIZE: (u16, u16) = (80, 24);
@@ -317,7 +313,7 @@ impl App {
                 u32::from(self.graphics.cell.1),
             )
         } else {
-            sim_view::DOTS
+            pane::DOTS
         };
         if let Screen::Lesson(run) = &mut self.screen {
             run.set_grid(grid);
@@ -642,222 +638,6 @@ impl App {
     pub fn set_canvas_area(&self, area: Rect) {
         self.canvas_area.set(area);
     }
-
-    /// The event loop: draw, wait for input or the next frame, tick; until the user quits.
-    ///
-    /// # Errors
-    /// Only when the terminal cannot be read or written.
-    pub fn run(&mut self, terminal: &mut DefaultTerminal) -> anyhow::Result<()> {
-        let mut last_tick = Instant::now();
-        let mut next_frame = Instant::now();
-        let mut fps_window = (Instant::now(), 0u32);
-        let mut images = 0u32;
-        let mut dirty = true;
-        if let Ok(size) = terminal.size() {
-            self.resize(size.width, size.height);
-        }
-        while !self.quit {
-            self.submit_raster();
-            if let Some(encoder) = &mut self.encoder
-                && encoder.poll()
-            {
-                dirty = true;
-                images += 1;
-            }
-            if dirty {
-                if std::mem::take(&mut self.clear) {
-                    terminal.clear()?;
-                }
-                terminal.draw(|frame| frame.render_widget(&*self, frame.area()))?;
-                fps_window.1 += 1;
-                dirty = false;
-            }
-            let animating = self.is_animating();
-            if animating {
-                // Frames on a fixed schedule; a late frame starts the schedule again from now.
-                let now = Instant::now();
-                // The raster view redraws the screen at the images' rate: the CPU the text and
-                // plots would take at 60 frames a second goes to stepping and encoding.
-                let period = if self.view == ViewMode::Raster && self.encoder.is_some() {
-                    RASTER_FRAME
-                } else {
-                    FRAME
-                };
-                next_frame = if next_frame + period < now {
-                    now + period
-                } else {
-                    next_frame + period
-                };
-                while !self.quit {
-                    let timeout = next_frame.saturating_duration_since(Instant::now());
-                    if timeout.is_zero() {
-                        break;
-                    }
-                    // While an image is being encoded, look for it every 2 ms: the next one is
-                    // sent as soon as the encoder is free, not at the next frame.
-                    let slice = if self.encoder.as_ref().is_some_and(Encoder::busy) {
-                        timeout.min(Duration::from_millis(2))
-                    } else {
-                        timeout
-                    };
-                    if !event::poll(slice)? {
-                        if let Some(encoder) = &mut self.encoder
-                            && encoder.poll()
-                        {
-                            images += 1;
-                            dirty = true;
-                            self.submit_raster();
-                        }
-                        continue;
-                    }
-                    dirty |= self.handle_pending_events()?;
-                    if !self.is_animating() {
-                        break;
-                    }
-                }
-            } else if self.raster_in_flight() {
-                // A frame is being encoded: wait for it or for input, whichever comes first.
-                if event::poll(Duration::from_millis(5))? {
-                    dirty |= self.handle_pending_events()?;
-                }
-            } else {
-                // Nothing moves: block until the user does something (no CPU while paused).
-                let event = event::read()?;
-                dirty |= self.handle_event(&event);
-                dirty |= self.drain_events()?;
-            }
-            let now = Instant::now();
-            // Wall time counts only while the simulation was running before this wait.
-            let wall = if animating {
-                (now - last_tick).as_secs_f64()
-            } else {
-                0.0
-            };
-            last_tick = now;
-            if animating {
-                self.tick_until(wall, Some(now + STEP_BUDGET));
-                dirty = true;
-                let elapsed = now - fps_window.0;
-                if elapsed >= Duration::from_millis(500) {
-                    self.fps = Some(f64::from(fps_window.1) / elapsed.as_secs_f64());
-                    self.raster_fps = Some(f64::from(images) / elapsed.as_secs_f64());
-                    fps_window = (now, 0);
-                    images = 0;
-                }
-            } else {
-                fps_window = (now, 0);
-                images = 0;
-                next_frame = now;
-                self.fps = None;
-                self.raster_fps = None;
-            }
-        }
-        Ok(())
-    }
-
-    /// True while the raster view waits for a frame: one is being encoded, or the pane changed
-    /// since the last one was sent.
-    fn raster_in_flight(&self) -> bool {
-        let Some(encoder) = &self.encoder else {
-            return false;
-        };
-        if encoder.busy() {
-            return true;
-        }
-        match &self.screen {
-            Screen::Lesson(run) if self.view == ViewMode::Raster && !self.help => {
-                let inner =
-                    lesson_view::scene_inner(run, Rect::new(0, 0, self.size.0, self.size.1));
-                run.sim().diverged.is_none() && self.submitted != Some((run.version(), inner))
-            }
-            _ => false,
-        }
-    }
-
-    fn handle_pending_events(&mut self) -> anyhow::Result<bool> {
-        let event = event::read()?;
-        let mut dirty = self.handle_event(&event);
-        dirty |= self.drain_events()?;
-        Ok(dirty)
-    }
-
-    /// Handles every event already waiting (a mouse drag sends many) before the next draw.
-    fn drain_events(&mut self) -> anyhow::Result<bool> {
-        let mut dirty = false;
-        while !self.quit && event::poll(Duration::ZERO)? {
-            let event = event::read()?;
-            dirty |= self.handle_event(&event);
-        }
-        Ok(dirty)
-    }
-}
-
-impl Widget for &App {
-    fn render(self, area: Rect, buf: &mut Buffer) {
-        let theme = self.theme;
-        if area.width < MIN_SIZE.0 || area.height < MIN_SIZE.1 {
-            too_small(area, buf, theme);
-            return;
-        }
-        match &self.screen {
-            Screen::Menu => menu::render(self, area, buf),
-            Screen::Lesson(run) => {
-                let label = self.view_label();
-                let canvas = lesson_view::render(
-                    run,
-                    self.fps,
-                    &label,
-                    theme,
-                    &ScenePainter { app: self },
-                    area,
-                    buf,
-                );
-                self.canvas_area.set(canvas);
-            }
-        }
-        if self.help {
-            help::render(matches!(self.screen, Screen::Menu), theme, area, buf);
-        }
-    }
-}
-
-/// The stamp of a raster job: the lesson opened (`opened`, high bits) and the run's version.
-fn raster_stamp(opened: u64, version: u64) -> u64 {
-    (opened << 40) | (version & ((1 << 40) - 1))
-}
-
-/// Draws the scene pane's content in the app's view.
-struct ScenePainter<'a> {
-    app: &'a App,
-}
-
-impl Painter for ScenePainter<'_> {
-    fn paint(&self, run: &LessonRun, theme: Theme, inner: Rect, buf: &mut Buffer) {
-        let app = self.app;
-        if app.view == ViewMode::Raster
-            && let Some(frame) = app.encoder.as_ref().and_then(Encoder::latest)
-            && frame.cells == ratatui::layout::Size::new(inner.width, inner.height)
-            && frame.stamp >> 40 == app.opened
-        {
-            raster::show(&frame.encoded, inner, buf);
-            return;
-        }
-        match app.view {
-            ViewMode::Braille => sim_view::Braille.paint(run, theme, inner, buf),
-            // The raster view shows half-blocks until its first frame is encoded.
-            ViewMode::HalfBlocks | ViewMode::Raster => {
-                let pixmap = app.pane.borrow_mut().draw(
-                    &run.sim().scene,
-                    run.generation(),
-                    run.camera(),
-                    run.spring_filter(),
-                    (u32::from(inner.width), 2 * u32::from(inner.height)),
-                    None,
-                );
-                halfblocks::render(&pixmap, app.colour, inner, buf);
-            }
-        }
-    }
 }
 
 /// The index in `lessons` of the lesson numbered `which` or with slug `which` (any case).
@@ -869,125 +649,4 @@ pub fn find_lesson(lessons: &[Result<Lesson, LessonError>], which: &str) -> Opti
         l.as_ref()
             .is_ok_and(|l| Some(l.number) == number || l.slug.eq_ignore_ascii_case(which))
     })
-}
-
-fn too_small(area: Rect, buf: &mut Buffer, theme: Theme) {
-    let text = vec![
-        Line::from(format!(
-            "The terminal is {}×{}; springlab needs at least {}×{}.",
-            area.width, area.height, MIN_SIZE.0, MIN_SIZE.1
-        )),
-        Line::from("Enlarge the window, or press q to go back."),
-    ];
-    let top = area.height.saturating_sub(2) / 2;
-    let rect = Rect::new(area.x, area.y + top, area.width, area.height - top);
-    Paragraph::new(text)
-        .alignment(Alignment::Center)
-        .wrap(Wrap { trim: true })
-        .style(theme.fg(Color::Yellow))
-        .render(rect, buf);
-}
-
-/// Where the app keeps progress and where its lessons came from.
-#[derive(Debug, Default)]
-pub struct RunOptions {
-    /// The student's progress (a file, or memory only with `--no-save`).
-    pub progress: Progress,
-    /// The `--lessons` directory, if any.
-    pub lessons_dir: Option<std::path::PathBuf>,
-}
-
-/// Opens the app on the menu, or on lesson `open` (an index into `lessons`), and runs it until
-/// the user quits. The terminal is restored on return, on error and on panic.
-///
-/// # Errors
-/// Standard output is not a terminal, the lesson does not open, or the terminal fails.
-pub fn run(
-    lessons: Vec<Result<Lesson, LessonError>>,
-    open: Option<usize>,
-    view: Option<ViewMode>,
-    options: RunOptions,
-) -> anyhow::Result<()> {
-    if !stdout().is_terminal() || !std::io::stdin().is_terminal() {
-        bail!(
-            "the lesson app needs a terminal; `springlab lessons` lists the lessons, \
-             `springlab run <scene>` runs a scene headless"
-        );
-    }
-    let theme = Theme::from_env();
-    let mut terminal = init_terminal().context("cannot set up the terminal")?;
-    // Ask the terminal before anything else reads its input (raw mode is on).
-    let graphics = Graphics::detect();
-    let default = if graphics.protocol.is_some() {
-        ViewMode::Raster
-    } else {
-        ViewMode::HalfBlocks
-    };
-    let mut app = App::new(lessons, theme)
-        .with_display(view.unwrap_or(default), graphics, ColourDepth::from_env())
-        .with_progress(options.progress)
-        .with_lessons_dir(options.lessons_dir);
-    if let Ok(size) = terminal.size() {
-        app.resize(size.width, size.height);
-    }
-    if let Some(i) = open
-        && let Err(e) = app.open_lesson(i)
-    {
-        restore_terminal();
-        bail!(e);
-    }
-    if view == Some(ViewMode::Raster)
-        && graphics.protocol.is_none()
-        && let Some(run) = app.lesson_mut()
-    {
-        run.set_message("no raster view: the terminal answered no graphics protocol (halfblocks)");
-    }
-    let result = execute!(stdout(), EnableMouseCapture)
-        .map_err(anyhow::Error::from)
-        .and_then(|()| app.run(&mut terminal));
-    if graphics.protocol == Some(Protocol::Kitty) {
-        use std::io::Write as _;
-        let _ = write!(stdout(), "{}", raster::kitty_delete(graphics.tmux_wrap));
-    }
-    restore_terminal();
-    result
-}
-
-/// Sets the terminal up for the app: raw mode, the alternate screen, and a panic hook that
-/// restores it (see [`restore_terminal`]) before the panic message is printed.
-///
-/// # Errors
-/// The terminal cannot be set up.
-pub fn init_terminal() -> std::io::Result<DefaultTerminal> {
-    let terminal = ratatui::try_init()?;
-    // ratatui's hook (installed by `try_init`) leaves raw mode and the alternate screen; ours
-    // runs first and empties the screen and turns the mouse off.
-    let hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        leave_clean();
-        hook(info);
-    }));
-    Ok(terminal)
-}
-
-/// Restores the terminal: the alternate screen emptied and left, raw mode and the mouse off.
-///
-/// The alternate screen is emptied first because tmux, when the window changed size while the
-/// app ran, reflows what the alternate screen holds into the shell's screen on leaving it
-/// (lines wider than the shell's old width wrap into its history and come back above the prompt);
-/// an empty screen leaves nothing.
-pub fn restore_terminal() {
-    leave_clean();
-    ratatui::restore();
-}
-
-fn leave_clean() {
-    use ratatui::crossterm::cursor::MoveTo;
-    use ratatui::crossterm::terminal::{Clear, ClearType};
-    let _ = execute!(
-        stdout(),
-        DisableMouseCapture,
-        Clear(ClearType::All),
-        MoveTo(0, 0)
-    );
 }

@@ -396,7 +396,7 @@ fn every_number_in_the_lessons_is_an_input_a_placeholder_or_explained() {
 #[test]
 fn the_explained_numbers_hold() {
     use springlab::physics::collide::Collider;
-    use springlab::tui::lesson_view::{COEFFICIENT_FACTOR, FIRST_DRAG_RATE, FIRST_VERLET_GAMMA};
+    use springlab::tui::lesson_run::{COEFFICIENT_FACTOR, FIRST_DRAG_RATE, FIRST_VERLET_GAMMA};
     // Lesson 1: A×4 from no drag on 1 kg nodes: c = 0.25 · 2³ = 2 N·s/m.
     assert_eq!(FIRST_DRAG_RATE * 8.0, 2.0);
     // Lesson 2: D and K multiply by 1.5.

@@ -13,7 +13,7 @@ use ratatui::style::Color;
 use springlab::lesson;
 use springlab::physics::Method;
 use springlab::simulation::Simulation;
-use springlab::tui::{App, LessonRun, Screen, Theme, sim_view};
+use springlab::tui::{App, LessonRun, Screen, Theme, pane};
 
 fn app() -> App {
     App::new(lesson::builtin(), Theme { color: false })
@@ -115,7 +115,7 @@ fn m_opens_the_method_chooser_which_picks_by_key_number_or_enter() {
         key(&mut app, KeyCode::Char('m'));
         key(
             &mut app,
-            KeyCode::Char(springlab::tui::lesson_view::method_key(m)),
+            KeyCode::Char(springlab::tui::lesson_run::method_key(m)),
         );
         assert_eq!(method(&app), m);
         assert!(run(&app).chooser().is_none());
@@ -694,7 +694,7 @@ fn mouse_grabs_drags_and_releases_a_particle() {
     // The cell of particle 1 (the free end).
     // The cell of particle 1 (the free end): its pixel on the pane's braille dots (2 × 4 a
     // cell).
-    let view = sim_view::dot_view(&camera, inner);
+    let view = pane::dot_view(&camera, inner);
     let p = view
         .project(run_ref.sim().scene.bodies[0].state.x[1])
         .expect("in front of the camera");
@@ -1091,7 +1091,7 @@ fn a_prediction_is_asked_before_the_run_and_answered_after_it() {
 /// beyond it.
 #[test]
 fn status_line_shows_the_damped_limit() {
-    use springlab::tui::lesson_view::Limit;
+    use springlab::tui::lesson_run::Limit;
     // The oscillator under semi-implicit Euler: dt·ω < 2, ω = 10 rad/s.
     let mut app = open("euler");
     key(&mut app, KeyCode::Char('n'));

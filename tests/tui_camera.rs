@@ -8,7 +8,7 @@ use springlab::lesson;
 use springlab::render::View;
 use springlab::render::camera::ZOOM_STEP;
 use springlab::tui::LessonRun;
-use springlab::tui::lesson_view::PAN_STEP;
+use springlab::tui::lesson_run::PAN_STEP;
 
 fn lesson_run(slug: &str, step: usize) -> LessonRun {
     let l = lesson::builtin()
@@ -167,14 +167,14 @@ fn following_never_moves_a_camera_whose_bodies_are_in_view() {
 #[test]
 fn the_mouse_picks_through_the_grid_of_the_view_shown() {
     use ratatui::crossterm::event::MouseButton;
-    use springlab::tui::sim_view;
+    use springlab::tui::pane::grid_view;
     // A raster view on 9 × 17-pixel cells: the particle is found where the image shows it.
     let mut run = lesson_run("rope", 0);
     let pane = Rect::new(40, 2, 58, 18);
     let grid = (9, 17);
     run.set_grid(grid);
     let target = run.sim().scene.bodies[0].state.x[1];
-    let view = sim_view::grid_view(run.camera(), pane, grid);
+    let view = grid_view(run.camera(), pane, grid);
     let q = view.project(target).expect("in front");
     let column = pane.x + (q.x / 9.0) as u16;
     let row = pane.y + (q.y / 17.0) as u16;

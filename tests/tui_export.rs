@@ -76,7 +76,15 @@ fn export_writes_the_view_on_screen() {
     run.handle_key(ratatui::crossterm::event::KeyCode::Char(' '));
     run.tick(0.3);
     let path = dir.join("frame.png");
-    let written = export_png(&run, &path).expect("export");
+    let written = export_png(
+        run.sim(),
+        run.generation(),
+        run.camera(),
+        run.spring_filter(),
+        run.aspect(),
+        &path,
+    )
+    .expect("export");
     assert_eq!(written, path);
     let big = read_png(&path);
     assert_eq!((big.0, big.1), export_size(2.0));
@@ -111,6 +119,14 @@ fn export_writes_the_view_on_screen() {
         100.0 * home
     );
     // An unwritable path gives a message, not a panic.
-    let err = export_png(&run, &dir.join("no/such/dir/x.png")).expect_err("unwritable");
+    let err = export_png(
+        run.sim(),
+        run.generation(),
+        run.camera(),
+        run.spring_filter(),
+        run.aspect(),
+        &dir.join("no/such/dir/x.png"),
+    )
+    .expect_err("unwritable");
     assert!(err.starts_with("cannot write"), "{err}");
 }

@@ -227,34 +227,56 @@ fn exact_solution(scene: &Scene, t: f64) -> Option<Vec<DVec3>> {
         return None;
     }
     let u = damped_oscillator(
-        s.stiffness * model.inv_mass[1],
-        s.damping * model.inv_mass[1],
+        s.stiffness,
+        s.damping,
+        model.mass[1],
         state.x[1].x - s.rest_length,
+        0.0,
         t,
     );
     Some(vec![DVec3::ZERO, DVec3::new(s.rest_length + u, 0.0, 0.0)])
 }
 
-/// The stretch `u(t)` (m) of `u'' + 2γ u' + ω0² u = 0` from `u(0) = u0` at rest, with
-/// `ω0² = k/m` (`omega2`, 1/s²) and `2γ = k_d/m` (`mu`, 1/s):
+/// The stretch `u(τ)` (m) of the damped harmonic oscillator, exactly: the one formula of the
+/// convergence study's reference and of the lesson app's "exact vs simulated" plot.
 ///
 /// ```text
-/// γ < ω0:  u = u0 e^{-γt} (cos ω_d t + γ/ω_d sin ω_d t),      ω_d = √(ω0² - γ²)
-/// γ = ω0:  u = u0 e^{-γt} (1 + γ t)
-/// γ > ω0:  u = u0 (r2 e^{r1 t} - r1 e^{r2 t}) / (r2 - r1),    r1,2 = -γ ± √(γ² - ω0²)
+/// m u'' = -k u - k_d u'                 u = x - L0, the stretch along the spring (m)
+/// γ = k_d / (2 m),  ω0 = √(k/m)
+/// γ < ω0:  u = e^{-γ τ} (u0 cos ω_d τ + (v0 + γ u0)/ω_d sin ω_d τ),   ω_d = √(ω0² - γ²)
+/// γ = ω0:  u = e^{-γ τ} (u0 + (v0 + γ u0) τ)
+/// γ > ω0:  u = (u0 r2 - v0) e^{r1 τ}/(r2 - r1) + (v0 - u0 r1) e^{r2 τ}/(r2 - r1),   r1,2 = -γ ± √(γ² - ω0²)
 /// ```
-fn damped_oscillator(omega2: f64, mu: f64, u0: f64, t: f64) -> f64 {
-    let gamma = 0.5 * mu;
-    let disc = gamma * gamma - omega2;
-    if disc < 0.0 {
-        let wd = (-disc).sqrt();
-        u0 * (-gamma * t).exp() * ((wd * t).cos() + gamma / wd * (wd * t).sin())
-    } else if disc == 0.0 {
-        u0 * (-gamma * t).exp() * (1.0 + gamma * t)
+/// where `τ` (s) is the time since the state `(u0, v0)` (m, m/s), `k` the `stiffness` (N/m),
+/// `k_d` the `damping` (N·s/m) and `m` the `mass` (kg). Undamped and from rest this is
+/// `u = u0 cos(ω0 τ)`; with `k = 0` the mass coasts, `u = u0 + v0 τ`.
+#[must_use]
+pub fn damped_oscillator(
+    stiffness: f64,
+    damping: f64,
+    mass: f64,
+    u0: f64,
+    v0: f64,
+    tau: f64,
+) -> f64 {
+    let omega0 = (stiffness / mass).sqrt();
+    let gamma = damping / (2.0 * mass);
+    if gamma == 0.0 {
+        if omega0 == 0.0 {
+            u0 + v0 * tau
+        } else {
+            u0 * (omega0 * tau).cos() + v0 / omega0 * (omega0 * tau).sin()
+        }
+    } else if (gamma - omega0).abs() <= 1e-12 * omega0.max(gamma) {
+        (-gamma * tau).exp() * (u0 + (v0 + gamma * u0) * tau)
+    } else if gamma < omega0 {
+        let omega_d = (omega0 * omega0 - gamma * gamma).sqrt();
+        (-gamma * tau).exp()
+            * (u0 * (omega_d * tau).cos() + (v0 + gamma * u0) / omega_d * (omega_d * tau).sin())
     } else {
-        let root = disc.sqrt();
+        let root = (gamma * gamma - omega0 * omega0).sqrt();
         let (r1, r2) = (-gamma + root, -gamma - root);
-        u0 * (r2 * (r1 * t).exp() - r1 * (r2 * t).exp()) / (r2 - r1)
+        ((u0 * r2 - v0) * (r1 * tau).exp() + (v0 - u0 * r1) * (r2 * tau).exp()) / (r2 - r1)
     }
 }
 

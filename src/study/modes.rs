@@ -49,6 +49,8 @@
 //! λ_max ≤ max_i Σ_j |(M⁻¹K)_ij|
 //! ```
 //! an upper bound that costs one pass over the springs. So `λ_power ≤ λ_max ≤ λ_Gershgorin`.
+//! [`spring_gershgorin`] is the same bound with each spring taken as a scalar spring (no
+//! geometry, no state): the budget estimates and the lesson app's status line use it.
 //!
 //! Checks: for the oscillator (one spring, one free mass) `ω_max = √(k/m) = 10` rad/s exactly;
 //! for a chain of `N` free masses hanging from a pinned end, at rest,
@@ -212,6 +214,31 @@ fn apply(
     for (y, s) in y.iter_mut().zip(scale) {
         *y *= *s;
     }
+}
+
+/// The Gershgorin bound of `M⁻¹K` with each spring taken as a scalar spring of stiffness `k`
+/// (no geometry, no state), in 1/s²: the quick bound of the budget estimates and the lesson
+/// app's status line.
+///
+/// ```text
+/// λ_max ≤ max_i (1/m_i) Σ_{springs s at i} k_s (1 + [other end of s free])
+/// ```
+/// where `m_i` is the mass of particle `i` (kg; pinned particles have `1/m_i = 0`) and `k_s` the
+/// stiffness (N/m): row `i` of the scalar `K` holds `Σ k_s` on its diagonal and `k_s` beside it
+/// for each free neighbour. For one spring on a pinned end `λ = k/m`; inside a chain `4k/m`.
+#[must_use]
+pub fn spring_gershgorin(model: &Model) -> f64 {
+    let mut sum = vec![0.0; model.particle_count()];
+    for s in &model.springs {
+        let (a, b) = (s.a as usize, s.b as usize);
+        let free = |i: usize| if model.inv_mass[i] > 0.0 { 1.0 } else { 0.0 };
+        sum[a] += s.stiffness * (1.0 + free(b));
+        sum[b] += s.stiffness * (1.0 + free(a));
+    }
+    sum.iter()
+        .zip(&model.inv_mass)
+        .map(|(k, w)| w * k)
+        .fold(0.0, f64::max)
 }
 
 /// `max_i Σ_j |(M⁻¹K)_ij|` over the rows of free particles, pinned columns left out (1/s²).

@@ -6,9 +6,11 @@
 
 use std::path::{Path, PathBuf};
 
-use super::lesson_view::LessonRun;
+use super::pane::SpringFilter;
 use super::raster::PaneRenderer;
+use crate::render::Camera;
 use crate::render::{Overlay, export};
+use crate::simulation::Simulation;
 
 /// Width of an exported frame (pixels); the height follows the pane's aspect ratio.
 pub const EXPORT_WIDTH: u32 = 1280;
@@ -26,19 +28,27 @@ pub fn export_size(aspect: f64) -> (u32, u32) {
     (EXPORT_WIDTH, h as u32)
 }
 
-/// Writes the scene of `run` as its pane shows it now to the PNG file `path`; returns the path
-/// written.
+/// Writes the scene of `sim` as its pane shows it now (the scene's structure at `generation`,
+/// seen by `camera` with springs `filter`, on a pane of aspect `aspect`) to the PNG file `path`;
+/// returns the path written.
 ///
 /// # Errors
 /// A message for the status line when the file cannot be written.
-pub fn export_png(run: &LessonRun, path: &Path) -> Result<PathBuf, String> {
+pub fn export_png(
+    sim: &Simulation,
+    generation: u64,
+    camera: &Camera,
+    filter: SpringFilter,
+    aspect: f64,
+    path: &Path,
+) -> Result<PathBuf, String> {
     let pixmap = PaneRenderer::default().draw(
-        &run.sim().scene,
-        run.generation(),
-        run.camera(),
-        run.spring_filter(),
-        export_size(run.aspect()),
-        Some(&Overlay::of(run.sim())),
+        &sim.scene,
+        generation,
+        camera,
+        filter,
+        export_size(aspect),
+        Some(&Overlay::of(sim)),
     );
     export::save_png(&pixmap, path).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(path.to_path_buf())

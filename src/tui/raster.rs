@@ -27,7 +27,7 @@ use ratatui_image::protocol::sixel::Sixel;
 use tiny_skia::Pixmap;
 
 use super::graphics::{Graphics, Protocol};
-use super::lesson_view::SpringFilter;
+use super::pane::SpringFilter;
 use crate::physics::SpringKind;
 use crate::render::{Camera, KindToggles, MAX_SIDE, Renderer, Style};
 use crate::scene::Scene;

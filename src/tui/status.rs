@@ -21,7 +21,7 @@ use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
 
 use super::Theme;
-use super::lesson_view::LessonRun;
+use super::lesson_run::LessonRun;
 use super::plots::number;
 use super::sim_view::time_text;
 
@@ -49,7 +49,7 @@ pub fn render(
     // dt against the method's limit on this scene: the damped theory (dampers and drag
     // included) of the bodies at their initial state.
     if let Some((limit, omega)) = run.limit() {
-        use super::lesson_view::Limit;
+        use super::lesson_run::Limit;
         first.push(sep());
         first.push(Span::raw(format!("dt·ω {}", number(dt * omega))));
         let (text, style) = match limit {

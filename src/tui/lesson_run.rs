@@ -1,0 +1,873 @@
+//! One open lesson at one step, the model of the lesson screen: the step's simulation stepped
+//! against wall time, its initial states, the camera, the goal and prediction, the plots'
+//! records and the progress through the lesson.
+//!
+//! The views read it ([`super::lesson_view`], [`super::sim_view`], [`super::status`]); the keys
+//! and the mouse change it (`controls.rs`); `goals.rs` judges the goal and the prediction after
+//! each step.
+
+mod controls;
+mod goals;
+
+use std::time::Instant;
+
+use glam::DVec3;
+
+use super::pane::{DOTS, SpringFilter};
+use super::plots::{self, History, Oscillator, Studies};
+use crate::lesson::{GoalProgress, Lesson, Step};
+use crate::physics::{Method, SpringKind, State};
+use crate::render::{Camera, Projection};
+use crate::simulation::Simulation;
+
+/// Default cap on the steps taken in one frame.
+pub const DEFAULT_MAX_STEPS_PER_FRAME: u64 = 4096;
+
+/// Range of the cap on steps per frame (`[` halves it, `]` doubles it).
+pub const STEPS_PER_FRAME_RANGE: (u64, u64) = (1, 1 << 20);
+
+/// Range of the time step the `+` / `-` keys reach (s).
+pub const DT_RANGE: (f64, f64) = (1e-7, 1.0);
+
+/// Range of the speed factor (simulated seconds per wall second).
+pub const SPEED_RANGE: (f64, f64) = (1.0 / 64.0, 64.0);
+
+/// Factor of one press of `k` / `K` and `d` / `D`.
+pub const COEFFICIENT_FACTOR: f64 = 1.5;
+
+/// `D` on an undamped spring starts at this fraction of its critical damping `2√(k m)`.
+pub const FIRST_DAMPING: f64 = 0.01;
+
+/// `A` on a scene without drag starts it at this rate `c/m` (1/s, `m` the mean particle mass);
+/// then ×2 per press (`a`: ÷2, to zero below the first value).
+pub const FIRST_DRAG_RATE: f64 = 0.25;
+
+/// `G` on Verlet without damping starts γ here; then ×10 per press up to [`MAX_VERLET_GAMMA`]
+/// (`g`: ÷10, to zero below the first value).
+pub const FIRST_VERLET_GAMMA: f64 = 5e-5;
+
+/// The largest γ `G` reaches (per step; 1 would stop every motion at once).
+pub const MAX_VERLET_GAMMA: f64 = 0.5;
+
+/// Largest number of projection passes `J` reaches (×2 per press; `j`: ÷2).
+pub const MAX_PASSES: u32 = 1024;
+
+/// Columns one press of `h` / `l` scrolls the step's code blocks and tables.
+pub const HSCROLL_STEP: u16 = 8;
+
+/// Fraction of the visible height one press of Shift + arrow moves the view.
+pub const PAN_STEP: f64 = 0.1;
+
+/// Following keeps every body within this fraction of the view's half-width and half-height:
+/// more than the `1/1.08` that the step's first framing leaves the framed region, so a step
+/// never starts with the camera moving.
+pub const FOLLOW_ZONE: f64 = 0.95;
+
+/// Following moves the eye back at most this many times the step's initial distance.
+pub const FOLLOW_MAX_ZOOM_OUT: f64 = 10.0;
+
+/// Aspect ratio (width / height, in pixels) of the scene pane before the app reports it: the
+/// pane of a 120 × 40 terminal.
+pub const DEFAULT_ASPECT: f64 = 1.75;
+
+/// A particle held by the mouse: pinned while held, its inverse mass restored on release.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Drag {
+    body: usize,
+    index: usize,
+    inv_mass: f64,
+    /// Depth of the particle in view coordinates (m): it moves in the view plane.
+    depth: f64,
+}
+
+/// Rolling measurements of the run against wall time (from the wall times passed to
+/// [`LessonRun::tick`], so deterministic in tests).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Rates {
+    wall: f64,
+    simulated: f64,
+    steps: u64,
+    /// Simulated seconds per wall second over the last half second.
+    real_time_factor: Option<f64>,
+    /// Steps per wall second over the last half second.
+    steps_per_second: Option<f64>,
+}
+
+impl Rates {
+    fn add(&mut self, wall: f64, simulated: f64, steps: u64) {
+        self.wall += wall;
+        self.simulated += simulated;
+        self.steps += steps;
+        if self.wall >= 0.5 {
+            self.real_time_factor = Some(self.simulated / self.wall);
+            self.steps_per_second = Some(self.steps as f64 / self.wall);
+            self.wall = 0.0;
+            self.simulated = 0.0;
+            self.steps = 0;
+        }
+    }
+}
+
+/// The four corners of an `n × n` cloth body (keys 1–4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Cloth {
+    body: usize,
+    n: usize,
+}
+
+/// The method chooser (`m`): a list of the methods, one of them highlighted, and which bodies a
+/// choice applies to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Chooser {
+    /// The highlighted entry of [`Method::ALL`].
+    pub selected: usize,
+    /// The body a choice applies to (`None`: every body); Tab cycles it.
+    pub target: Option<usize>,
+}
+
+/// The key that picks each method in the chooser (beside the numbers 1–8).
+#[must_use]
+pub fn method_key(method: Method) -> char {
+    match method {
+        Method::ExplicitEuler => 'e',
+        Method::SemiImplicitEuler => 's',
+        Method::Midpoint => 'm',
+        Method::Rk4 => 'r',
+        Method::ImplicitEuler => 'i',
+        Method::PredictorCorrector => 'p',
+        Method::Verlet => 'v',
+        Method::Xpbd => 'x',
+    }
+}
+
+/// What the status line says about the method's stability limit at the present scene.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Limit {
+    /// Stable below this dt (s), by the damped theory of the scene (dampers and drag included).
+    Below(f64),
+    /// No dt is stable (explicit Euler or midpoint without damping).
+    Never,
+    /// Stable at any dt.
+    Always,
+    /// The theory does not cover the method (projection, XPBD).
+    NotCovered,
+}
+
+/// An open lesson at one step, with its simulation running or paused.
+#[derive(Clone, Debug)]
+pub struct LessonRun {
+    lesson: Lesson,
+    step: usize,
+    sim: Simulation,
+    /// The body states at `t = 0`, restored by `r`.
+    initial: Vec<State>,
+    running: bool,
+    /// Simulated time owed to the simulation (s), paid in whole steps.
+    accumulator: f64,
+    /// Simulated seconds per wall second.
+    speed: f64,
+    max_steps_per_frame: u64,
+    last_frame_steps: u64,
+    rates: Rates,
+    /// The camera the pane shows (every view, and `e`).
+    camera: Camera,
+    /// The step's initial camera, restored by `r`, `c` and on entering a step.
+    home: Camera,
+    /// The camera keeps the bodies in view.
+    follow: bool,
+    /// Width / height of the scene pane in pixels.
+    aspect: f64,
+    /// Changes whenever the scene's structure (bodies, springs) may have changed.
+    generation: u64,
+    /// The last cell of a drag that pans the view (the left button on empty space).
+    pan_drag: Option<(u16, u16)>,
+    /// Changes whenever what the pane shows may have changed (a key, the mouse, a step).
+    version: u64,
+    /// Pixels of a cell in the view shown (dots for braille and half-blocks, the font cell for
+    /// raster): the mouse maps cells to the scene through it.
+    grid: (u32, u32),
+    filter: SpringFilter,
+    history: History,
+    oscillator: Option<Oscillator>,
+    /// Study results for the step's study plots.
+    studies: Studies,
+    cloth: Option<Cloth>,
+    /// The goal's verdict once decided: met or failed.
+    goal: Option<bool>,
+    /// What the goal remembers between frames.
+    goal_progress: GoalProgress,
+    message: Option<String>,
+    drag: Option<Drag>,
+    text_scroll: u16,
+    /// Columns the code blocks and tables of the text are scrolled to the left.
+    hscroll: u16,
+    /// The step's text with its numbers filled in (computed when the step opens).
+    text: String,
+    /// The method chooser, when open.
+    chooser: Option<Chooser>,
+    /// Per step: its goal was met (in this visit or an earlier one, see [`LessonRun::restore`]).
+    met: Vec<bool>,
+    /// Per step: the student opened it.
+    visited: Vec<bool>,
+    /// Per step: the option the student predicted (0-based).
+    answers: Vec<Option<usize>>,
+    /// The prediction's result is shown: a run after the answer was decided.
+    revealed: Option<String>,
+    /// Something that the progress file keeps changed (met goals, visits, answers).
+    progress_changed: bool,
+    /// Which methods the study charts show (by index into [`Method::ALL`]).
+    shown: [bool; 8],
+    /// Per body: the linearised spectrum at the step's initial state (for the status line).
+    spectra: Vec<Option<crate::study::theory::Spectrum>>,
+    /// The stability limit of the present methods, dampers and drag included.
+    limit: Option<(Limit, f64)>,
+}
+
+impl LessonRun {
+    /// Opens `lesson` at step `step` (0-based), paused at `t = 0`.
+    ///
+    /// # Errors
+    /// The step does not exist or its scene does not build (the message says which).
+    pub fn new(lesson: Lesson, step: usize) -> Result<LessonRun, String> {
+        let sim = build(&lesson, step)?;
+        let mut run = LessonRun {
+            initial: Vec::new(),
+            camera: Camera::default(),
+            home: Camera::default(),
+            follow: true,
+            aspect: DEFAULT_ASPECT,
+            generation: 0,
+            pan_drag: None,
+            version: 0,
+            grid: DOTS,
+            history: History::new(sim.dt(), None),
+            sim,
+            lesson,
+            step,
+            running: false,
+            accumulator: 0.0,
+            speed: 1.0,
+            max_steps_per_frame: DEFAULT_MAX_STEPS_PER_FRAME,
+            last_frame_steps: 0,
+            rates: Rates::default(),
+            filter: SpringFilter::All,
+            oscillator: None,
+            studies: Studies::default(),
+            cloth: None,
+            goal: None,
+            goal_progress: GoalProgress::default(),
+            message: None,
+            drag: None,
+            text_scroll: 0,
+            hscroll: 0,
+            text: String::new(),
+            chooser: None,
+            met: Vec::new(),
+            visited: Vec::new(),
+            answers: Vec::new(),
+            revealed: None,
+            progress_changed: false,
+            shown: [true; 8],
+            spectra: Vec::new(),
+            limit: None,
+        };
+        let n = run.lesson.steps.len();
+        run.met = vec![false; n];
+        run.visited = vec![false; n];
+        run.answers = vec![None; n];
+        run.start_step();
+        Ok(run)
+    }
+
+    /// Restores what the student did before (met goals, visited steps, predictions), for
+    /// example from the progress file; lengths that do not match the lesson are cut or padded.
+    pub fn restore(&mut self, met: &[bool], visited: &[bool], answers: &[Option<usize>]) {
+        let n = self.lesson.steps.len();
+        for i in 0..n {
+            self.met[i] |= met.get(i).copied().unwrap_or(false);
+            self.visited[i] |= visited.get(i).copied().unwrap_or(false);
+            if self.answers[i].is_none() {
+                self.answers[i] = answers.get(i).copied().flatten().filter(|&a| {
+                    self.lesson.steps[i]
+                        .predict
+                        .as_ref()
+                        .is_some_and(|p| a < p.options.len())
+                });
+            }
+        }
+    }
+
+    /// Per step: its goal was met.
+    #[must_use]
+    pub fn met_goals(&self) -> &[bool] {
+        &self.met
+    }
+
+    /// Per step: the student opened it.
+    #[must_use]
+    pub fn visited_steps(&self) -> &[bool] {
+        &self.visited
+    }
+
+    /// Per step: the option predicted (0-based).
+    #[must_use]
+    pub fn answers(&self) -> &[Option<usize>] {
+        &self.answers
+    }
+
+    /// True once since the last call when met goals, visits or answers changed.
+    pub fn take_progress_changed(&mut self) -> bool {
+        std::mem::take(&mut self.progress_changed)
+    }
+
+    /// Replaces the step's scene with `scene` (a scene built in code, for tests and tools), paused
+    /// at its start; `r` returns to this scene's initial state.
+    pub fn set_scene(&mut self, scene: crate::scene::Scene) {
+        self.sim = Simulation::new(scene);
+        self.filter = SpringFilter::All;
+        self.start_step();
+    }
+
+    /// Everything that follows from a freshly built scene.
+    fn start_step(&mut self) {
+        self.initial = self.sim.states().cloned().collect();
+        self.generation += 1;
+        self.home = Camera::for_scene(&self.sim.scene, self.aspect, Projection::default());
+        self.camera = self.home;
+        self.follow = true;
+        self.pan_drag = None;
+        self.oscillator = Oscillator::detect(&self.sim.scene);
+        let step = &self.lesson.steps[self.step];
+        self.studies = Studies::compute(&step.plots, &step.scene, &step.params);
+        self.text = crate::lesson::numbers::fill(
+            &step.text,
+            &step.scene,
+            &step.params,
+            Some(self.scene_at_start()),
+        );
+        self.cloth = find_cloth(&self.sim);
+        self.running = false;
+        self.drag = None;
+        self.text_scroll = 0;
+        self.hscroll = 0;
+        self.chooser = None;
+        self.revealed = None;
+        if let Some(v) = self.visited.get_mut(self.step)
+            && !*v
+        {
+            *v = true;
+            self.progress_changed = true;
+        }
+        self.refresh_spectra();
+        self.restart_records();
+    }
+
+    /// The step's text with its computed numbers.
+    #[must_use]
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+
+    /// Recomputes every body's spectrum (after a change of stiffness, damping, drag or pins)
+    /// and the limit.
+    fn refresh_spectra(&mut self) {
+        use crate::study::{omega_max, theory};
+        self.spectra = self
+            .sim
+            .scene
+            .bodies
+            .iter()
+            .zip(&self.initial)
+            .map(|(b, initial)| {
+                let omega = omega_max(&b.model, initial).omega;
+                (omega > 0.0 && omega.is_finite())
+                    .then(|| theory::spectrum(&b.model, initial, omega))
+            })
+            .collect();
+        self.refresh_limit();
+    }
+
+    /// The limit of the present methods and method settings over the bodies' spectra.
+    fn refresh_limit(&mut self) {
+        use crate::study::theory;
+        let mut limit: Option<Limit> = None;
+        let mut omega = 0.0f64;
+        for (b, spectrum) in self.sim.scene.bodies.iter().zip(&self.spectra) {
+            let Some(spectrum) = spectrum else { continue };
+            omega = omega.max(spectrum.omega_max);
+            let l = theory::limit(b.method, &b.params, spectrum);
+            let this = match (l.stability, l.dt) {
+                ("conditional", Some(dt)) => Limit::Below(dt),
+                ("none", _) => Limit::Never,
+                ("unconditional", _) => Limit::Always,
+                _ => Limit::NotCovered,
+            };
+            // The most restrictive body decides.
+            let rank = |l: &Limit| match l {
+                Limit::Never => 0,
+                Limit::Below(_) => 1,
+                Limit::NotCovered => 2,
+                Limit::Always => 3,
+            };
+            limit = Some(match limit {
+                None => this,
+                Some(Limit::Below(a)) if matches!(this, Limit::Below(b) if b < a) => this,
+                Some(prev) if rank(&this) < rank(&prev) => this,
+                Some(prev) => prev,
+            });
+        }
+        self.limit = limit.map(|l| (l, omega));
+    }
+
+    /// The stability limit of the present methods on this scene by the damped theory (dampers
+    /// and drag included), and ω_max (rad/s); `None` when no spring holds a free particle.
+    #[must_use]
+    pub fn limit(&self) -> Option<&(Limit, f64)> {
+        self.limit.as_ref()
+    }
+
+    /// Clears what belongs to one run from `t = 0`: accumulator, history, goal, rates.
+    fn restart_records(&mut self) {
+        self.accumulator = 0.0;
+        self.last_frame_steps = 0;
+        self.rates = Rates::default();
+        self.goal = None;
+        self.goal_progress = GoalProgress::default();
+        if let Some(o) = &mut self.oscillator {
+            *o = o.restarted(&self.sim);
+        }
+        self.history = History::new(self.sim.dt(), self.oscillator.as_ref());
+        self.history.record(&self.sim, self.oscillator.as_ref());
+    }
+
+    /// The lesson.
+    #[must_use]
+    pub fn lesson(&self) -> &Lesson {
+        &self.lesson
+    }
+
+    /// The current step's index (0-based).
+    #[must_use]
+    pub fn step_index(&self) -> usize {
+        self.step
+    }
+
+    /// The current step.
+    #[must_use]
+    pub fn step(&self) -> &Step {
+        &self.lesson.steps[self.step]
+    }
+
+    /// The simulation.
+    #[must_use]
+    pub fn sim(&self) -> &Simulation {
+        &self.sim
+    }
+
+    /// True while the simulation runs.
+    #[must_use]
+    pub fn is_running(&self) -> bool {
+        self.running
+    }
+
+    /// The cap on steps per frame.
+    #[must_use]
+    pub fn max_steps_per_frame(&self) -> u64 {
+        self.max_steps_per_frame
+    }
+
+    /// Sets the cap on steps per frame (clamped to [`STEPS_PER_FRAME_RANGE`]).
+    pub fn set_max_steps_per_frame(&mut self, n: u64) {
+        self.max_steps_per_frame = n.clamp(STEPS_PER_FRAME_RANGE.0, STEPS_PER_FRAME_RANGE.1);
+    }
+
+    /// Steps taken in the last frame.
+    #[must_use]
+    pub fn last_frame_steps(&self) -> u64 {
+        self.last_frame_steps
+    }
+
+    /// Simulated time owed to the simulation (s).
+    #[must_use]
+    pub fn accumulator(&self) -> f64 {
+        self.accumulator
+    }
+
+    /// Simulated seconds per wall second.
+    #[must_use]
+    pub fn speed(&self) -> f64 {
+        self.speed
+    }
+
+    /// Measured simulated seconds per wall second, once half a second of wall time ran.
+    #[must_use]
+    pub fn real_time_factor(&self) -> Option<f64> {
+        self.rates.real_time_factor
+    }
+
+    /// Measured steps per wall second, once half a second of wall time ran.
+    #[must_use]
+    pub fn steps_per_second(&self) -> Option<f64> {
+        self.rates.steps_per_second
+    }
+
+    /// The camera.
+    #[must_use]
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// The step's initial camera (what `r` and `c` return to).
+    #[must_use]
+    pub fn home_camera(&self) -> &Camera {
+        &self.home
+    }
+
+    /// True while the camera follows the bodies.
+    #[must_use]
+    pub fn follows(&self) -> bool {
+        self.follow
+    }
+
+    /// Width / height of the scene pane in pixels, as last reported.
+    #[must_use]
+    pub fn aspect(&self) -> f64 {
+        self.aspect
+    }
+
+    /// Changes whenever the scene's bodies or springs may have changed (a renderer made for an
+    /// older generation must be rebuilt).
+    #[must_use]
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// Changes whenever what the scene pane shows may have changed.
+    #[must_use]
+    pub fn version(&self) -> u64 {
+        self.version
+    }
+
+    /// Tells the run the pixel size of a cell in the view shown (see [`super::pane::grid_view`]).
+    pub fn set_grid(&mut self, grid: (u32, u32)) {
+        self.grid = (grid.0.max(1), grid.1.max(1));
+    }
+
+    /// Shows `message` on the hint line.
+    pub fn set_message(&mut self, message: impl Into<String>) {
+        self.message = Some(message.into());
+    }
+
+    /// Tells the run the scene pane's aspect ratio (width / height in pixels). The step's
+    /// initial view is framed for it; a camera the user has not moved follows the new framing.
+    pub fn set_aspect(&mut self, aspect: f64) {
+        if !(aspect.is_finite() && aspect > 0.0) || (aspect / self.aspect - 1.0).abs() < 1e-3 {
+            return;
+        }
+        self.aspect = aspect;
+        self.version += 1;
+        let untouched = self.camera == self.home;
+        self.home = Camera::for_scene(&self.scene_at_start(), aspect, Projection::default());
+        if untouched {
+            self.camera = self.home;
+        }
+    }
+
+    /// The scene with the bodies' initial states.
+    fn scene_at_start(&self) -> crate::scene::Scene {
+        let mut scene = self.sim.scene.clone();
+        for (body, initial) in scene.bodies.iter_mut().zip(&self.initial) {
+            body.state = initial.clone();
+        }
+        scene
+    }
+
+    /// Turns following on or off.
+    pub fn set_follow(&mut self, on: bool) {
+        self.follow = on;
+        if on {
+            self.follow_bodies();
+        }
+    }
+
+    /// Moves the camera so that every body is in view (see [`Camera::follow`]).
+    fn follow_bodies(&mut self) {
+        if self.sim.diverged.is_some() {
+            return;
+        }
+        let mut points: Vec<DVec3> = Vec::new();
+        for body in &self.sim.scene.bodies {
+            points.extend(body.state.x.iter().copied());
+            for s in &body.state.spheres {
+                points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::X));
+                points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::Y));
+                points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::Z));
+            }
+        }
+        let max_distance = self.home.distance * FOLLOW_MAX_ZOOM_OUT;
+        let max_height = self.home.visible_height() * FOLLOW_MAX_ZOOM_OUT;
+        self.camera
+            .follow(&points, self.aspect, FOLLOW_ZONE, max_distance, max_height);
+    }
+
+    fn zoom(&mut self, factor: f64) {
+        let before = self.camera;
+        self.camera.zoom(factor);
+        if self.follow {
+            self.follow_bodies();
+            if factor > 1.0 && self.camera.distance >= before.distance {
+                self.message = Some(
+                    "following keeps every body in view: f stops following, to zoom closer".into(),
+                );
+            }
+        }
+    }
+
+    fn pan(&mut self, right: f64, up: f64) {
+        self.camera.pan(right, up);
+        if self.follow {
+            self.follow_bodies();
+        }
+    }
+
+    /// Back to the step's initial view.
+    pub fn reset_camera(&mut self) {
+        self.camera = self.home;
+        self.pan_drag = None;
+    }
+
+    /// Which springs are drawn.
+    #[must_use]
+    pub fn spring_filter(&self) -> SpringFilter {
+        self.filter
+    }
+
+    /// Study results for the step's study plots.
+    #[must_use]
+    pub fn studies(&self) -> &Studies {
+        &self.studies
+    }
+
+    /// The sampled history of this run.
+    #[must_use]
+    pub fn history(&self) -> &History {
+        &self.history
+    }
+
+    /// The oscillator's exact solution, when the scene is the one-spring oscillator.
+    #[must_use]
+    pub fn oscillator(&self) -> Option<&Oscillator> {
+        self.oscillator.as_ref()
+    }
+
+    /// The goal's state: `Some(true)` met (in this run or an earlier one: a met goal stays
+    /// met), `Some(false)` failed in this run, `None` pending (or no goal).
+    #[must_use]
+    pub fn goal_state(&self) -> Option<bool> {
+        if self.met.get(self.step).copied().unwrap_or(false) {
+            Some(true)
+        } else {
+            self.goal
+        }
+    }
+
+    /// This run's verdict on the goal alone (`r` clears it), whatever earlier runs did.
+    #[must_use]
+    pub fn run_verdict(&self) -> Option<bool> {
+        self.goal
+    }
+
+    /// The method chooser, when open.
+    #[must_use]
+    pub fn chooser(&self) -> Option<&Chooser> {
+        self.chooser.as_ref()
+    }
+
+    /// The option predicted at this step (0-based), if any.
+    #[must_use]
+    pub fn answer(&self) -> Option<usize> {
+        self.answers.get(self.step).copied().flatten()
+    }
+
+    /// What a decided run showed after the prediction (`None` until then).
+    #[must_use]
+    pub fn revealed(&self) -> Option<&str> {
+        self.revealed.as_deref()
+    }
+
+    /// True while the step's prediction waits for an answer (the run waits too).
+    #[must_use]
+    pub fn awaiting_prediction(&self) -> bool {
+        self.step().predict.is_some() && self.answer().is_none()
+    }
+
+    /// Which methods the study charts show.
+    #[must_use]
+    pub fn shown_methods(&self) -> [bool; 8] {
+        self.shown
+    }
+
+    /// Columns the text's code blocks are scrolled to the left.
+    #[must_use]
+    pub fn hscroll(&self) -> u16 {
+        self.hscroll
+    }
+
+    /// The last message of a key (for example why it did nothing).
+    #[must_use]
+    pub fn message(&self) -> Option<&str> {
+        self.message.as_deref()
+    }
+
+    /// The particle held by the mouse: `(body, index)`.
+    #[must_use]
+    pub fn dragged(&self) -> Option<(usize, usize)> {
+        self.drag.map(|d| (d.body, d.index))
+    }
+
+    /// An upper bound on the highest angular frequency of the springs (rad/s): the square root
+    /// of the largest [`spring_gershgorin`](crate::study::modes::spring_gershgorin) bound of the
+    /// bodies. Exact for one spring with a pinned end (`ω = √(k/m)`); `2√(k/m)` for a long chain,
+    /// the value of its fastest mode. Damping, gravity and collisions are left out. `None` when no
+    /// spring moves a free particle.
+    #[must_use]
+    pub fn omega_max(&self) -> Option<f64> {
+        let bodies = &self.sim.scene.bodies;
+        let any = bodies.iter().any(|b| !b.model.springs.is_empty());
+        let max = bodies
+            .iter()
+            .map(|b| crate::study::modes::spring_gershgorin(&b.model))
+            .fold(0.0, f64::max);
+        (any && max > 0.0).then(|| max.sqrt())
+    }
+
+    /// The stiffness (N/m) when every spring has the same, else `None`.
+    #[must_use]
+    pub fn uniform_stiffness(&self) -> Option<f64> {
+        uniform(self.springs().map(|s| s.stiffness))
+    }
+
+    /// The damping (N·s/m) when every spring has the same, else `None`.
+    #[must_use]
+    pub fn uniform_damping(&self) -> Option<f64> {
+        uniform(self.springs().map(|s| s.damping))
+    }
+
+    fn springs(&self) -> impl Iterator<Item = &crate::physics::Spring> {
+        self.sim.scene.bodies.iter().flat_map(|b| &b.model.springs)
+    }
+
+    /// Advances the simulation by `wall_dt` seconds of wall time; see [`LessonRun::tick_until`].
+    pub fn tick(&mut self, wall_dt: f64) {
+        self.tick_until(wall_dt, None);
+    }
+
+    /// Adds `wall_dt` (s) times the speed factor to the accumulator and takes as many steps of
+    /// `dt` as fit, at most the cap on steps per frame, stopping early at `deadline` or at
+    /// divergence. When it stops early the rest of the accumulator is dropped: the run falls
+    /// behind real time rather than ever further behind. Does nothing while paused.
+    pub fn tick_until(&mut self, wall_dt: f64, deadline: Option<Instant>) {
+        if !self.running || self.sim.diverged.is_some() {
+            self.running = false;
+            self.accumulator = 0.0;
+            return;
+        }
+        let wall_dt = if wall_dt.is_finite() && wall_dt > 0.0 {
+            wall_dt
+        } else {
+            0.0
+        };
+        self.accumulator += wall_dt * self.speed;
+        let dt = self.sim.dt();
+        // Whole steps that fit, with a billionth of a step of slack against rounding
+        // (0.1 s at dt = 0.01 s is 10 steps, not 9.999...).
+        let fit = (self.accumulator / dt + 1e-9).floor();
+        let mut wanted = if fit >= self.max_steps_per_frame as f64 {
+            self.max_steps_per_frame
+        } else {
+            fit as u64
+        };
+        let mut behind = fit > self.max_steps_per_frame as f64;
+        let mut taken = 0;
+        while taken < wanted {
+            if self.step_once() {
+                taken += 1;
+                behind = true;
+                break;
+            }
+            taken += 1;
+            if let Some(deadline) = deadline
+                && taken % 16 == 0
+                && Instant::now() >= deadline
+            {
+                behind = true;
+                wanted = taken;
+            }
+        }
+        self.accumulator = if behind {
+            0.0
+        } else {
+            (self.accumulator - taken as f64 * dt).max(0.0)
+        };
+        self.last_frame_steps = taken;
+        self.version += 1;
+        self.rates.add(wall_dt, taken as f64 * dt, taken);
+        if self.follow {
+            self.follow_bodies();
+        }
+    }
+
+    /// Lines the step's text is scrolled down.
+    #[must_use]
+    pub fn text_scroll(&self) -> u16 {
+        self.text_scroll
+    }
+}
+
+fn build(lesson: &Lesson, step: usize) -> Result<Simulation, String> {
+    let s = lesson
+        .steps
+        .get(step)
+        .ok_or_else(|| format!("lesson {} has no step {}", lesson.number, step + 1))?;
+    let scene = s
+        .build_scene()
+        .map_err(|e| format!("{}: step \"{}\": {e}", lesson.source, s.title))?;
+    let mut sim = Simulation::new(scene);
+    if let Some(dt) = s.dt
+        && dt > 0.0
+        && dt.is_finite()
+    {
+        sim.set_dt(dt);
+    }
+    Ok(sim)
+}
+
+fn uniform(mut values: impl Iterator<Item = f64>) -> Option<f64> {
+    let first = values.next()?;
+    values.all(|v| v == first).then_some(first)
+}
+
+/// The first body that is an `n × n` cloth: `n²` particles whose structural springs join
+/// `p` to `p + 1` within a row and `p` to `p + n`, `2n(n-1)` of them.
+fn find_cloth(sim: &Simulation) -> Option<Cloth> {
+    sim.scene.bodies.iter().enumerate().find_map(|(b, body)| {
+        let count = body.model.particle_count();
+        let n = (count as f64).sqrt().round() as usize;
+        if n < 2 || n * n != count {
+            return None;
+        }
+        let mut structural = 0;
+        for s in &body.model.springs {
+            if s.kind != SpringKind::Struct {
+                continue;
+            }
+            let (a, c) = (s.a.min(s.b) as usize, s.a.max(s.b) as usize);
+            let along_row = c == a + 1 && c % n != 0;
+            if !(along_row || c == a + n) {
+                return None;
+            }
+            structural += 1;
+        }
+        (structural == 2 * n * (n - 1)).then_some(Cloth { body: b, n })
+    })
+}
