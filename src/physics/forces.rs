@@ -20,7 +20,7 @@
 
 use glam::DVec3;
 
-use super::collide::{Collider, ContactParams, contact_forces};
+use super::collide::{Collider, ContactParams, World, contact_forces};
 use super::springs::Spring;
 use super::stencil::{Dynamics, Kernel, Output, Stencil};
 
@@ -366,6 +366,19 @@ impl Model {
             drag: self.drag,
             colliders: if contact { &self.colliders } else { &[] },
             contact: &self.contact,
+        }
+    }
+}
+
+impl<'a> From<&'a Model> for World<'a> {
+    /// What the colliders read of the model: colliders, contact coefficients, gravity and
+    /// inverse masses.
+    fn from(model: &'a Model) -> World<'a> {
+        World {
+            colliders: &model.colliders,
+            contact: &model.contact,
+            gravity: model.gravity,
+            inv_mass: &model.inv_mass,
         }
     }
 }
