@@ -181,7 +181,8 @@ const ROUNDING_SPEED: f64 = 1e-9;
 const RIM_MARGIN: f64 = 1e-9;
 
 /// A static obstacle. Normals are unit vectors: build colliders with the constructors
-/// ([`Collider::plane`] etc.) or pass them through [`Model::with_colliders`](crate::physics::Model::with_colliders), which normalises.
+/// ([`Collider::plane`] etc.) or pass them through
+/// [`Model::with_colliders`](crate::physics::Model::with_colliders), which normalises.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Collider {
     /// The half-space `(x - point)·normal ≥ 0`: particles stay on the side the normal points to.
