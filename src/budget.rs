@@ -513,7 +513,7 @@ pub fn updates_per_step(scene: &Scene, method: Option<Method>) -> f64 {
         .map(|b| {
             let m = method.unwrap_or(b.method);
             evaluations_per_step(m, &b.params)
-                * (b.model.particle_count() as f64 + b.model.springs.len() as f64 + OVERHEAD)
+                * (b.model.particle_count() as f64 + b.model.springs().len() as f64 + OVERHEAD)
         })
         .sum()
 }
@@ -546,7 +546,7 @@ pub fn scene_bytes(scene: &Scene, methods: Option<&[Method]>, copies: f64) -> f6
                 let own = [b.method];
                 body_bytes(
                     b.model.particle_count() as f64,
-                    b.model.springs.len() as f64,
+                    b.model.springs().len() as f64,
                     methods.unwrap_or(&own),
                     copies,
                 )
@@ -678,7 +678,7 @@ pub fn omega_bound(scene: &Scene) -> f64 {
     for b in &scene.bodies {
         let model = &b.model;
         let mut sum = vec![0.0; model.particle_count()];
-        for s in &model.springs {
+        for s in model.springs() {
             let (a, bb) = (s.a as usize, s.b as usize);
             let free = |i: usize| if model.inv_mass[i] > 0.0 { 1.0 } else { 0.0 };
             sum[a] += s.stiffness * (1.0 + free(bb));

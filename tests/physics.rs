@@ -173,8 +173,8 @@ fn rope_constructor_spaces_nodes_evenly_with_springs_between_neighbours() {
         let expected = start + (end - start) * (i as f64 / 10.0);
         assert!((x[i] - expected).length() < 1e-14);
     }
-    assert_eq!(model.springs.len(), 10);
-    for (i, s) in model.springs.iter().enumerate() {
+    assert_eq!(model.springs().len(), 10);
+    for (i, s) in model.springs().iter().enumerate() {
         assert_eq!((s.a, s.b), (1 + i as u32, 2 + i as u32));
         assert!((s.rest_length - spacing).abs() < 1e-12);
         assert_eq!((s.stiffness, s.damping), (40.0, 0.1));

@@ -499,7 +499,7 @@ fn rope_of(physics: &Physics, state: &State) -> Rope {
         })
         .collect();
     let springs = model
-        .springs
+        .springs()
         .iter()
         .map(|s| Spring {
             a: s.a as usize,

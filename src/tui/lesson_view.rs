@@ -792,7 +792,7 @@ impl LessonRun {
         for body in &self.sim.scene.bodies {
             let m = &body.model;
             let mut row = vec![0.0f64; m.particle_count()];
-            for s in &m.springs {
+            for s in m.springs() {
                 let (a, b) = (s.a as usize, s.b as usize);
                 let (free_a, free_b) = (m.inv_mass[a] > 0.0, m.inv_mass[b] > 0.0);
                 row[a] += s.stiffness * (1.0 + f64::from(u8::from(free_b)));
@@ -819,7 +819,7 @@ impl LessonRun {
     }
 
     fn springs(&self) -> impl Iterator<Item = &crate::physics::Spring> {
-        self.sim.scene.bodies.iter().flat_map(|b| &b.model.springs)
+        self.sim.scene.bodies.iter().flat_map(|b| b.model.springs())
     }
 
     /// Advances the simulation by `wall_dt` seconds of wall time; see [`LessonRun::tick_until`].
@@ -1441,10 +1441,7 @@ impl LessonRun {
             return;
         }
         for body in &mut self.sim.scene.bodies {
-            for s in &mut body.model.springs {
-                s.stiffness *= factor;
-            }
-            body.model.rebuild();
+            body.model.scale_stiffness(factor);
         }
         self.coefficients_changed();
         self.message = Some(match self.uniform_stiffness() {
@@ -1462,7 +1459,7 @@ impl LessonRun {
         }
         for body in &mut self.sim.scene.bodies {
             let mass = body.model.mass.clone();
-            for s in &mut body.model.springs {
+            body.model.update_springs(|s| {
                 let m = mass[s.a as usize].min(mass[s.b as usize]);
                 let first = FIRST_DAMPING * 2.0 * (s.stiffness * m).sqrt();
                 s.damping = if up {
@@ -1475,8 +1472,7 @@ impl LessonRun {
                     let d = s.damping / COEFFICIENT_FACTOR;
                     if d < first { 0.0 } else { d }
                 };
-            }
-            body.model.rebuild();
+            });
         }
         self.coefficients_changed();
         self.message = Some(match self.uniform_damping() {
@@ -1704,7 +1700,7 @@ fn find_cloth(sim: &Simulation) -> Option<Cloth> {
             return None;
         }
         let mut structural = 0;
-        for s in &body.model.springs {
+        for s in body.model.springs() {
             if s.kind != SpringKind::Struct {
                 continue;
             }
