@@ -1,4 +1,4 @@
-//! One step of each peer-benchmark workload (`WORKLOADS.md`): the library's integrator plus the
+//! One step of each peer-benchmark workload (`docs/workloads.md`): the library's integrator plus the
 //! workload's contact projection. `springlab bench` times whole runs of N steps and checks the
 //! checksums; this measures the per-step cost with criterion's statistics.
 //!

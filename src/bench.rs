@@ -1,5 +1,5 @@
 //! The peer-benchmark workloads: six fixed mass-spring runs shared with the C++/Eigen, Taichi,
-//! Warp and NumPy peers (`WORKLOADS.md`), stepped with the library's own integrators.
+//! Warp and NumPy peers (`docs/workloads.md`), stepped with the library's own integrators.
 //!
 //! | workload | particles | springs | method | dt (s) | steps N |
 //! |---|---|---|---|---|---|
@@ -39,7 +39,7 @@
 //! (no spring term for `rope-verlet`, whose velocity is `v = (x - x_prev) / dt`).
 //!
 //! The set-up is reproduced bit for bit: [`setup_bytes`] serialises it in the canonical layout
-//! whose SHA-256 `WORKLOADS.md` lists.
+//! whose SHA-256 `docs/workloads.md` lists.
 
 use std::fmt;
 use std::str::FromStr;
@@ -55,7 +55,7 @@ use crate::scene::builder::Builder;
 /// Gravitational acceleration of every workload (m/s²).
 pub const GRAVITY: DVec3 = DVec3::new(0.0, -9.8, 0.0);
 
-/// Relative tolerance on every checksum value for an f64 implementation (`WORKLOADS.md`).
+/// Relative tolerance on every checksum value for an f64 implementation (`docs/workloads.md`).
 pub const REL_TOL: f64 = 1e-8;
 
 /// Absolute floor of the checksum comparison (m or J), for reference values that are exactly
@@ -80,7 +80,7 @@ pub enum Workload {
 }
 
 impl Workload {
-    /// All workloads, in the order of `WORKLOADS.md`.
+    /// All workloads, in the order of `docs/workloads.md`.
     pub const ALL: [Workload; 6] = [
         Workload::JellySe,
         Workload::JellyRk4,
@@ -145,7 +145,7 @@ impl Workload {
         }
     }
 
-    /// The reference checksum after [`Workload::steps`] steps (C++ f64 reference, `WORKLOADS.md`).
+    /// The reference checksum after [`Workload::steps`] steps (C++ f64 reference, `docs/workloads.md`).
     #[must_use]
     pub fn reference(self) -> Checksum {
         match self {
@@ -381,7 +381,7 @@ fn rope(b: &mut Builder, stiffness: f64, damping: f64) {
     }
 }
 
-/// The model and initial state of `workload`, bit for bit as `WORKLOADS.md` defines them.
+/// The model and initial state of `workload`, bit for bit as `docs/workloads.md` defines them.
 ///
 /// For `rope-verlet` the springs have zero stiffness and damping (pure distance constraints)
 /// and the state's history is valid with `x_prev = x`, so Verlet starts from rest.
@@ -397,7 +397,7 @@ pub fn setup(workload: Workload) -> (Model, State) {
     }
     let (model, mut state) = b.build(GRAVITY, 0.0);
     if workload == Workload::RopeVerlet {
-        // x_prev = x: the rope starts at rest (WORKLOADS.md), not with the Taylor start-up.
+        // x_prev = x: the rope starts at rest (docs/workloads.md), not with the Taylor start-up.
         state.x_prev.clone_from(&state.x);
         state.history_valid = true;
     }
@@ -406,7 +406,7 @@ pub fn setup(workload: Workload) -> (Model, State) {
 
 /// The canonical set-up bytes of `workload`: all initial positions as little-endian f64
 /// `(x, y, z)` per particle, then per spring `u32 i, u32 j, f64 rest_length` (little-endian),
-/// in canonical order. Their SHA-256 is listed in `WORKLOADS.md`.
+/// in canonical order. Their SHA-256 is listed in `docs/workloads.md`.
 #[must_use]
 pub fn setup_bytes(workload: Workload) -> Vec<u8> {
     let (model, state) = setup(workload);

@@ -11,7 +11,7 @@
 //! - **A student crate** comes from `springlab homework new DIR --assignment rope|jelly|cloth`
 //!   ([`homework::new_homework`]): `src/lib.rs` with every TODO compiling to a neutral answer,
 //!   `src/main.rs` serving it, a copy of the student API, a README with the tasks and formulas,
-//!   and `tests/grade.rs`, which runs `springlab grade` on the crate, so `cargo test` prints the
+//!   and `DIR/tests/grade.rs`, which runs `springlab grade` on the crate, so `cargo test` prints the
 //!   rubric.
 //! - **`springlab grade DIR…`** ([`external::grade_crate`], [`external::grade_all`]) builds each
 //!   submission's `src/` against springlab's own manifest ([`build`]), runs it as a separate
@@ -58,6 +58,7 @@ pub mod build;
 mod checks;
 mod cloth;
 mod collision;
+mod data;
 pub mod external;
 pub mod homework;
 mod jelly;

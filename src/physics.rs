@@ -17,6 +17,7 @@
 //! This module imports nothing else from the crate: scenes, studies, rendering, grading and the
 //! terminal app are built on it, never the other way round.
 
+pub mod bowl;
 pub mod collide;
 pub mod constraints;
 pub mod diverge;

@@ -29,14 +29,18 @@ pub mod chart;
 pub mod colour;
 pub mod draw;
 pub mod export;
+mod paint;
+pub mod style;
 pub mod surface;
+mod terrain;
 pub mod text;
 
 pub use camera::{Aabb, Camera, Projection, View, scene_bounds};
 pub use chart::{Chart, Scale, Series, SeriesStyle};
 pub use colour::Colour;
-pub use draw::{Colouring, KindToggles, Overlay, Renderer, Style, check_size};
+pub use draw::{Renderer, check_size};
 pub use export::{FrameEncoder, Outputs};
+pub use style::{Colouring, KindToggles, Overlay, Style};
 pub use surface::Lattice;
 
 /// The largest image side accepted (px).

@@ -295,7 +295,7 @@ impl Simulation {
         self.scene.bodies.iter().map(|b| &b.state)
     }
 
-    /// The report of `springlab run` (see DESIGN.md's JSON contract).
+    /// The report of `springlab run` (printed by `run --json`, see README.md "Use").
     #[must_use]
     pub fn report(&self, wall_seconds: f64) -> RunReport {
         RunReport {

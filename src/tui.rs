@@ -9,7 +9,7 @@
 //!
 //! # Time
 //!
-//! Simulated time is decoupled from drawing (DESIGN.md). Each frame the loop measures the wall
+//! Simulated time is decoupled from drawing (ARCHITECTURE.md). Each frame the loop measures the wall
 //! time since the previous frame and calls [`App::tick`]; the lesson adds that time (times the
 //! speed factor) to an accumulator and takes as many steps of the fixed `dt` as fit, at most the
 //! cap on steps per frame (`[` / `]`). When the cap (or the frame's time budget) is hit, the

@@ -1,4 +1,4 @@
-//! The peer-benchmark workloads against `WORKLOADS.md`: set-up bytes bit for bit (SHA-256),
+//! The peer-benchmark workloads against `docs/workloads.md`: set-up bytes bit for bit (SHA-256),
 //! checksums after N steps against the C++ f64 reference, run-to-run determinism, and the
 //! `springlab bench` command line on bad input.
 //!
@@ -17,7 +17,7 @@ fn sha256_hex(bytes: &[u8]) -> String {
         .collect()
 }
 
-/// SHA-256 of the canonical set-up bytes, from `WORKLOADS.md`.
+/// SHA-256 of the canonical set-up bytes, from `docs/workloads.md`.
 fn expected_setup_sha(w: Workload) -> &'static str {
     match w {
         Workload::JellySe | Workload::JellyRk4 => {
@@ -44,7 +44,7 @@ fn setup_bytes_match_the_peers_sha256() {
 
 #[test]
 fn setups_have_the_documented_sizes() {
-    // (particles, springs) from the WORKLOADS.md table.
+    // (particles, springs) from the docs/workloads.md table.
     let sizes = [
         (Workload::JellySe, 1000, 12_876),
         (Workload::JellyRk4, 1000, 12_876),

@@ -1,5 +1,5 @@
 //! Lattice builders (cube/jelly and cloth) against independent truths: brute-force neighbour
-//! searches, closed-form spring counts, geometry, and the SHA-256 of WORKLOADS.md's canonical
+//! searches, closed-form spring counts, geometry, and the SHA-256 of docs/workloads.md's canonical
 //! set-up bytes.
 
 use std::collections::HashSet;
@@ -121,7 +121,7 @@ fn cube_10_counts_and_pairs_match_brute_force() {
     assert_eq!(b.len(), 1000);
     assert_eq!(count_kinds(&b.springs), [2700, 7776, 2400]);
     assert_eq!(b.springs.len(), 12_876);
-    // Face diagonals 4 860, body diagonals 2 916 (SEEDS.md §2).
+    // Face diagonals 4 860, body diagonals 2 916 (docs/course.md §2).
     let body = b
         .springs
         .iter()
@@ -358,7 +358,7 @@ fn w1_jelly_setup_bytes_match_workloads() {
     let spec = CubeSpec::w1_jelly();
     assert_eq!(spec.spacing(), DVec3::splat(0.1));
     let b = build_cube(&spec);
-    // W1's positions, written out as WORKLOADS.md states them.
+    // W1's positions, written out as docs/workloads.md states them.
     for (p, x) in b.x.iter().enumerate() {
         let (ix, iy, iz) = (p % 10, (p / 10) % 10, p / 100);
         let w1 = DVec3::new(ix as f64 * 0.1, 1.0 + iy as f64 * 0.1, iz as f64 * 0.1);

@@ -1,4 +1,4 @@
-//! `springlab study stability`: the stiffest mode against closed forms and WORKLOADS.md, the
+//! `springlab study stability`: the stiffest mode against closed forms and docs/workloads.md, the
 //! measured limits against the oscillator's amplification factors, determinism and bad input.
 
 use std::process::{Command, Output};
@@ -105,12 +105,12 @@ fn omega_max_of_the_rope_is_the_fixed_free_chain() {
 
 #[test]
 fn omega_max_of_the_w1_jelly_matches_workloads_md() {
-    // WORKLOADS.md W1: λ_max(M⁻¹K) = 3.37e4 at rest, ω_max = 184 rad/s.
+    // docs/workloads.md W1: λ_max(M⁻¹K) = 3.37e4 at rest, ω_max = 184 rad/s.
     let (model, state) = setup(Workload::JellySe);
     let e = omega_max(&model, &state);
     assert!(
         relative(e.lambda, 3.37e4) < 0.01,
-        "λ_max = {} (1/s²), WORKLOADS.md 3.37e4",
+        "λ_max = {} (1/s²), docs/workloads.md 3.37e4",
         e.lambda
     );
     assert!(relative(e.omega, 184.0) < 0.01, "ω_max = {}", e.omega);

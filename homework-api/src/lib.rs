@@ -30,6 +30,7 @@
 //! Computer Animation HW1 "Mass-spring system" (2022 cloth, 2023 jelly), TODO #1–#4; D. Baraff,
 //! A. Witkin, "Large Steps in Cloth Simulation", SIGGRAPH 1998, §3 (backward Euler).
 
+mod channel;
 mod matrix;
 mod physics;
 mod serve;

@@ -96,7 +96,7 @@ impl Physics {
     pub fn accelerations(&self, x: &[DVec3], v: &[DVec3]) -> Vec<DVec3> {
         self.check_sizes("accelerations", x, v);
         match &self.source {
-            Source::Grader => crate::matrix::unflatten(&crate::serve::ask_grader(
+            Source::Grader => crate::matrix::unflatten(&crate::channel::ask_grader(
                 physics_request::ACCELERATIONS,
                 x,
                 v,
@@ -157,7 +157,7 @@ impl Physics {
         let size = 3 * x.len();
         match &self.source {
             Source::Grader => {
-                let values = crate::serve::ask_grader(what, x, v, size * size);
+                let values = crate::channel::ask_grader(what, x, v, size * size);
                 Matrix::from_row_major(size, values).unwrap_or_else(|| Matrix::zeros(size))
             }
             Source::Local(f) => central_differences(f.as_ref(), what, x, v),

@@ -7,14 +7,14 @@
 //! starts a new program for the next call.
 
 use std::cell::RefCell;
-use std::io::{IsTerminal, Read, Write};
+use std::io::IsTerminal;
 use std::panic::{self, AssertUnwindSafe};
 use std::process::ExitCode;
 
+use crate::channel::{read_frame, send, set_token};
 use crate::physics::Physics;
 use crate::wire::{
-    MAX_FRAME, Reader, TOKEN_LEN, VERSION, Wire, WireError, encode, method, reply_frame, to_grader,
-    to_program,
+    Reader, TOKEN_LEN, VERSION, Wire, WireError, encode, method, to_grader, to_program,
 };
 use crate::{
     Body, Bowl, ClothHomework, ContactCoefficients, DVec3, JellyHomework, Particle, Plane, Rope,
@@ -22,78 +22,8 @@ use crate::{
 };
 
 thread_local! {
-    /// The session token while the loop runs on this thread.
-    static TOKEN: RefCell<Option<[u8; TOKEN_LEN]>> = const { RefCell::new(None) };
     /// The message and location of the last panic on this thread.
     static LAST_PANIC: RefCell<Option<String>> = const { RefCell::new(None) };
-}
-
-/// The next frame from the grader; `None` at the end of its input.
-fn read_frame() -> Option<Vec<u8>> {
-    let mut input = std::io::stdin().lock();
-    let mut len = [0u8; 4];
-    input.read_exact(&mut len).ok()?;
-    let len = u32::from_le_bytes(len) as usize;
-    if len > MAX_FRAME {
-        return None;
-    }
-    let mut payload = vec![0u8; len];
-    input.read_exact(&mut payload).ok()?;
-    Some(payload)
-}
-
-/// Writes one reply; the program ends when the grader is gone.
-fn send(token: &[u8; TOKEN_LEN], payload: &[u8]) {
-    let mut out = std::io::stdout().lock();
-    let written = out
-        .write_all(&reply_frame(token, payload))
-        .and_then(|()| out.flush());
-    if written.is_err() {
-        std::process::exit(0);
-    }
-}
-
-fn token() -> Option<[u8; TOKEN_LEN]> {
-    TOKEN.with(|t| *t.borrow())
-}
-
-/// Asks the grader for accelerations (`what` = 0) or a Jacobian (1: J_x, 2: J_v) at `(x, v)`;
-/// `expected` numbers come back.
-pub(crate) fn ask_grader(what: u8, x: &[DVec3], v: &[DVec3], expected: usize) -> Vec<f64> {
-    let Some(token) = token() else {
-        panic!(
-            "Physics: the grader's physics answers only during a call from the grader, on the \
-             thread that received it"
-        );
-    };
-    let mut payload = vec![to_grader::PHYSICS, what];
-    x.to_vec().put(&mut payload);
-    v.to_vec().put(&mut payload);
-    send(&token, &payload);
-    let Some(reply) = read_frame() else {
-        // The grader stopped listening: nothing left to do.
-        std::process::exit(0);
-    };
-    let mut r = Reader::new(&reply);
-    let answer = (|| -> Result<Result<Vec<f64>, String>, WireError> {
-        if u8::take(&mut r)? != to_program::PHYSICS_REPLY {
-            return Err(WireError("the grader sent something else".to_string()));
-        }
-        Ok(if bool::take(&mut r)? {
-            Ok(Vec::<f64>::take(&mut r)?)
-        } else {
-            Err(String::take(&mut r)?)
-        })
-    })();
-    match answer {
-        Ok(Ok(values)) if values.len() == expected => values,
-        Ok(Ok(values)) => panic!(
-            "Physics: the grader answered {} numbers, {expected} expected",
-            values.len()
-        ),
-        Ok(Err(message)) => panic!("{message}"),
-        Err(e) => panic!("Physics: unreadable answer from the grader: {e}"),
-    }
 }
 
 fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
@@ -146,7 +76,7 @@ fn serve(assignment: &str, dispatch: &mut Dispatch<'_>) -> ExitCode {
     let Ok((_their_version, token)) = parsed else {
         return ExitCode::FAILURE;
     };
-    TOKEN.with(|t| *t.borrow_mut() = Some(token));
+    set_token(token);
     let mut greeting = vec![to_grader::HELLO];
     VERSION.put(&mut greeting);
     assignment.to_string().put(&mut greeting);

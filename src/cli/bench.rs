@@ -1,4 +1,4 @@
-//! `springlab bench`: the peer-benchmark workloads (`WORKLOADS.md`), timed, with checksums.
+//! `springlab bench`: the peer-benchmark workloads (`docs/workloads.md`), timed, with checksums.
 
 use std::io::Write;
 
@@ -55,7 +55,7 @@ pub fn estimate(workloads: &[Workload], repeats: u32, seconds: f64) -> budget::E
     e
 }
 
-/// The JSON document of `springlab bench --json` (DESIGN.md), fields in declaration order.
+/// The JSON document of `springlab bench --json`, fields in declaration order.
 #[derive(Serialize)]
 struct Report<'a> {
     workloads: &'a [BenchResult],

@@ -14,7 +14,7 @@
 //! whole penetration in proportion to the inverse masses (the course's reference pushed by
 //! 0.15 of it, which leaves the cloth inside the sphere for several steps).
 //!
-//! Reference: NYCU Computer Animation HW1 (2022), TODO #1–#4 (SEEDS.md §3).
+//! Reference: NYCU Computer Animation HW1 (2022), TODO #1–#4 (`docs/course.md` §3).
 
 use glam::DVec3;
 

@@ -12,7 +12,7 @@
 //! DIR/.gitignore              /target
 //! ```
 //! The crate builds offline in about a second and does not depend on springlab's source tree.
-//! `tests/grade.rs` finds springlab through `$SPRINGLAB`, else the absolute path of the binary
+//! `DIR/tests/grade.rs` finds springlab through `$SPRINGLAB`, else the absolute path of the binary
 //! that wrote the crate ([`std::env::current_exe`]), else `springlab` on PATH.
 
 use std::fs;
@@ -23,8 +23,12 @@ use super::Assignment;
 
 /// The student API crate (`homework-api/` in springlab's repository) as `(relative path,
 /// contents)`: written into every homework crate and into the grader's build directory.
-pub const API_FILES: [(&str, &str); 7] = [
+pub const API_FILES: [(&str, &str); 8] = [
     ("Cargo.toml", include_str!("../../homework-api/Cargo.toml")),
+    (
+        "src/channel.rs",
+        include_str!("../../homework-api/src/channel.rs"),
+    ),
     ("src/lib.rs", include_str!("../../homework-api/src/lib.rs")),
     (
         "src/matrix.rs",
@@ -100,7 +104,7 @@ fn sources(assignment: Assignment) -> (&'static str, &'static str, &'static str)
 }
 
 /// The files of a student crate for `assignment`, as `(relative path, contents)`; `springlab`
-/// is the binary its `tests/grade.rs` runs.
+/// is the binary its `DIR/tests/grade.rs` runs.
 #[must_use]
 pub fn files(assignment: Assignment, springlab: &Path) -> Vec<(String, String)> {
     let (lib, readme, title) = sources(assignment);

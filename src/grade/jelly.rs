@@ -14,7 +14,7 @@
 //! force and friction 3. Internal force: random systems 4, one spring among four particles 2.
 //! The spring and damper force and the integrators are described in [`super::shared`].
 //!
-//! Reference: NYCU Computer Animation HW1 (2023), TODO #1–#4 and the grading sheet (SEEDS.md §2).
+//! Reference: NYCU Computer Animation HW1 (2023), TODO #1–#4 and the grading sheet (`docs/course.md` §2).
 
 use glam::DVec3;
 

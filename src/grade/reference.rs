@@ -17,7 +17,7 @@
 use glam::DVec3;
 
 use super::assignments::{
-    Body, Bowl, ClothHomework, ContactCoefficients, JellyHomework, Mass, Particle, Plane, Rope,
+    Body, Bowl, ClothHomework, ContactCoefficients, JellyHomework, Particle, Plane, Rope,
     RopeHomework, Spring, SpringSetup, State,
 };
 use super::system::Physics;
@@ -229,27 +229,13 @@ impl RopeHomework for Reference {
                 pinned: pinned.to_vec(),
             },
         );
-        let masses = (0..builder.len())
-            .map(|i| Mass {
-                position: builder.x[i],
-                velocity: builder.v[i],
-                last_position: builder.x[i],
-                mass: builder.mass[i],
-                pinned: builder.pinned[i],
-            })
-            .collect();
-        let springs = builder
-            .springs
-            .iter()
-            .map(|s| Spring {
-                a: s.a as usize,
-                b: s.b as usize,
-                rest_length: s.rest_length,
-                stiffness: s.stiffness,
-                damping: s.damping,
-            })
-            .collect();
-        Rope { masses, springs }
+        Rope::from_physics(
+            &builder.x,
+            &builder.v,
+            |i| builder.mass[i],
+            |i| builder.pinned[i],
+            &builder.springs,
+        )
     }
 
     fn spring_force(&self, a: DVec3, b: DVec3, stiffness: f64, rest_length: f64) -> DVec3 {

@@ -489,27 +489,13 @@ fn rope_forces<H: RopeHomework>(hw: &H, ctx: &Ctx) -> CheckResult {
 /// The rope of a system: masses and pins from the physics, springs from its model.
 fn rope_of(physics: &Physics, state: &State) -> Rope {
     let model = physics.model();
-    let masses = (0..state.x.len())
-        .map(|i| Mass {
-            position: state.x[i],
-            velocity: state.v[i],
-            last_position: state.x[i],
-            mass: model.mass.get(i).copied().unwrap_or(1.0),
-            pinned: model.inv_mass.get(i).is_some_and(|&w| w == 0.0),
-        })
-        .collect();
-    let springs = model
-        .springs()
-        .iter()
-        .map(|s| Spring {
-            a: s.a as usize,
-            b: s.b as usize,
-            rest_length: s.rest_length,
-            stiffness: s.stiffness,
-            damping: s.damping,
-        })
-        .collect();
-    Rope { masses, springs }
+    Rope::from_physics(
+        &state.x,
+        &state.v,
+        |i| model.mass.get(i).copied().unwrap_or(1.0),
+        |i| model.inv_mass.get(i).is_some_and(|&w| w == 0.0),
+        model.springs(),
+    )
 }
 
 fn write_back(rope: &Rope, state: &mut State) {

@@ -13,7 +13,7 @@
 //!
 //! The 2023 rubric gives "implicit + midpoint" 5 points together; here they are two items of 2.5,
 //! so that a broken implicit step does not take the midpoint's points with it. The course's
-//! "implicit Euler" was a predictor–corrector (SEEDS.md §4): it passes none of the implicit
+//! "implicit Euler" was a predictor–corrector (`docs/course.md` §4): it passes none of the implicit
 //! checks, which ask for a real backward Euler step.
 
 /// Force and integrator constants shared by the generated items.

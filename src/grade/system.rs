@@ -22,7 +22,7 @@ use std::ops::{Index, IndexMut};
 
 use glam::DVec3;
 
-use super::assignments::Rope;
+use super::data::Rope;
 use crate::physics::{Model, accelerations};
 
 /// The physics of the system being stepped: the grader builds it from the same masses, springs

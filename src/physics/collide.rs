@@ -7,7 +7,7 @@
 //! into that side ([`Collider::contact`]). A particle is *in contact* when it is closer than the
 //! contact band `ε` (m) to the surface or already inside (`φ < ε`); the course uses `ε = 0.01` m.
 //!
-//! **Contact force** (NYCU Computer Animation HW1 2021–2023, SEEDS.md §2), added in
+//! **Contact force** (NYCU Computer Animation HW1 2021–2023, `docs/course.md` §2), added in
 //! [`super::forces::forces`] after the springs so that every stage of every integrator sees it
 //! ([`contact_forces`]). When a particle is in contact, not moving away (`v·N ≤ 0`) and the
 //! accumulated force `f` pushes into the surface (`N·f < 0`):
@@ -78,7 +78,7 @@
 //! loses a particle that leaves through its wall just below the rim and ends the step outside
 //! the rim circle.)
 //!
-//! **Dynamic spheres** (cloth scenes, NYCU HW1 2022/2024, SEEDS.md §3; [`step_spheres`]) move by
+//! **Dynamic spheres** (cloth scenes, NYCU HW1 2022/2024, `docs/course.md` §3; [`step_spheres`]) move by
 //! semi-implicit Euler under gravity, or at a set velocity when kinematic. A sphere and a particle,
 //! or two spheres, that overlap exchange an impulse along the line of centres and are pushed apart:
 //!
@@ -97,7 +97,7 @@
 //! (`m_a Δx_a + m_b Δx_b = 0`), so the gravitational energy too. The course reference pushes the
 //! bodies apart by only 0.15 of the penetration; here the whole penetration is removed at once.
 //!
-//! References: NYCU Computer Animation HW1 (2021–2024), SEEDS.md §2–3; D. Baraff, "An
+//! References: NYCU Computer Animation HW1 (2021–2024), `docs/course.md` §2–3; D. Baraff, "An
 //! Introduction to Physically Based Modeling: Rigid Body Simulation II — Nonpenetration
 //! Constraints", SIGGRAPH 1997 course notes (colliding contact, the impulse `J`, the resting
 //! threshold); R. Bridson, R. Fedkiw, J. Anderson, "Robust Treatment of Collisions, Contact and
@@ -376,13 +376,13 @@ impl Collider {
                 rim_height,
             } => {
                 // At most a hemisphere: the rim circle is the widest part of the bowl.
-                let rim = rim_height.min(center.y);
+                let bowl_rim = super::bowl::Rim::of(center, radius, rim_height);
+                let (rim, a2) = (bowl_rim.height, bowl_rim.radius_squared);
                 if x.y > rim {
                     return None;
                 }
                 // ρ² = horizontal distance² from the axis; a² = r² - (c_y - rim)².
                 let rho2 = (x.x - center.x).powi(2) + (x.z - center.z).powi(2);
-                let a2 = radius * radius - (center.y - rim).powi(2);
                 // A floor's shaft of radius a (the 2023 terrain) projects a particle that
                 // crossed the floor beside the hole onto ρ = a just below the rim, where the
                 // bowl's wall has already turned inwards; ρ² then exceeds a² by rounding only.

@@ -94,7 +94,7 @@
 //! SC 2008); Intel Intrinsics Guide, `_mm512_rsqrt14_pd`, `_mm512_fmadd_pd`,
 //! <https://www.intel.com/content/www/us/en/docs/intrinsics-guide/>; C. Lomont, "Fast Inverse
 //! Square Root", Purdue University technical report, 2003 (the Newton step for `1/√a`);
-//! WORKLOADS.md (the peer benchmark's lattices and their spring order).
+//! `docs/workloads.md` (the peer benchmark's lattices and their spring order).
 
 mod contacts;
 mod kernels;

@@ -41,6 +41,7 @@
 
 use glam::DVec3;
 
+use crate::physics::bowl::Rim;
 use crate::physics::collide::Collider;
 use crate::scene::Scene;
 
@@ -489,8 +490,8 @@ pub fn scene_bounds(scene: &Scene) -> Aabb {
                     radius,
                     rim_height,
                 } => {
-                    let rim = rim_height.min(center.y);
-                    let a = (radius * radius - (center.y - rim).powi(2)).max(0.0).sqrt();
+                    let bowl_rim = Rim::of(center, radius, rim_height);
+                    let (rim, a) = (bowl_rim.height, bowl_rim.radius());
                     b.add(DVec3::new(center.x - a, rim, center.z - a));
                     b.add(DVec3::new(center.x + a, rim, center.z + a));
                     b.add(center - DVec3::new(0.0, radius, 0.0));

@@ -39,9 +39,13 @@ use tiny_skia::{
 };
 
 use super::colour::{self, Colour};
-use super::draw::{nice, stroke_line};
+use super::paint::stroke_line;
 use super::text::{Align, draw_text, draw_text_vertical, text_width, vertical_metrics};
 use super::{Quality, RenderError, check_size, export};
+
+mod axis;
+pub use axis::{Axis, Tick};
+use axis::{data_range, make_axis};
 
 /// How an axis maps values.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -178,256 +182,6 @@ impl Chart {
     }
 }
 
-/// One tick of an axis.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Tick {
-    /// Position in data units.
-    pub value: f64,
-    /// Label; empty for a minor tick.
-    pub label: String,
-}
-
-/// An axis: its ends in data units, its scale and its ticks (module docs).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Axis {
-    /// Value at the start (left or bottom).
-    pub lo: f64,
-    /// Value at the end (right or top).
-    pub hi: f64,
-    /// Linear or log.
-    pub scale: Scale,
-    /// Ticks from `lo` to `hi`.
-    pub ticks: Vec<Tick>,
-}
-
-impl Axis {
-    /// Nice linear ticks over `[a, b]` with about `n` ticks (module docs). An empty or
-    /// degenerate range is widened.
-    #[must_use]
-    pub fn linear(a: f64, b: f64, n: usize) -> Axis {
-        let (mut a, mut b) = if a <= b { (a, b) } else { (b, a) };
-        if !(a.is_finite() && b.is_finite()) {
-            (a, b) = (0.0, 1.0);
-        }
-        if b - a <= f64::EPSILON * a.abs().max(b.abs()).max(1e-300) {
-            let w = if a == 0.0 { 1.0 } else { 0.1 * a.abs() };
-            (a, b) = (a - w, b + w);
-        }
-        let range = nice(b - a, false);
-        let d = nice(range / (n.max(2) - 1) as f64, true);
-        let lo = (a / d).floor() * d;
-        let hi = (b / d).ceil() * d;
-        let decimals = (-d.log10().floor()).max(0.0) as usize;
-        let scientific = lo.abs().max(hi.abs()) >= 1e6 || d < 1e-4;
-        let count = ((hi - lo) / d).round() as i64;
-        let ticks = (0..=count)
-            .map(|k| {
-                let v = lo + k as f64 * d;
-                // Snap values that should be 0 (from lo + k d rounding).
-                let v = if v.abs() < 1e-9 * d { 0.0 } else { v };
-                Tick {
-                    value: v,
-                    label: if scientific {
-                        scientific_label(v, d)
-                    } else {
-                        format!("{v:.decimals$}")
-                    },
-                }
-            })
-            .collect();
-        Axis {
-            lo,
-            hi,
-            scale: Scale::Linear,
-            ticks,
-        }
-    }
-
-    /// Decade ticks over `[a, b]`, `0 < a ≤ b` (module docs). Non-positive input gives 1 to 10.
-    #[must_use]
-    pub fn log(a: f64, b: f64) -> Axis {
-        let (a, b) = if a > 0.0 && b >= a && b.is_finite() {
-            (a, b)
-        } else {
-            (1.0, 10.0)
-        };
-        let k0 = a.log10().floor() as i32;
-        let mut k1 = b.log10().ceil() as i32;
-        if k1 <= k0 {
-            k1 = k0 + 1;
-        }
-        let decades = (k1 - k0) as usize;
-        let every = decades.div_ceil(8).max(1);
-        let mut ticks = Vec::new();
-        for k in k0..=k1 {
-            let labelled = ((k - k0) as usize).is_multiple_of(every);
-            ticks.push(Tick {
-                value: 10f64.powi(k),
-                label: if labelled {
-                    power_of_ten(k)
-                } else {
-                    String::new()
-                },
-            });
-            if decades <= 6 && k < k1 {
-                for m in 2..=9 {
-                    ticks.push(Tick {
-                        value: f64::from(m) * 10f64.powi(k),
-                        label: String::new(),
-                    });
-                }
-            }
-        }
-        Axis {
-            lo: 10f64.powi(k0),
-            hi: 10f64.powi(k1),
-            scale: Scale::Log,
-            ticks,
-        }
-    }
-
-    /// Fraction `t` of the way from `lo` to `hi` (module docs); `None` for a value a log axis
-    /// cannot show or a non-finite value.
-    #[must_use]
-    pub fn fraction(&self, v: f64) -> Option<f64> {
-        if !v.is_finite() {
-            return None;
-        }
-        match self.scale {
-            Scale::Linear => Some((v - self.lo) / (self.hi - self.lo)),
-            Scale::Log => (v > 0.0)
-                .then(|| (v.log10() - self.lo.log10()) / (self.hi.log10() - self.lo.log10())),
-        }
-    }
-}
-
-/// `v` as `m.mmme±k` with as many digits as the spacing `d` needs.
-fn scientific_label(v: f64, d: f64) -> String {
-    if v == 0.0 {
-        return "0".into();
-    }
-    let digits = (v.abs().log10().floor() - d.log10().floor()).clamp(0.0, 6.0) as usize;
-    let s = format!("{v:.digits$e}");
-    s
-}
-
-/// `10` followed by the exponent in superscript digits, for example `10⁻³`.
-fn power_of_ten(k: i32) -> String {
-    const SUP: [char; 10] = ['⁰', '¹', '²', '³', '⁴', '⁵', '⁶', '⁷', '⁸', '⁹'];
-    let mut s = String::from("10");
-    if k < 0 {
-        s.push('⁻');
-    }
-    for c in k.unsigned_abs().to_string().chars() {
-        s.push(SUP[c.to_digit(10).unwrap_or(0) as usize]);
-    }
-    s
-}
-
-/// The data range of every series on one axis (`x` when `first`), leaving out what `scale`
-/// cannot show.
-fn data_range(chart: &Chart, first: bool, scale: Scale) -> Option<(f64, f64)> {
-    let mut range: Option<(f64, f64)> = None;
-    for s in &chart.series {
-        for &(x, y) in s.points.iter().chain(s.band.iter().flatten()) {
-            let v = if first { x } else { y };
-            let other = if first { y } else { x };
-            let other_scale = if first { chart.y_scale } else { chart.x_scale };
-            let ok = |v: f64, sc: Scale| v.is_finite() && (sc == Scale::Linear || v > 0.0);
-            if !ok(v, scale) || !ok(other, other_scale) {
-                continue;
-            }
-            range = Some(range.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))));
-        }
-    }
-    range
-}
-
-/// Share of the data range left free beyond the data at each end of an axis (on a log axis, of
-/// the range in decades), so that nothing is drawn on the frame.
-const MARGIN: f64 = 0.04;
-
-fn make_axis(range: Option<(f64, f64)>, fixed: Option<(f64, f64)>, scale: Scale) -> Axis {
-    let (a, b) = fixed.or(range).unwrap_or(match scale {
-        Scale::Linear => (0.0, 1.0),
-        Scale::Log => (1.0, 10.0),
-    });
-    let mut axis = match scale {
-        Scale::Linear => Axis::linear(a, b, 6),
-        Scale::Log => Axis::log(a, b),
-    };
-    let ends = match fixed {
-        // A fixed range is kept exactly.
-        Some((lo, hi)) if lo < hi && (scale == Scale::Linear || lo > 0.0) => Some((lo, hi)),
-        Some(_) => None,
-        None if b > a => Some(match scale {
-            Scale::Linear => (a - MARGIN * (b - a), b + MARGIN * (b - a)),
-            Scale::Log => {
-                let span = b.log10() - a.log10();
-                (
-                    10f64.powf(a.log10() - MARGIN * span),
-                    10f64.powf(b.log10() + MARGIN * span),
-                )
-            }
-        }),
-        None => None,
-    };
-    if let Some((lo, hi)) = ends {
-        axis.lo = lo;
-        axis.hi = hi;
-        // Only ticks inside stay (or outside by rounding only).
-        let inside = axis.clone();
-        axis.ticks.retain(|t| {
-            inside
-                .fraction(t.value)
-                .is_some_and(|f| (-1e-9..=1.0 + 1e-9).contains(&f))
-        });
-    }
-    if scale == Scale::Log && axis.ticks.iter().filter(|t| !t.label.is_empty()).count() < 2 {
-        // Less than two decades in view: label 1, 2 and 5 times each power of ten, or every
-        // tick when that is still less than two labels.
-        let nice_125 = |v: f64| {
-            let m = v / 10f64.powf(v.log10().floor());
-            [1.0, 2.0, 5.0, 10.0].iter().any(|n| (m - n).abs() < 1e-6)
-        };
-        let all = axis.ticks.iter().filter(|t| nice_125(t.value)).count() < 2;
-        for t in &mut axis.ticks {
-            if all || nice_125(t.value) {
-                t.label = format_number(t.value);
-            }
-        }
-    }
-    axis
-}
-
-/// A short label for `v`: plain decimals between 0.001 and 10 000 (three significant digits at
-/// most), else `m×10ᵏ`.
-fn format_number(v: f64) -> String {
-    let a = v.abs();
-    if a == 0.0 || !a.is_finite() {
-        return if a == 0.0 { "0".into() } else { format!("{v}") };
-    }
-    let k = a.log10().floor() as i32;
-    if (-3..4).contains(&k) {
-        let decimals = (2 - k).max(0) as usize;
-        let s = format!("{v:.decimals$}");
-        let s = if s.contains('.') {
-            s.trim_end_matches('0').trim_end_matches('.').to_string()
-        } else {
-            s
-        };
-        return s;
-    }
-    let m = v / 10f64.powi(k);
-    if (m.abs() - 1.0).abs() < 1e-9 {
-        let sign = if v < 0.0 { "-" } else { "" };
-        return format!("{sign}{}", power_of_ten(k));
-    }
-    let m = format!("{m:.2}");
-    let m = m.trim_end_matches('0').trim_end_matches('.');
-    format!("{m}×{}", power_of_ten(k))
-}
-
 /// Draws `chart` on a `width × height` image with the default [`Quality`].
 ///
 /// # Panics
@@ -455,7 +209,8 @@ pub fn save_png(chart: &Chart, path: &Path, width: u32, height: u32) -> Result<(
     export::save_png(&pixmap, path)
 }
 
-/// Draws `chart` with the rasteriser settings `quality`.
+/// Draws `chart` with the rasteriser settings `quality`: layout, title, grid with ticks and
+/// labels, the series clipped to the plot, the frame and the legend, in that order.
 ///
 /// # Panics
 /// If a side is 0 or larger than [`super::MAX_SIDE`].
@@ -469,15 +224,7 @@ pub fn draw_with(chart: &Chart, width: u32, height: u32, quality: Quality) -> Pi
         force_hq_pipeline: quality.force_hq_pipeline,
         ..Paint::default()
     };
-    let (w, h) = (width as f32, height as f32);
-    let s = (w.min(h) / 480.0).max(0.5);
-    let px = (h.min(w) / 32.0).clamp(10.0, 40.0).round();
-    let title_px = (1.2 * px).round();
-    let (ascent, descent) = vertical_metrics(px);
-    let (t_ascent, t_descent) = vertical_metrics(title_px);
-    let pad = 0.6 * px;
-    let tick = 0.4 * px;
-
+    let m = Metrics::new(width as f32, height as f32);
     let x_axis = make_axis(
         data_range(chart, true, chart.x_scale),
         chart.x_range,
@@ -488,32 +235,211 @@ pub fn draw_with(chart: &Chart, width: u32, height: u32, quality: Quality) -> Pi
         chart.y_range,
         chart.y_scale,
     );
+    let layout = Layout::new(chart, &m, &x_axis, &y_axis);
+    let plot = Plot {
+        layout: &layout,
+        x_axis: &x_axis,
+        y_axis: &y_axis,
+    };
+    let colours = series_colours(chart);
 
-    // Layout: title on top; y label and tick labels on the left; x tick labels and label below.
-    let y_tick_w = y_axis
-        .ticks
-        .iter()
-        .map(|t| text_width(&t.label, px))
-        .fold(0.0f32, f32::max);
-    let has_title = !chart.title.is_empty();
-    // Legend: one entry per named series, in rows under the title.
-    let colours: Vec<Colour> = chart
+    draw_title(&mut pixmap, chart, &m, &layout);
+    draw_x_ticks(&mut pixmap, &mut paint, &m, &plot);
+    draw_y_ticks(&mut pixmap, &mut paint, &m, &plot);
+    draw_axis_labels(&mut pixmap, chart, &m, &layout);
+    let mask = plot_mask(width, height, &layout);
+    let mut canvas = SeriesCanvas {
+        pixmap: &mut pixmap,
+        paint: &mut paint,
+        m: &m,
+        plot: &plot,
+        mask: &mask,
+    };
+    for (series, &c) in chart.series.iter().zip(&colours) {
+        if let Some(lower) = &series.band {
+            canvas.band(series, lower, c);
+        }
+        if matches!(series.style, SeriesStyle::Line | SeriesStyle::LineAndPoints) {
+            canvas.line(series, c);
+        }
+        if matches!(
+            series.style,
+            SeriesStyle::Scatter | SeriesStyle::LineAndPoints
+        ) {
+            canvas.points(series, c);
+        }
+    }
+    draw_frame(&mut pixmap, &mut paint, &m, &layout);
+    draw_legend(&mut pixmap, &mut paint, chart, &m, &layout, &colours);
+    pixmap
+}
+
+/// Sizes that scale with the image (px): line scale, text sizes and their metrics, padding.
+struct Metrics {
+    w: f32,
+    h: f32,
+    /// Line width scale (1 at 480 px, at least 0.5).
+    s: f32,
+    /// Text size of labels and legend; `title_px` of the title.
+    px: f32,
+    title_px: f32,
+    ascent: f32,
+    descent: f32,
+    t_ascent: f32,
+    t_descent: f32,
+    pad: f32,
+    /// Length of a major tick.
+    tick: f32,
+}
+
+impl Metrics {
+    fn new(w: f32, h: f32) -> Metrics {
+        let s = (w.min(h) / 480.0).max(0.5);
+        let px = (h.min(w) / 32.0).clamp(10.0, 40.0).round();
+        let title_px = (1.2 * px).round();
+        let (ascent, descent) = vertical_metrics(px);
+        let (t_ascent, t_descent) = vertical_metrics(title_px);
+        Metrics {
+            w,
+            h,
+            s,
+            px,
+            title_px,
+            ascent,
+            descent,
+            t_ascent,
+            t_descent,
+            pad: 0.6 * px,
+            tick: 0.4 * px,
+        }
+    }
+
+    /// Length of the legend's line sample.
+    fn sample(&self) -> f32 {
+        1.8 * self.px
+    }
+
+    /// Width of one legend entry: sample, gap, name and the space before the next entry.
+    fn entry_width(&self, series: &Series) -> f32 {
+        self.sample() + 0.4 * self.px + text_width(&series.name, self.px) + 1.2 * self.px
+    }
+}
+
+/// Where things go: title on top, then the legend rows; y label and tick labels on the left;
+/// x tick labels and label below; the plot rectangle in between.
+struct Layout {
+    left: f32,
+    right: f32,
+    top: f32,
+    bottom: f32,
+    /// Plot width and height (px).
+    pw: f32,
+    ph: f32,
+    legend_top: f32,
+    legend_line: f32,
+    /// Legend rows: indices of the named series, as many per row as fit.
+    rows: Vec<Vec<usize>>,
+}
+
+impl Layout {
+    fn new(chart: &Chart, m: &Metrics, x_axis: &Axis, y_axis: &Axis) -> Layout {
+        let y_tick_w = y_axis
+            .ticks
+            .iter()
+            .map(|t| text_width(&t.label, m.px))
+            .fold(0.0f32, f32::max);
+        let rows = legend_rows(chart, m);
+        let legend_line = (m.ascent + m.descent) * 1.2;
+        let title_h = if chart.title.is_empty() {
+            0.0
+        } else {
+            m.t_ascent + m.t_descent + 0.5 * m.pad
+        };
+        let legend_top = m.pad + title_h;
+        let top = legend_top + rows.len() as f32 * legend_line + 0.5 * m.pad;
+        let left = m.pad
+            + if chart.y_label.is_empty() {
+                0.0
+            } else {
+                m.ascent + m.descent + m.pad
+            }
+            + y_tick_w
+            + m.tick
+            + 0.5 * m.pad;
+        let bottom = m.h
+            - m.pad
+            - if chart.x_label.is_empty() {
+                0.0
+            } else {
+                m.ascent + m.descent + 0.5 * m.pad
+            }
+            - (m.ascent + m.descent)
+            - m.tick;
+        // Room for the last x tick label to the right.
+        let right = m.w
+            - m.pad
+            - 0.5
+                * x_axis
+                    .ticks
+                    .last()
+                    .map_or(0.0, |t| text_width(&t.label, m.px));
+        Layout {
+            left,
+            right,
+            top,
+            bottom,
+            pw: (right - left).max(1.0),
+            ph: (bottom - top).max(1.0),
+            legend_top,
+            legend_line,
+            rows,
+        }
+    }
+}
+
+/// The plot rectangle with its two axes: data coordinates to pixels.
+struct Plot<'a> {
+    layout: &'a Layout,
+    x_axis: &'a Axis,
+    y_axis: &'a Axis,
+}
+
+impl Plot<'_> {
+    /// The pixel of data point `(x, y)`, or `None` where an axis cannot place it (a logarithmic
+    /// axis and a value ≤ 0).
+    fn to_px(&self, x: f64, y: f64) -> Option<(f32, f32)> {
+        let tx = self.x_axis.fraction(x)?;
+        let ty = self.y_axis.fraction(y)?;
+        let l = self.layout;
+        Some((l.left + tx as f32 * l.pw, l.bottom - ty as f32 * l.ph))
+    }
+}
+
+const GRID: Colour = Colour::rgb(228, 231, 236);
+const MINOR_GRID: Colour = Colour::rgb(242, 243, 246);
+const AXIS_COLOUR: Colour = Colour::rgb(70, 74, 82);
+
+/// The colour of each series: its own, else the palette's in turn.
+fn series_colours(chart: &Chart) -> Vec<Colour> {
+    chart
         .series
         .iter()
         .enumerate()
         .map(|(i, s)| s.colour.unwrap_or(colour::SERIES[i % colour::SERIES.len()]))
-        .collect();
-    let sample = 1.8 * px;
-    let entry_w = |s: &Series| sample + 0.4 * px + text_width(&s.name, px) + 1.2 * px;
+        .collect()
+}
+
+/// The named series in legend rows, as many entries per row as fit in the image's width.
+fn legend_rows(chart: &Chart, m: &Metrics) -> Vec<Vec<usize>> {
     let mut rows: Vec<Vec<usize>> = Vec::new();
     let mut row_w = 0.0f32;
     for (i, series) in chart.series.iter().enumerate() {
         if series.name.is_empty() {
             continue;
         }
-        let ew = entry_w(series);
+        let ew = m.entry_width(series);
         match rows.last_mut() {
-            Some(row) if row_w + ew <= w - 2.0 * pad => {
+            Some(row) if row_w + ew <= m.w - 2.0 * m.pad => {
                 row.push(i);
                 row_w += ew;
             }
@@ -523,152 +449,127 @@ pub fn draw_with(chart: &Chart, width: u32, height: u32, quality: Quality) -> Pi
             }
         }
     }
-    let legend_line = (ascent + descent) * 1.2;
-    let title_h = if has_title {
-        t_ascent + t_descent + 0.5 * pad
-    } else {
-        0.0
-    };
-    let legend_top = pad + title_h;
-    let top = legend_top + rows.len() as f32 * legend_line + 0.5 * pad;
-    let left =
-        pad + if chart.y_label.is_empty() {
-            0.0
-        } else {
-            ascent + descent + pad
-        } + y_tick_w
-            + tick
-            + 0.5 * pad;
-    let bottom = h
-        - pad
-        - if chart.x_label.is_empty() {
-            0.0
-        } else {
-            ascent + descent + 0.5 * pad
-        }
-        - (ascent + descent)
-        - tick;
-    // Room for the last x tick label to the right.
-    let right = w
-        - pad
-        - 0.5
-            * x_axis
-                .ticks
-                .last()
-                .map_or(0.0, |t| text_width(&t.label, px));
-    let (pw, ph) = ((right - left).max(1.0), (bottom - top).max(1.0));
-    let to_px = |x: f64, y: f64| -> Option<(f32, f32)> {
-        let tx = x_axis.fraction(x)?;
-        let ty = y_axis.fraction(y)?;
-        Some((left + tx as f32 * pw, bottom - ty as f32 * ph))
-    };
+    rows
+}
 
-    if has_title {
+fn draw_title(pixmap: &mut Pixmap, chart: &Chart, m: &Metrics, layout: &Layout) {
+    if !chart.title.is_empty() {
         draw_text(
-            &mut pixmap,
+            pixmap,
             &chart.title,
-            0.5 * (left + right),
-            pad + t_ascent,
-            title_px,
+            0.5 * (layout.left + layout.right),
+            m.pad + m.t_ascent,
+            m.title_px,
             colour::TEXT,
             Align::Centre,
         );
     }
-    // Grid, ticks and tick labels.
-    let grid = Colour::rgb(228, 231, 236);
-    let minor_grid = Colour::rgb(242, 243, 246);
-    let axis_colour = Colour::rgb(70, 74, 82);
-    // Right end of the last x label and top of the last y label drawn (px).
+}
+
+/// Vertical grid lines, x ticks and the x tick labels that do not overlap the previous one.
+fn draw_x_ticks(pixmap: &mut Pixmap, paint: &mut Paint, m: &Metrics, plot: &Plot<'_>) {
+    let (l, axis) = (plot.layout, plot.x_axis);
+    // Right end of the last x label drawn (px).
     let mut last_x_label = f32::NEG_INFINITY;
-    let mut last_y_label = f32::INFINITY;
-    for t in &x_axis.ticks {
-        let Some(f) = x_axis.fraction(t.value) else {
+    for t in &axis.ticks {
+        let Some(f) = axis.fraction(t.value) else {
             continue;
         };
-        let x = left + f as f32 * pw;
-        let major = !t.label.is_empty() || x_axis.scale == Scale::Linear;
-        let g = if major { grid } else { minor_grid };
-        stroke_line(&mut pixmap, &mut paint, pt(x, top), pt(x, bottom), s, g);
-        let len = if major { tick } else { 0.5 * tick };
+        let x = l.left + f as f32 * l.pw;
+        let major = !t.label.is_empty() || axis.scale == Scale::Linear;
+        let g = if major { GRID } else { MINOR_GRID };
+        stroke_line(pixmap, paint, pt(x, l.top), pt(x, l.bottom), m.s, g);
+        let len = if major { m.tick } else { 0.5 * m.tick };
         stroke_line(
-            &mut pixmap,
-            &mut paint,
-            pt(x, bottom),
-            pt(x, bottom + len),
-            s,
-            axis_colour,
+            pixmap,
+            paint,
+            pt(x, l.bottom),
+            pt(x, l.bottom + len),
+            m.s,
+            AXIS_COLOUR,
         );
-        let half = 0.5 * text_width(&t.label, px);
-        if !t.label.is_empty() && x - half >= last_x_label + 0.5 * px {
+        let half = 0.5 * text_width(&t.label, m.px);
+        if !t.label.is_empty() && x - half >= last_x_label + 0.5 * m.px {
             last_x_label = x + half;
             draw_text(
-                &mut pixmap,
+                pixmap,
                 &t.label,
                 x,
-                bottom + tick + ascent,
-                px,
+                l.bottom + m.tick + m.ascent,
+                m.px,
                 colour::TEXT,
                 Align::Centre,
             );
         }
     }
-    for t in &y_axis.ticks {
-        let Some(f) = y_axis.fraction(t.value) else {
+}
+
+/// Horizontal grid lines, y ticks and the y tick labels that do not overlap the previous one.
+fn draw_y_ticks(pixmap: &mut Pixmap, paint: &mut Paint, m: &Metrics, plot: &Plot<'_>) {
+    let (l, axis) = (plot.layout, plot.y_axis);
+    // Top of the last y label drawn (px).
+    let mut last_y_label = f32::INFINITY;
+    for t in &axis.ticks {
+        let Some(f) = axis.fraction(t.value) else {
             continue;
         };
-        let y = bottom - f as f32 * ph;
-        let major = !t.label.is_empty() || y_axis.scale == Scale::Linear;
-        let g = if major { grid } else { minor_grid };
-        stroke_line(&mut pixmap, &mut paint, pt(left, y), pt(right, y), s, g);
-        let len = if major { tick } else { 0.5 * tick };
+        let y = l.bottom - f as f32 * l.ph;
+        let major = !t.label.is_empty() || axis.scale == Scale::Linear;
+        let g = if major { GRID } else { MINOR_GRID };
+        stroke_line(pixmap, paint, pt(l.left, y), pt(l.right, y), m.s, g);
+        let len = if major { m.tick } else { 0.5 * m.tick };
         stroke_line(
-            &mut pixmap,
-            &mut paint,
-            pt(left - len, y),
-            pt(left, y),
-            s,
-            axis_colour,
+            pixmap,
+            paint,
+            pt(l.left - len, y),
+            pt(l.left, y),
+            m.s,
+            AXIS_COLOUR,
         );
         // Labels go upwards: the next one must end above this one's top.
-        if !t.label.is_empty() && y + 0.5 * ascent <= last_y_label - 0.2 * px {
-            last_y_label = y - 0.5 * ascent;
+        if !t.label.is_empty() && y + 0.5 * m.ascent <= last_y_label - 0.2 * m.px {
+            last_y_label = y - 0.5 * m.ascent;
             draw_text(
-                &mut pixmap,
+                pixmap,
                 &t.label,
-                left - tick - 0.3 * pad,
-                y + 0.35 * ascent,
-                px,
+                l.left - m.tick - 0.3 * m.pad,
+                y + 0.35 * m.ascent,
+                m.px,
                 colour::TEXT,
                 Align::Right,
             );
         }
     }
-    // Axis labels.
+}
+
+fn draw_axis_labels(pixmap: &mut Pixmap, chart: &Chart, m: &Metrics, layout: &Layout) {
     if !chart.x_label.is_empty() {
         draw_text(
-            &mut pixmap,
+            pixmap,
             &chart.x_label,
-            left + 0.5 * pw,
-            h - pad - descent,
-            px,
+            layout.left + 0.5 * layout.pw,
+            m.h - m.pad - m.descent,
+            m.px,
             colour::TEXT,
             Align::Centre,
         );
     }
     if !chart.y_label.is_empty() {
         draw_text_vertical(
-            &mut pixmap,
+            pixmap,
             &chart.y_label,
-            pad + ascent,
-            top + 0.5 * ph,
-            px,
+            m.pad + m.ascent,
+            layout.top + 0.5 * layout.ph,
+            m.px,
             colour::TEXT,
         );
     }
+}
 
-    // Series, clipped to the plot.
+/// The clip mask of the plot rectangle: series are drawn inside it only.
+fn plot_mask(width: u32, height: u32, layout: &Layout) -> Mask {
     let mut mask = Mask::new(width, height).expect("size checked");
-    if let Some(rect) = Rect::from_xywh(left, top, pw, ph) {
+    if let Some(rect) = Rect::from_xywh(layout.left, layout.top, layout.pw, layout.ph) {
         mask.fill_path(
             &PathBuilder::from_rect(rect),
             FillRule::Winding,
@@ -676,143 +577,170 @@ pub fn draw_with(chart: &Chart, width: u32, height: u32, quality: Quality) -> Pi
             Transform::identity(),
         );
     }
-    for (series, &c) in chart.series.iter().zip(&colours) {
-        if let Some(lower) = &series.band {
-            // The polygon along the upper points and back along the lower ones.
-            let mut pb = PathBuilder::new();
-            let mut started = false;
-            for &(x, y) in series.points.iter().chain(lower.iter().rev()) {
-                if let Some((u, v)) = to_px(x, y)
-                    && u.is_finite()
-                    && v.is_finite()
-                {
-                    if started {
+    mask
+}
+
+/// What every series is drawn with: the image, its paint, the sizes, the plot and the clip mask
+/// of the plot rectangle.
+struct SeriesCanvas<'a, 'p> {
+    pixmap: &'a mut Pixmap,
+    paint: &'a mut Paint<'p>,
+    m: &'a Metrics,
+    plot: &'a Plot<'a>,
+    mask: &'a Mask,
+}
+
+impl SeriesCanvas<'_, '_> {
+    /// Fills `path` with `colour`, inside the plot.
+    fn fill(&mut self, path: &tiny_skia::Path, colour: tiny_skia::Color) {
+        self.paint.set_color(colour);
+        self.pixmap.fill_path(
+            path,
+            self.paint,
+            FillRule::Winding,
+            Transform::identity(),
+            Some(self.mask),
+        );
+    }
+
+    /// Strokes `path` with `colour` and `stroke`, inside the plot.
+    fn stroke(&mut self, path: &tiny_skia::Path, colour: tiny_skia::Color, stroke: &Stroke) {
+        self.paint.set_color(colour);
+        self.pixmap.stroke_path(
+            path,
+            self.paint,
+            stroke,
+            Transform::identity(),
+            Some(self.mask),
+        );
+    }
+
+    /// A shaded band: the polygon along the series' points and back along `lower`.
+    fn band(&mut self, series: &Series, lower: &[(f64, f64)], c: Colour) {
+        let mut pb = PathBuilder::new();
+        let mut started = false;
+        for &(x, y) in series.points.iter().chain(lower.iter().rev()) {
+            if let Some((u, v)) = self.plot.to_px(x, y)
+                && u.is_finite()
+                && v.is_finite()
+            {
+                if started {
+                    pb.line_to(u, v);
+                } else {
+                    pb.move_to(u, v);
+                    started = true;
+                }
+            }
+        }
+        pb.close();
+        if let Some(path) = pb.finish() {
+            let mut fill = c.to_skia();
+            fill.set_alpha(0.25);
+            self.fill(&path, fill);
+        }
+    }
+
+    /// The series as a polyline; the pen lifts over points that cannot be placed.
+    fn line(&mut self, series: &Series, c: Colour) {
+        let mut pb = PathBuilder::new();
+        let mut pen_down = false;
+        for &(x, y) in &series.points {
+            match self.plot.to_px(x, y) {
+                Some((u, v)) if u.is_finite() && v.is_finite() => {
+                    if pen_down {
                         pb.line_to(u, v);
                     } else {
                         pb.move_to(u, v);
-                        started = true;
+                        pen_down = true;
                     }
                 }
-            }
-            pb.close();
-            if let Some(path) = pb.finish() {
-                let mut fill = c.to_skia();
-                fill.set_alpha(0.25);
-                paint.set_color(fill);
-                pixmap.fill_path(
-                    &path,
-                    &paint,
-                    FillRule::Winding,
-                    Transform::identity(),
-                    Some(&mask),
-                );
+                _ => pen_down = false,
             }
         }
-        if matches!(series.style, SeriesStyle::Line | SeriesStyle::LineAndPoints) {
-            let mut pb = PathBuilder::new();
-            let mut pen_down = false;
-            for &(x, y) in &series.points {
-                match to_px(x, y) {
-                    Some((u, v)) if u.is_finite() && v.is_finite() => {
-                        if pen_down {
-                            pb.line_to(u, v);
-                        } else {
-                            pb.move_to(u, v);
-                            pen_down = true;
-                        }
-                    }
-                    _ => pen_down = false,
-                }
-            }
-            if let Some(path) = pb.finish() {
-                paint.set_color(c.to_skia());
+        if let Some(path) = pb.finish() {
+            let stroke = Stroke {
+                width: 2.0 * self.m.s,
+                line_cap: LineCap::Round,
+                line_join: LineJoin::Round,
+                ..Stroke::default()
+            };
+            self.stroke(&path, c.to_skia(), &stroke);
+        }
+    }
+
+    /// The series' points as discs with a white outline.
+    fn points(&mut self, series: &Series, c: Colour) {
+        for &(x, y) in &series.points {
+            if let Some((u, v)) = self.plot.to_px(x, y)
+                && let Some(path) = PathBuilder::from_circle(u, v, 3.2 * self.m.s)
+            {
+                self.fill(&path, c.to_skia());
                 let stroke = Stroke {
-                    width: 2.0 * s,
-                    line_cap: LineCap::Round,
-                    line_join: LineJoin::Round,
+                    width: 0.9 * self.m.s,
                     ..Stroke::default()
                 };
-                pixmap.stroke_path(&path, &paint, &stroke, Transform::identity(), Some(&mask));
-            }
-        }
-        if matches!(
-            series.style,
-            SeriesStyle::Scatter | SeriesStyle::LineAndPoints
-        ) {
-            for &(x, y) in &series.points {
-                if let Some((u, v)) = to_px(x, y)
-                    && let Some(path) = PathBuilder::from_circle(u, v, 3.2 * s)
-                {
-                    paint.set_color(c.to_skia());
-                    pixmap.fill_path(
-                        &path,
-                        &paint,
-                        FillRule::Winding,
-                        Transform::identity(),
-                        Some(&mask),
-                    );
-                    paint.set_color(Colour::rgb(255, 255, 255).to_skia());
-                    let stroke = Stroke {
-                        width: 0.9 * s,
-                        ..Stroke::default()
-                    };
-                    pixmap.stroke_path(&path, &paint, &stroke, Transform::identity(), Some(&mask));
-                }
+                self.stroke(&path, Colour::rgb(255, 255, 255).to_skia(), &stroke);
             }
         }
     }
-    // Frame around the plot.
-    if let Some(rect) = Rect::from_xywh(left, top, pw, ph) {
-        paint.set_color(axis_colour.to_skia());
+}
+
+/// The frame around the plot.
+fn draw_frame(pixmap: &mut Pixmap, paint: &mut Paint, m: &Metrics, layout: &Layout) {
+    if let Some(rect) = Rect::from_xywh(layout.left, layout.top, layout.pw, layout.ph) {
+        paint.set_color(AXIS_COLOUR.to_skia());
         let stroke = Stroke {
-            width: s,
+            width: m.s,
             ..Stroke::default()
         };
         pixmap.stroke_path(
             &PathBuilder::from_rect(rect),
-            &paint,
+            paint,
             &stroke,
             Transform::identity(),
             None,
         );
     }
-    // Legend rows, each centred over the plot.
-    for (r, row) in rows.iter().enumerate() {
-        let total: f32 = row.iter().map(|&i| entry_w(&chart.series[i])).sum::<f32>() - 1.2 * px;
-        let mut x = (0.5 * (left + right) - 0.5 * total)
-            .min(w - pad - total)
-            .max(pad);
-        let baseline = legend_top + ascent + r as f32 * legend_line;
-        let mid = baseline - 0.35 * ascent;
+}
+
+/// The legend rows, each centred over the plot: a sample of the series' line or point, then
+/// its name.
+fn draw_legend(
+    pixmap: &mut Pixmap,
+    paint: &mut Paint,
+    chart: &Chart,
+    m: &Metrics,
+    layout: &Layout,
+    colours: &[Colour],
+) {
+    let (px, sample) = (m.px, m.sample());
+    for (r, row) in layout.rows.iter().enumerate() {
+        let total: f32 = row
+            .iter()
+            .map(|&i| m.entry_width(&chart.series[i]))
+            .sum::<f32>()
+            - 1.2 * px;
+        let mut x = (0.5 * (layout.left + layout.right) - 0.5 * total)
+            .min(m.w - m.pad - total)
+            .max(m.pad);
+        let baseline = layout.legend_top + m.ascent + r as f32 * layout.legend_line;
+        let mid = baseline - 0.35 * m.ascent;
         for &i in row {
             let series = &chart.series[i];
             let c = colours[i];
             if matches!(series.style, SeriesStyle::Line | SeriesStyle::LineAndPoints) {
-                stroke_line(
-                    &mut pixmap,
-                    &mut paint,
-                    pt(x, mid),
-                    pt(x + sample, mid),
-                    2.0 * s,
-                    c,
-                );
+                stroke_line(pixmap, paint, pt(x, mid), pt(x + sample, mid), 2.0 * m.s, c);
             }
             if matches!(
                 series.style,
                 SeriesStyle::Scatter | SeriesStyle::LineAndPoints
-            ) && let Some(path) = PathBuilder::from_circle(x + 0.5 * sample, mid, 3.2 * s)
+            ) && let Some(path) = PathBuilder::from_circle(x + 0.5 * sample, mid, 3.2 * m.s)
             {
                 paint.set_color(c.to_skia());
-                pixmap.fill_path(
-                    &path,
-                    &paint,
-                    FillRule::Winding,
-                    Transform::identity(),
-                    None,
-                );
+                pixmap.fill_path(&path, paint, FillRule::Winding, Transform::identity(), None);
             }
             draw_text(
-                &mut pixmap,
+                pixmap,
                 &series.name,
                 x + sample + 0.4 * px,
                 baseline,
@@ -820,10 +748,9 @@ pub fn draw_with(chart: &Chart, width: u32, height: u32, quality: Quality) -> Pi
                 colour::TEXT,
                 Align::Left,
             );
-            x += entry_w(series);
+            x += m.entry_width(series);
         }
     }
-    pixmap
 }
 
 fn pt(x: f32, y: f32) -> tiny_skia::Point {
@@ -832,6 +759,7 @@ fn pt(x: f32, y: f32) -> tiny_skia::Point {
 
 #[cfg(test)]
 mod tests {
+    use super::axis::format_number;
     use super::*;
 
     #[test]

@@ -1,7 +1,7 @@
 //! The 3D scenes of the NYCU Computer Animation course, HW1 "Mass-spring system" (2021–2024):
 //! a spring cube dropped on four terrains (2021), a jelly that falls through a hole into a bowl
 //! (2023), a cloth under four falling spheres (2022) and a cloth over a sphere the user moves
-//! (2024). Every course value is a parameter default (SEEDS.md §2–3); `springlab scenes` lists
+//! (2024). Every course value is a parameter default (`docs/course.md` §2–3); `springlab scenes` lists
 //! them with units and ranges.
 //!
 //! # Cube and jelly (2021, 2023)
@@ -88,7 +88,7 @@
 //! `scenes/cloth_spheres_implicit.toml`).
 //!
 //! References: NYCU Computer Animation HW1, "Mass-spring system", 2021 (cube), 2022 (cloth),
-//! 2023 (jelly), 2024 (cloth); SEEDS.md §2–3.
+//! 2023 (jelly), 2024 (cloth); `docs/course.md` §2–3.
 
 use glam::DVec3;
 

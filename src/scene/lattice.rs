@@ -14,7 +14,7 @@
 //! offsets ("stencil") whose first non-zero component is positive; the second end `b` may have
 //! the smaller index (cube offset (1,-1,0) gives `b = a + 1 - nx`). The order of the springs is canonical: kind by kind
 //! (struct, then shear, then bend); within a kind particle by particle; within a particle offset
-//! by offset in the order of the tables below. The peer benchmarks (`WORKLOADS.md`, W1 and W2)
+//! by offset in the order of the tables below. The peer benchmarks (`docs/workloads.md`, W1 and W2)
 //! generate their springs in exactly this order, so the set-ups agree bit for bit.
 //!
 //! ```text
@@ -39,7 +39,7 @@
 //! this), so an undeformed lattice starts at rest with no elastic energy.
 //!
 //! References: NYCU Computer Animation HW1 2021 (cube), 2022 (cloth), 2023 (jelly), 2024 (cloth);
-//! `WORKLOADS.md` (peer benchmarks) W1 `jelly` and W2 `cloth`, section "Canonical setup bytes".
+//! `docs/workloads.md` (peer benchmarks) W1 `jelly` and W2 `cloth`, section "Canonical set-up bytes".
 
 use glam::{DQuat, DVec3};
 
@@ -206,7 +206,7 @@ impl Default for CubeSpec {
 }
 
 impl CubeSpec {
-    /// Workload W1 `jelly` (`WORKLOADS.md`): 10 × 10 × 10 particles of 1 kg at spacing 0.1 m
+    /// Workload W1 `jelly` (`docs/workloads.md`): 10 × 10 × 10 particles of 1 kg at spacing 0.1 m
     /// (edge 0.9 m), bottom face at y = 1 m, k = 2000 N/m and k_d = 10 N·s/m for all kinds.
     #[must_use]
     pub fn w1_jelly() -> CubeSpec {
@@ -473,7 +473,7 @@ impl ClothSpec {
         }
     }
 
-    /// Workload W2 `cloth` (`WORKLOADS.md`) with `n × n` particles (64 and 128 in the
+    /// Workload W2 `cloth` (`docs/workloads.md`) with `n × n` particles (64 and 128 in the
     /// benchmark): the unit square at y = 1 m, total mass 1 kg (`m = 1 / n²` each),
     /// k = 5000 N/m, k_d = 0.02 N·s/m for all kinds, particles 0 and `n - 1` pinned.
     #[must_use]
@@ -651,7 +651,7 @@ pub fn count_kinds(springs: &[Spring]) -> [usize; 3] {
     counts
 }
 
-/// The canonical set-up bytes of `WORKLOADS.md` ("Canonical setup bytes"): all positions as
+/// The canonical set-up bytes of `docs/workloads.md` ("Canonical set-up bytes"): all positions as
 /// little-endian f64 `x, y, z` per particle, then per spring `u32 a, u32 b, f64 rest_length`
 /// (little-endian), in the order given.
 ///

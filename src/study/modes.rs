@@ -53,7 +53,7 @@
 //! Checks: for the oscillator (one spring, one free mass) `ω_max = √(k/m) = 10` rad/s exactly;
 //! for a chain of `N` free masses hanging from a pinned end, at rest,
 //! `ω_max² = 4 (k/m) sin²((2N - 1) π / (4N + 2))` (a fixed–free chain); for the W1 jelly at rest
-//! `λ_max = 3.37·10⁴` 1/s², `ω_max = 184` rad/s (`WORKLOADS.md`).
+//! `λ_max = 3.37·10⁴` 1/s², `ω_max = 184` rad/s (`docs/workloads.md`).
 //!
 //! References: G. H. Golub, C. F. Van Loan, *Matrix Computations*, 4th ed., Johns Hopkins 2013,
 //! §7.2.1 (Gershgorin), §7.3.1 (the power method), §8.2.1 (the symmetric power method);

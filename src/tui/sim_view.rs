@@ -439,9 +439,9 @@ fn draw_colliders(ctx: &mut Context, sim: &Simulation, camera: &Camera, dots: &D
                     radius,
                     rim_height,
                 } => {
-                    let rim = rim_height.min(center.y);
-                    let rim_radius = (radius * radius - (center.y - rim).powi(2)).max(0.0).sqrt();
-                    let rim_center = DVec3::new(center.x, rim, center.z);
+                    let bowl_rim = crate::physics::bowl::Rim::of(center, radius, rim_height);
+                    let (rim, rim_radius) = (bowl_rim.height, bowl_rim.radius());
+                    let rim_center = bowl_rim.center(center);
                     dots.polyline(ctx, &circle(rim_center, DVec3::Y, rim_radius, 64), color);
                     // The arc of the bowl in the vertical plane facing the camera.
                     let right = dots.view.right;

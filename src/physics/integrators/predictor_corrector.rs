@@ -19,7 +19,7 @@
 //! **Stability**: on `y' = λ y` the amplification is `R(z) = 1 + z + z²`, `z = dt λ`.
 //! - On a pure decay (real `z < 0`, a stiff damper) it is stable only for `-1 ≤ z ≤ 0`: HALF of
 //!   explicit Euler's range `[-2, 0]`. This is why the course's "implicit" method failed first on
-//!   the cloth (dt 0.0006 against explicit Euler's 0.001, SEEDS.md §4).
+//!   the cloth (dt 0.0006 against explicit Euler's 0.001, `docs/course.md` §4).
 //! - On the undamped oscillator (`z = i dt ω`) `|R|² = 1 - (dt ω)² + (dt ω)⁴`: stable, and losing
 //!   energy, while **dt·ω ≤ 1**; growing beyond (measured by the tests).
 //!

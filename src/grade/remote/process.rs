@@ -1,0 +1,191 @@
+//! Starting and ending a student's program: the session token, a fresh empty working
+//! directory, the limits (setrlimit) applied in the child before `exec`, reaping the process
+//! group, and what its end means in words for the report.
+
+use std::io::Read;
+use std::path::PathBuf;
+use std::process::{Child, ChildStderr, ExitStatus};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use springlab_homework::wire::TOKEN_LEN;
+
+use super::Limits;
+
+/// 16 random bytes for a session token: the system's random source, or, where there is none,
+/// std's randomly keyed hasher.
+pub(super) fn random_token() -> [u8; TOKEN_LEN] {
+    let mut token = [0u8; TOKEN_LEN];
+    let from_os = std::fs::File::open("/dev/urandom").and_then(|mut f| f.read_exact(&mut token));
+    if from_os.is_err() {
+        use std::hash::{BuildHasher, Hasher};
+        for (i, chunk) in token.chunks_mut(8).enumerate() {
+            let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+            h.write_usize(i);
+            h.write_u128(
+                std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map_or(0, |d| d.as_nanos()),
+            );
+            chunk.copy_from_slice(&h.finish().to_le_bytes());
+        }
+    }
+    token
+}
+
+pub(super) static WORKDIRS: AtomicU64 = AtomicU64::new(0);
+
+/// A new empty directory only this user can enter, for one program's working directory.
+pub(super) fn fresh_workdir() -> std::io::Result<PathBuf> {
+    let n = WORKDIRS.fetch_add(1, Ordering::Relaxed);
+    let tag: String = random_token()[..6]
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    let dir = std::env::temp_dir().join(format!(
+        "springlab-homework-{}-{n}-{tag}",
+        std::process::id()
+    ));
+    std::fs::create_dir(&dir)?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700))?;
+    }
+    Ok(dir)
+}
+
+/// Applies `limits` in the child between fork and exec (only system calls, no allocation).
+#[cfg(unix)]
+pub(super) fn apply_limits(limits: Limits) -> std::io::Result<()> {
+    use nix::sys::resource::{Resource, setrlimit};
+    let set = |resource, value: u64| {
+        setrlimit(resource, value, value).map_err(|e| std::io::Error::from_raw_os_error(e as i32))
+    };
+    set(Resource::RLIMIT_AS, limits.memory_bytes)?;
+    set(Resource::RLIMIT_CPU, limits.cpu_seconds)?;
+    set(Resource::RLIMIT_FSIZE, limits.file_bytes)?;
+    set(Resource::RLIMIT_CORE, 0)?;
+    set(Resource::RLIMIT_NOFILE, 32)?;
+    // No new processes or threads (not binding on root, which the kernel exempts).
+    set(Resource::RLIMIT_NPROC, 0)?;
+    Ok(())
+}
+
+/// Keeps the last 16 KiB of the program's stderr.
+pub(super) fn keep_stderr(mut err: ChildStderr, tail: &Mutex<Vec<u8>>) {
+    let mut chunk = [0u8; 4096];
+    while let Ok(n) = err.read(&mut chunk) {
+        if n == 0 {
+            break;
+        }
+        if let Ok(mut t) = tail.lock() {
+            t.extend_from_slice(&chunk[..n]);
+            let excess = t.len().saturating_sub(16 << 10);
+            t.drain(..excess);
+        }
+    }
+}
+
+/// The exit status of `child` if it has ended, and its peak resident memory (KiB) where the
+/// system reports it (Linux: `wait4`). Before reaping, the rest of its process group is killed,
+/// while the ended leader still holds the group's id.
+#[cfg(unix)]
+pub(super) fn reap(child: &mut Child) -> Option<(ExitStatus, Option<u64>)> {
+    use nix::libc;
+    use std::os::unix::process::ExitStatusExt;
+    let pid = libc::pid_t::try_from(child.id()).ok()?;
+    // SAFETY: an all-zero siginfo_t is a valid value of this plain C struct.
+    let mut info: libc::siginfo_t = unsafe { std::mem::zeroed() };
+    // SAFETY: waitid on our own child with a valid pointer; WNOHANG | WNOWAIT neither blocks
+    // nor reaps.
+    let polled = unsafe {
+        libc::waitid(
+            libc::P_PID,
+            pid as libc::id_t,
+            &raw mut info,
+            libc::WEXITED | libc::WNOHANG | libc::WNOWAIT,
+        )
+    };
+    // SAFETY: si_pid is set by waitid (zero while the child runs).
+    if polled != 0 || unsafe { info.si_pid() } == 0 {
+        return None;
+    }
+    let _ = nix::sys::signal::killpg(
+        nix::unistd::Pid::from_raw(pid),
+        nix::sys::signal::Signal::SIGKILL,
+    );
+    let mut status: libc::c_int = 0;
+    // SAFETY: an all-zero rusage is a valid value of this plain C struct.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    // SAFETY: wait4 on our own ended child with valid pointers to locals; it returns at once.
+    let got = unsafe { libc::wait4(pid, &raw mut status, 0, &raw mut usage) };
+    (got == pid).then(|| {
+        (
+            ExitStatus::from_raw(status),
+            u64::try_from(usage.ru_maxrss).ok(),
+        )
+    })
+}
+
+#[cfg(not(unix))]
+pub(super) fn reap(child: &mut Child) -> Option<(ExitStatus, Option<u64>)> {
+    child.try_wait().ok().flatten().map(|s| (s, None))
+}
+
+/// Mebibytes, for messages.
+pub(super) fn mib(bytes: u64) -> u64 {
+    bytes >> 20
+}
+
+/// What an exit status and the end of stderr say about how a program ended.
+pub(super) fn describe_end(status: Option<ExitStatus>, stderr: &str, limits: Limits) -> String {
+    let last_line = stderr
+        .lines()
+        .rev()
+        .find(|l| !l.trim().is_empty())
+        .map(|l| format!(" (stderr: \"{}\")", l.trim()))
+        .unwrap_or_default();
+    if let Some(line) = stderr.lines().find(|l| l.contains("memory allocation of")) {
+        return format!(
+            "it ran out of memory: \"{}\"; a homework program may use {} MiB of address space",
+            line.trim(),
+            mib(limits.memory_bytes)
+        );
+    }
+    if stderr.contains("has overflowed its stack") {
+        return "its stack overflowed (a recursion without end?)".to_string();
+    }
+    let Some(status) = status else {
+        return format!("it stopped answering{last_line}");
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::ExitStatusExt;
+        if let Some(signal) = status.signal() {
+            let name = nix::sys::signal::Signal::try_from(signal)
+                .map_or_else(|_| format!("signal {signal}"), |s| s.as_str().to_string());
+            let why = match signal {
+                6 => "it aborted (std::process::abort, or a panic inside a panic)".to_string(),
+                9 => "it was killed".to_string(),
+                11 => "it crashed with a segmentation fault".to_string(),
+                24 => format!(
+                    "it used up its CPU time ({} s for one program)",
+                    limits.cpu_seconds
+                ),
+                25 => format!(
+                    "it wrote a file larger than the limit of {} MiB",
+                    mib(limits.file_bytes)
+                ),
+                _ => "it was stopped by a signal".to_string(),
+            };
+            return format!("{why} ({name}){last_line}");
+        }
+    }
+    match status.code() {
+        Some(code) => format!(
+            "it exited with status {code} in the middle of a call (std::process::exit?){last_line}"
+        ),
+        None => format!("it ended ({status}){last_line}"),
+    }
+}
