@@ -113,9 +113,10 @@ pub use spheres::{
     DynamicSphere, advance_spheres, collide_spheres, collide_spheres_logged, step_spheres,
 };
 
-/// What the colliders read of the system: a view of the model, so that this module depends on
-/// no other part of `physics` (the model and the state convert into these views; every function
-/// here takes `&model` and `&mut state` as they are).
+/// What the colliders read of the system: a view of the model, so that this module imports
+/// neither the model (`forces`) nor the state (`particles`), which both build on it. `&Model`
+/// converts into a `World` and `&mut State` into [`Bodies`], so every function here is called
+/// with `&model` and `&mut state` as they are.
 #[derive(Clone, Copy, Debug)]
 pub struct World<'a> {
     /// Static obstacles, normals of unit length.
