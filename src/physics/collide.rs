@@ -588,7 +588,7 @@ pub fn contact_power<'a>(
 /// and friction to the applied force `f` (N), each collider in order seeing what the previous
 /// ones left (module docs); `None` when no collider pushes it.
 fn with_contact(model: &World<'_>, x: DVec3, v: DVec3, f: DVec3) -> Option<DVec3> {
-    contact_force(&model.colliders, &model.contact, x, v, f)
+    contact_force(model.colliders, model.contact, x, v, f)
 }
 
 /// [`contact_forces`] for one particle at `x` (m) moving at `v` (m/s) with applied force `f`
