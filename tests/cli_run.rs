@@ -98,8 +98,8 @@ fn explicit_euler_rope_reports_divergence_with_exit_code_zero() {
 
 #[test]
 fn csv_has_a_header_and_one_row_per_recorded_step() {
-    let dir = std::env::temp_dir().join(format!("springlab-csv-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let path = dir.join("osc.csv");
     let out = springlab(&[
         "run",
@@ -136,7 +136,6 @@ fn csv_has_a_header_and_one_row_per_recorded_step() {
         "residual {} expected {expected}",
         last[7]
     );
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]

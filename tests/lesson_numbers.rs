@@ -277,33 +277,33 @@ const EXPLAINED: &[(u32, &str, &str)] = &[
     (
         8,
         "35",
-        "quoted output of a study that runs for minutes (issue 14's lesson): NOT checked by this fast suite; to become a placeholder or a test",
+        "quoted output of a study that runs for minutes: checked against its recording in docs/studies/ by tests/lesson8.rs, which re-runs the cheapest levels",
     ),
     (8, "25", "the course's n = 25 cloth (the scene's default)"),
     (
         8,
         "2.13e-2",
-        "quoted output of a study that runs for minutes (issue 14's lesson): NOT checked by this fast suite; to become a placeholder or a test",
+        "quoted output of a study that runs for minutes: checked against its recording in docs/studies/ by tests/lesson8.rs, which re-runs the cheapest levels",
     ),
     (
         8,
         "0.77",
-        "quoted output of a study that runs for minutes (issue 14's lesson): NOT checked by this fast suite; to become a placeholder or a test",
+        "quoted output of a study that runs for minutes: checked against its recording in docs/studies/ by tests/lesson8.rs, which re-runs the cheapest levels",
     ),
     (
         8,
         "0.4642",
-        "quoted output of a study that runs for minutes (issue 14's lesson): NOT checked by this fast suite; to become a placeholder or a test",
+        "quoted output of a study that runs for minutes: checked against its recording in docs/studies/ by tests/lesson8.rs, which re-runs the cheapest levels",
     ),
     (
         8,
         "0.7465",
-        "quoted output of a study that runs for minutes (issue 14's lesson): NOT checked by this fast suite; to become a placeholder or a test",
+        "quoted output of a study that runs for minutes: checked against its recording in docs/studies/ by tests/lesson8.rs, which re-runs the cheapest levels",
     ),
     (
         8,
         "0.8462",
-        "quoted output of a study that runs for minutes (issue 14's lesson): NOT checked by this fast suite; to become a placeholder or a test",
+        "quoted output of a study that runs for minutes: checked against its recording in docs/studies/ by tests/lesson8.rs, which re-runs the cheapest levels",
     ),
     (8, "9", "the study's coarsest level n = 9"),
     (8, "49", "the study's finest level n = 49"),
@@ -328,42 +328,42 @@ const EXPLAINED: &[(u32, &str, &str)] = &[
     (
         8,
         "2.5e-2",
-        "quoted output of a study that runs for minutes (issue 14's lesson): NOT checked by this fast suite; to become a placeholder or a test",
+        "quoted output of a study that runs for minutes: checked against its recording in docs/studies/ by tests/lesson8.rs, which re-runs the cheapest levels",
     ),
     (
         8,
         "3.0e-2",
-        "quoted output of a study that runs for minutes (issue 14's lesson): NOT checked by this fast suite; to become a placeholder or a test",
+        "quoted output of a study that runs for minutes: checked against its recording in docs/studies/ by tests/lesson8.rs, which re-runs the cheapest levels",
     ),
     (
         8,
         "2.7e-2",
-        "quoted output of a study that runs for minutes (issue 14's lesson): NOT checked by this fast suite; to become a placeholder or a test",
+        "quoted output of a study that runs for minutes: checked against its recording in docs/studies/ by tests/lesson8.rs, which re-runs the cheapest levels",
     ),
     (
         8,
         "1.5e-2",
-        "quoted output of a study that runs for minutes (issue 14's lesson): NOT checked by this fast suite; to become a placeholder or a test",
+        "quoted output of a study that runs for minutes: checked against its recording in docs/studies/ by tests/lesson8.rs, which re-runs the cheapest levels",
     ),
     (
         8,
         "8.49e-5",
-        "quoted output of a study that runs for minutes (issue 14's lesson): NOT checked by this fast suite; to become a placeholder or a test",
+        "quoted output of a study that runs for minutes: checked against its recording in docs/studies/ by tests/lesson8.rs, which re-runs the cheapest levels",
     ),
     (
         8,
         "24",
-        "quoted output of a study that runs for minutes (issue 14's lesson): NOT checked by this fast suite; to become a placeholder or a test",
+        "quoted output of a study that runs for minutes: checked against its recording in docs/studies/ by tests/lesson8.rs, which re-runs the cheapest levels",
     ),
     (
         8,
         "6.41e-3",
-        "quoted output of a study that runs for minutes (issue 14's lesson): NOT checked by this fast suite; to become a placeholder or a test",
+        "quoted output of a study that runs for minutes: checked against its recording in docs/studies/ by tests/lesson8.rs, which re-runs the cheapest levels",
     ),
     (
         8,
         "2.9",
-        "quoted output of a study that runs for minutes (issue 14's lesson): NOT checked by this fast suite; to become a placeholder or a test",
+        "quoted output of a study that runs for minutes: checked against its recording in docs/studies/ by tests/lesson8.rs, which re-runs the cheapest levels",
     ),
 ];
 

@@ -560,7 +560,8 @@ fn bad_set_on_a_builtin_file_is_a_parameter_error() {
 
 #[test]
 fn missing_and_unreadable_files_are_io_errors() {
-    let path = fresh_dir().join("does-not-exist.toml");
+    let dir = fresh_dir();
+    let path = dir.join("does-not-exist.toml");
     match scene::load(path.to_str().expect("utf-8"), &[]) {
         Err(SceneError::Io { path: p, .. }) => assert_eq!(p, path.display().to_string()),
         other => panic!("expected an I/O error, got {other:?}"),
@@ -569,6 +570,8 @@ fn missing_and_unreadable_files_are_io_errors() {
     std::fs::write(&path, b"scene = \"r\xe9pe\"\n").expect("write");
     let result = scene::load(path.to_str().expect("utf-8"), &[]);
     assert!(matches!(result, Err(SceneError::Io { .. })), "{result:?}");
+    let _ = std::fs::remove_dir_all(dir);
+    let _ = std::fs::remove_dir_all(path.parent().expect("parent"));
 }
 
 #[test]

@@ -62,8 +62,8 @@ fn difference(big: &(u32, u32, Vec<u8>), small: &tiny_skia::Pixmap) -> f64 {
 
 #[test]
 fn export_writes_the_view_on_screen() {
-    let dir = std::env::temp_dir().join(format!("springlab-export-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let dir = tmp.path();
     let cloth = lesson::builtin()
         .into_iter()
         .flatten()
@@ -113,5 +113,4 @@ fn export_writes_the_view_on_screen() {
     // An unwritable path gives a message, not a panic.
     let err = export_png(&run, &dir.join("no/such/dir/x.png")).expect_err("unwritable");
     assert!(err.starts_with("cannot write"), "{err}");
-    std::fs::remove_dir_all(&dir).ok();
 }
