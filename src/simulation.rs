@@ -20,13 +20,31 @@
 //! Backward Euler on springs, gravity and dampers removes energy; one Newton step with a
 //! contact response after it can still add some when a step deforms the body far beyond the
 //! linearisation (measured: `jelly-bowl` at dt = 0.1 s, the lattice squeezed by more than its
-//! spacing in one step). A body stepped by implicit Euler therefore checks that the step and its
-//! collision response did not raise `E` (beyond 10⁻¹² relative); if they did, the step is
-//! taken again as two half steps, each checked the same way, at most [`MAX_HALVINGS`] times
-//! deep, and only while halving at least halves the rise per second (a linearisation error
-//! shrinks with the step; the small up-and-down of a contact resting under a large step does
-//! not, and is accepted). The report counts these steps (`solver.halved_steps`). A driven (kinematic) sphere that
-//! moves does work on the cloth, so bodies with one are not guarded.
+//! spacing in one step). A body stepped by implicit Euler therefore checks each step (the solve
+//! and the collision response after it, spheres included):
+//!
+//! ```text
+//! rise = E_1 - E_0                                  (J)
+//! rate = rise / dt                                  (W)
+//! accept        if  rise ≤ 10⁻¹² (|K_0| + |G_0| + |U_0|)
+//! else halve    if  rate < rate_parent / 2  and  depth < MAX_HALVINGS
+//! else accept
+//! ```
+//! where `E_0`, `E_1` (J) are the total energy ([`crate::physics::energy`]) before and after
+//! the step, `K_0`, `G_0`, `U_0` (J) its kinetic, gravitational and elastic terms before
+//! (the tolerance is rounding of their sum, not a physical allowance), `rate_parent` (W) the
+//! rate of the step this one halves (infinite for a whole step) and `depth` the halvings so
+//! far. Halving takes the step again as two half steps, each checked the same way, at most
+//! [`MAX_HALVINGS`] deep (2⁵ = 32 substeps), and only while halving at least halves the rise
+//! per second (a linearisation error shrinks with the step; the small up-and-down of a contact
+//! resting under a large step does not, and is accepted). The report counts the whole steps
+//! halved (`solver.halved_steps`). A driven (kinematic) sphere that moves does work on the
+//! cloth, so bodies with one are not guarded.
+//!
+//! The solve keeps contacts inside it (colliders and spheres,
+//! [`crate::physics::integrators`]'s implicit Euler), so that a contact does not add the
+//! elastic energy a projection after the step would: on `cloth-spheres` at dt = 0.005 s the
+//! guard halves none of the 600 steps of 3 s (`examples/implicit_guard.rs`).
 
 use glam::DVec3;
 use serde::Serialize;
