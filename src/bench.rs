@@ -410,13 +410,13 @@ pub fn setup(workload: Workload) -> (Model, State) {
 #[must_use]
 pub fn setup_bytes(workload: Workload) -> Vec<u8> {
     let (model, state) = setup(workload);
-    let mut bytes = Vec::with_capacity(state.len() * 24 + model.springs.len() * 16);
+    let mut bytes = Vec::with_capacity(state.len() * 24 + model.springs().len() * 16);
     for p in &state.x {
         for c in p.to_array() {
             bytes.extend_from_slice(&c.to_le_bytes());
         }
     }
-    for s in &model.springs {
+    for s in model.springs() {
         bytes.extend_from_slice(&s.a.to_le_bytes());
         bytes.extend_from_slice(&s.b.to_le_bytes());
         bytes.extend_from_slice(&s.rest_length.to_le_bytes());
@@ -629,7 +629,7 @@ pub fn checksum(workload: Workload, model: &Model, state: &State) -> Checksum {
         gravity += m * 9.8 * state.x[i].y;
     }
     if !verlet {
-        for s in &model.springs {
+        for s in model.springs() {
             let d = state.x[s.b as usize] - state.x[s.a as usize];
             let stretch = d.length() - s.rest_length;
             elastic += 0.5 * s.stiffness * stretch * stretch;
@@ -719,7 +719,7 @@ pub fn measure(workload: Workload, repeats: u32, mut progress: impl FnMut(u32)) 
     let bits = |c: &Checksum| (c.centroid.map(f64::to_bits), c.energy.to_bits());
     let deterministic = checksums.iter().all(|c| bits(c) == bits(&first));
     let reference = workload.reference();
-    let springs = model.springs.len();
+    let springs = model.springs().len();
     BenchResult {
         workload,
         method: workload.method(),
@@ -813,7 +813,7 @@ pub fn measure_method(
     rates.sort_by(f64::total_cmp);
     let rate = rates[rates.len() / 2];
     let (steps, checksum, evals) = last;
-    let springs = model.springs.len();
+    let springs = model.springs().len();
     BenchResult {
         workload,
         method,

@@ -57,7 +57,7 @@ impl Scene {
     /// Total number of springs over all bodies.
     #[must_use]
     pub fn spring_count(&self) -> usize {
-        self.bodies.iter().map(|b| b.model.springs.len()).sum()
+        self.bodies.iter().map(|b| b.model.springs().len()).sum()
     }
 
     /// Sets every body's method.

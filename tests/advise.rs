@@ -69,16 +69,16 @@ fn every_level_keeps_the_body_total_mass_and_scales_its_springs_by_the_dimension
                 total(&level),
                 total(&own)
             );
-            let k = level.bodies[0].model.springs[0].stiffness;
-            let k0 = own.bodies[0].model.springs[0].stiffness;
+            let k = level.bodies[0].model.springs()[0].stiffness;
+            let k0 = own.bodies[0].model.springs()[0].stiffness;
             let expected = (spacing(n) / spacing(r.base)).powf(p);
             assert!(
                 (k / k0 / expected - 1.0).abs() < 1e-12,
                 "{name} n = {n}: k/k0 = {} against h^{p} ratio {expected}",
                 k / k0
             );
-            let d = level.bodies[0].model.springs[0].damping;
-            let d0 = own.bodies[0].model.springs[0].damping;
+            let d = level.bodies[0].model.springs()[0].damping;
+            let d0 = own.bodies[0].model.springs()[0].damping;
             if d0 > 0.0 {
                 assert!((d / d0 / expected - 1.0).abs() < 1e-12, "{name}: dampers");
             }
@@ -99,7 +99,7 @@ fn leaving_out_a_kind_removes_exactly_its_springs() {
     let r = Refinement::require("jelly-bowl", &sets(&["n=4"])).expect("jelly");
     let count = |kinds| {
         let s = r.scene(4, kinds, &Limits::DEFAULT).expect("scene");
-        springlab::scene::lattice::count_kinds(&s.bodies[0].model.springs)
+        springlab::scene::lattice::count_kinds(s.bodies[0].model.springs())
     };
     let [st, sh, be] = count(Kinds::All);
     // A 4×4×4 lattice: 3·4²·3 struct, 6·4·3² + 4·3³ shear, 3·4²·2 bend.

@@ -57,7 +57,7 @@ fn setups_have_the_documented_sizes() {
         let (model, state) = bench::setup(w);
         assert_eq!(model.particle_count(), particles, "{w}");
         assert_eq!(state.len(), particles, "{w}");
-        assert_eq!(model.springs.len(), springs, "{w}");
+        assert_eq!(model.springs().len(), springs, "{w}");
     }
 }
 

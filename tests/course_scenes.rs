@@ -140,7 +140,7 @@ fn every_scene_is_listed_builds_with_course_values_and_counts() {
         assert!(b.model.inv_mass.iter().all(|&w| w == 1.0), "nothing pinned");
         assert!(
             b.model
-                .springs
+                .springs()
                 .iter()
                 .all(|s| (s.stiffness, s.damping) == (2000.0, 60.0))
         );
@@ -185,7 +185,7 @@ fn every_scene_is_listed_builds_with_course_values_and_counts() {
         assert_eq!(b.model.drag, 3.4e-4);
         assert!(
             b.model
-                .springs
+                .springs()
                 .iter()
                 .all(|s| (s.stiffness, s.damping) == (k, 750.0))
         );
@@ -241,12 +241,12 @@ fn overrides_change_what_they_name() {
     for (i, b) in s.bodies.iter().enumerate() {
         assert_eq!(b.model.particle_count(), 64);
         // n = 4: struct 3·3·16 = 144, shear 2·9·4·3 + 4·27 = 324, no bend.
-        let kinds = |k| b.model.springs.iter().filter(|s| s.kind == k).count();
+        let kinds = |k| b.model.springs().iter().filter(|s| s.kind == k).count();
         assert_eq!(
             [SpringKind::Struct, SpringKind::Shear, SpringKind::Bend].map(kinds),
             [144, 324, 0]
         );
-        for s in &b.model.springs {
+        for s in b.model.springs() {
             let expected = match s.kind {
                 SpringKind::Struct => (1500.0, 5.0),
                 SpringKind::Shear => (800.0, 60.0),
@@ -293,7 +293,7 @@ fn overrides_change_what_they_name() {
     let pinned: Vec<usize> = (0..81).filter(|&i| b.model.is_pinned(i)).collect();
     assert_eq!(pinned, vec![0, 80]);
     assert_eq!(s.spring_count(), 2 * 9 * 8 + 2 * 64 + 2 * 9 * 7);
-    assert!(b.model.springs.iter().all(|s| s.stiffness == 1000.0));
+    assert!(b.model.springs().iter().all(|s| s.stiffness == 1000.0));
     assert_eq!(b.state.spheres[0].velocity, DVec3::new(0.0, 0.0, 5.0));
     assert_eq!(b.state.spheres[0].radius, 0.5);
     let s = load("cloth-sphere", &["pinned=[]"]);

@@ -308,7 +308,7 @@ fn failed_implicit_solves_are_divergences() {
     // An overflowing stiffness (outside the range a user may set, so set in code): the solve
     // is not finite.
     let mut sim = run_scene("rope", &[], Method::ImplicitEuler, 1.0 / 64.0);
-    let damping = sim.scene.bodies[0].model.springs[0].damping;
+    let damping = sim.scene.bodies[0].model.springs()[0].damping;
     sim.scene.bodies[0]
         .model
         .set_spring_coefficients(1e308, damping);

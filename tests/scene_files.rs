@@ -637,7 +637,7 @@ fn set_applies_on_top_of_params() {
     );
     let scene = result.expect("loads");
     assert_eq!(scene.particle_count(), 5);
-    assert_eq!(scene.bodies[0].model.springs[0].stiffness, 50.0);
+    assert_eq!(scene.bodies[0].model.springs()[0].stiffness, 50.0);
 }
 
 #[test]
@@ -688,7 +688,7 @@ fn explicit_oscillator_equals_the_builtin() {
     assert_eq!(f.label, "oscillator");
     assert_eq!(f.model.mass, b.model.mass);
     assert_eq!(f.model.inv_mass, b.model.inv_mass);
-    assert_eq!(f.model.springs, b.model.springs);
+    assert_eq!(f.model.springs(), b.model.springs());
     assert_eq!(f.model.gravity, b.model.gravity);
     assert_eq!(f.model.drag, b.model.drag);
     assert_eq!(f.model, b.model);
@@ -738,7 +738,7 @@ fn explicit_defaults() {
     // A pinned particle starts at rest whatever velocity the file gives.
     assert_eq!(body.state.v[2], DVec3::ZERO);
     assert!(body.model.is_pinned(2));
-    let s = &body.model.springs[0];
+    let s = &body.model.springs()[0];
     // Rest length defaults to the initial distance |(0, 3, 4)| = 5 m.
     assert_eq!((s.a, s.b, s.rest_length), (0, 2, 5.0));
     assert_eq!(
@@ -772,12 +772,12 @@ kind = \"bend\"
     let scene = load("mixed.toml", text);
     let body = &scene.bodies[0];
     assert_eq!(body.model.particle_count(), 5);
-    assert_eq!(body.model.springs.len(), 4);
+    assert_eq!(body.model.springs().len(), 4);
     assert_eq!(body.model.mass, vec![3.0, 0.5, 0.5, 0.5, 0.5]);
     let pinned: Vec<bool> = (0..5).map(|i| body.model.is_pinned(i)).collect();
     assert_eq!(pinned, vec![false, true, false, false, true]);
     assert_eq!(body.state.x[4], DVec3::new(3.0, 0.0, 0.0));
-    let rope_spring = &body.model.springs[0];
+    let rope_spring = &body.model.springs()[0];
     assert_eq!((rope_spring.a, rope_spring.b), (1, 2));
     assert_eq!(
         (
@@ -787,7 +787,7 @@ kind = \"bend\"
         ),
         (70.0, 0.25, 1.0)
     );
-    let last = &body.model.springs[3];
+    let last = &body.model.springs()[3];
     assert_eq!((last.a, last.b, last.rest_length), (4, 0, 2.0));
     assert_eq!(last.kind, SpringKind::Bend);
 }

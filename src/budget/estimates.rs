@@ -33,7 +33,7 @@ pub fn updates_per_step(scene: &Scene, method: Option<Method>) -> f64 {
         .map(|b| {
             let m = method.unwrap_or(b.method);
             evaluations_per_step(m, &b.params)
-                * (b.model.particle_count() as f64 + b.model.springs.len() as f64 + OVERHEAD)
+                * (b.model.particle_count() as f64 + b.model.springs().len() as f64 + OVERHEAD)
         })
         .sum()
 }
@@ -66,7 +66,7 @@ pub fn scene_bytes(scene: &Scene, methods: Option<&[Method]>, copies: f64) -> f6
                 let own = [b.method];
                 body_bytes(
                     b.model.particle_count() as f64,
-                    b.model.springs.len() as f64,
+                    b.model.springs().len() as f64,
                     methods.unwrap_or(&own),
                     copies,
                 )

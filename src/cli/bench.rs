@@ -38,12 +38,12 @@ pub fn estimate(workloads: &[Workload], repeats: u32, seconds: f64) -> budget::E
     let mut e = budget::Estimate::new("bench");
     for &w in workloads {
         let (model, _) = bench::setup(w);
-        let size = model.particle_count() as f64 + model.springs.len() as f64 + budget::OVERHEAD;
+        let size = model.particle_count() as f64 + model.springs().len() as f64 + budget::OVERHEAD;
         let steps = w.steps() as f64;
         e.steps = e.steps.max(steps);
         e.steps_detail = format!("{} steps of the workload {w}", budget::approx(e.steps));
         e.particles = e.particles.max(model.particle_count() as f64);
-        e.springs = e.springs.max(model.springs.len() as f64);
+        e.springs = e.springs.max(model.springs().len() as f64);
         let others = bench::methods_for(w).len().saturating_sub(1) as f64;
         e.work += f64::from(repeats)
             * (steps * budget::evaluations_per_step(w.method(), &w.params()) * size

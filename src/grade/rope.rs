@@ -494,7 +494,7 @@ fn rope_of(physics: &Physics, state: &State) -> Rope {
         &state.v,
         |i| model.mass.get(i).copied().unwrap_or(1.0),
         |i| model.inv_mass.get(i).is_some_and(|&w| w == 0.0),
-        &model.springs,
+        model.springs(),
     )
 }
 

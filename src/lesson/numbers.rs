@@ -391,7 +391,7 @@ fn value(p: &Placeholder, cx: &Context) -> String {
                 scene
                     .bodies
                     .iter()
-                    .flat_map(|b| &b.model.springs)
+                    .flat_map(|b| b.model.springs())
                     .filter(|s| kind.is_none_or(|k| s.kind == k))
                     .count()
             };

@@ -107,14 +107,71 @@
 
 use glam::DVec3;
 
-use super::forces::Model;
-use super::particles::State;
-
 mod spheres;
 
 pub use spheres::{
     DynamicSphere, advance_spheres, collide_spheres, collide_spheres_logged, step_spheres,
 };
+
+/// What the colliders read of the system: a view of the model, so that this module imports
+/// neither the model (`forces`) nor the state (`particles`), which both build on it. `&Model`
+/// converts into a `World` and `&mut State` into [`Bodies`], so every function here is called
+/// with `&model` and `&mut state` as they are.
+#[derive(Clone, Copy, Debug)]
+pub struct World<'a> {
+    /// Static obstacles, normals of unit length.
+    pub colliders: &'a [Collider],
+    /// Restitution, friction and contact band.
+    pub contact: &'a ContactParams,
+    /// Gravitational acceleration (m/s²).
+    pub gravity: DVec3,
+    /// Inverse mass of each particle (1/kg); zero for a pinned particle. Its length is the
+    /// particle count.
+    pub inv_mass: &'a [f64],
+}
+
+impl<'a> From<&World<'a>> for World<'a> {
+    fn from(world: &World<'a>) -> World<'a> {
+        *world
+    }
+}
+
+impl World<'_> {
+    /// Number of particles.
+    #[must_use]
+    pub fn particle_count(&self) -> usize {
+        self.inv_mass.len()
+    }
+}
+
+/// What collisions change after a step: a view of the state's positions (m), velocities (m/s),
+/// Verlet history and dynamic spheres.
+#[derive(Debug)]
+pub struct Bodies<'a> {
+    /// Positions (m).
+    pub x: &'a mut [DVec3],
+    /// Velocities (m/s).
+    pub v: &'a mut [DVec3],
+    /// Positions one step ago (m), kept consistent for position Verlet.
+    pub x_prev: &'a mut [DVec3],
+    /// True when `x_prev` holds a Verlet history.
+    pub history_valid: bool,
+    /// The moving spheres.
+    pub spheres: &'a mut [DynamicSphere],
+}
+
+impl Bodies<'_> {
+    /// The same view for a shorter borrow (to pass it on and use it again).
+    pub fn reborrow(&mut self) -> Bodies<'_> {
+        Bodies {
+            x: self.x,
+            v: self.v,
+            x_prev: self.x_prev,
+            history_valid: self.history_valid,
+            spheres: self.spheres,
+        }
+    }
+}
 
 /// `v·N` (m/s) up to which a particle counts as not moving away, so that the contact force still
 /// holds it: the velocity response sets `v·N = 0`, which rounding may turn into `+1e-17`.
@@ -125,7 +182,8 @@ const ROUNDING_SPEED: f64 = 1e-9;
 const RIM_MARGIN: f64 = 1e-9;
 
 /// A static obstacle. Normals are unit vectors: build colliders with the constructors
-/// ([`Collider::plane`] etc.) or pass them through [`Model::with_colliders`], which normalises.
+/// ([`Collider::plane`] etc.) or pass them through
+/// [`Model::with_colliders`](crate::physics::Model::with_colliders), which normalises.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Collider {
     /// The half-space `(x - point)·normal ≥ 0`: particles stay on the side the normal points to.
@@ -486,12 +544,13 @@ impl Default for ContactParams {
 /// Adds the contact force and friction of the model's colliders to `f` (N); see the module
 /// documentation for the formulas. Called by [`super::forces()`] after the springs, only when
 /// the model has colliders. Pure and allocation-free.
-pub fn contact_forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
+pub fn contact_forces<'a>(model: impl Into<World<'a>>, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
+    let model = model.into();
     for i in 0..model.particle_count() {
         if model.inv_mass[i] == 0.0 {
             continue;
         }
-        if let Some(total) = with_contact(model, x[i], v[i], f[i]) {
+        if let Some(total) = with_contact(&model, x[i], v[i], f[i]) {
             f[i] = total;
         }
     }
@@ -506,13 +565,19 @@ pub fn contact_forces(model: &Model, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) 
 /// springs, as [`super::forces::applied_forces`] computes them. Each term is ≥ 0 by
 /// construction (`f_c·v = λ N·v ≤ 0`, `f_f·v_T ≤ 0`, module docs).
 #[must_use]
-pub fn contact_power(model: &Model, x: &[DVec3], v: &[DVec3], f_applied: &[DVec3]) -> f64 {
+pub fn contact_power<'a>(
+    model: impl Into<World<'a>>,
+    x: &[DVec3],
+    v: &[DVec3],
+    f_applied: &[DVec3],
+) -> f64 {
+    let model = model.into();
     let mut power = 0.0;
     for i in 0..model.particle_count() {
         if model.inv_mass[i] == 0.0 {
             continue;
         }
-        if let Some(total) = with_contact(model, x[i], v[i], f_applied[i]) {
+        if let Some(total) = with_contact(&model, x[i], v[i], f_applied[i]) {
             power -= (total - f_applied[i]).dot(v[i]);
         }
     }
@@ -522,8 +587,8 @@ pub fn contact_power(model: &Model, x: &[DVec3], v: &[DVec3], f_applied: &[DVec3
 /// The force on particle `i` at `x` moving at `v` after the colliders added their contact force
 /// and friction to the applied force `f` (N), each collider in order seeing what the previous
 /// ones left (module docs); `None` when no collider pushes it.
-fn with_contact(model: &Model, x: DVec3, v: DVec3, f: DVec3) -> Option<DVec3> {
-    contact_force(&model.colliders, &model.contact, x, v, f)
+fn with_contact(model: &World<'_>, x: DVec3, v: DVec3, f: DVec3) -> Option<DVec3> {
+    contact_force(model.colliders, model.contact, x, v, f)
 }
 
 /// [`contact_forces`] for one particle at `x` (m) moving at `v` (m/s) with applied force `f`
@@ -592,12 +657,18 @@ fn friction_force(limit: f64, f_t: DVec3, v_t: DVec3, rest_speed: f64) -> DVec3 
 /// Velocity response and positional projection of every free particle against the model's
 /// colliders, after a step of `dt` seconds (module docs). Keeps position Verlet's history
 /// consistent: a particle whose velocity changed gets `x_prev = x - dt v`.
-pub fn resolve(model: &Model, state: &mut State, dt: f64) {
+pub fn resolve<'a, 'b>(model: impl Into<World<'a>>, state: impl Into<Bodies<'b>>, dt: f64) {
     resolve_logged(model, state, dt, None);
 }
 
 /// [`resolve`], recording in `log` (when given) every particle it changes.
-pub fn resolve_logged(model: &Model, state: &mut State, dt: f64, mut log: Option<&mut Changes>) {
+pub fn resolve_logged<'a, 'b>(
+    model: impl Into<World<'a>>,
+    state: impl Into<Bodies<'b>>,
+    dt: f64,
+    mut log: Option<&mut Changes>,
+) {
+    let (model, state) = (model.into(), state.into());
     if model.colliders.is_empty() {
         return;
     }
@@ -608,7 +679,7 @@ pub fn resolve_logged(model: &Model, state: &mut State, dt: f64, mut log: Option
         }
         let (x_old, v_old) = (state.x[i], state.v[i]);
         let mut touched = false;
-        for collider in &model.colliders {
+        for collider in model.colliders {
             touched |= respond(
                 collider,
                 0.0,
@@ -685,15 +756,14 @@ impl Changes {
     }
 }
 
-/// Kinetic and gravitational energy of the non-kinematic dynamic spheres (J), as
-/// [`super::energy::energy`] counts them.
+/// Kinetic and gravitational energy of the non-kinematic dynamic `spheres` under `gravity`
+/// (m/s²), in J, as [`super::energy::energy`] counts them.
 #[must_use]
-pub fn spheres_energy(model: &Model, state: &State) -> f64 {
-    state
-        .spheres
+pub fn spheres_energy(gravity: DVec3, spheres: &[DynamicSphere]) -> f64 {
+    spheres
         .iter()
         .filter(|s| !s.kinematic)
-        .map(|s| 0.5 * s.mass * s.velocity.length_squared() - s.mass * model.gravity.dot(s.center))
+        .map(|s| 0.5 * s.mass * s.velocity.length_squared() - s.mass * gravity.dot(s.center))
         .sum()
 }
 
@@ -771,7 +841,8 @@ fn keep_verlet_history(history_valid: bool, x_prev: &mut DVec3, x: DVec3, v: DVe
 /// Everything collisions do after an integrator step of `dt` seconds: [`step_spheres`], then
 /// [`resolve`]. Returns at once when the model has no colliders and the state no spheres, so
 /// scenes without obstacles pay nothing. `Simulation::step` calls it for every body.
-pub fn after_step(model: &Model, state: &mut State, dt: f64) {
-    step_spheres(model, state, dt);
+pub fn after_step<'a, 'b>(model: impl Into<World<'a>>, state: impl Into<Bodies<'b>>, dt: f64) {
+    let (model, mut state) = (model.into(), state.into());
+    step_spheres(model, state.reborrow(), dt);
     resolve(model, state, dt);
 }

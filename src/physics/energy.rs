@@ -97,7 +97,7 @@ pub fn energy_change(model: &Model, state: &State, changes: &Changes) -> f64 {
             delta += s.energy(&state.x) - s.energy_between(before(a), before(b));
         }
     }
-    delta + spheres_energy(model, state) - changes.spheres_before
+    delta + spheres_energy(model.gravity, &state.spheres) - changes.spheres_before
 }
 
 /// The power that the dissipative forces take out of the particles at positions `x` (m) and

@@ -20,7 +20,7 @@
 
 use glam::DVec3;
 
-use super::collide::{Collider, ContactParams, contact_forces};
+use super::collide::{Collider, ContactParams, World, contact_forces};
 use super::springs::Spring;
 use super::stencil::{Dynamics, Kernel, Output, Stencil};
 
@@ -32,8 +32,11 @@ pub struct Model {
     pub mass: Vec<f64>,
     /// Inverse mass of each particle (1/kg); zero pins the particle in place.
     pub inv_mass: Vec<f64>,
-    /// The springs, in the order the force loop visits them.
-    pub springs: Vec<Spring>,
+    /// The springs, in the order the force loop visits them. Private: the caches below are
+    /// derived from them, so they change only through methods that rebuild the caches
+    /// ([`Model::update_springs`], [`Model::scale_stiffness`], [`Model::set_spring_coefficients`]);
+    /// read them with [`Model::springs`].
+    pub(in crate::physics) springs: Vec<Spring>,
     /// Gravitational acceleration (m/s²).
     pub gravity: DVec3,
     /// Viscous drag coefficient `c` in `f = -c v` (N·s/m).
@@ -108,9 +111,37 @@ impl Model {
         }
     }
 
-    /// Recomputes what is derived from the springs (the colouring and the stencil form). Call it
-    /// after changing `springs` directly.
-    pub fn rebuild(&mut self) {
+    /// The springs, in the order the force loop visits them.
+    #[must_use]
+    pub fn springs(&self) -> &[Spring] {
+        &self.springs
+    }
+
+    /// Changes every spring with `edit`, then rebuilds what is derived from the springs (the
+    /// colouring, the stencil form, the incidence lists), so the model stays consistent.
+    ///
+    /// # Panics
+    /// If `edit` moves a spring's end out of range.
+    pub fn update_springs(&mut self, edit: impl FnMut(&mut Spring)) {
+        self.springs.iter_mut().for_each(edit);
+        let n = self.particle_count();
+        for s in &self.springs {
+            assert!(
+                (s.a as usize) < n && (s.b as usize) < n,
+                "spring end out of range"
+            );
+        }
+        self.rebuild();
+    }
+
+    /// Multiplies every spring's stiffness (N/m) by `factor`, so that kinds keep their ratios.
+    pub fn scale_stiffness(&mut self, factor: f64) {
+        self.update_springs(|s| s.stiffness *= factor);
+    }
+
+    /// Recomputes what is derived from the springs (the colouring, the stencil form, the
+    /// incidence lists). Every method that changes the springs calls it.
+    fn rebuild(&mut self) {
         let (order, starts) = colour_springs(self.particle_count(), &self.springs);
         self.projection_order = order;
         self.colour_starts = starts;
@@ -366,6 +397,19 @@ impl Model {
             drag: self.drag,
             colliders: if contact { &self.colliders } else { &[] },
             contact: &self.contact,
+        }
+    }
+}
+
+impl<'a> From<&'a Model> for World<'a> {
+    /// What the colliders read of the model: colliders, contact coefficients, gravity and
+    /// inverse masses.
+    fn from(model: &'a Model) -> World<'a> {
+        World {
+            colliders: &model.colliders,
+            contact: &model.contact,
+            gravity: model.gravity,
+            inv_mass: &model.inv_mass,
         }
     }
 }

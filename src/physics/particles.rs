@@ -7,7 +7,7 @@
 
 use glam::DVec3;
 
-use super::collide::DynamicSphere;
+use super::collide::{Bodies, DynamicSphere};
 use super::forces::Model;
 
 /// Positions and velocities of every particle (struct of arrays).
@@ -79,6 +79,19 @@ impl State {
             return DVec3::ZERO;
         }
         self.x.iter().copied().sum::<DVec3>() / self.x.len() as f64
+    }
+}
+
+impl<'a> From<&'a mut State> for Bodies<'a> {
+    /// What collisions change of the state: positions, velocities, Verlet history, spheres.
+    fn from(state: &'a mut State) -> Bodies<'a> {
+        Bodies {
+            x: &mut state.x,
+            v: &mut state.v,
+            x_prev: &mut state.x_prev,
+            history_valid: state.history_valid,
+            spheres: &mut state.spheres,
+        }
     }
 }
 

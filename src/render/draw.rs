@@ -132,7 +132,7 @@ impl Renderer {
                 let edges = edges_with_quads(&quads);
                 let mut rest: Vec<f64> = b
                     .model
-                    .springs
+                    .springs()
                     .iter()
                     .map(|s| s.rest_length)
                     .filter(|l| *l > 0.0)
@@ -332,8 +332,8 @@ impl Renderer {
         any: &mut [bool; 3],
     ) {
         let x = &body.state.x;
-        let many = body.model.springs.len() > 2000;
-        for spring in &body.model.springs {
+        let many = body.model.springs().len() > 2000;
+        for spring in body.model.springs() {
             if !self.style.springs.shows(spring.kind) {
                 continue;
             }
@@ -706,7 +706,7 @@ fn vertex_strains(body: &crate::scene::Body) -> Vec<f64> {
     let x = &body.state.x;
     let mut sum = vec![0.0; x.len()];
     let mut count = vec![0u32; x.len()];
-    for s in &body.model.springs {
+    for s in body.model.springs() {
         let (a, b) = (s.a as usize, s.b as usize);
         if s.kind != SpringKind::Struct || a >= x.len() || b >= x.len() {
             continue;

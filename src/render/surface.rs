@@ -55,7 +55,7 @@ impl Lattice {
         let mut edges: BTreeSet<(usize, usize)> = BTreeSet::new();
         let mut offsets: BTreeSet<usize> = BTreeSet::new();
         for s in model
-            .springs
+            .springs()
             .iter()
             .filter(|s| s.kind == SpringKind::Struct)
         {

@@ -191,7 +191,7 @@ fn exact_solution(scene: &Scene, t: f64) -> Option<Vec<DVec3>> {
     if !model.colliders.is_empty() || !state.spheres.is_empty() || model.drag != 0.0 {
         return None;
     }
-    if model.springs.is_empty() {
+    if model.springs().is_empty() {
         // Free fall: x(t) = x0 + v0 t + ½ g t² for free particles; pinned ones stay.
         return Some(
             state
@@ -211,7 +211,7 @@ fn exact_solution(scene: &Scene, t: f64) -> Option<Vec<DVec3>> {
     }
     // The oscillator: one spring from a pinned particle at the origin to a free one on the x axis,
     // no gravity, no damping: x_1(t) = L0 + A cos(ω t).
-    let [s] = model.springs.as_slice() else {
+    let [s] = model.springs() else {
         return None;
     };
     let along_x = state

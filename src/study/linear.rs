@@ -117,11 +117,11 @@ impl Linearisation {
         let n = model.particle_count();
         let free: Vec<bool> = (0..n).map(|i| !model.is_pinned(i)).collect();
         let blocks = stiffness_blocks(&model, &base.x);
-        let length = if model.springs.is_empty() {
+        let length = if model.springs().is_empty() {
             1.0
         } else {
-            let l = model.springs.iter().map(|s| s.rest_length).sum::<f64>()
-                / model.springs.len() as f64;
+            let l = model.springs().iter().map(|s| s.rest_length).sum::<f64>()
+                / model.springs().len() as f64;
             if l > 0.0 { l } else { 1.0 }
         };
         let rigid = if free.iter().all(|&f| f) && n > 1 {
@@ -148,7 +148,7 @@ impl Linearisation {
                 e += 0.5 * self.model.mass[i] * dv[i].length_squared();
             }
         }
-        for (s, k) in self.model.springs.iter().zip(&self.blocks) {
+        for (s, k) in self.model.springs().iter().zip(&self.blocks) {
             let d = dx[s.b as usize] - dx[s.a as usize];
             e += 0.5 * d.dot(*k * d);
         }
@@ -158,7 +158,7 @@ impl Linearisation {
     /// `u ← M⁻¹ K_0 u` (zero on pinned particles).
     fn stiffness_times(&self, u: &mut [DVec3]) {
         let mut y = vec![DVec3::ZERO; u.len()];
-        for (s, k) in self.model.springs.iter().zip(&self.blocks) {
+        for (s, k) in self.model.springs().iter().zip(&self.blocks) {
             let (a, b) = (s.a as usize, s.b as usize);
             let f = *k * (u[a] - u[b]);
             y[a] += f;

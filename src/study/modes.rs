@@ -175,7 +175,7 @@ pub fn omega_max(model: &Model, state: &State) -> OmegaEstimate {
 /// `K_s = k [n nᵀ + max(0, 1 - L0/L)(I - n nᵀ)]` for every spring (zero for a zero length).
 pub(crate) fn stiffness_blocks(model: &Model, x: &[DVec3]) -> Vec<DMat3> {
     model
-        .springs
+        .springs()
         .iter()
         .map(|s| {
             let d = x[s.b as usize] - x[s.a as usize];
@@ -204,7 +204,7 @@ fn apply(
         *u = *q * *s;
     }
     y.fill(DVec3::ZERO);
-    for (s, k_s) in model.springs.iter().zip(blocks) {
+    for (s, k_s) in model.springs().iter().zip(blocks) {
         let (a, b) = (s.a as usize, s.b as usize);
         // (K u)_a += K_s (u_a - u_b),  (K u)_b += K_s (u_b - u_a)
         let f = *k_s * (u[a] - u[b]);
@@ -229,7 +229,7 @@ fn apply(
 #[must_use]
 pub fn spring_gershgorin(model: &Model) -> f64 {
     let mut sum = vec![0.0; model.particle_count()];
-    for s in &model.springs {
+    for s in model.springs() {
         let (a, b) = (s.a as usize, s.b as usize);
         let free = |i: usize| if model.inv_mass[i] > 0.0 { 1.0 } else { 0.0 };
         sum[a] += s.stiffness * (1.0 + free(b));
@@ -246,7 +246,7 @@ fn gershgorin(model: &Model, blocks: &[DMat3], free: &[bool]) -> f64 {
     let n = model.particle_count();
     let mut diagonal = vec![DMat3::ZERO; n];
     let mut off = vec![DVec3::ZERO; n];
-    for (s, k_s) in model.springs.iter().zip(blocks) {
+    for (s, k_s) in model.springs().iter().zip(blocks) {
         let (a, b) = (s.a as usize, s.b as usize);
         diagonal[a] += *k_s;
         diagonal[b] += *k_s;

@@ -525,7 +525,7 @@ pub fn cost(scene: &Scene, steps: u64, force_evals: u64, cg_iterations: u64) -> 
         .iter()
         .map(|b| {
             let size =
-                b.model.particle_count() as f64 + b.model.springs.len() as f64 + budget::OVERHEAD;
+                b.model.particle_count() as f64 + b.model.springs().len() as f64 + budget::OVERHEAD;
             let evals = if b.method == Method::ImplicitEuler {
                 // Measured: the energy guard's halved steps cost more than one evaluation.
                 (force_evals as f64 / scene.bodies.len() as f64) + cg_iterations as f64

@@ -242,7 +242,7 @@ pub fn spectrum(model: &Model, state: &State, omega_max: f64) -> Spectrum {
 fn damper_ratios(model: &Model, state: &State) -> ((f64, f64), bool) {
     let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
     let mut proportional = true;
-    for s in &model.springs {
+    for s in model.springs() {
         if s.stiffness > 0.0 {
             let r = s.damping / s.stiffness;
             lo = lo.min(r);
@@ -271,7 +271,7 @@ fn dense_eigenvalues(model: &Model, state: &State, free: &[usize]) -> Vec<f64> {
     }
     let mut a = vec![0.0; n * n];
     let blocks = stiffness_blocks(model, &state.x);
-    for (s, k) in model.springs.iter().zip(&blocks) {
+    for (s, k) in model.springs().iter().zip(&blocks) {
         let (ia, ib) = (index[s.a as usize], index[s.b as usize]);
         let cols = [k.x_axis, k.y_axis, k.z_axis];
         for (p, q, sign) in [(ia, ia, 1.0), (ib, ib, 1.0), (ia, ib, -1.0), (ib, ia, -1.0)] {

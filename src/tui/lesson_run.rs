@@ -733,7 +733,7 @@ impl LessonRun {
     #[must_use]
     pub fn omega_max(&self) -> Option<f64> {
         let bodies = &self.sim.scene.bodies;
-        let any = bodies.iter().any(|b| !b.model.springs.is_empty());
+        let any = bodies.iter().any(|b| !b.model.springs().is_empty());
         let max = bodies
             .iter()
             .map(|b| crate::study::modes::spring_gershgorin(&b.model))
@@ -754,7 +754,7 @@ impl LessonRun {
     }
 
     fn springs(&self) -> impl Iterator<Item = &crate::physics::Spring> {
-        self.sim.scene.bodies.iter().flat_map(|b| &b.model.springs)
+        self.sim.scene.bodies.iter().flat_map(|b| b.model.springs())
     }
 
     /// Advances the simulation by `wall_dt` seconds of wall time; see [`LessonRun::tick_until`].
@@ -857,7 +857,7 @@ fn find_cloth(sim: &Simulation) -> Option<Cloth> {
             return None;
         }
         let mut structural = 0;
-        for s in &body.model.springs {
+        for s in body.model.springs() {
             if s.kind != SpringKind::Struct {
                 continue;
             }

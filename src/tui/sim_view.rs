@@ -189,7 +189,7 @@ fn braille(run: &LessonRun, theme: Theme, inner: Rect, buf: &mut Buffer) {
                 for (b, body) in sim.scene.bodies.iter().enumerate() {
                     let color = theme.color(spring_color(b, kind));
                     let x = &body.state.x;
-                    for s in body.model.springs.iter().filter(|s| s.kind == kind) {
+                    for s in body.model.springs().iter().filter(|s| s.kind == kind) {
                         dots.line(ctx, x[s.a as usize], x[s.b as usize], color);
                     }
                 }

@@ -64,15 +64,17 @@ impl DynamicSphere {
 ///    hole's edge);
 /// 4. sphere–particle impulses and separation (restitution `sphere_particle_restitution`); a
 ///    pinned particle counts as infinitely heavy.
-pub fn step_spheres(model: &Model, state: &mut State, dt: f64) {
-    advance_spheres(model, state, dt);
+pub fn step_spheres<'a, 'b>(model: impl Into<World<'a>>, state: impl Into<Bodies<'b>>, dt: f64) {
+    let (model, mut state) = (model.into(), state.into());
+    advance_spheres(model, state.reborrow(), dt);
     collide_spheres(model, state, dt);
 }
 
 /// Step 1 of [`step_spheres`]: moves every dynamic sphere by `dt` seconds (semi-implicit Euler
 /// under gravity; a kinematic sphere at its set velocity).
-pub fn advance_spheres(model: &Model, state: &mut State, dt: f64) {
-    for s in &mut state.spheres {
+pub fn advance_spheres<'a, 'b>(model: impl Into<World<'a>>, state: impl Into<Bodies<'b>>, dt: f64) {
+    let (model, state) = (model.into(), state.into());
+    for s in state.spheres.iter_mut() {
         if !s.kinematic {
             // Semi-implicit Euler: velocity first, then position with the new velocity.
             s.velocity += dt * model.gravity;
@@ -83,26 +85,27 @@ pub fn advance_spheres(model: &Model, state: &mut State, dt: f64) {
 
 /// Steps 2–4 of [`step_spheres`]: the impulses and separations between spheres, colliders and
 /// particles after the spheres moved. `dt` (s) keeps Verlet's history consistent.
-pub fn collide_spheres(model: &Model, state: &mut State, dt: f64) {
+pub fn collide_spheres<'a, 'b>(model: impl Into<World<'a>>, state: impl Into<Bodies<'b>>, dt: f64) {
     collide_spheres_logged(model, state, dt, None);
 }
 
 /// [`collide_spheres`], recording in `log` (when given) the spheres' energy before and every
 /// particle it changes.
-pub fn collide_spheres_logged(
-    model: &Model,
-    state: &mut State,
+pub fn collide_spheres_logged<'a, 'b>(
+    model: impl Into<World<'a>>,
+    state: impl Into<Bodies<'b>>,
     dt: f64,
     mut log: Option<&mut Changes>,
 ) {
+    let (model, state) = (model.into(), state.into());
     if state.spheres.is_empty() {
         return;
     }
     if let Some(log) = log.as_deref_mut() {
-        log.spheres_before += spheres_energy(model, state);
+        log.spheres_before += spheres_energy(model.gravity, state.spheres);
     }
-    let params = &model.contact;
-    let State {
+    let params = model.contact;
+    let Bodies {
         x,
         v,
         x_prev,
@@ -132,7 +135,7 @@ pub fn collide_spheres_logged(
         }
     }
     for s in spheres.iter_mut().filter(|s| !s.kinematic) {
-        for collider in &model.colliders {
+        for collider in model.colliders {
             respond(
                 collider,
                 s.radius,
@@ -180,7 +183,7 @@ pub fn collide_spheres_logged(
                     );
                     if touched {
                         bounds.include(x[i]);
-                        keep_verlet_history(*history_valid, &mut x_prev[i], x[i], v[i], dt);
+                        keep_verlet_history(history_valid, &mut x_prev[i], x[i], v[i], dt);
                         if let Some(log) = log.as_deref_mut() {
                             log.record(i, x_old, v_old);
                         }

@@ -4,7 +4,10 @@
 //! x_{n+1} = x_n + dt v_n
 //! v_{n+1} = v_n + dt a(x_n, v_n)
 //! ```
-//! where `x` is position (m), `v` velocity (m/s), `a` acceleration (m/s²) and `dt` the step (s).
+//! where
+//! - `x`: positions (m), `v`: velocities (m/s)
+//! - `a(x, v)`: accelerations from all forces (m/s²), [`crate::physics::accelerations`]
+//! - `dt`: the time step (s), `n`: the step index
 //!
 //! Both updates use only the old state. Global error O(dt): first order.
 //!
@@ -12,6 +15,12 @@
 //! `1 + i dt ω`, of modulus `√(1 + dt² ω²) > 1`, so the energy grows by `1 + dt² ω²` every step
 //! for any `dt` — explicit Euler is unstable undamped. With damping it is stable only while
 //! `dt λ` stays inside the unit circle around -1.
+//!
+//! **Fast path.** The textbook loop (`textbook`, first below) is the method. On a lattice,
+//! `step` hands the same arithmetic, stage by stage, to the stencil's fused passes through the
+//! one seam (`integrators::fused` and `fused_pass`, which call
+//! [`Stencil::write`](crate::physics::stencil::Stencil::write)): `step_fused`, last in this
+//! file, does the same operations in the same order, bit for bit (tested).
 //!
 //! Reference: E. Hairer, S. P. Nørsett, G. Wanner, *Solving Ordinary Differential Equations I*,
 //! 2nd ed., Springer 1993, §I.7 and §II.1; GAMES101 assignment 8 (2020), §1.2.

@@ -6,7 +6,10 @@
 //! x_{n+1} = x_n + dt v_mid
 //! v_{n+1} = v_n + dt a(x_mid, v_mid)
 //! ```
-//! where `x` is position (m), `v` velocity (m/s), `a` acceleration (m/s²), `dt` the step (s).
+//! where
+//! - `x`: positions (m), `v`: velocities (m/s)
+//! - `a(x, v)`: accelerations from all forces (m/s²), [`crate::physics::accelerations`]
+//! - `dt`: the time step (s), `n`: the step index; `x_mid`, `v_mid`: the state at `t_n + dt/2`
 //!
 //! A half Euler step finds the state at the middle of the interval; its slope is then used for
 //! the whole step. Two force evaluations, global error O(dt²): second order.
@@ -14,6 +17,12 @@
 //! **Stability on the harmonic oscillator**: amplification `1 + z + z²/2` with `z = i dt ω`, of
 //! modulus `√(1 + (dt ω)⁴/4) > 1`: unstable at every dt undamped, though far more slowly than
 //! explicit Euler.
+//!
+//! **Fast path.** The textbook loop (`textbook`, first below) is the method. On a lattice,
+//! `step` hands the same arithmetic, stage by stage, to the stencil's fused passes through the
+//! one seam (`integrators::fused` and `fused_pass`, which call
+//! [`Stencil::write`](crate::physics::stencil::Stencil::write)): `step_fused`, last in this
+//! file, does the same operations in the same order, bit for bit (tested).
 //!
 //! Reference: E. Hairer, S. P. Nørsett, G. Wanner, *Solving Ordinary Differential Equations I*,
 //! 2nd ed., Springer 1993, §II.1 (eq. 1.7); NYCU Computer Animation HW1 (2021–2023).

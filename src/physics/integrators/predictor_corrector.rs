@@ -6,7 +6,11 @@
 //! x_{n+1} = x_n + dt ṽ                   step from the OLD state
 //! v_{n+1} = v_n + dt a(x̃, ṽ)             with the slope at the prediction
 //! ```
-//! where `x` is position (m), `v` velocity (m/s), `a` acceleration (m/s²), `dt` the step (s).
+//! where
+//! - `x`: positions (m), `v`: velocities (m/s)
+//! - `a(x, v)`: accelerations from all forces (m/s²), [`crate::physics::accelerations`]
+//! - `dt`: the time step (s), `n`: the step index
+//! - `x̃` (m), `ṽ` (m/s): the explicit-Euler prediction of the end state
 //!
 //! It looks like backward Euler (`v_{n+1} = v_n + dt a(x_{n+1}, v_{n+1})`) with the unknown end
 //! state replaced by a guess, but no equation is solved: it is an explicit method. Two force
@@ -20,6 +24,12 @@
 //!   energy, while **dt·ω ≤ 1**; growing beyond (measured by the tests).
 //!
 //! A real implicit Euler is [`super::implicit_euler`].
+//!
+//! **Fast path.** The textbook loop (`textbook`, first below) is the method. On a lattice,
+//! `step` hands the same arithmetic, stage by stage, to the stencil's fused passes through the
+//! one seam (`integrators::fused` and `fused_pass`, which call
+//! [`Stencil::write`](crate::physics::stencil::Stencil::write)): `step_fused`, last in this
+//! file, does the same operations in the same order, bit for bit (tested).
 //!
 //! Reference: E. Hairer, S. P. Nørsett, G. Wanner, *Solving Ordinary Differential Equations I*,
 //! 2nd ed., Springer 1993, §III.1 (predictor–corrector methods); NYCU Computer Animation HW1

@@ -10,7 +10,11 @@
 //! x_{n+1} = x_n + dt/6 (k1x + 2 k2x + 2 k3x + k4x)
 //! v_{n+1} = v_n + dt/6 (k1v + 2 k2v + 2 k3v + k4v)
 //! ```
-//! where `x` is position (m), `v` velocity (m/s), `a` acceleration (m/s²), `dt` the step (s).
+//! where
+//! - `x`: positions (m), `v`: velocities (m/s)
+//! - `a(x, v)`: accelerations from all forces (m/s²), [`crate::physics::accelerations`]
+//! - `dt`: the time step (s), `n`: the step index
+//! - `k1x..k4x`: slopes of the positions (m/s), `k1v..k4v`: slopes of the velocities (m/s²)
 //!
 //! Four force evaluations, global error O(dt⁴): fourth order. Note that `k1x` appears in the
 //! position update: dropping it (a mistake in one course's code) makes the method first order.
@@ -18,6 +22,12 @@
 //! **Stability on the harmonic oscillator**: amplification
 //! `R(z) = 1 + z + z²/2 + z³/6 + z⁴/24`, `z = i dt ω`; `|R| ≤ 1` while **dt·ω ≤ 2√2 ≈ 2.828**.
 //! Inside that range it loses a little energy each step (`|R|² = 1 - (dt ω)⁶/72 + (dt ω)⁸/576`).
+//!
+//! **Fast path.** The textbook loop (`textbook`, first below) is the method. On a lattice,
+//! `step` hands the same arithmetic, stage by stage, to the stencil's fused passes through the
+//! one seam (`integrators::fused` and `fused_pass`, which call
+//! [`Stencil::write`](crate::physics::stencil::Stencil::write)): `step_fused`, last in this
+//! file, does the same operations in the same order, bit for bit (tested).
 //!
 //! Reference: W. Kutta, "Beitrag zur näherungsweisen Integration totaler
 //! Differentialgleichungen", Z. Math. Phys. 46 (1901); E. Hairer, S. P. Nørsett, G. Wanner,

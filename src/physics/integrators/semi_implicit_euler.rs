@@ -4,7 +4,10 @@
 //! v_{n+1} = v_n + dt a(x_n, v_n)
 //! x_{n+1} = x_n + dt v_{n+1}
 //! ```
-//! where `x` is position (m), `v` velocity (m/s), `a` acceleration (m/s²) and `dt` the step (s).
+//! where
+//! - `x`: positions (m), `v`: velocities (m/s)
+//! - `a(x, v)`: accelerations from all forces (m/s²), [`crate::physics::accelerations`]
+//! - `dt`: the time step (s), `n`: the step index
 //!
 //! The only difference from explicit Euler is the order of the two lines: position is advanced
 //! with the NEW velocity. Global error O(dt): first order. The map is symplectic, so on a
@@ -14,6 +17,12 @@
 //! `[[1 - dt²ω², dt], [-dt ω², 1]]` has determinant 1 and trace `2 - dt²ω²`; its eigenvalues stay
 //! on the unit circle while `|trace| < 2`, that is while **dt·ω < 2**; at dt·ω = 2 they meet at
 //! -1 as a double root and the amplitude grows linearly; beyond, one grows exponentially.
+//!
+//! **Fast path.** The textbook loop (`textbook`, first below) is the method. On a lattice,
+//! `step` hands the same arithmetic, stage by stage, to the stencil's fused passes through the
+//! one seam (`integrators::fused` and `fused_pass`, which call
+//! [`Stencil::write`](crate::physics::stencil::Stencil::write)): `step_fused`, last in this
+//! file, does the same operations in the same order, bit for bit (tested).
 //!
 //! Reference: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,
 //! Springer 2006, §I.1.2 and §VI.3; GAMES101 assignment 8 (2020), §1.2.

@@ -7,8 +7,13 @@
 //! then, `iterations` times, project every spring back to its rest length
 //! v_{n+1} = (x_{n+1} - x_n) / dt
 //! ```
-//! where `x` is position (m), `a` acceleration (m/s²), `dt` the step (s), `γ` the dimensionless
-//! damping factor per step (GAMES101 uses 0.00005) and `r` the damping rate (1/s).
+//! where
+//! - `x`: positions (m), `x_{n-1}`: the positions one step earlier (m)
+//! - `a(x, v)`: accelerations from all forces (m/s²), [`crate::physics::accelerations`], with
+//!   `v_n = (x_n - x_{n-1})/dt` (m/s)
+//! - `dt`: the time step (s)
+//! - `γ`: the damping factor per step (dimensionless; GAMES101 uses 0.00005)
+//! - `r`: the damping rate (1/s), `h = r dt / 2` (dimensionless)
 //!
 //! The velocity is not a state variable: the last displacement `x_n - x_{n-1}` plays its part.
 //! Global error O(dt²): **second order** (the GAMES101 sheet's "fourth order" is the local error

@@ -11,8 +11,15 @@
 //!     repeat `iterations` times: solve every spring as a compliant constraint (α = 1/k, β = k_d)
 //!     v      = (x - x_prev) / h
 //! ```
-//! where `x` is position (m), `v` velocity (m/s), `a_ext` the acceleration from forces other than
-//! springs (m/s²), `h` the substep (s). The constraint solve is [`xpbd_solve`].
+//! where
+//! - `x`: positions (m), `x_prev`: the positions at the start of the substep (m)
+//! - `v`: velocities (m/s)
+//! - `a_ext`: the acceleration from the forces other than springs (m/s²)
+//! - `h = dt / substeps`: the substep (s)
+//! - `λ`: each spring's accumulated Lagrange multiplier (N·s²), see [`xpbd_solve`]
+//! - `α = 1/k`: compliance (m/N), `β = k_d`: the spring's damping (N·s/m)
+//!
+//! The constraint solve is [`xpbd_solve`].
 //!
 //! Springs are not forces here but constraints with compliance `α = 1/k` (m/N); as `α → 0` a spring
 //! becomes a rigid rod, and nothing becomes unstable: the solve is a projection. The error is

@@ -451,10 +451,7 @@ impl LessonRun {
             return;
         }
         for body in &mut self.sim.scene.bodies {
-            for s in &mut body.model.springs {
-                s.stiffness *= factor;
-            }
-            body.model.rebuild();
+            body.model.scale_stiffness(factor);
         }
         self.coefficients_changed();
         self.message = Some(match self.uniform_stiffness() {
@@ -472,7 +469,7 @@ impl LessonRun {
         }
         for body in &mut self.sim.scene.bodies {
             let mass = body.model.mass.clone();
-            for s in &mut body.model.springs {
+            body.model.update_springs(|s| {
                 let m = mass[s.a as usize].min(mass[s.b as usize]);
                 let first = FIRST_DAMPING * 2.0 * (s.stiffness * m).sqrt();
                 s.damping = if up {
@@ -485,8 +482,7 @@ impl LessonRun {
                     let d = s.damping / COEFFICIENT_FACTOR;
                     if d < first { 0.0 } else { d }
                 };
-            }
-            body.model.rebuild();
+            });
         }
         self.coefficients_changed();
         self.message = Some(match self.uniform_damping() {

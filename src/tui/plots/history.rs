@@ -44,7 +44,7 @@ impl Oscillator {
             return None;
         };
         let (model, state) = (&body.model, &body.state);
-        let [spring] = model.springs.as_slice() else {
+        let [spring] = model.springs() else {
             return None;
         };
         let simple = model.particle_count() == 2
@@ -79,7 +79,7 @@ impl Oscillator {
         let Some(body) = sim.scene.bodies.first() else {
             return *self;
         };
-        let Some(spring) = body.model.springs.first() else {
+        let Some(spring) = body.model.springs().first() else {
             return *self;
         };
         Oscillator {
@@ -359,7 +359,7 @@ pub(super) fn sample(sim: &Simulation, oscillator: Option<&Oscillator>, t: f64) 
         };
         let stretch = body
             .model
-            .springs
+            .springs()
             .iter()
             .filter(|s| s.rest_length > 0.0)
             .map(|s| {
