@@ -15,6 +15,7 @@ pub mod grade;
 pub mod lesson;
 pub mod output;
 pub mod physics;
+mod random;
 pub mod render;
 
 pub use physics::{Energy, Method, MethodParams, Model, Spring, SpringKind, State, Workspace};

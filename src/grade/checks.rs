@@ -23,13 +23,14 @@ use super::report::Feedback;
 use super::runner::{CheckResult, Failure, set_case};
 use super::system::Physics;
 use crate::physics::{Model, SpringKind};
+use crate::random::XorShift64Star;
 use crate::scene::builder::Builder;
 
 /// Relative tolerance of one evaluation or one step.
 pub(crate) const REL: f64 = 1e-9;
 
-/// A small deterministic pseudo-random generator (xorshift64*).
-pub(crate) struct Rng(u64);
+/// A small deterministic pseudo-random generator ([`XorShift64Star`]) seeded per check.
+pub(crate) struct Rng(XorShift64Star);
 
 impl Rng {
     /// A generator for check `salt` under the run's `seed`.
@@ -39,16 +40,12 @@ impl Rng {
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         z ^= z >> 31;
-        Rng(z | 1)
+        Rng(XorShift64Star::new(z | 1))
     }
 
     /// A float in `[lo, hi)`.
     pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let bits = self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11;
-        lo + (hi - lo) * (bits as f64 / (1u64 << 53) as f64)
+        lo + (hi - lo) * self.0.unit()
     }
 
     /// An integer in `0..n` (`n > 0`).

@@ -487,8 +487,8 @@ fn answer_physics(physics: Option<&Physics>, request: &[u8]) -> Vec<u8> {
     let v: Vec<DVec3> = v.into_iter().map(local_vec).collect();
     let values: Vec<f64> = match what {
         physics_request::ACCELERATIONS => super::system::flatten(&physics.accelerations(&x, &v)),
-        physics_request::JACOBIAN_X => physics.jacobian_x(&x, &v).row_major().to_vec(),
-        _ => physics.jacobian_v(&x, &v).row_major().to_vec(),
+        physics_request::JACOBIAN_X => physics.jacobian_x(&x, &v).as_row_major().to_vec(),
+        _ => physics.jacobian_v(&x, &v).as_row_major().to_vec(),
     };
     let mut reply = vec![to_program::PHYSICS_REPLY, 1];
     values.put(&mut reply);

@@ -18,12 +18,13 @@
 //! whose error is `O(h²)` times the third derivative plus round-off `O(ε |a| / h)`: about 1e-10
 //! relative for springs. `J_v` is exact up to round-off (the dampers are linear in `v`).
 
-use std::ops::{Index, IndexMut};
-
 use glam::DVec3;
 
 use super::data::Rope;
 use crate::physics::{Model, accelerations};
+/// The student API's dense matrix and solver: the grader's Jacobians are the same type the
+/// students' integrators receive.
+pub use springlab_homework::Matrix;
 
 /// The physics of the system being stepped: the grader builds it from the same masses, springs
 /// and gravity as the state it hands to an integrator.
@@ -149,129 +150,6 @@ impl Physics {
             }
         }
         jac
-    }
-}
-
-/// A dense square matrix of `f64`, row-major; index it with `m[(row, column)]`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Matrix {
-    size: usize,
-    data: Vec<f64>,
-}
-
-impl Matrix {
-    /// The `size × size` zero matrix.
-    #[must_use]
-    pub fn zeros(size: usize) -> Matrix {
-        Matrix {
-            size,
-            data: vec![0.0; size * size],
-        }
-    }
-
-    /// The `size × size` identity.
-    #[must_use]
-    pub fn identity(size: usize) -> Matrix {
-        let mut m = Matrix::zeros(size);
-        for i in 0..size {
-            m[(i, i)] = 1.0;
-        }
-        m
-    }
-
-    /// Number of rows (and of columns).
-    #[must_use]
-    pub fn size(&self) -> usize {
-        self.size
-    }
-
-    /// The entries, row after row.
-    #[must_use]
-    pub fn row_major(&self) -> &[f64] {
-        &self.data
-    }
-
-    /// The product `M y`.
-    ///
-    /// # Panics
-    /// If `y.len()` differs from the size.
-    #[must_use]
-    pub fn mul_vec(&self, y: &[f64]) -> Vec<f64> {
-        assert_eq!(y.len(), self.size, "Matrix::mul_vec: wrong vector length");
-        (0..self.size)
-            .map(|i| {
-                let row = &self.data[i * self.size..(i + 1) * self.size];
-                row.iter().zip(y).map(|(m, y)| m * y).sum()
-            })
-            .collect()
-    }
-
-    /// Solves `M y = b` by Gaussian elimination with partial pivoting; `None` when the matrix is
-    /// singular (a pivot is zero or not finite) or `b` has the wrong length.
-    #[must_use]
-    pub fn solve(&self, b: &[f64]) -> Option<Vec<f64>> {
-        let n = self.size;
-        if b.len() != n {
-            return None;
-        }
-        let mut m = self.data.clone();
-        let mut y = b.to_vec();
-        for col in 0..n {
-            // Pivot: the largest entry of the column on or below the diagonal.
-            let pivot =
-                (col..n).max_by(|&p, &q| m[p * n + col].abs().total_cmp(&m[q * n + col].abs()))?;
-            let p = m[pivot * n + col];
-            if p == 0.0 || !p.is_finite() {
-                return None;
-            }
-            if pivot != col {
-                for k in 0..n {
-                    m.swap(col * n + k, pivot * n + k);
-                }
-                y.swap(col, pivot);
-            }
-            // Eliminate below: row_r -= (m_rc / m_cc) row_c.
-            for r in col + 1..n {
-                let factor = m[r * n + col] / p;
-                if factor != 0.0 {
-                    for k in col..n {
-                        m[r * n + k] -= factor * m[col * n + k];
-                    }
-                    y[r] -= factor * y[col];
-                }
-            }
-        }
-        // Back substitution.
-        for col in (0..n).rev() {
-            let mut s = y[col];
-            for k in col + 1..n {
-                s -= m[col * n + k] * y[k];
-            }
-            y[col] = s / m[col * n + col];
-        }
-        y.iter().all(|v| v.is_finite()).then_some(y)
-    }
-}
-
-impl Index<(usize, usize)> for Matrix {
-    type Output = f64;
-
-    fn index(&self, (row, column): (usize, usize)) -> &f64 {
-        assert!(
-            row < self.size && column < self.size,
-            "Matrix index out of range"
-        );
-        &self.data[row * self.size + column]
-    }
-}
-
-impl IndexMut<(usize, usize)> for Matrix {
-    fn index_mut(&mut self, (row, column): (usize, usize)) -> &mut f64 {
-        assert!(
-            row < self.size && column < self.size,
-            "Matrix index out of range"
-        );
-        &mut self.data[row * self.size + column]
     }
 }
 

@@ -62,6 +62,7 @@ use serde::Serialize;
 
 use super::modes::stiffness_blocks;
 use crate::physics::{Method, MethodParams, Model, State, Workspace};
+use crate::random::XorShift64Star;
 
 /// `Ē_late / Ē_early` above `1 +` this is growth.
 pub const TOLERANCE: f64 = 1e-6;
@@ -341,14 +342,8 @@ fn rigid_modes(model: &Model, x: &[DVec3]) -> Vec<Vec<DVec3>> {
 
 /// A fixed pseudo-random perturbation (xorshift64*), zero on pinned particles.
 fn start_vector(n: usize, free: &[bool]) -> (Vec<DVec3>, Vec<DVec3>) {
-    let mut state: u64 = 0x2545_F491_4F6C_DD1D;
-    let mut next = || {
-        state ^= state >> 12;
-        state ^= state << 25;
-        state ^= state >> 27;
-        let bits = state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11;
-        2.0 * (bits as f64 / (1u64 << 53) as f64) - 1.0
-    };
+    let mut random = XorShift64Star::new(0x2545_F491_4F6C_DD1D);
+    let mut next = || random.symmetric();
     let mut dx = vec![DVec3::ZERO; n];
     let mut dv = vec![DVec3::ZERO; n];
     for i in 0..n {

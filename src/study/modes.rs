@@ -66,6 +66,7 @@ use glam::{DMat3, DVec3};
 use serde::Serialize;
 
 use crate::physics::{Model, State};
+use crate::random::XorShift64Star;
 
 /// Iteration limit of the power iteration.
 pub const MAX_ITERATIONS: u32 = 20_000;
@@ -280,15 +281,8 @@ fn abs_row_sums(m: &DMat3) -> DVec3 {
 
 /// A fixed pseudo-random unit vector (xorshift64*), zero on pinned particles.
 fn start_vector(scale: &[f64]) -> Vec<DVec3> {
-    let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
-    let mut next = || {
-        state ^= state >> 12;
-        state ^= state << 25;
-        state ^= state >> 27;
-        let bits = state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11;
-        // uniform in [-1, 1)
-        2.0 * (bits as f64 / (1u64 << 53) as f64) - 1.0
-    };
+    let mut random = XorShift64Star::new(0x9E37_79B9_7F4A_7C15);
+    let mut next = || random.symmetric();
     let mut q: Vec<DVec3> = scale
         .iter()
         .map(|&s| {

@@ -104,6 +104,16 @@ pub struct SolveStats {
     pub constrained: u32,
 }
 
+impl SolveStats {
+    /// Adds one solve of `iterations` that ended at relative residual `residual`.
+    fn record(&mut self, iterations: u32, residual: f64, converged: bool) {
+        self.iterations += iterations;
+        self.relative_residual = residual;
+        self.converged = converged;
+        self.passes += 1;
+    }
+}
+
 impl Default for SolveStats {
     fn default() -> SolveStats {
         SolveStats {
@@ -228,10 +238,7 @@ fn textbook(
             cg,
             warm || stats.passes > 0,
         );
-        stats.iterations += iterations;
-        stats.relative_residual = residual;
-        stats.converged = converged;
-        stats.passes += 1;
+        stats.record(iterations, residual, converged);
         if !converged {
             break;
         }
@@ -260,17 +267,22 @@ fn textbook(
     let dv = &cg[0];
     last_dv.clone_from(dv);
     *last_dt = dt;
+    advance(model, state, dt, dv);
+    // D_{n+1} = D_n + dt P(x_{n+1}, v_{n+1}): backward Euler on D' = P too, when accounting.
+    dissipated.add_power(dt, power_if(*account, model, &state.x, &state.v, power_f));
+    1
+}
+
+/// The step's update from the solved velocity change, on free particles:
+/// `v_{n+1} = v_n + Δv`, `x_{n+1} = x_n + dt v_{n+1}`.
+fn advance(model: &Model, state: &mut State, dt: f64, dv: &[DVec3]) {
     for i in 0..state.x.len() {
         if model.inv_mass[i] != 0.0 {
-            // v_{n+1} = v_n + Δv;  x_{n+1} = x_n + dt v_{n+1}
             state.v[i] += dv[i];
             state.x[i] += dt * state.v[i];
         }
     }
     state.history_valid = false;
-    // D_{n+1} = D_n + dt P(x_{n+1}, v_{n+1}): backward Euler on D' = P too, when accounting.
-    dissipated.add_power(dt, power_if(*account, model, &state.x, &state.v, power_f));
-    1
 }
 
 pub(super) fn step(
@@ -350,10 +362,7 @@ fn step_lattice(
             start,
         );
         lattice.copy_dv(dv);
-        stats.iterations += iterations;
-        stats.relative_residual = residual;
-        stats.converged = converged;
-        stats.passes += 1;
+        stats.record(iterations, residual, converged);
         if !converged {
             break;
         }
@@ -378,14 +387,7 @@ fn step_lattice(
     }
     last_dv.clone_from(dv);
     *last_dt = dt;
-    for i in 0..state.x.len() {
-        if model.inv_mass[i] != 0.0 {
-            // v_{n+1} = v_n + Δv;  x_{n+1} = x_n + dt v_{n+1}
-            state.v[i] += dv[i];
-            state.x[i] += dt * state.v[i];
-        }
-    }
-    state.history_valid = false;
+    advance(model, state, dt, dv);
     // D_{n+1} = D_n + dt P(x_{n+1}, v_{n+1}), when accounting.
     dissipated.add_power(dt, power_if(*account, model, &state.x, &state.v, power_f));
     1
