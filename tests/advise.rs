@@ -3,8 +3,10 @@
 //! sphere, the oscillator's exact solution, the measured (perturbation-growth) stability limit,
 //! and `springlab run`'s own positions.
 
+mod common;
+use common::{json, springlab};
+
 use std::f64::consts::PI;
-use std::process::{Command, Output};
 
 use glam::DVec3;
 use serde_json::Value;
@@ -15,23 +17,6 @@ use springlab::study::convergence::fitted_slope;
 use springlab::study::observe::{self, Observable, Value as Obs};
 use springlab::study::resolution::{self, Kinds, Refinement, ResolutionOptions};
 use springlab::study::stability::{self, StabilityOptions};
-
-fn springlab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_springlab"))
-        .args(args)
-        .output()
-        .expect("run springlab")
-}
-
-fn json(args: &[&str]) -> Value {
-    let out = springlab(args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("one JSON object")
-}
 
 fn stderr_of_failure(args: &[&str]) -> String {
     let out = springlab(args);

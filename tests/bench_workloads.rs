@@ -5,7 +5,8 @@
 //! The checksum tests run each workload once for its full N steps; run them with
 //! `cargo test --release --test bench_workloads`.
 
-use std::process::Command;
+mod common;
+use common::springlab;
 
 use sha2::{Digest, Sha256};
 use springlab::bench::{self, REL_TOL, Run, Workload};
@@ -209,13 +210,6 @@ fn workload_names_round_trip_and_unknown_names_list_the_known_ones() {
         "unknown workload `jelly`; expected one of: jelly-se, jelly-rk4, cloth64-se, \
          cloth128-se, rope-se, rope-verlet"
     );
-}
-
-fn springlab(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_springlab"))
-        .args(args)
-        .output()
-        .expect("the springlab binary runs")
 }
 
 #[test]

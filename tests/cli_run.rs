@@ -1,23 +1,7 @@
 //! `springlab run` and `springlab scenes` through the real binary.
 
-use std::process::{Command, Output};
-
-fn springlab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_springlab"))
-        .args(args)
-        .output()
-        .expect("run springlab")
-}
-
-fn json(args: &[&str]) -> serde_json::Value {
-    let out = springlab(args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("one JSON object")
-}
+mod common;
+use common::{json, springlab};
 
 fn stderr_of_failure(args: &[&str]) -> String {
     let out = springlab(args);

@@ -1,8 +1,10 @@
 //! `springlab run <file.toml>`: the binary prints `file:line:col: message` for a bad scene file
 //! and exits non-zero; a good file runs.
 
+mod common;
+use common::springlab;
+
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
 /// Writes `text` to `name` in a directory unique to this process and test.
 fn write(test: &str, name: &str, text: &str) -> PathBuf {
@@ -14,13 +16,6 @@ fn write(test: &str, name: &str, text: &str) -> PathBuf {
     let path = dir.join(name);
     std::fs::write(&path, text).expect("write scene file");
     path
-}
-
-fn springlab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_springlab"))
-        .args(args)
-        .output()
-        .expect("run springlab")
 }
 
 fn text(bytes: &[u8]) -> String {

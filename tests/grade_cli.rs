@@ -2,15 +2,10 @@
 //! the refusals with their messages, and a crate that does not build, which still gets a
 //! report, a Gradescope file and exit code 0.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+use common::springlab;
 
-fn springlab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_springlab"))
-        .args(args)
-        .output()
-        .expect("run springlab")
-}
+use std::path::{Path, PathBuf};
 
 /// A fresh, empty scratch directory for test `name`.
 fn scratch(name: &str) -> PathBuf {

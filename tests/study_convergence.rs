@@ -1,23 +1,7 @@
 //! `springlab study convergence` and `work-precision` through the binary.
 
-use std::process::Command;
-
-fn springlab(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_springlab"))
-        .args(args)
-        .output()
-        .expect("run springlab")
-}
-
-fn json(args: &[&str]) -> serde_json::Value {
-    let out = springlab(args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("JSON")
-}
+mod common;
+use common::{json, springlab};
 
 fn orders(v: &serde_json::Value) -> Vec<(String, Option<f64>)> {
     v["methods"]

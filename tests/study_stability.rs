@@ -1,7 +1,8 @@
 //! `springlab study stability`: the stiffest mode against closed forms and docs/workloads.md, the
 //! measured limits against the oscillator's amplification factors, determinism and bad input.
 
-use std::process::{Command, Output};
+mod common;
+use common::{json, springlab};
 
 use serde_json::Value;
 use springlab::bench::{Workload, setup};
@@ -9,23 +10,6 @@ use springlab::physics::Method;
 use springlab::scene;
 use springlab::study::stability::{self, StabilityOptions};
 use springlab::study::{Stability, StudyError, omega_max, theory};
-
-fn springlab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_springlab"))
-        .args(args)
-        .output()
-        .expect("run springlab")
-}
-
-fn json(args: &[&str]) -> Value {
-    let out = springlab(args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("one JSON object")
-}
 
 fn stderr_of_failure(args: &[&str]) -> String {
     let out = springlab(args);

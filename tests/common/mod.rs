@@ -42,3 +42,22 @@ pub fn fitted_order(points: &[(f64, f64)]) -> f64 {
     let sxx: f64 = lx.iter().map(|x| (x - mx) * (x - mx)).sum();
     sxy / sxx
 }
+
+/// Runs this build's `springlab` binary with `args`.
+pub fn springlab(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_springlab"))
+        .args(args)
+        .output()
+        .expect("run springlab")
+}
+
+/// `springlab args…`, which must succeed, and the one JSON object it prints.
+pub fn json(args: &[&str]) -> serde_json::Value {
+    let out = springlab(args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
