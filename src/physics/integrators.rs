@@ -44,7 +44,7 @@ use serde::{Serialize, Serializer};
 use super::energy::{Dissipated, Power, dissipated_power};
 use super::forces::Model;
 use super::particles::State;
-use super::stencil::{After, Output, Stencil};
+use super::stencil::{After, Output, Stencil, Update};
 
 pub use implicit_euler::{MAX_CONTACT_PASSES, SolveStats};
 
@@ -381,6 +381,42 @@ fn fused_pass(
         dampers_and_drag,
         contact,
     }
+}
+
+/// A one-pass step on a lattice: every thread computes its particles' accelerations and applies
+/// `update` to them in the same pass (with the dissipated power and the projection), into fresh
+/// buffers, because the other threads still read the old positions and velocities; then the
+/// buffers become the state. Returns the force evaluations (1).
+fn one_pass_step(
+    stencil: &Stencil,
+    model: &Model,
+    state: &mut State,
+    dt: f64,
+    work: &mut Workspace,
+    update: Update,
+) -> u64 {
+    let output = Output::Step {
+        dynamics: model.dynamics(true),
+        update,
+        after: after(&work.projection),
+    };
+    let (x_new, v_new) = (&mut work.x_stage, &mut work.v_stage);
+    let outs = [&mut x_new[..], &mut v_new[..], &mut []];
+    let p = fused_pass(
+        stencil,
+        &state.x,
+        &state.v,
+        outs,
+        output,
+        work.account,
+        &mut work.power_f,
+    );
+    work.dissipated.add_power(dt, p);
+    std::mem::swap(&mut state.x, x_new);
+    std::mem::swap(&mut state.v, v_new);
+    work.projected = true;
+    state.history_valid = false;
+    1
 }
 
 /// The projection as the stencil's per-tile hook.

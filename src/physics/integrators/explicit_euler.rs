@@ -26,9 +26,9 @@
 //! 2nd ed., Springer 1993, §I.7 and §II.1; GAMES101 assignment 8 (2020), §1.2.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, after, fused, fused_pass, power_if};
+use crate::physics::integrators::{Workspace, fused, one_pass_step, power_if};
 use crate::physics::particles::State;
-use crate::physics::stencil::{Base, Output, Stencil, Update};
+use crate::physics::stencil::{Base, Stencil, Update};
 
 /// The method as the formula writes it: one force evaluation, then the two lines.
 fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
@@ -63,29 +63,9 @@ fn step_fused(
     dt: f64,
     work: &mut Workspace,
 ) -> u64 {
-    let output = Output::Step {
-        dynamics: model.dynamics(true),
-        update: Update::Euler {
-            h: dt,
-            base: Base::Input,
-        },
-        after: after(&work.projection),
+    let update = Update::Euler {
+        h: dt,
+        base: Base::Input,
     };
-    let (x_new, v_new) = (&mut work.x_stage, &mut work.v_stage);
-    let outs = [&mut x_new[..], &mut v_new[..], &mut []];
-    let p = fused_pass(
-        stencil,
-        &state.x,
-        &state.v,
-        outs,
-        output,
-        work.account,
-        &mut work.power_f,
-    );
-    work.dissipated.add_power(dt, p);
-    std::mem::swap(&mut state.x, x_new);
-    std::mem::swap(&mut state.v, v_new);
-    work.projected = true;
-    state.history_valid = false;
-    1
+    one_pass_step(stencil, model, state, dt, work, update)
 }

@@ -28,9 +28,9 @@
 //! Springer 2006, §I.1.2 and §VI.3; GAMES101 assignment 8 (2020), §1.2.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, after, fused, fused_pass, power_if};
+use crate::physics::integrators::{Workspace, fused, one_pass_step, power_if};
 use crate::physics::particles::State;
-use crate::physics::stencil::{Output, Stencil, Update};
+use crate::physics::stencil::{Stencil, Update};
 
 /// The method as the formula writes it: one force evaluation, then the two lines.
 fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
@@ -67,26 +67,12 @@ fn step_fused(
     dt: f64,
     work: &mut Workspace,
 ) -> u64 {
-    let output = Output::Step {
-        dynamics: model.dynamics(true),
-        update: Update::SemiImplicitEuler { dt },
-        after: after(&work.projection),
-    };
-    let (x_new, v_new) = (&mut work.x_stage, &mut work.v_stage);
-    let outs = [&mut x_new[..], &mut v_new[..], &mut []];
-    let p = fused_pass(
+    one_pass_step(
         stencil,
-        &state.x,
-        &state.v,
-        outs,
-        output,
-        work.account,
-        &mut work.power_f,
-    );
-    work.dissipated.add_power(dt, p);
-    std::mem::swap(&mut state.x, x_new);
-    std::mem::swap(&mut state.v, v_new);
-    work.projected = true;
-    state.history_valid = false;
-    1
+        model,
+        state,
+        dt,
+        work,
+        Update::SemiImplicitEuler { dt },
+    )
 }
