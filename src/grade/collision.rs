@@ -185,6 +185,17 @@ fn compare(
     ))
 }
 
+/// A point of the contact band: at `φ` in [0.001, 0.009) m from `surface` (inside `ε`), its
+/// position and the surface normal there.
+fn in_band(
+    rng: &mut Rng,
+    surface: &Surface,
+) -> Result<(f64, DVec3, DVec3), super::runner::Failure> {
+    let phi = rng.range(0.001, 0.009);
+    let (x, n) = surface.sample(rng, phi).ok_or_else(|| no_sample(surface))?;
+    Ok((phi, x, n))
+}
+
 fn no_sample(surface: &Surface) -> super::runner::Failure {
     wrong(
         surface.describe(),
@@ -205,10 +216,7 @@ pub(crate) fn check_bounce(
     for i in 0..3 {
         let surface = surfaces(rng, i);
         // Touching and approaching: bounce.
-        let phi = rng.range(0.001, 0.009);
-        let (x, n) = surface
-            .sample(rng, phi)
-            .ok_or_else(|| no_sample(&surface))?;
+        let (phi, x, n) = in_band(rng, &surface)?;
         let vn = rng.range(-3.0, -0.5);
         let p = Particle {
             x,
@@ -254,10 +262,7 @@ pub(crate) fn check_bounce(
             ),
         )?;
         // Touching but moving away: nothing.
-        let phi = rng.range(0.001, 0.009);
-        let (x, n) = surface
-            .sample(rng, phi)
-            .ok_or_else(|| no_sample(&surface))?;
+        let (_, x, n) = in_band(rng, &surface)?;
         let (vn, load) = (rng.range(0.2, 2.0), rng.range(1.0, 20.0));
         let p = Particle {
             x,
@@ -335,10 +340,7 @@ pub(crate) fn check_penetration(
             )?;
         }
         // Touching from the free side: the position stays.
-        let phi = rng.range(0.001, 0.009);
-        let (x, n) = surface
-            .sample(rng, phi)
-            .ok_or_else(|| no_sample(&surface))?;
+        let (phi, x, n) = in_band(rng, &surface)?;
         let vn = rng.range(-3.0, -0.5);
         let p = Particle {
             x,
@@ -373,10 +375,7 @@ pub(crate) fn check_contact_force(
     for i in 0..3 {
         let surface = surfaces(rng, i);
         for _ in 0..2 {
-            let phi = rng.range(0.001, 0.009);
-            let (x, n) = surface
-                .sample(rng, phi)
-                .ok_or_else(|| no_sample(&surface))?;
+            let (_, x, n) = in_band(rng, &surface)?;
             let load = rng.range(1.0, 20.0);
             let vn = rng.range(-1.0, -0.1);
             let p = Particle {
