@@ -275,7 +275,6 @@ fn a_fifty_megabyte_scene_file_is_refused_before_it_is_parsed() {
         )),
         "{err}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 // Row 6: render size, and outputs that are complete or absent.
@@ -362,7 +361,6 @@ fn a_render_killed_half_way_leaves_no_file_at_the_target_path() {
         names.iter().any(|n| n.starts_with(".g.gif.")),
         "it was writing: {names:?}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
