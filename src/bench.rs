@@ -43,12 +43,13 @@
 
 use std::fmt;
 use std::str::FromStr;
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::DVec3;
 use serde::Serialize;
 
-use crate::physics::pool::Pool;
+use crate::physics::integrators::Projection;
 use crate::physics::{Method, MethodParams, Model, SpringKind, State, Workspace};
 use crate::scene::builder::Builder;
 
@@ -443,30 +444,20 @@ enum Contact {
     },
 }
 
-/// From this many particles on, the contact projection is split between the pool's threads
-/// (every particle is projected on its own, so the result does not depend on the split).
-const PARALLEL_CONTACT: usize = 4096;
-
 impl Contact {
-    fn apply(self, state: &mut State) {
-        let pool = Pool::global();
-        let parts = if state.len() >= PARALLEL_CONTACT {
-            pool.threads()
-        } else {
-            1
-        };
+    /// The rule as the integrator's end-of-step [`Projection`]: a method with a fused last
+    /// pass applies it to each tile of particles inside that pass (on the pass's threads, while
+    /// the tile is in cache), any other method to all particles after its step. Every particle
+    /// is projected on its own, so the result does not depend on where or in which order.
+    fn projection(self) -> Option<Projection> {
         match self {
-            Contact::None => {}
-            Contact::Ground { restitution } => {
-                pool.for_each_part(&mut state.x, &mut state.v, parts, |_, x, v| {
-                    ground(x, v, restitution);
-                });
-            }
-            Contact::Sphere { centre, radius } => {
-                pool.for_each_part(&mut state.x, &mut state.v, parts, |_, x, v| {
-                    sphere(x, v, centre, radius);
-                });
-            }
+            Contact::None => None,
+            Contact::Ground { restitution } => Some(Projection(Arc::new(move |x, v| {
+                ground(x, v, restitution);
+            }))),
+            Contact::Sphere { centre, radius } => Some(Projection(Arc::new(move |x, v| {
+                sphere(x, v, centre, radius);
+            }))),
         }
     }
 }
@@ -488,9 +479,16 @@ fn ground(x: &mut [DVec3], v: &mut [DVec3], restitution: f64) {
 /// Pushes every particle inside the sphere out to its surface and removes the inward normal
 /// velocity (positions `x`, velocities `v`).
 fn sphere(x: &mut [DVec3], v: &mut [DVec3], centre: DVec3, radius: f64) {
+    // A particle with |dd|² at least (1 + 1e-9) R² has fl(√|dd|²) ≥ R, so it fails the exact
+    // test below: skip its square root (the rule's decisions and results are unchanged).
+    let far = radius * radius * (1.0 + 1e-9);
     for (x, v) in x.iter_mut().zip(v.iter_mut()) {
         let dd = *x - centre;
-        let dist = dd.length();
+        let squared = dd.length_squared();
+        if squared >= far || squared.is_nan() {
+            continue;
+        }
+        let dist = squared.sqrt();
         if dist < radius {
             // Outward normal n = dd / |dd| (divided, as the peers do).
             let nn = dd / dist;
@@ -523,7 +521,6 @@ pub struct Run {
     method: Method,
     dt: f64,
     params: MethodParams,
-    contact: Contact,
     work: Workspace,
 }
 
@@ -547,8 +544,10 @@ impl Run {
             method: workload.method(),
             dt: workload.dt(),
             params: workload.params(),
-            contact: workload.contact(),
-            work: Workspace::new(),
+            work: Workspace {
+                projection: workload.contact().projection(),
+                ..Workspace::new()
+            },
         }
     }
 
@@ -576,7 +575,8 @@ impl Run {
         self.method
     }
 
-    /// One step of the library's integrator followed by the workload's contact projection.
+    /// One step of the library's integrator, which ends with the workload's contact projection
+    /// (its [`Workspace::projection`]).
     #[inline]
     pub fn step(&mut self) {
         self.force_evals += self.method.step(
@@ -586,7 +586,6 @@ impl Run {
             &self.params,
             &mut self.work,
         );
-        self.contact.apply(&mut self.state);
         self.steps += 1;
     }
 
