@@ -51,8 +51,9 @@
 //! few per cent lower (RK4: `cube-plane` -5.1 %, `jelly-bowl` -8.1 %, `cloth-spheres` -5.3 %;
 //! docs/stability.md), and that is not the contact code: an impact squeezes the body, and the
 //! stiffest mode of the squeezed body is stiffer than at rest (the springs' directions change;
-//! `ω_max` of `jelly-bowl` rises from 183.6 to 195.1 rad/s at the impact on the hole's edge,
-//! which lowers the overdamped mode's limit by `(195.1/183.6)²`, since `μ = (k_d/k) ω²`). Measured on
+//! `ω_max` of `jelly-bowl` rises from 183.6 rad/s at rest to 194.4 rad/s in the impact on the
+//! hole's edge, which lowers the overdamped mode's limit by about `(194.4/183.6)² ≈ 1.12`,
+//! since `μ = (k_d/k) ω²`). Measured on
 //! `jelly-bowl` with RK4 at dt = 2.75e-3 s (the theory at rest allows 2.85e-3): the run
 //! diverges in the impact with the contact force left out of the stages, with the positional
 //! projection left out, and with both; and the step map linearised at the squeezed state of a
