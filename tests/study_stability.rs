@@ -8,6 +8,8 @@ use serde_json::Value;
 use springlab::bench::{Workload, setup};
 use springlab::physics::Method;
 use springlab::scene;
+use springlab::simulation::Simulation;
+use springlab::study::modes::omega_max_from as omega_from;
 use springlab::study::stability::{self, StabilityOptions};
 use springlab::study::{Stability, StudyError, omega_max, theory};
 
@@ -102,6 +104,13 @@ fn omega_max_of_the_w1_jelly_matches_workloads_md() {
     assert!(e.gershgorin_lambda >= e.lambda);
     // Deterministic: the same start vector, the same iterations, the same bits.
     assert_eq!(omega_max(&model, &state), e);
+    // Warm started from its own converged vector it stops within a few iterations at the
+    // same value; from an empty vector it is the cold iteration, bit for bit.
+    let mut warm = Vec::new();
+    assert_eq!(omega_from(&model, &state, &mut warm), e);
+    let again = omega_from(&model, &state, &mut warm);
+    assert!(again.iterations < 50, "{again:?}");
+    assert!(relative(again.omega, e.omega) < 1e-6, "{again:?}");
 }
 
 #[test]
@@ -334,6 +343,60 @@ fn confirmed_limits_hold_fifty_horizons_at_95_percent() {
     };
     let r = stability::stability(&cube, &options, &mut |_, _| {}).unwrap();
     fifty_times_longer_at_95_percent(&r, &cube);
+}
+
+#[test]
+fn an_impact_stiffens_the_cube_and_free_fall_does_not() {
+    // cube-plane at n = 6: the landing on the plane (t ≈ 1.4 s) squeezes the cube, and the
+    // stiffest mode of the squeezed cube is stiffer than at rest.
+    let (cube, _) = stability::load_scene("cube-plane", &["n=6".into()]).unwrap();
+    let body = &cube.bodies[0];
+    let at_rest = omega_max(&body.model, &body.state).omega;
+    let s = stability::stiffest(&cube, 2.0).unwrap();
+    assert!(s.ratio > 1.01, "{s:?}");
+    assert!(s.time > 1.3 && s.time < 1.7, "{s:?}");
+    assert!(relative(s.omega_max / at_rest, s.ratio) < 1e-12, "{s:?}");
+    // The warm-started sample is reproduced by a cold power iteration at that instant.
+    let mut sim = Simulation::new(cube.clone());
+    sim.set_accounting(false);
+    sim.run((s.time / s.dt).round() as u64, |_| {});
+    let state = sim.states().next().unwrap();
+    let cold = omega_max(&body.model, state).omega;
+    assert!(relative(cold, s.omega_max) < 1e-3, "{cold} vs {s:?}");
+    // Every explicit method's damped theory there is below its theory at rest.
+    let spectrum = theory::spectrum(&body.model, state, s.omega_max);
+    let rest = theory::spectrum(&body.model, &body.state, at_rest);
+    for m in [Method::ExplicitEuler, Method::Midpoint, Method::Rk4] {
+        let squeezed = theory::limit(m, &body.params, &spectrum).dt.unwrap();
+        let resting = theory::limit(m, &body.params, &rest).dt.unwrap();
+        assert!(squeezed < 0.99 * resting, "{m}: {squeezed} vs {resting}");
+    }
+    // Without the plane the cube falls freely, undeformed: never stiffer than at rest (up to
+    // the warm start's further convergence of the same quotient).
+    let mut falling = cube.clone();
+    falling.bodies[0].model.colliders.clear();
+    let f = stability::stiffest(&falling, 2.0).unwrap();
+    assert!(f.ratio < 1.0 + 1e-4, "{f:?}");
+}
+
+#[test]
+fn stiffest_state_is_reported_and_the_scene_limit_lies_between_the_theories() {
+    let (cube, _) = stability::load_scene("cube-plane", &["n=6".into()]).unwrap();
+    let options = StabilityOptions {
+        methods: vec![Method::Rk4],
+        ..StabilityOptions::default()
+    };
+    let r = stability::stability(&cube, &options, &mut |_, _| {}).unwrap();
+    assert!(r.stiffest_state.ratio > 1.01, "{:?}", r.stiffest_state);
+    let m = &r.methods[0];
+    let (scene_dt, linear, rest, squeezed) = (
+        m.max_stable_dt.unwrap(),
+        m.linear_max_dt.unwrap(),
+        m.theory_dt.unwrap(),
+        m.stiffest_theory_dt.unwrap(),
+    );
+    assert!(relative(linear, rest) < 0.01, "{linear} vs {rest}");
+    assert!(squeezed < scene_dt && scene_dt <= linear, "{m:?}");
 }
 
 #[test]

@@ -15,6 +15,7 @@ use crate::study::convergence::{self, ConvergenceOptions, ConvergenceReport};
 use crate::study::observe::{Difference, Unit};
 use crate::study::resolution::{self, Kinds, LevelRun, ResolutionOptions, ResolutionReport};
 use crate::study::stability::{self, DEFAULT_HORIZON, StabilityOptions, StabilityReport};
+use crate::study::theory::TheoryLimit;
 
 /// The studies.
 #[derive(Debug, Subcommand)]
@@ -520,36 +521,61 @@ pub fn print_table(
         r.dt_omega_range[1],
         stability::BISECTION_TOLERANCE
     )?;
+    let st = &r.stiffest_state;
     writeln!(
         out,
-        "{:<21} {:<14} {:>14} {:>9} {:>11} {:>13} {:>14} {:>9}  binding mode (theory)",
+        "stiffest state: ω_max = {:.6} rad/s ({:+.2} % against the start) at t = {:.4} s of a run \
+         of the scene ({}, dt = {:e} s, {} samples{}); damped theory there: {}\n",
+        st.omega_max,
+        100.0 * (st.ratio - 1.0),
+        st.time,
+        st.method.name(),
+        st.dt,
+        st.samples,
+        st.stopped
+            .as_deref()
+            .map_or_else(String::new, |why| format!(", stopped early: {why}")),
+        st.theory_spectrum
+    )?;
+    writeln!(
+        out,
+        "{:<21} {:<14} {:>13} {:>11} {:>13} {:>11} {:>9} │ {:>13} {:>9} {:>9} {:>15}  \
+         binding mode (theory)",
         "method",
         "stability",
-        "max stable dt",
-        "dt·ω",
+        "linear dt",
         "linear dt·ω",
         "theory dt",
         "theory dt·ω",
-        "vs theory"
+        "vs theory",
+        "scene dt",
+        "dt·ω",
+        "vs theory",
+        "theory stiffest"
     )?;
     let limit = |class: Stability, z: Option<f64>| match (class, z) {
         (_, Some(z)) => format!("{z:.4}"),
         (Stability::Unconditional, None) => format!("> {}", r.dt_omega_range[1]),
         (_, None) => "none".to_string(),
     };
+    let seconds = |class: Stability, dt: Option<f64>| match (class, dt) {
+        (_, Some(dt)) => format!("{dt:.4e} s"),
+        (Stability::Unconditional, None) => "any".to_string(),
+        (_, None) => "none".to_string(),
+    };
+    let versus = |a: Option<f64>, b: Option<f64>| match (a, b) {
+        (Some(a), Some(b)) => format!("{:+.2} %", 100.0 * (a / b - 1.0)),
+        _ => "—".to_string(),
+    };
+    let theory_seconds = |t: &TheoryLimit| match t.dt {
+        Some(dt) => format!("{dt:.4e} s"),
+        None => t.stability.to_string(),
+    };
     for m in &r.methods {
-        let dt = m
-            .max_stable_dt
-            .map_or_else(|| "—".to_string(), |dt| format!("{dt:.4e} s"));
         let t = &m.damped_theory;
-        let (theory_dt, theory_z) = match (t.dt, t.dt_omega) {
-            (Some(dt), Some(z)) => (format!("{dt:.4e} s"), format!("{z:.4}")),
-            _ => (t.stability.to_string(), "—".to_string()),
-        };
-        let versus = match (m.linear_max_dt, t.dt) {
-            (Some(a), Some(b)) => format!("{:+.2} %", 100.0 * (a / b - 1.0)),
-            _ => "—".to_string(),
-        };
+        let theory_z = t
+            .dt_omega
+            .map_or_else(|| "—".to_string(), |z| format!("{z:.4}"));
         let binding = t.binding.map_or_else(String::new, |b| {
             let which = if b.stiffest { "ω_max" } else { "ω" };
             let kind = if b.lambda_im == 0.0 {
@@ -564,15 +590,18 @@ pub fn print_table(
         });
         writeln!(
             out,
-            "{:<21} {:<14} {:>14} {:>9} {:>11} {:>13} {:>14} {:>9}  {binding}",
+            "{:<21} {:<14} {:>13} {:>11} {:>13} {:>11} {:>9} │ {:>13} {:>9} {:>9} {:>15}  {binding}",
             m.method.name(),
             m.stability.name(),
-            dt,
-            limit(m.stability, m.limit_dt_omega),
+            seconds(m.linear_stability, m.linear_max_dt),
             limit(m.linear_stability, m.linear_dt_omega),
-            theory_dt,
+            theory_seconds(t),
             theory_z,
-            versus
+            versus(m.linear_max_dt, t.dt),
+            seconds(m.stability, m.max_stable_dt),
+            limit(m.stability, m.limit_dt_omega),
+            versus(m.max_stable_dt, t.dt),
+            theory_seconds(&m.stiffest_theory),
         )?;
         for c in m.confirmations.iter().filter(|c| !c.passed) {
             writeln!(
@@ -586,9 +615,14 @@ pub fn print_table(
     }
     writeln!(
         out,
-        "\nmax stable dt: linear limit confirmed by a run (halved and bisected when the run \
-         fails); linear dt·ω: perturbation growth alone; theory: the damped linear theory; \
-         vs theory: linear against theory ({:.2} s wall)",
+        "\nlinear dt: the largest dt at which a perturbation of the scene at rest does not grow \
+         (measured; the damped theory predicts it, vs theory compares the two). scene dt: the \
+         largest dt at which the whole scene, contacts and impacts included, runs without \
+         breaking (the linear limit confirmed by runs, lowered and bisected when one fails): \
+         the dt to use; stability is its class. theory stiffest: the damped theory linearised \
+         at the stiffest state above: an impact squeezes a body and stiffens its stiffest \
+         mode, so on scenes with impacts the scene dt lies between the two theories; below \
+         both, motion pumps a stiff mode (a nonlinear resonance) ({:.2} s wall)",
         wall_seconds
     )
 }

@@ -106,6 +106,18 @@ pub struct OmegaEstimate {
 /// If `state` has fewer particles than `model`.
 #[must_use]
 pub fn omega_max(model: &Model, state: &State) -> OmegaEstimate {
+    omega_max_from(model, state, &mut Vec::new())
+}
+
+/// [`omega_max`] started from `warm` (the vector a previous call left there) when it has one
+/// entry per particle and is not zero, else from the fixed start vector; leaves the final
+/// vector in `warm`. Along a motion sampled finely the stiffest mode changes little between
+/// samples, so a warm start needs a few iterations instead of thousands. The result is still
+/// the Rayleigh quotient of the last vector: a lower bound on `λ_max`.
+///
+/// # Panics
+/// If `state` has fewer particles than `model`.
+pub fn omega_max_from(model: &Model, state: &State, warm: &mut Vec<DVec3>) -> OmegaEstimate {
     let n = model.particle_count();
     let blocks = stiffness_blocks(model, &state.x);
     let free: Vec<bool> = (0..n).map(|i| !model.is_pinned(i)).collect();
@@ -122,7 +134,25 @@ pub fn omega_max(model: &Model, state: &State) -> OmegaEstimate {
             }
         })
         .collect();
-    let mut q = start_vector(&scale);
+    let mut q = if warm.len() == n && norm(warm) > 0.0 {
+        let mut q = std::mem::take(warm);
+        for (q, s) in q.iter_mut().zip(&scale) {
+            if *s == 0.0 {
+                *q = DVec3::ZERO;
+            }
+        }
+        let q_norm = norm(&q);
+        if q_norm > 0.0 {
+            for q in &mut q {
+                *q /= q_norm;
+            }
+            q
+        } else {
+            start_vector(&scale)
+        }
+    } else {
+        start_vector(&scale)
+    };
     let mut y = vec![DVec3::ZERO; n];
     let mut u = vec![DVec3::ZERO; n];
     let mut lambda = 0.0;
@@ -162,6 +192,7 @@ pub fn omega_max(model: &Model, state: &State) -> OmegaEstimate {
     } else {
         residual = 0.0;
     }
+    *warm = q;
     OmegaEstimate {
         omega: lambda.max(0.0).sqrt(),
         method: "power iteration",

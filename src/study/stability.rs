@@ -43,6 +43,34 @@
 //! (projection removes the stiff modes), yet at `dt·ω_max = 100` (6 s steps) one pass cannot
 //! pull a rope that fell 350 m in a step back together. The confirmation run finds these.
 //!
+//! # Linear, scene, and the stiffest state
+//!
+//! The report keeps the two limits apart: the **linear** limit is what the damped theory
+//! ([`super::theory`]) predicts and is compared with it; the **scene** limit (`max_stable_dt`,
+//! the confirmed one) is the dt to use. On the course scenes with impacts the scene limit is a
+//! few per cent lower (RK4: `cube-plane` -5.1 %, `jelly-bowl` -8.1 %, `cloth-spheres` -5.3 %;
+//! docs/stability.md), and that is not the contact code: an impact squeezes the body, and the
+//! stiffest mode of the squeezed body is stiffer than at rest (the springs' directions change;
+//! `ω_max` of `jelly-bowl` rises from 183.6 rad/s at rest to 194.4 rad/s in the impact on the
+//! hole's edge, which lowers the overdamped mode's limit by about `(194.4/183.6)² ≈ 1.12`,
+//! since `μ = (k_d/k) ω²`). Measured on
+//! `jelly-bowl` with RK4 at dt = 2.75e-3 s (the theory at rest allows 2.85e-3): the run
+//! diverges in the impact with the contact force left out of the stages, with the positional
+//! projection left out, and with both; and the step map linearised at the squeezed state of a
+//! run at 2.5e-3 s (contacts excluded, as in the linear test) grows perturbations at
+//! 77 s⁻¹ at every dt up to 2.65e-3 s (a physical, dt-independent rate: the squeezed lattice is
+//! not an equilibrium) and faster beyond it (104 s⁻¹ at 2.75e-3, 147 s⁻¹ at 2.84e-3), while at
+//! rest every one of those dt decays (`examples/squeezed_linearisation.rs` reproduces these).
+//!
+//! So the study also runs the scene once with its own methods and `dt` over the horizon,
+//! samples `ω_max` of every body every [`STIFFEST_SAMPLE_INTERVAL`] seconds (power iteration
+//! warm-started from the previous sample, [`super::modes::omega_max_from`]) and reports the
+//! **stiffest state** and each method's damped theory linearised there (`stiffest_theory`).
+//! The state is held only for an instant, so a run survives a little above that theory: on
+//! scenes with impacts the scene limit lies between the theory at the stiffest state and the
+//! theory at rest. Below both, the motion pumps a stiff mode (a nonlinear resonance, the
+//! rope's semi-implicit Euler below).
+//!
 //! # The search
 //!
 //! For each method, with `z = dt·ω_max`:
@@ -62,9 +90,9 @@ use serde::Serialize;
 
 use super::StudyError;
 use super::linear::{self, Linearisation};
-use super::modes::omega_max;
-use super::theory::{self, TheoryLimit};
-use crate::physics::{Method, energy};
+use super::modes::{omega_max, omega_max_from};
+use super::theory::{self, Spectrum, TheoryLimit};
+use crate::physics::{Method, State, energy};
 use crate::scene::{self, Scene};
 use crate::simulation::Simulation;
 
@@ -103,6 +131,9 @@ pub const CONFIRM_MARGIN: f64 = 0.95;
 pub const CONFIRM_ROUNDS: u32 = 4;
 /// Confirmation bisection stops within this relative width.
 pub const CONFIRM_TOLERANCE: f64 = 0.005;
+/// The stiffest state: the run of the scene is sampled every this many seconds (at least
+/// every step).
+pub const STIFFEST_SAMPLE_INTERVAL: f64 = 0.005;
 /// No probe may take more steps than this (see [`StudyError::TooManySteps`]).
 pub const MAX_STEPS: f64 = 1e9;
 
@@ -203,6 +234,11 @@ pub struct MethodLimit {
     pub theory_dt: Option<f64>,
     /// The damped theory for this scene: class, limit, binding mode and how it was obtained.
     pub damped_theory: TheoryLimit,
+    /// The damped theory linearised at the scene's stiffest state ([`StiffestState`]) (s);
+    /// null unless conditional there.
+    pub stiffest_theory_dt: Option<f64>,
+    /// That theory in full: class, limit, binding mode, how it was obtained.
+    pub stiffest_theory: TheoryLimit,
     /// The limit `dt·ω` on the undamped oscillator; null when none or unconditional.
     pub theory_dt_omega: Option<f64>,
     /// The stability class on the undamped oscillator.
@@ -211,6 +247,29 @@ pub struct MethodLimit {
     pub probes: Vec<Probe>,
     /// Every confirmation run, in the order taken.
     pub confirmations: Vec<Confirmation>,
+}
+
+/// The stiffest state of the scene along a run (module docs, "Linear, scene, and the stiffest
+/// state"): the scene with its own methods and `dt` over the horizon, `ω_max` of every body
+/// sampled every [`STIFFEST_SAMPLE_INTERVAL`] seconds.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StiffestState {
+    /// The method of the body whose state it is (the scene's own).
+    pub method: Method,
+    /// The run's time step (s): the scene's own.
+    pub dt: f64,
+    /// Samples taken (each body at each sampled step).
+    pub samples: u64,
+    /// When `ω_max` was largest (s).
+    pub time: f64,
+    /// The largest `ω_max` of the run (rad/s), the power iteration's lower bound.
+    pub omega_max: f64,
+    /// `omega_max / ω_max` at the start.
+    pub ratio: f64,
+    /// How the damped theory at that state was obtained.
+    pub theory_spectrum: String,
+    /// Why the run ended before the horizon (a divergence of the scene's own method), or null.
+    pub stopped: Option<String>,
 }
 
 /// What `springlab study stability --json` prints.
@@ -238,6 +297,8 @@ pub struct StabilityReport {
     pub energy_scale: f64,
     /// How the damped theory's spectrum was obtained.
     pub theory_spectrum: String,
+    /// Where along a run of the whole scene the stiffest mode is stiffest (module docs).
+    pub stiffest_state: StiffestState,
     /// The range of `dt·ω_max` probed, `[floor, ceiling]`.
     pub dt_omega_range: [f64; 2],
     /// One entry per method, in the order asked for.
@@ -446,12 +507,19 @@ pub fn stability(
             .map(|(b, e)| Linearisation::new(&b.model, &b.state, e.omega.max(omega * 1e-9)))
             .collect(),
     };
+    let (stiffest_state, stiffest_body, stiffest_spectrum) =
+        stiffest_state(scene, horizon, (stiffest, omega));
     let methods = options
         .methods
         .iter()
         .map(|&m| {
             let damped = theory::limit(m, &body.params, &spectrum);
-            context.search(m, damped, progress)
+            let at_stiffest =
+                theory::limit(m, &scene.bodies[stiffest_body].params, &stiffest_spectrum);
+            let mut limit = context.search(m, damped, progress);
+            limit.stiffest_theory_dt = at_stiffest.dt;
+            limit.stiffest_theory = at_stiffest;
+            limit
         })
         .collect();
     Ok(StabilityReport {
@@ -466,9 +534,81 @@ pub fn stability(
         definition: definition(horizon, scale),
         energy_scale: scale,
         theory_spectrum: spectrum.how,
+        stiffest_state,
         dt_omega_range: [DT_OMEGA_FLOOR, DT_OMEGA_CEILING],
         methods,
     })
+}
+
+/// The stiffest state of `scene` along a run of `horizon` seconds (s) with its own methods
+/// and `dt` (module docs), for library callers: [`StiffestState`] with `ω_max` of the stiffest
+/// body at the start as the reference of its `ratio`. `None` when no body has stiffness.
+#[must_use]
+pub fn stiffest(scene: &Scene, horizon: f64) -> Option<StiffestState> {
+    let (body, omega) = scene
+        .bodies
+        .iter()
+        .map(|b| omega_max(&b.model, &b.state).omega)
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .filter(|(_, w)| *w > 0.0 && w.is_finite())?;
+    Some(stiffest_state(scene, horizon, (body, omega)).0)
+}
+
+/// The stiffest state of `scene` along a run of `horizon` seconds (module docs): the report,
+/// the index of its body and the damped theory's spectrum there. `omega` (rad/s) is `ω_max` of
+/// body `stiffest` at the start, the answer when no sample is stiffer.
+fn stiffest_state(
+    scene: &Scene,
+    horizon: f64,
+    (stiffest, omega): (usize, f64),
+) -> (StiffestState, usize, Spectrum) {
+    let mut sim = Simulation::new(scene.clone());
+    sim.set_accounting(false);
+    let dt = scene.dt;
+    let every = ((STIFFEST_SAMPLE_INTERVAL / dt).round() as u64).max(1);
+    let steps = (horizon / dt).ceil() as u64;
+    let mut warm: Vec<Vec<DVec3>> = vec![Vec::new(); scene.bodies.len()];
+    // (ω_max, body, time, state) of the stiffest sample so far; the start counts.
+    let mut best: Option<(f64, usize, f64, State)> = None;
+    let mut samples = 0;
+    let mut stopped = None;
+    for k in 0..=steps {
+        if k > 0
+            && let Some(d) = sim.step()
+        {
+            stopped = Some(format!("diverged at t = {:.4e} s: {}", d.time, d.reason));
+            break;
+        }
+        if k % every != 0 && k != steps {
+            continue;
+        }
+        for (i, b) in sim.scene.bodies.iter().enumerate() {
+            let w = omega_max_from(&b.model, &b.state, &mut warm[i]).omega;
+            samples += 1;
+            if w.is_finite() && best.as_ref().is_none_or(|(top, ..)| w > *top) {
+                best = Some((w, i, sim.time(), b.state.clone()));
+            }
+        }
+    }
+    let (w, body, time, state) = match best {
+        Some((w, body, time, state)) if w > omega => (w, body, time, state),
+        // Never stiffer than at the start (or nothing finite): the start is the stiffest.
+        _ => (omega, stiffest, 0.0, scene.bodies[stiffest].state.clone()),
+    };
+    let b = &scene.bodies[body];
+    let spectrum = theory::spectrum(&b.model, &state, w);
+    let report = StiffestState {
+        method: b.method,
+        dt,
+        samples,
+        time,
+        omega_max: w,
+        ratio: w / omega,
+        theory_spectrum: spectrum.how.clone(),
+        stopped,
+    };
+    (report, body, spectrum)
 }
 
 /// Below a failed `z`: lower it by 5 % three times, then halve, until a run passes (none below
@@ -539,6 +679,8 @@ impl Context<'_> {
             linear_max_dt: linear_z.map(|z| z / self.omega),
             linear_dt_omega: linear_z,
             theory_dt: damped.dt,
+            stiffest_theory_dt: damped.dt,
+            stiffest_theory: damped.clone(),
             damped_theory: damped,
             theory_dt_omega,
             theory: theory_class,
