@@ -279,3 +279,134 @@ fn small_body<V: Lanes>(
 fn chunk_mut(values: &mut [f64], at: usize) -> &mut [f64; LANES] {
     (&mut values[at..at + LANES]).try_into().expect("a chunk")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bench::{Workload, setup};
+    use crate::physics::collide::ContactParams;
+    use crate::physics::forces::Model;
+    use crate::physics::particles::State;
+    use crate::physics::{Method, MethodParams, SpringKind, Workspace};
+    use crate::scene::builder::Builder;
+
+    /// Moves every particle and gives it a velocity (deterministic), so that every spring is
+    /// stretched and every damper works.
+    fn shaken(mut state: State) -> State {
+        let mut seed = 0x5eed_u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for (x, v) in state.x.iter_mut().zip(&mut state.v) {
+            *x += 0.01 * DVec3::new(next(), next(), next());
+            *v = DVec3::new(next(), next(), next());
+        }
+        state
+    }
+
+    /// The rope of `rope-se`, and a 7×7 cloth with drag (49 particles: a last chunk of one
+    /// particle; six offset groups), two corners pinned.
+    fn lattices() -> Vec<(Model, State)> {
+        let (rope, rope_state) = setup(Workload::RopeSe);
+        let mut b = Builder::new();
+        let n = 7u32;
+        for r in 0..n {
+            for c in 0..n {
+                b.particle(
+                    DVec3::new(f64::from(c) * 0.1, 1.0, f64::from(r) * 0.1),
+                    0.02,
+                );
+            }
+        }
+        b.pinned[0] = true;
+        b.pinned[n as usize - 1] = true;
+        let offsets = [(0, 1), (1, 0), (1, 1), (1, -1), (0, 2), (2, 0)];
+        for (k, (dr, dc)) in offsets.into_iter().enumerate() {
+            for r in 0..n as i32 {
+                for c in 0..n as i32 {
+                    let (qr, qc) = (r + dr, c + dc);
+                    if (0..n as i32).contains(&qr) && (0..n as i32).contains(&qc) {
+                        let (p, q) = ((r * n as i32 + c) as u32, (qr * n as i32 + qc) as u32);
+                        b.spring(p, q, 500.0 + 100.0 * k as f64, 0.05, SpringKind::Struct);
+                    }
+                }
+            }
+        }
+        let (cloth, cloth_state) = b.build(DVec3::new(0.0, -9.8, 0.0), 0.3);
+        vec![(rope, shaken(rope_state)), (cloth, shaken(cloth_state))]
+    }
+
+    fn bits(x: &[DVec3]) -> Vec<[u64; 3]> {
+        x.iter()
+            .map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
+            .collect()
+    }
+
+    #[test]
+    fn many_steps_in_one_call_are_the_single_steps_bit_for_bit() {
+        let params = MethodParams::default();
+        for (model, state) in lattices() {
+            for kernel in Kernel::ALL.into_iter().filter(|k| k.is_available()) {
+                let model = model.clone().with_kernel(kernel);
+                let stencil = model.stencil().expect("a lattice");
+                let label = format!("{} particles, {kernel:?}", stencil.particles());
+                let mut single = state.clone();
+                let mut work = Workspace::new();
+                for _ in 0..40 {
+                    Method::SemiImplicitEuler.step(&model, &mut single, 1e-4, &params, &mut work);
+                }
+                let mut many = state.clone();
+                let dynamics = model.dynamics(true);
+                assert!(
+                    stencil.semi_implicit_euler_steps(
+                        &mut many.x,
+                        &mut many.v,
+                        &dynamics,
+                        1e-4,
+                        40
+                    ),
+                    "{label}: not taken"
+                );
+                assert_eq!(bits(&many.x), bits(&single.x), "{label}: positions");
+                assert_eq!(bits(&many.v), bits(&single.v), "{label}: velocities");
+                // The same through `Method::steps`, in two calls.
+                let mut via = state.clone();
+                let mut work = Workspace::new();
+                let evals = Method::SemiImplicitEuler
+                    .steps(&model, &mut via, 1e-4, &params, &mut work, 15)
+                    + Method::SemiImplicitEuler
+                        .steps(&model, &mut via, 1e-4, &params, &mut work, 25);
+                assert_eq!(evals, 40);
+                assert_eq!(bits(&via.x), bits(&single.x), "{label}: Method::steps");
+                assert_eq!(bits(&via.v), bits(&single.v), "{label}: Method::steps");
+                // And the state moved.
+                assert_ne!(bits(&single.x), bits(&state.x));
+            }
+        }
+    }
+
+    #[test]
+    fn large_lattices_and_colliders_are_left_to_the_single_steps() {
+        let (jelly, mut state) = setup(Workload::JellySe);
+        let before = bits(&state.x);
+        let stencil = jelly.stencil().expect("a lattice");
+        let dynamics = jelly.dynamics(true);
+        assert!(!stencil.semi_implicit_euler_steps(&mut state.x, &mut state.v, &dynamics, 1e-4, 3));
+        assert_eq!(bits(&state.x), before);
+        let (rope, mut state) = setup(Workload::RopeSe);
+        let rope = rope.with_colliders(
+            vec![Collider::Sphere {
+                center: DVec3::new(0.5, 0.5, 0.0),
+                radius: 0.2,
+            }],
+            ContactParams::course_2021(),
+        );
+        let stencil = rope.stencil().expect("a lattice");
+        let dynamics = rope.dynamics(true);
+        assert!(!stencil.semi_implicit_euler_steps(&mut state.x, &mut state.v, &dynamics, 1e-4, 3));
+        assert_eq!(bits(&state.x), bits(&setup(Workload::RopeSe).1.x));
+    }
+}
