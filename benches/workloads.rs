@@ -26,5 +26,22 @@ fn one_step(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, one_step);
+/// A hundred steps of each rope in one [`Run::advance`] call, as `springlab bench` takes them:
+/// semi-implicit Euler on the rope keeps the particles in the stencil's layout between the steps
+/// (`Method::steps`), so this is less than a hundred times one step.
+fn hundred_rope_steps(c: &mut Criterion) {
+    let mut group = c.benchmark_group("workload 100 steps");
+    for w in [Workload::RopeSe, Workload::RopeVerlet] {
+        let mut run = Run::new(w);
+        group.bench_function(w.name(), |b| {
+            b.iter(|| {
+                run.advance(100);
+                black_box(&run.state);
+            });
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, one_step, hundred_rope_steps);
 criterion_main!(benches);

@@ -140,6 +140,34 @@ impl Method {
     }
 }
 
+impl Method {
+    /// `n` steps of [`Method::step`]; returns the force evaluations they took.
+    ///
+    /// Semi-implicit Euler on a small lattice (a rope) without energy accounting or projection
+    /// takes them in one call, with the particles in the stencil's layout in between: the same
+    /// numbers bit for bit, without converting the state at every step.
+    pub fn steps(
+        self,
+        model: &Model,
+        state: &mut State,
+        dt: f64,
+        params: &MethodParams,
+        work: &mut Workspace,
+        n: u64,
+    ) -> u64 {
+        if self == Method::SemiImplicitEuler
+            && n > 1
+            && let Some(evals) = semi_implicit_euler::steps(model, state, dt, work, n)
+        {
+            work.dissipated = Dissipated::default();
+            return evals;
+        }
+        (0..n)
+            .map(|_| self.step(model, state, dt, params, work))
+            .sum()
+    }
+}
+
 impl fmt::Display for Method {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
@@ -222,6 +250,8 @@ pub struct Workspace {
     pub(crate) lambda: Vec<f64>,
     /// Verlet: the springs as rods, in projection order.
     pub(crate) rods: Vec<crate::physics::constraints::Rod>,
+    /// Verlet: a chain's rods and particles laid out for the fast projection.
+    pub(crate) chain: crate::physics::constraints::ChainScratch,
     /// Statistics of the last implicit solve.
     pub last_solve: SolveStats,
     /// Implicit Euler: the contact constraints of the current step.

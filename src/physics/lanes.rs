@@ -56,6 +56,18 @@ pub(crate) trait Lanes: Copy {
         }
         Self::load(&values)
     }
+    /// `self` in the lanes whose bit is set in `mask`, `other` elsewhere (bits unchanged).
+    fn blend(self, other: Self, mask: u8) -> Self {
+        let (mut a, mut b) = ([0.0; LANES], [0.0; LANES]);
+        self.store(&mut a);
+        other.store(&mut b);
+        for l in 0..LANES {
+            if mask & (1 << l) == 0 {
+                a[l] = b[l];
+            }
+        }
+        Self::load(&a)
+    }
     /// Bit `l` set where lane `l` of `self` is less than that of `other` (false for NaN).
     fn less_than(self, other: Self) -> u8 {
         let (mut a, mut b) = ([0.0; LANES], [0.0; LANES]);
@@ -170,8 +182,8 @@ use std::arch::x86_64::__m512d;
 /// [`Lanes`] as one AVX-512 register.
 ///
 /// Its methods call AVX-512F instructions without checking the CPU: an `Avx512` value is only
-/// ever created inside `range_avx512` (a `target_feature(enable = "avx512f")` function, which
-/// runs only where AVX-512F was detected) or by the methods of a value that already exists, so
+/// ever created inside `range_avx512` or the chain projection's `passes_avx512`
+/// (`target_feature(enable = "avx512f")` functions, which run only where AVX-512F was detected) or by the methods of a value that already exists, so
 /// their code only runs where AVX-512F was detected.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
@@ -239,6 +251,11 @@ impl Lanes for Avx512 {
     fn select(self, mask: u8) -> Avx512 {
         // SAFETY: AVX-512F, see the type's docs.
         Avx512(unsafe { std::arch::x86_64::_mm512_maskz_mov_pd(mask, self.0) })
+    }
+    #[inline(always)]
+    fn blend(self, other: Avx512, mask: u8) -> Avx512 {
+        // SAFETY: AVX-512F, see the type's docs.
+        Avx512(unsafe { std::arch::x86_64::_mm512_mask_blend_pd(mask, other.0, self.0) })
     }
     #[inline(always)]
     fn less_than(self, other: Avx512) -> u8 {

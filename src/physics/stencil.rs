@@ -99,6 +99,7 @@
 mod contacts;
 mod kernels;
 mod passes;
+mod small;
 
 use std::cell::RefCell;
 use std::sync::Mutex;

@@ -46,6 +46,11 @@
 //! rod (an infinitely stiff spring, GAMES101 §1.3): each end moves half the error, a pinned end
 //! none. The spring forces still enter `a`, but after projection they are nearly zero.
 //!
+//! **Fast path.** On a chain (a rope) the projection computes eight rods of a colour at a time
+//! with the textbook's operations, so the same bits
+//! ([`project_distances_fast`](crate::physics::constraints::project_distances_fast); the
+//! workspace's `textbook` flag keeps the loop, and the tests compare the two).
+//!
 //! **Energy accounting**: the dampers' power at `(x_n, v_n)` times `dt` (what the force saw),
 //! `½ m (1 - (1 - γ)²) |x_n - x_{n-1}|²/dt²` for the factor, `dt r m |v_centred|²` for the rate,
 //! and the drop of the energy across the projection.
@@ -57,7 +62,7 @@
 
 use glam::DVec3;
 
-use crate::physics::constraints::{prepare_rods, project_distances};
+use crate::physics::constraints::{prepare_rods, project_distances, project_distances_fast};
 use crate::physics::forces::{Model, accelerations};
 
 use crate::physics::integrators::{MethodParams, Workspace, power_if};
@@ -73,12 +78,14 @@ pub(super) fn step(
     let Workspace {
         a,
         rods,
+        chain,
+        textbook,
         account,
         dissipated,
         power_f,
         ..
     } = work;
-    let account = *account;
+    let (account, textbook) = (*account, *textbook);
     accelerations(model, &state.x, &state.v, a);
     let dt2 = dt * dt;
     if !state.history_valid {
@@ -123,7 +130,12 @@ pub(super) fn step(
             0.0
         };
         prepare_rods(model, rods);
-        project_distances(rods, &mut state.x, params.iterations);
+        if textbook {
+            project_distances(rods, &mut state.x, params.iterations);
+        } else {
+            // The same operations, eight rods at a time on a chain (`constraints/chain.rs`).
+            project_distances_fast(rods, &mut state.x, params.iterations, chain);
+        }
         if account {
             // Projection is inelastic: what it takes out (or, rarely, puts in).
             dissipated.method += before - mechanical_energy(model, &state.x, &state.x_prev, dt);
