@@ -202,7 +202,7 @@ impl Default for MethodParams {
             verlet_damping_rate: 0.0,
             iterations: 1,
             substeps: 10,
-            cg_tolerance: 1e-10,
+            cg_tolerance: 1e-3,
             cg_max_iterations: 1000,
         }
     }

@@ -46,14 +46,17 @@
 //! Δv·N    = (v_n + Δv)·N - φ̃/dt - v_n·N       prescribed: x_{n+1} lands on the surface
 //! (S A S) y = S (b - A z),   Δv = z + y       z: the prescribed parts, y ⊥ N
 //! ```
-//! where `φ̃` is in m. Up to [`MAX_CONTACT_PASSES`] solves add the particles that the previous one
-//! still carried inside. The springs then feel the contact within the same implicit step, the
-//! constraint only slows the approach (it removes kinetic energy), and the collision response
-//! after the step ([`crate::physics::collide::resolve`]) finds the particle on the surface: it
-//! bounces it with the restitution and moves nothing, so no spring is squeezed by a projection.
-//! The first pass of a step that may meet a contact only finds the contacts: it stops at the
-//! relative residual [`FIND_TOLERANCE`] (10⁻³), and the last pass goes on to the user's
-//! tolerance from there (a missed contact is caught by the check after that pass).
+//! where `φ̃` is in m. The contact set is found by an active-set loop of up to
+//! [`MAX_CONTACT_PASSES`] solves: a solve adds the particles it still carries inside, and
+//! releases the constrained ones whose constraint impulse `J_i = (A Δv - b)_i·N_i` is negative
+//! (a contact pushes, it never pulls: `J ≥ 0`), then solves again from its own `Δv`. The
+//! springs then feel the contact within the same implicit step, the constraint only slows the
+//! approach (it removes kinetic energy), and the collision response after the step
+//! ([`crate::physics::collide::resolve`]) finds the particle on the surface: it bounces it with
+//! the restitution and moves nothing, so no spring is squeezed by a projection. With the warm
+//! start (below) the first solve starts from the last step's contact set, re-aimed at where the
+//! warm start carries each particle, so a resting contact costs one solve, not two (a missed
+//! contact is caught by the check after the last pass).
 //!
 //! **Contacts with spheres** (the cloth scenes' dynamic and kinematic spheres) are constraints
 //! the same way, against the sphere where it ends the step
@@ -226,30 +229,35 @@ fn textbook(
         diag_inv,
         rhs,
     };
-    constraints.clear();
     let contacts = has_contacts(model, state);
-    let mut tolerance = first_tolerance(contacts, params.cg_tolerance);
+    if warm && contacts {
+        carry_over(model, state, dt, &cg[0], constraints);
+    } else {
+        constraints.clear();
+    }
     let mut stats = SolveStats::default();
     loop {
         // Later passes start from the previous pass's Δv (it changed only near contacts).
         let (iterations, residual, converged) = system.solve(
             constraints,
-            (tolerance, params.cg_max_iterations),
+            (params.cg_tolerance, params.cg_max_iterations),
             cg,
             warm || stats.passes > 0,
         );
         stats.record(iterations, residual, converged);
-        if !converged {
+        if !converged || !contacts || stats.passes >= MAX_CONTACT_PASSES {
             break;
         }
-        // Particles this solve carries into a collider: prescribe their normal velocity.
-        let added = contacts
-            && stats.passes < MAX_CONTACT_PASSES
-            && add_contacts(model, state, dt, &cg[0], constraints);
-        if !added && tolerance == params.cg_tolerance {
+        // Release the constraints that pull; prescribe the particles this solve carries into
+        // a collider.
+        let [dv, _, _, ap] = &mut *cg;
+        let released = !constraints.is_empty() && {
+            system.apply(dv, ap);
+            release_pulling(constraints, |i| ap[i] - system.rhs[i])
+        };
+        if !(add_contacts(model, state, dt, dv, constraints) || released) {
             break;
         }
-        tolerance = params.cg_tolerance;
     }
     stats.constrained = constraints.len() as u32;
     *last_solve = stats;
@@ -347,39 +355,46 @@ fn step_lattice(
         &state.v,
         f,
     );
-    constraints.clear();
     let contacts = has_contacts(model, state);
-    let mut tolerance = first_tolerance(contacts, params.cg_tolerance);
-    let mut stats = SolveStats::default();
     let dv = &mut cg[0];
+    if warm && contacts {
+        carry_over(model, state, dt, dv, constraints);
+    } else {
+        constraints.clear();
+    }
+    let mut stats = SolveStats::default();
+    let mut fresh = false;
     loop {
         let start = (warm && stats.passes == 0).then_some(&dv[..]);
         let (iterations, residual, converged) = lattice.solve(
             constraints,
-            tolerance,
+            params.cg_tolerance,
             params.cg_max_iterations,
             stats.passes > 0,
             start,
         );
         lattice.copy_dv(dv);
         stats.record(iterations, residual, converged);
-        if !converged {
+        if !converged || !contacts || stats.passes >= MAX_CONTACT_PASSES {
             break;
         }
-        let added = contacts
-            && stats.passes < MAX_CONTACT_PASSES
-            && add_contacts(model, state, dt, dv, constraints);
-        if !added && tolerance == params.cg_tolerance {
+        let released =
+            !constraints.is_empty() && release_pulling(constraints, lattice.residual_force());
+        if !(add_contacts(model, state, dt, dv, constraints) || released) {
+            // The products of the release test are this Δv's: the impulses below reuse them.
+            fresh = !constraints.is_empty();
             break;
         }
-        tolerance = params.cg_tolerance;
     }
     stats.constrained = constraints.len() as u32;
     *last_solve = stats;
     if !constraints.is_empty() && (*account || constraints.iter().any(|c| c.sphere.is_some())) {
         // The constraint impulses (A Δv - b)·N and the spheres' reactions, as in the textbook
         // step.
-        let impulse = lattice.residual_force();
+        if !fresh {
+            lattice.update_residual_force();
+        }
+        let impulse = lattice.last_residual_force();
         let removed = contact_impulses(state, constraints, dv, impulse);
         if *account {
             dissipated.contacts += removed;
@@ -406,19 +421,7 @@ fn add_contacts(
 ) -> bool {
     // Deeper than this (m) counts as inside: rounding of a landing exactly on the surface is not.
     const DEPTH: f64 = 1e-12;
-    // Where each sphere ends this step (`collide::advance_spheres`: gravity, then the move).
-    let ends: Vec<(DVec3, f64)> = state
-        .spheres
-        .iter()
-        .map(|s| {
-            let velocity = if s.kinematic {
-                s.velocity
-            } else {
-                s.velocity + dt * model.gravity
-            };
-            (s.center + dt * velocity, s.radius)
-        })
-        .collect();
+    let ends = sphere_ends(model, state, dt);
     let mut changed = false;
     for i in 0..state.x.len() {
         if model.inv_mass[i] == 0.0 {
@@ -426,27 +429,9 @@ fn add_contacts(
         }
         let v = state.v[i] + dv[i];
         let x = state.x[i] + dt * v;
-        let colliders = model
-            .colliders
-            .iter()
-            .filter_map(|c| c.contact(x))
-            .map(|c| (c, None));
-        let spheres = ends
-            .iter()
-            .enumerate()
-            .filter_map(|(k, &(center, radius))| {
-                let d = x - center;
-                let distance = d.length();
-                (distance > 0.0).then(|| {
-                    let (phi, normal) = (distance - radius, d / distance);
-                    (Contact { phi, normal }, Some(k))
-                })
-            });
-        let deepest = colliders
-            .chain(spheres)
-            .filter(|(c, _)| c.phi < -DEPTH)
-            .min_by(|a, b| a.0.phi.total_cmp(&b.0.phi));
-        let Some((contact, sphere)) = deepest else {
+        let Some((contact, sphere)) =
+            nearest_contact(model, &ends, x, true).filter(|(c, _)| c.phi < -DEPTH)
+        else {
             continue;
         };
         // (v_n + Δv)·N - φ̃/dt is the normal velocity that ends on the surface.
@@ -466,18 +451,92 @@ fn add_contacts(
     changed
 }
 
-/// The relative residual (dimensionless) at which a solve that only finds contacts stops
-/// (module docs, "Contacts inside the solve").
-pub const FIND_TOLERANCE: f64 = 1e-3;
+/// The last step's constraints as the first guess of this step's (with the warm start): each
+/// constrained particle gets the contact nearest to where the warm start `dv` carries it
+/// (collider or sphere, inside or not) and the normal velocity that lands it there. A guess that
+/// pulls is released after the first solve ([`release_pulling`]); one that is missing is found
+/// by [`add_contacts`].
+fn carry_over(
+    model: &Model,
+    state: &State,
+    dt: f64,
+    dv: &[DVec3],
+    constraints: &mut Vec<Constraint>,
+) {
+    let ends = sphere_ends(model, state, dt);
+    constraints.retain_mut(|c| {
+        let v = state.v[c.i] + dv[c.i];
+        let x = state.x[c.i] + dt * v;
+        let Some((contact, sphere)) = nearest_contact(model, &ends, x, false) else {
+            return false;
+        };
+        *c = Constraint {
+            i: c.i,
+            normal: contact.normal,
+            dv_n: v.dot(contact.normal) - contact.phi / dt - state.v[c.i].dot(contact.normal),
+            sphere,
+        };
+        true
+    });
+}
 
-/// The first pass's tolerance: [`FIND_TOLERANCE`] where contacts may be found (unless the
-/// user's is looser), else the user's `tolerance`.
-fn first_tolerance(contacts: bool, tolerance: f64) -> f64 {
-    if contacts {
-        tolerance.max(FIND_TOLERANCE)
-    } else {
-        tolerance
-    }
+/// Removes the constraints whose impulse `J_i = (A Δv - b)_i·N_i` (N·s; `impulse(i)` is
+/// `(A Δv - b)_i`) is negative: a contact pushes, it never pulls a particle onto a surface it
+/// would leave (the contact's complementarity condition, `J ≥ 0`). Returns whether any went.
+fn release_pulling(constraints: &mut Vec<Constraint>, impulse: impl Fn(usize) -> DVec3) -> bool {
+    let before = constraints.len();
+    constraints.retain(|c| impulse(c.i).dot(c.normal) >= 0.0);
+    constraints.len() != before
+}
+
+/// Where each sphere ends this step (`collide::advance_spheres`: gravity, then the move), and
+/// its radius (m).
+fn sphere_ends(model: &Model, state: &State, dt: f64) -> Vec<(DVec3, f64)> {
+    state
+        .spheres
+        .iter()
+        .map(|s| {
+            let velocity = if s.kinematic {
+                s.velocity
+            } else {
+                s.velocity + dt * model.gravity
+            };
+            (s.center + dt * velocity, s.radius)
+        })
+        .collect()
+}
+
+/// The contact with the smallest signed distance at `x` over the colliders and the spheres'
+/// end positions `ends` (the sphere's index with it), if any; with `inside`, the spheres that
+/// `x` is outside of are skipped (a test of the squared distance, no square root).
+fn nearest_contact(
+    model: &Model,
+    ends: &[(DVec3, f64)],
+    x: DVec3,
+    inside: bool,
+) -> Option<(Contact, Option<usize>)> {
+    let colliders = model
+        .colliders
+        .iter()
+        .filter_map(|c| c.contact(x))
+        .map(|c| (c, None));
+    let spheres = ends
+        .iter()
+        .enumerate()
+        .filter_map(|(k, &(center, radius))| {
+            let d = x - center;
+            if inside && d.length_squared() >= radius * radius {
+                return None;
+            }
+            let distance = d.length();
+            (distance > 0.0).then(|| {
+                let (phi, normal) = (distance - radius, d / distance);
+                (Contact { phi, normal }, Some(k))
+            })
+        });
+    colliders
+        .chain(spheres)
+        .min_by(|a, b| a.0.phi.total_cmp(&b.0.phi))
 }
 
 /// True when the step may need contact constraints: colliders or spheres.

@@ -193,11 +193,21 @@ impl Lattice {
     /// The constraint impulses' `(A Δv - b)_i` (N·s) of the last solve, particle `i` (the
     /// product is computed once, into the scratch vector `ap`).
     pub(crate) fn residual_force(&mut self) -> impl Fn(usize) -> DVec3 + '_ {
+        self.update_residual_force();
+        self.last_residual_force()
+    }
+
+    /// Computes `A Δv` of the last solve into the scratch vector `ap`.
+    pub(crate) fn update_residual_force(&mut self) {
         let dv = std::mem::take(&mut self.dv);
         let mut ap = std::mem::take(&mut self.ap);
         apply_dispatch(self, &dv, &mut ap);
         self.dv = dv;
         self.ap = ap;
+    }
+
+    /// `(A Δv - b)_i` as [`Lattice::residual_force`] computed it last (Δv unchanged since).
+    pub(crate) fn last_residual_force(&self) -> impl Fn(usize) -> DVec3 + '_ {
         move |i| {
             let k = self.front + i;
             DVec3::new(
@@ -218,7 +228,9 @@ fn apply_dispatch(sys: &Lattice, p: &Soa, out: &mut Soa) {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: as above.
         Some(Kernel::Avx2) => unsafe { apply_avx2(sys, p, out) },
-        _ => apply::<Plain>(sys, p, out),
+        _ => {
+            apply::<Plain>(sys, p, out);
+        }
     }
 }
 
@@ -363,9 +375,11 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64) {
     }
 }
 
-/// `out = A p` (see the module docs), zero at pinned particles and in the margins.
+/// `out = A p` (see the module docs), zero at pinned particles and in the margins; returns
+/// `p·out` (the conjugate-gradient step's `pᵀ A p`, summed in the same pass).
 #[inline(always)]
-fn apply<V: Lanes>(sys: &Lattice, p: &Soa, out: &mut Soa) {
+fn apply<V: Lanes>(sys: &Lattice, p: &Soa, out: &mut Soa) -> f64 {
+    let mut p_out = V::zero();
     for q in (0..sys.n.next_multiple_of(LANES)).step_by(LANES) {
         let i = sys.front + q;
         let pq = triple::<V>(p, i);
@@ -395,12 +409,22 @@ fn apply<V: Lanes>(sys: &Lattice, p: &Soa, out: &mut Soa) {
             }
         }
         let free: V = at(&sys.free, i);
-        put_triple(
-            out,
-            i,
-            [acc[0].mul(free), acc[1].mul(free), acc[2].mul(free)],
-        );
+        let y = [acc[0].mul(free), acc[1].mul(free), acc[2].mul(free)];
+        p_out = p_out
+            .add(pq[0].mul(y[0]))
+            .add(pq[1].mul(y[1]))
+            .add(pq[2].mul(y[2]));
+        put_triple(out, i, y);
     }
+    sum_lanes(p_out)
+}
+
+/// The sum of the lanes of `v`, in a fixed order.
+#[inline(always)]
+fn sum_lanes<V: Lanes>(v: V) -> f64 {
+    let mut values = [0.0; LANES];
+    v.store(&mut values);
+    values.iter().sum()
 }
 
 /// `Σ a·b` over all particles, in lanes, added in a fixed order.
@@ -478,7 +502,7 @@ fn solve_body<V: Lanes>(
             dv[2][k] += (c.dv_n - along) * n.z;
         }
         // r = S (b - A z_0), pinned rows zero; |b|² over the free particles.
-        apply::<V>(sys, &dv, &mut ap);
+        let _ = apply::<V>(sys, &dv, &mut ap);
         let mut b2 = V::zero();
         for i in chunks() {
             let free: V = at(&sys.free, i);
@@ -514,25 +538,38 @@ fn solve_body<V: Lanes>(
         let mut r_norm2 = dot::<V>(sys, &r, &r);
         let mut iterations = 0;
         while r_norm2 > tol2 && iterations < max_iterations {
-            apply::<V>(sys, &p, &mut ap);
+            // p ⊥ N at the constrained particles, so pᵀ S A p = pᵀ A p: the product's own sum.
+            let p_ap = apply::<V>(sys, &p, &mut ap);
             filter(front, constraints, &mut ap);
-            let p_ap = dot::<V>(sys, &p, &ap);
             if p_ap.is_nan() || p_ap <= 0.0 {
                 break;
             }
+            // One pass: Δv += α p, r -= α S A p, |r|², z = P⁻¹ r and r·z (r = S r, so
+            // r·S z = r·z: the filter of z can follow).
             let alpha = V::splat(rz / p_ap);
+            let (mut rr, mut rzv) = (V::zero(), V::zero());
             for i in chunks() {
+                let mut rn = [V::zero(); 3];
                 for c in 0..3 {
                     let d = at::<V>(&dv[c], i).add(alpha.mul(at(&p[c], i)));
                     put(&mut dv[c], i, d);
-                    let e = at::<V>(&r[c], i).sub(alpha.mul(at(&ap[c], i)));
-                    put(&mut r[c], i, e);
+                    rn[c] = at::<V>(&r[c], i).sub(alpha.mul(at(&ap[c], i)));
+                    put(&mut r[c], i, rn[c]);
                 }
+                let y = sym_mul(&block::<V>(&sys.diag_inv, i), rn);
+                put_triple(&mut z, i, y);
+                rr = rr
+                    .add(rn[0].mul(rn[0]))
+                    .add(rn[1].mul(rn[1]))
+                    .add(rn[2].mul(rn[2]));
+                rzv = rzv
+                    .add(rn[0].mul(y[0]))
+                    .add(rn[1].mul(y[1]))
+                    .add(rn[2].mul(y[2]));
             }
-            r_norm2 = dot::<V>(sys, &r, &r);
-            precondition::<V>(sys, &r, &mut z);
+            r_norm2 = sum_lanes(rr);
             filter(front, constraints, &mut z);
-            let rz_new = dot::<V>(sys, &r, &z);
+            let rz_new = sum_lanes(rzv);
             let beta = V::splat(rz_new / rz);
             rz = rz_new;
             for i in chunks() {
