@@ -46,7 +46,7 @@ use super::forces::Model;
 use super::particles::State;
 use super::stencil::{After, Output, Stencil, Update};
 
-pub use implicit_euler::{MAX_CONTACT_PASSES, SolveStats};
+pub use implicit_euler::{MAX_CONTACT_PASSES, SolveStats, guard_energy};
 
 /// An integration method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -83,6 +83,7 @@ use glam::{DMat3, DVec3};
 use serde::Serialize;
 
 use crate::physics::collide::Contact;
+use crate::physics::energy::{Energy, energy, energy_with_elastic};
 use crate::physics::forces::{Model, forces};
 use crate::physics::integrators::{MethodParams, Workspace, fused, power_if};
 use crate::physics::particles::State;
@@ -303,6 +304,19 @@ pub(super) fn step(
     match fused(model, work) {
         Some(stencil) => step_lattice(stencil, model, state, dt, params, work),
         None => textbook(model, state, dt, params, work),
+    }
+}
+
+/// The energy of `state` (J) as [`crate::physics::energy`] sums it, with the springs' elastic
+/// term summed on the lattice where there is one (eight springs at a time; equal to rounding).
+/// `Simulation`'s energy guard compares two of these around every step.
+pub fn guard_energy(model: &Model, state: &State, work: &mut Workspace) -> Energy {
+    match fused(model, work) {
+        Some(stencil) => {
+            let elastic = work.lattice.elastic_energy(stencil, &state.x);
+            energy_with_elastic(model, state, elastic)
+        }
+        None => energy(model, state),
     }
 }
 

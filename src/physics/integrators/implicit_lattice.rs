@@ -177,6 +177,27 @@ impl Lattice {
         }
     }
 
+    /// The springs' elastic energy `Σ ½ k (|x_{p+δ} - x_p| - L0)²` (J) at `x` (m): the spring
+    /// list's sum ([`crate::physics::energy`]) by offset group, eight springs at a time (equal
+    /// to it up to rounding). Uses the position arrays as scratch.
+    pub(crate) fn elastic_energy(&mut self, stencil: &Stencil, x: &[DVec3]) -> f64 {
+        self.resize(stencil);
+        for (i, xi) in x.iter().enumerate().take(self.n) {
+            for c in 0..3 {
+                self.x[c][self.front + i] = xi[c];
+            }
+        }
+        match stencil.kernel() {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the stencil chooses AVX-512 only on a CPU that has it.
+            Kernel::Avx512 => unsafe { elastic_avx512(self, stencil) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the stencil chooses AVX2 only on a CPU that has it.
+            Kernel::Avx2 => unsafe { elastic_avx2(self, stencil) },
+            _ => elastic_body::<Plain>(self, stencil),
+        }
+    }
+
     /// Δv of the last solve (m/s), particle `i`.
     pub(crate) fn dv(&self, i: usize) -> DVec3 {
         let k = self.front + i;
@@ -373,6 +394,35 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64) {
             put(d, i, e.mul(inv_det));
         }
     }
+}
+
+/// `Σ ½ k (L - L0)²` over the groups' springs at the positions in `sys.x`.
+#[inline(always)]
+fn elastic_body<V: Lanes>(sys: &Lattice, stencil: &Stencil) -> f64 {
+    let front = sys.front;
+    let mut total = 0.0;
+    for g in stencil.group_views() {
+        let mut sum = V::zero();
+        for p in (0..g.starts).step_by(LANES) {
+            let (i, j) = (front + p, front + p + g.delta);
+            let d = [
+                at::<V>(&sys.x[0], j).sub(at(&sys.x[0], i)),
+                at::<V>(&sys.x[1], j).sub(at(&sys.x[1], i)),
+                at::<V>(&sys.x[2], j).sub(at(&sys.x[2], i)),
+            ];
+            let length = d[0]
+                .mul(d[0])
+                .add(d[1].mul(d[1]))
+                .add(d[2].mul(d[2]))
+                .sqrt();
+            let stretch = length
+                .sub(at(g.rest_length, p))
+                .select(g.present[p / LANES]);
+            sum = sum.add(stretch.mul(stretch));
+        }
+        total += 0.5 * g.stiffness * sum_lanes(sum);
+    }
+    total
 }
 
 /// `out = A p` (see the module docs), zero at pinned particles and in the margins; returns
@@ -625,6 +675,18 @@ fn solve_avx2(
     warm: bool,
 ) -> (u32, f64, bool) {
     solve_body::<Avx2>(sys, constraints, tolerance, max_iterations, warm)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn elastic_avx512(sys: &Lattice, stencil: &Stencil) -> f64 {
+    elastic_body::<Avx512>(sys, stencil)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn elastic_avx2(sys: &Lattice, stencil: &Stencil) -> f64 {
+    elastic_body::<Avx2>(sys, stencil)
 }
 
 #[cfg(target_arch = "x86_64")]
