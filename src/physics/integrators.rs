@@ -254,6 +254,9 @@ pub struct Workspace {
     /// Implicit Euler: the last step's `Δv` (m/s) and its `dt` (s), for the warm start.
     pub(crate) last_dv: Vec<DVec3>,
     pub(crate) last_dt: f64,
+    /// The `Δv` and `dt` of the step before that (the warm start's extrapolation).
+    pub(crate) before_dv: Vec<DVec3>,
+    pub(crate) before_dt: f64,
     /// Implicit Euler's system on a lattice (`implicit_lattice`).
     pub(crate) lattice: implicit_lattice::Lattice,
 }

@@ -183,6 +183,8 @@ fn textbook(
         power_f,
         last_dv,
         last_dt,
+        before_dv,
+        before_dt,
         ..
     } = work;
 
@@ -274,8 +276,7 @@ fn textbook(
     }
 
     let dv = &cg[0];
-    last_dv.clone_from(dv);
-    *last_dt = dt;
+    remember((last_dv, last_dt), (before_dv, before_dt), dv, dt);
     advance(model, state, dt, dv);
     // D_{n+1} = D_n + dt P(x_{n+1}, v_{n+1}): backward Euler on D' = P too, when accounting.
     dissipated.add_power(dt, power_if(*account, model, &state.x, &state.v, power_f));
@@ -320,18 +321,50 @@ pub fn guard_energy(model: &Model, state: &State, work: &mut Workspace) -> Energ
     }
 }
 
-/// With `work.warm_start` and a last step of the same size: the last step's `Δv` scaled by
-/// the ratio of the steps (the velocity change of a step is about `dt a`), in `cg[0]`.
+/// With `work.warm_start` and a last step: the start of the solve in `cg[0]`. The velocity
+/// change of a step is about `dt a`, and `a` changes smoothly between steps, so the guess is the
+/// last step's `Δv` scaled by the ratio of the steps, extrapolated linearly over the two last
+/// steps when they had this step's `dt`:
+///
+/// ```text
+/// Δv_guess = 2 Δv_{n-1} - Δv_{n-2}      (dt_{n-1} = dt_{n-2} = dt)
+/// Δv_guess = (dt / dt_{n-1}) Δv_{n-1}   (otherwise)
+/// ```
+/// where the `Δv` are in m/s. Only the start changes: the solve goes on to its tolerance.
 fn warm_start(work: &mut Workspace, dt: f64) -> bool {
     let n = work.cg[0].len();
     if !(work.warm_start && work.last_dv.len() == n && work.last_dt > 0.0) {
         return false;
+    }
+    if work.last_dt == dt && work.before_dt == dt && work.before_dv.len() == n {
+        for ((start, last), before) in work.cg[0]
+            .iter_mut()
+            .zip(&work.last_dv)
+            .zip(&work.before_dv)
+        {
+            *start = 2.0 * *last - *before;
+        }
+        return true;
     }
     let scale = dt / work.last_dt;
     for (start, last) in work.cg[0].iter_mut().zip(&work.last_dv) {
         *start = scale * *last;
     }
     true
+}
+
+/// Keeps this step's `Δv` and `dt` (and the last step's) for the next warm start.
+fn remember(
+    work_last: (&mut Vec<DVec3>, &mut f64),
+    work_before: (&mut Vec<DVec3>, &mut f64),
+    dv: &[DVec3],
+    dt: f64,
+) {
+    std::mem::swap(work_last.0, work_before.0);
+    *work_before.1 = *work_last.1;
+    work_last.0.clear();
+    work_last.0.extend_from_slice(dv);
+    *work_last.1 = dt;
 }
 
 /// The same step on a lattice (`implicit_lattice`): the same system, its blocks stored by
@@ -355,6 +388,8 @@ fn step_lattice(
         power_f,
         last_dv,
         last_dt,
+        before_dv,
+        before_dt,
         lattice,
         ..
     } = work;
@@ -414,8 +449,7 @@ fn step_lattice(
             dissipated.contacts += removed;
         }
     }
-    last_dv.clone_from(dv);
-    *last_dt = dt;
+    remember((last_dv, last_dt), (before_dv, before_dt), dv, dt);
     advance(model, state, dt, dv);
     // D_{n+1} = D_n + dt P(x_{n+1}, v_{n+1}), when accounting.
     dissipated.add_power(dt, power_if(*account, model, &state.x, &state.v, power_f));
@@ -529,28 +563,34 @@ fn nearest_contact(
     x: DVec3,
     inside: bool,
 ) -> Option<(Contact, Option<usize>)> {
-    let colliders = model
-        .colliders
-        .iter()
-        .filter_map(|c| c.contact(x))
-        .map(|c| (c, None));
-    let spheres = ends
-        .iter()
-        .enumerate()
-        .filter_map(|(k, &(center, radius))| {
-            let d = x - center;
-            if inside && d.length_squared() >= radius * radius {
-                return None;
-            }
-            let distance = d.length();
-            (distance > 0.0).then(|| {
-                let (phi, normal) = (distance - radius, d / distance);
-                (Contact { phi, normal }, Some(k))
-            })
-        });
-    colliders
-        .chain(spheres)
-        .min_by(|a, b| a.0.phi.total_cmp(&b.0.phi))
+    // The first of the smallest, colliders before spheres.
+    let mut nearest: Option<(Contact, Option<usize>)> = None;
+    let mut consider = |contact: Contact, sphere: Option<usize>| {
+        if nearest.is_none_or(|(n, _)| contact.phi.total_cmp(&n.phi).is_lt()) {
+            nearest = Some((contact, sphere));
+        }
+    };
+    for c in &model.colliders {
+        if let Some(contact) = c.contact(x) {
+            consider(contact, None);
+        }
+    }
+    for (k, &(center, radius)) in ends.iter().enumerate() {
+        let d = x - center;
+        let distance2 = d.length_squared();
+        if (inside && distance2 >= radius * radius) || distance2 == 0.0 {
+            continue;
+        }
+        let distance = distance2.sqrt();
+        consider(
+            Contact {
+                phi: distance - radius,
+                normal: d / distance,
+            },
+            Some(k),
+        );
+    }
+    nearest
 }
 
 /// True when the step may need contact constraints: colliders or spheres.
