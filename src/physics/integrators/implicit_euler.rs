@@ -89,6 +89,8 @@ use crate::physics::integrators::{MethodParams, Workspace, fused, power_if};
 use crate::physics::particles::State;
 use crate::physics::stencil::Stencil;
 
+use super::implicit_lattice::Forces;
+
 /// At most this many solves per step: the first without contact constraints, each further one
 /// with the particles the previous solve carried into a collider.
 pub const MAX_CONTACT_PASSES: u32 = 4;
@@ -393,7 +395,16 @@ fn step_lattice(
         lattice,
         ..
     } = work;
-    forces(model, &state.x, &state.v, f);
+    // f_n: with colliders from `forces` (the contact forces need the total), else summed by the
+    // assembly itself.
+    let given = if model.colliders.is_empty() {
+        Forces::Springs {
+            gravity: model.gravity,
+        }
+    } else {
+        forces(model, &state.x, &state.v, f);
+        Forces::Given(f)
+    };
     lattice.assemble(
         stencil,
         &model.mass,
@@ -402,7 +413,7 @@ fn step_lattice(
         dt,
         &state.x,
         &state.v,
-        f,
+        given,
     );
     let contacts = has_contacts(model, state);
     let dv = &mut cg[0];

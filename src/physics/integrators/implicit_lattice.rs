@@ -40,6 +40,16 @@ struct Blocks {
     kv: [Vec<f64>; 3],
 }
 
+/// Where the assembly's forces `f_n` come from.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Forces<'a> {
+    /// Computed elsewhere (N), per particle.
+    Given(&'a [DVec3]),
+    /// Weight `m g` and drag `-c v` with `gravity` (m/s²), and the springs' forces summed by the
+    /// assembly: `f_a = (k (L - L0) + k_d (v_b - v_a)·n) n`, `f_b = -f_a`.
+    Springs { gravity: DVec3 },
+}
+
 /// Three components as structure of arrays, indexed `front + particle`.
 type Soa = [Vec<f64>; 3];
 
@@ -103,8 +113,11 @@ impl Lattice {
         (self.dv, self.r, self.p, self.ap, self.z) = (soa(), soa(), soa(), soa(), soa());
     }
 
-    /// Assembles the system of a step of `dt` (s) at `(x, v)` with the forces `f` (N) (the
-    /// textbook's assembly loop, by offset group; see the module docs).
+    /// Assembles the system of a step of `dt` (s) at `(x, v)` (the textbook's assembly loop, by
+    /// offset group; see the module docs). `forces` is either the forces `f_n` (N) computed
+    /// elsewhere, or [`Forces::Springs`]: weight and drag, with the spring forces summed here
+    /// from the lengths and directions the blocks need anyway (no pass of its own; a model
+    /// with colliders needs the other: its contact forces depend on the total).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn assemble(
         &mut self,
@@ -115,7 +128,7 @@ impl Lattice {
         dt: f64,
         x: &[DVec3],
         v: &[DVec3],
-        f: &[DVec3],
+        forces: Forces<'_>,
     ) {
         self.resize(stencil);
         self.kernel = Some(stencil.kernel());
@@ -127,18 +140,24 @@ impl Lattice {
             for c in 0..3 {
                 self.x[c][k] = x[i][c];
                 self.v[c][k] = v[i][c];
-                // b = dt f_n (then + dt² ∂f/∂x v_n).
-                self.rhs[c][k] = dt * f[i][c];
+                // b = dt f_n (then + dt² ∂f/∂x v_n): f_n given, or weight and drag here and
+                // the springs' forces with the blocks.
+                self.rhs[c][k] = dt
+                    * match forces {
+                        Forces::Given(f) => f[i][c],
+                        Forces::Springs { gravity } => mass[i] * gravity[c] - drag * v[i][c],
+                    };
             }
         }
+        let springs = matches!(forces, Forces::Springs { .. });
         match stencil.kernel() {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: the stencil chooses AVX-512 only on a CPU that has it.
-            Kernel::Avx512 => unsafe { assemble_avx512(self, stencil, dt) },
+            Kernel::Avx512 => unsafe { assemble_avx512(self, stencil, dt, springs) },
             #[cfg(target_arch = "x86_64")]
             // SAFETY: the stencil chooses AVX2 only on a CPU that has it.
-            Kernel::Avx2 => unsafe { assemble_avx2(self, stencil, dt) },
-            _ => assemble_body::<Plain>(self, stencil, dt),
+            Kernel::Avx2 => unsafe { assemble_avx2(self, stencil, dt, springs) },
+            _ => assemble_body::<Plain>(self, stencil, dt, springs),
         }
     }
 
@@ -305,12 +324,13 @@ fn put_triple<V: Lanes>(a: &mut Soa, i: usize, value: [V; 3]) {
 /// The assembly: the springs' blocks and `dt² K_s (v_b - v_a)` group by group, then the
 /// diagonal blocks (inverted) and the right-hand side gathered particle by particle.
 #[inline(always)]
-fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64) {
+fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, springs: bool) {
     let front = sys.front;
     let dt2 = dt * dt;
     let (one, zero) = (V::splat(1.0), V::zero());
     for (blocks, g) in sys.groups.iter_mut().zip(stencil.group_views()) {
         let (k_dt2, kd_dt) = (V::splat(g.stiffness * dt2), V::splat(g.damping * dt));
+        let k_dt = V::splat(g.stiffness * dt);
         for p in (0..g.starts).step_by(LANES) {
             let (i, j) = (front + p, front + p + g.delta);
             let d = [
@@ -352,8 +372,17 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64) {
             ];
             let along = n[0].mul(dv[0]).add(n[1].mul(dv[1])).add(n[2].mul(dv[2]));
             let s = one.sub(t).mul(along);
+            // With `springs`: + dt f_a = dt (k (L - L0) + k_d (v_b - v_a)·n) n, which rows a
+            // and b get with the same signs as dt² K (v_b - v_a).
+            let f_dt = if springs {
+                k_dt
+                    .mul(length.sub(at(g.rest_length, p)))
+                    .add(kd_dt.mul(along))
+            } else {
+                zero
+            };
             for c in 0..3 {
-                let kv = k_dt2.mul(s.mul(n[c]).add(t.mul(dv[c])));
+                let kv = k_dt2.mul(s.mul(n[c]).add(t.mul(dv[c]))).add(f_dt.mul(n[c]));
                 put(&mut blocks.kv[c], i, kv.select(keep));
             }
         }
@@ -643,14 +672,14 @@ fn solve_body<V: Lanes>(
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn assemble_avx512(sys: &mut Lattice, stencil: &Stencil, dt: f64) {
-    assemble_body::<Avx512>(sys, stencil, dt);
+fn assemble_avx512(sys: &mut Lattice, stencil: &Stencil, dt: f64, springs: bool) {
+    assemble_body::<Avx512>(sys, stencil, dt, springs);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn assemble_avx2(sys: &mut Lattice, stencil: &Stencil, dt: f64) {
-    assemble_body::<Avx2>(sys, stencil, dt);
+fn assemble_avx2(sys: &mut Lattice, stencil: &Stencil, dt: f64, springs: bool) {
+    assemble_body::<Avx2>(sys, stencil, dt, springs);
 }
 
 #[cfg(target_arch = "x86_64")]
