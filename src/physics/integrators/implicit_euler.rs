@@ -423,7 +423,6 @@ fn step_lattice(
         constraints.clear();
     }
     let mut stats = SolveStats::default();
-    let mut fresh = false;
     loop {
         let start = (warm && stats.passes == 0).then_some(&dv[..]);
         let (iterations, residual, converged) = lattice.solve(
@@ -438,11 +437,8 @@ fn step_lattice(
         if !converged || !contacts || stats.passes >= MAX_CONTACT_PASSES {
             break;
         }
-        let released =
-            !constraints.is_empty() && release_pulling(constraints, lattice.residual_force());
+        let released = release_pulling(constraints, |i| lattice.row_residual(i));
         if !(add_contacts(model, state, dt, dv, constraints) || released) {
-            // The products of the release test are this Δv's: the impulses below reuse them.
-            fresh = !constraints.is_empty();
             break;
         }
     }
@@ -451,10 +447,7 @@ fn step_lattice(
     if !constraints.is_empty() && (*account || constraints.iter().any(|c| c.sphere.is_some())) {
         // The constraint impulses (A Δv - b)·N and the spheres' reactions, as in the textbook
         // step.
-        if !fresh {
-            lattice.update_residual_force();
-        }
-        let impulse = lattice.last_residual_force();
+        let impulse = |i| lattice.row_residual(i);
         let removed = contact_impulses(state, constraints, dv, impulse);
         if *account {
             dissipated.contacts += removed;

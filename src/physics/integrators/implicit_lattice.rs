@@ -230,47 +230,26 @@ impl Lattice {
         }
     }
 
-    /// The constraint impulses' `(A Δv - b)_i` (N·s) of the last solve, particle `i` (the
-    /// product is computed once, into the scratch vector `ap`).
-    pub(crate) fn residual_force(&mut self) -> impl Fn(usize) -> DVec3 + '_ {
-        self.update_residual_force();
-        self.last_residual_force()
-    }
-
-    /// Computes `A Δv` of the last solve into the scratch vector `ap`.
-    pub(crate) fn update_residual_force(&mut self) {
-        let dv = std::mem::take(&mut self.dv);
-        let mut ap = std::mem::take(&mut self.ap);
-        apply_dispatch(self, &dv, &mut ap);
-        self.dv = dv;
-        self.ap = ap;
-    }
-
-    /// `(A Δv - b)_i` as [`Lattice::residual_force`] computed it last (Δv unchanged since).
-    pub(crate) fn last_residual_force(&self) -> impl Fn(usize) -> DVec3 + '_ {
-        move |i| {
-            let k = self.front + i;
+    /// `(A Δv - b)_i` (N·s) of the last solve for particle `i`, from its row of `A` alone (the
+    /// constraint impulses need only the constrained particles' rows; module docs for the row).
+    pub(crate) fn row_residual(&self, i: usize) -> DVec3 {
+        let k = self.front + i;
+        let get = |a: &Soa, j: usize| DVec3::new(a[0][j], a[1][j], a[2][j]);
+        // The symmetric block at index j times d.
+        let sym = |b: &[Vec<f64>; 6], j: usize, d: DVec3| {
             DVec3::new(
-                self.ap[0][k] - self.rhs[0][k],
-                self.ap[1][k] - self.rhs[1][k],
-                self.ap[2][k] - self.rhs[2][k],
+                b[0][j] * d.x + b[1][j] * d.y + b[2][j] * d.z,
+                b[1][j] * d.x + b[3][j] * d.y + b[4][j] * d.z,
+                b[2][j] * d.x + b[4][j] * d.y + b[5][j] * d.z,
             )
+        };
+        let p = get(&self.dv, k);
+        let mut row = self.mass[k] * p;
+        for g in &self.groups {
+            row += sym(&g.b, k, p - get(&self.dv, k + g.delta));
+            row -= sym(&g.b, k - g.delta, get(&self.dv, k - g.delta) - p);
         }
-    }
-}
-
-/// `A p` into `out` with the kernel of the last assembly.
-fn apply_dispatch(sys: &Lattice, p: &Soa, out: &mut Soa) {
-    match sys.kernel {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: the kernel was chosen for this CPU.
-        Some(Kernel::Avx512) => unsafe { apply_avx512(sys, p, out) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as above.
-        Some(Kernel::Avx2) => unsafe { apply_avx2(sys, p, out) },
-        _ => {
-            apply::<Plain>(sys, p, out);
-        }
+        self.free[k] * row - get(&self.rhs, k)
     }
 }
 
@@ -375,8 +354,7 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, spring
             // With `springs`: + dt f_a = dt (k (L - L0) + k_d (v_b - v_a)·n) n, which rows a
             // and b get with the same signs as dt² K (v_b - v_a).
             let f_dt = if springs {
-                k_dt
-                    .mul(length.sub(at(g.rest_length, p)))
+                k_dt.mul(length.sub(at(g.rest_length, p)))
                     .add(kd_dt.mul(along))
             } else {
                 zero
@@ -716,16 +694,4 @@ fn elastic_avx512(sys: &Lattice, stencil: &Stencil) -> f64 {
 #[target_feature(enable = "avx2")]
 fn elastic_avx2(sys: &Lattice, stencil: &Stencil) -> f64 {
     elastic_body::<Avx2>(sys, stencil)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn apply_avx512(sys: &Lattice, p: &Soa, out: &mut Soa) {
-    apply::<Avx512>(sys, p, out);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn apply_avx2(sys: &Lattice, p: &Soa, out: &mut Soa) {
-    apply::<Avx2>(sys, p, out);
 }
