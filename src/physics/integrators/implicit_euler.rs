@@ -474,6 +474,12 @@ fn add_contacts(
     // Deeper than this (m) counts as inside: rounding of a landing exactly on the surface is not.
     const DEPTH: f64 = 1e-12;
     let ends = sphere_ends(model, state, dt);
+    // Without colliders, only a point inside the box around the spheres can be inside one.
+    let (low, high) = ends.iter().fold(
+        (DVec3::INFINITY, DVec3::NEG_INFINITY),
+        |(low, high), &(center, radius)| (low.min(center - radius), high.max(center + radius)),
+    );
+    let boxed = model.colliders.is_empty();
     let mut changed = false;
     for i in 0..state.x.len() {
         if model.inv_mass[i] == 0.0 {
@@ -481,6 +487,9 @@ fn add_contacts(
         }
         let v = state.v[i] + dv[i];
         let x = state.x[i] + dt * v;
+        if boxed && (x.cmplt(low).any() || x.cmpgt(high).any()) {
+            continue;
+        }
         let Some((contact, sphere)) =
             nearest_contact(model, &ends, x, true).filter(|(c, _)| c.phi < -DEPTH)
         else {
