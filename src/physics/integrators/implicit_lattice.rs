@@ -18,6 +18,15 @@
 //! and their `dt² K_s (v_b - v_a)`. The arrays carry a zero margin of at least the largest `δ`
 //! before and after the particles, so the chunks near either end need no special case.
 //!
+//! Without colliders the assembly also sums the force `f_n` (weight, drag and the springs' forces
+//! from the lengths and directions the blocks need), so the step has no force pass of its own;
+//! with colliders `f_n` comes from `forces` (the contact forces depend on the total). The
+//! conjugate-gradient loop does one pass for `A p` (with `pᵀ A p` summed in it) and one for the
+//! updates of `Δv`, `r`, `z = P⁻¹ r` and their dot products, then the new direction. The
+//! constraint impulses need `(A Δv - b)_i` only at the constrained particles: their rows alone
+//! ([`Lattice::row_residual`]). The energy guard's elastic energy is summed by offset group too
+//! ([`Lattice::elastic_energy`]).
+//!
 //! The sums run in another order than the spring-list loops, so the matrix and the solution
 //! agree with the textbook system to rounding, not bit for bit (the solve stops at the same
 //! relative residual).
