@@ -50,7 +50,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 use crate::physics::energy::energy_change;
-use crate::physics::integrators::guard_energy;
+use crate::physics::integrators::{guard_energy, guard_start_energy};
 use crate::physics::{
     Dissipated, Divergence, Energy, Method, SolveStats, State, Workspace, collide, diverge, energy,
 };
@@ -429,8 +429,13 @@ fn implicit_step(
         .any(|s| s.kinematic && s.velocity != DVec3::ZERO);
     let guard = !driven && depth < MAX_HALVINGS;
     let saved = guard.then(|| body.state.clone());
-    let e0 = guard.then(|| guard_energy(&body.model, &body.state, work));
+    work.start_elastic = None;
     let evals = plain_step(body, work, dt);
+    // The energy before the step, of the saved state (its elastic term from the step's own
+    // assembly where it summed one).
+    let e0 = saved
+        .as_ref()
+        .map(|s| guard_start_energy(&body.model, s, work));
     let stats = work.last_solve;
     tally.solves += 1;
     tally.iterations_sum += u64::from(stats.iterations);

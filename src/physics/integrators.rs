@@ -46,7 +46,7 @@ use super::forces::Model;
 use super::particles::State;
 use super::stencil::{After, Output, Stencil, Update};
 
-pub use implicit_euler::{MAX_CONTACT_PASSES, SolveStats, guard_energy};
+pub use implicit_euler::{MAX_CONTACT_PASSES, SolveStats, guard_energy, guard_start_energy};
 
 /// An integration method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -258,6 +258,9 @@ pub struct Workspace {
     /// The `Δv` and `dt` of the step before that (the warm start's extrapolation).
     pub(crate) before_dv: Vec<DVec3>,
     pub(crate) before_dt: f64,
+    /// Implicit Euler on a lattice: the elastic energy (J) at the step's start, summed by its
+    /// assembly (for `Simulation`'s energy guard); `None` when the step summed none.
+    pub start_elastic: Option<f64>,
     /// Implicit Euler's system on a lattice (`implicit_lattice`).
     pub(crate) lattice: implicit_lattice::Lattice,
 }

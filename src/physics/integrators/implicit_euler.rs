@@ -339,6 +339,16 @@ pub fn guard_energy(model: &Model, state: &State, work: &mut Workspace) -> Energ
     }
 }
 
+/// [`guard_energy`] of `start`, the state a step started from: with the elastic term that the
+/// step's assembly summed at that state when it left one in `work.start_elastic` (taken), else
+/// summed here.
+pub fn guard_start_energy(model: &Model, start: &State, work: &mut Workspace) -> Energy {
+    match work.start_elastic.take() {
+        Some(elastic) => energy_with_elastic(model, start, elastic),
+        None => guard_energy(model, start, work),
+    }
+}
+
 /// With `work.warm_start` and a last step: the start of the solve in `cg[0]`. The velocity
 /// change of a step is about `dt a`, and `a` changes smoothly between steps, so the guess is the
 /// last step's `Δv` scaled by the ratio of the steps, extrapolated linearly over the two last
@@ -409,6 +419,7 @@ fn step_lattice(
         before_dv,
         before_dt,
         lattice,
+        start_elastic,
         ..
     } = work;
     // f_n: with colliders from `forces` (the contact forces need the total), else summed by the
@@ -431,6 +442,7 @@ fn step_lattice(
         &state.v,
         given,
     );
+    *start_elastic = Some(lattice.start_elastic());
     let contacts = has_contacts(model, state);
     let dv = &mut cg[0];
     if warm && contacts {

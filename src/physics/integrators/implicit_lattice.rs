@@ -73,6 +73,8 @@ pub(crate) struct Lattice {
     len: usize,
     kernel: Option<Kernel>,
     groups: Vec<Blocks>,
+    /// The springs' elastic energy at the last assembly's positions (J).
+    start_elastic: f64,
     /// The inverse diagonal blocks (xx, xy, xz, yy, yz, zz; 1/kg); zero in the margins.
     diag_inv: [Vec<f64>; 6],
     /// `m + dt c` (kg); zero in the margins.
@@ -226,6 +228,12 @@ impl Lattice {
         }
     }
 
+    /// The springs' elastic energy `Σ ½ k (L - L0)²` (J) at the positions of the last assembly,
+    /// summed with the lengths it computed (as [`Lattice::elastic_energy`] sums it).
+    pub(crate) fn start_elastic(&self) -> f64 {
+        self.start_elastic
+    }
+
     /// Δv of the last solve (m/s), particle `i`.
     pub(crate) fn dv(&self, i: usize) -> DVec3 {
         let k = self.front + i;
@@ -316,7 +324,9 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, spring
     let front = sys.front;
     let dt2 = dt * dt;
     let (one, zero) = (V::splat(1.0), V::zero());
+    let mut elastic = 0.0;
     for (blocks, g) in sys.groups.iter_mut().zip(stencil.group_views()) {
+        let mut stretch2 = V::zero();
         let (k_dt2, kd_dt) = (V::splat(g.stiffness * dt2), V::splat(g.damping * dt));
         let k_dt = V::splat(g.stiffness * dt);
         for p in (0..g.starts).step_by(LANES) {
@@ -372,8 +382,15 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, spring
                 let kv = k_dt2.mul(s.mul(n[c]).add(t.mul(dv[c]))).add(f_dt.mul(n[c]));
                 put(&mut blocks.kv[c], i, kv.select(keep));
             }
+            // ½ k (L - L0)², as `elastic_body` sums it.
+            let stretch = length
+                .sub(at(g.rest_length, p))
+                .select(g.present[p / LANES]);
+            stretch2 = stretch2.add(stretch.mul(stretch));
         }
+        elastic += 0.5 * g.stiffness * sum_lanes(stretch2);
     }
+    sys.start_elastic = elastic;
     // Per particle: A_qq = (m + dt c) I + Σ (B_δ[q] + B_δ[q-δ]); b_q += Σ (kv_δ[q] - kv_δ[q-δ]).
     for q in (0..sys.n.next_multiple_of(LANES)).step_by(LANES) {
         let i = front + q;
