@@ -50,6 +50,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 use crate::physics::energy::energy_change;
+use crate::physics::integrators::{guard_energy, guard_start_energy};
 use crate::physics::{
     Dissipated, Divergence, Energy, Method, SolveStats, State, Workspace, collide, diverge, energy,
 };
@@ -428,8 +429,13 @@ fn implicit_step(
         .any(|s| s.kinematic && s.velocity != DVec3::ZERO);
     let guard = !driven && depth < MAX_HALVINGS;
     let saved = guard.then(|| body.state.clone());
-    let e0 = guard.then(|| energy(&body.model, &body.state));
+    work.start_elastic = None;
     let evals = plain_step(body, work, dt);
+    // The energy before the step, of the saved state (its elastic term from the step's own
+    // assembly where it summed one).
+    let e0 = saved
+        .as_ref()
+        .map(|s| guard_start_energy(&body.model, s, work));
     let stats = work.last_solve;
     tally.solves += 1;
     tally.iterations_sum += u64::from(stats.iterations);
@@ -448,7 +454,7 @@ fn implicit_step(
         };
     }
     if let (Some(saved), Some(e0)) = (saved, e0) {
-        let e1 = energy(&body.model, &body.state).total;
+        let e1 = guard_energy(&body.model, &body.state, work).total;
         let scale = e0.kinetic.abs() + e0.gravity.abs() + e0.elastic.abs();
         // The rise per second of this attempt; halving is worth it only while it shrinks the
         // rate (a linearisation error does, by dt; an oscillation of a resting contact does not).

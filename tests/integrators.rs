@@ -303,6 +303,42 @@ fn implicit_euler_keeps_the_spheres_contacts_inside_the_solve() {
     );
 }
 
+/// Implicit Euler on `cloth-spheres` at `dt` for 1 s (the spheres press into the cloth from
+/// t ≈ 0.3 s) with `sets`: every particle position and sphere centre (m).
+fn cloth_spheres_at_one_second(dt: f64, sets: &[&str]) -> Vec<glam::DVec3> {
+    let mut sim = run_scene("cloth-spheres", sets, Method::ImplicitEuler, dt);
+    sim.run((1.0 / dt).round() as u64, |_| {});
+    assert!(sim.diverged.is_none(), "{:?}", sim.diverged);
+    let spheres: Vec<glam::DVec3> = sim.scene.bodies[0]
+        .state
+        .spheres
+        .iter()
+        .map(|s| s.center)
+        .collect();
+    sim.positions().chain(spheres).collect()
+}
+
+#[test]
+fn the_default_cg_tolerance_costs_under_a_tenth_of_the_methods_own_error() {
+    // The solve need not be more exact than the step: implicit Euler's own error at dt = 5 ms
+    // (against dt/4, a lower bound for a first-order method) must be at least ten times what
+    // stopping CG at the default relative residual changes (against 1e-10).
+    let largest = |a: &[glam::DVec3], b: &[glam::DVec3]| {
+        a.iter()
+            .zip(b)
+            .map(|(a, b)| (*a - *b).length())
+            .fold(0.0, f64::max)
+    };
+    let default = cloth_spheres_at_one_second(0.005, &[]);
+    let tight = cloth_spheres_at_one_second(0.005, &["cg_tolerance=1e-10"]);
+    let finer = cloth_spheres_at_one_second(0.00125, &["cg_tolerance=1e-10"]);
+    let (solver_error, method_error) = (largest(&default, &tight), largest(&tight, &finer));
+    assert!(
+        solver_error > 0.0 && 10.0 * solver_error <= method_error,
+        "tolerance changes the state by {solver_error} m, the method's error is {method_error} m"
+    );
+}
+
 #[test]
 fn failed_implicit_solves_are_divergences() {
     // An overflowing stiffness (outside the range a user may set, so set in code): the solve

@@ -51,6 +51,14 @@ impl Energy {
 /// The energy of `state` under `model`.
 #[must_use]
 pub fn energy(model: &Model, state: &State) -> Energy {
+    let elastic: f64 = model.springs.iter().map(|s| s.energy(&state.x)).sum();
+    energy_with_elastic(model, state, elastic)
+}
+
+/// [`energy`] with its elastic term `elastic` (J) computed elsewhere (implicit Euler's energy
+/// guard sums it on the lattice).
+#[must_use]
+pub fn energy_with_elastic(model: &Model, state: &State, elastic: f64) -> Energy {
     let mut kinetic = 0.0;
     let mut gravity = 0.0;
     for ((&m, x), v) in model.mass.iter().zip(&state.x).zip(&state.v) {
@@ -61,7 +69,6 @@ pub fn energy(model: &Model, state: &State) -> Energy {
         kinetic += 0.5 * s.mass * s.velocity.length_squared();
         gravity -= s.mass * model.gravity.dot(s.center);
     }
-    let elastic: f64 = model.springs.iter().map(|s| s.energy(&state.x)).sum();
     Energy {
         kinetic,
         gravity,

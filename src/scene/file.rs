@@ -65,7 +65,7 @@
 //! verlet_damping = 0.00005    # optional method settings, defaults as MethodParams::default()
 //! iterations = 1
 //! substeps = 10
-//! cg_tolerance = 1e-10
+//! cg_tolerance = 1e-3
 //! ```
 //!
 //! Particle indices: the `[[particles]]` come first in file order, then the nodes of each

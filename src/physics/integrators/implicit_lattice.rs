@@ -18,6 +18,15 @@
 //! and their `dt² K_s (v_b - v_a)`. The arrays carry a zero margin of at least the largest `δ`
 //! before and after the particles, so the chunks near either end need no special case.
 //!
+//! Without colliders the assembly also sums the force `f_n` (weight, drag and the springs' forces
+//! from the lengths and directions the blocks need), so the step has no force pass of its own;
+//! with colliders `f_n` comes from `forces` (the contact forces depend on the total). The
+//! conjugate-gradient loop does one pass for `A p` (with `pᵀ A p` summed in it) and one for the
+//! updates of `Δv`, `r`, `z = P⁻¹ r` and their dot products, then the new direction. The
+//! constraint impulses need `(A Δv - b)_i` only at the constrained particles: their rows alone
+//! ([`Lattice::row_residual`]). The energy guard's elastic energy is summed by offset group too
+//! ([`Lattice::elastic_energy`]).
+//!
 //! The sums run in another order than the spring-list loops, so the matrix and the solution
 //! agree with the textbook system to rounding, not bit for bit (the solve stops at the same
 //! relative residual).
@@ -40,6 +49,16 @@ struct Blocks {
     kv: [Vec<f64>; 3],
 }
 
+/// Where the assembly's forces `f_n` come from.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Forces<'a> {
+    /// Computed elsewhere (N), per particle.
+    Given(&'a [DVec3]),
+    /// Weight `m g` and drag `-c v` with `gravity` (m/s²), and the springs' forces summed by the
+    /// assembly: `f_a = (k (L - L0) + k_d (v_b - v_a)·n) n`, `f_b = -f_a`.
+    Springs { gravity: DVec3 },
+}
+
 /// Three components as structure of arrays, indexed `front + particle`.
 type Soa = [Vec<f64>; 3];
 
@@ -54,6 +73,8 @@ pub(crate) struct Lattice {
     len: usize,
     kernel: Option<Kernel>,
     groups: Vec<Blocks>,
+    /// The springs' elastic energy at the last assembly's positions (J).
+    start_elastic: f64,
     /// The inverse diagonal blocks (xx, xy, xz, yy, yz, zz; 1/kg); zero in the margins.
     diag_inv: [Vec<f64>; 6],
     /// `m + dt c` (kg); zero in the margins.
@@ -103,8 +124,11 @@ impl Lattice {
         (self.dv, self.r, self.p, self.ap, self.z) = (soa(), soa(), soa(), soa(), soa());
     }
 
-    /// Assembles the system of a step of `dt` (s) at `(x, v)` with the forces `f` (N) (the
-    /// textbook's assembly loop, by offset group; see the module docs).
+    /// Assembles the system of a step of `dt` (s) at `(x, v)` (the textbook's assembly loop, by
+    /// offset group; see the module docs). `forces` is either the forces `f_n` (N) computed
+    /// elsewhere, or [`Forces::Springs`]: weight and drag, with the spring forces summed here
+    /// from the lengths and directions the blocks need anyway (no pass of its own; a model
+    /// with colliders needs the other: its contact forces depend on the total).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn assemble(
         &mut self,
@@ -115,7 +139,7 @@ impl Lattice {
         dt: f64,
         x: &[DVec3],
         v: &[DVec3],
-        f: &[DVec3],
+        forces: Forces<'_>,
     ) {
         self.resize(stencil);
         self.kernel = Some(stencil.kernel());
@@ -127,18 +151,24 @@ impl Lattice {
             for c in 0..3 {
                 self.x[c][k] = x[i][c];
                 self.v[c][k] = v[i][c];
-                // b = dt f_n (then + dt² ∂f/∂x v_n).
-                self.rhs[c][k] = dt * f[i][c];
+                // b = dt f_n (then + dt² ∂f/∂x v_n): f_n given, or weight and drag here and
+                // the springs' forces with the blocks.
+                self.rhs[c][k] = dt
+                    * match forces {
+                        Forces::Given(f) => f[i][c],
+                        Forces::Springs { gravity } => mass[i] * gravity[c] - drag * v[i][c],
+                    };
             }
         }
+        let springs = matches!(forces, Forces::Springs { .. });
         match stencil.kernel() {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: the stencil chooses AVX-512 only on a CPU that has it.
-            Kernel::Avx512 => unsafe { assemble_avx512(self, stencil, dt) },
+            Kernel::Avx512 => unsafe { assemble_avx512(self, stencil, dt, springs) },
             #[cfg(target_arch = "x86_64")]
             // SAFETY: the stencil chooses AVX2 only on a CPU that has it.
-            Kernel::Avx2 => unsafe { assemble_avx2(self, stencil, dt) },
-            _ => assemble_body::<Plain>(self, stencil, dt),
+            Kernel::Avx2 => unsafe { assemble_avx2(self, stencil, dt, springs) },
+            _ => assemble_body::<Plain>(self, stencil, dt, springs),
         }
     }
 
@@ -177,6 +207,33 @@ impl Lattice {
         }
     }
 
+    /// The springs' elastic energy `Σ ½ k (|x_{p+δ} - x_p| - L0)²` (J) at `x` (m): the spring
+    /// list's sum ([`crate::physics::energy`]) by offset group, eight springs at a time (equal
+    /// to it up to rounding). Uses the position arrays as scratch.
+    pub(crate) fn elastic_energy(&mut self, stencil: &Stencil, x: &[DVec3]) -> f64 {
+        self.resize(stencil);
+        for (i, xi) in x.iter().enumerate().take(self.n) {
+            for c in 0..3 {
+                self.x[c][self.front + i] = xi[c];
+            }
+        }
+        match stencil.kernel() {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the stencil chooses AVX-512 only on a CPU that has it.
+            Kernel::Avx512 => unsafe { elastic_avx512(self, stencil) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the stencil chooses AVX2 only on a CPU that has it.
+            Kernel::Avx2 => unsafe { elastic_avx2(self, stencil) },
+            _ => elastic_body::<Plain>(self, stencil),
+        }
+    }
+
+    /// The springs' elastic energy `Σ ½ k (L - L0)²` (J) at the positions of the last assembly,
+    /// summed with the lengths it computed (as [`Lattice::elastic_energy`] sums it).
+    pub(crate) fn start_elastic(&self) -> f64 {
+        self.start_elastic
+    }
+
     /// Δv of the last solve (m/s), particle `i`.
     pub(crate) fn dv(&self, i: usize) -> DVec3 {
         let k = self.front + i;
@@ -190,35 +247,26 @@ impl Lattice {
         }
     }
 
-    /// The constraint impulses' `(A Δv - b)_i` (N·s) of the last solve, particle `i` (the
-    /// product is computed once, into the scratch vector `ap`).
-    pub(crate) fn residual_force(&mut self) -> impl Fn(usize) -> DVec3 + '_ {
-        let dv = std::mem::take(&mut self.dv);
-        let mut ap = std::mem::take(&mut self.ap);
-        apply_dispatch(self, &dv, &mut ap);
-        self.dv = dv;
-        self.ap = ap;
-        move |i| {
-            let k = self.front + i;
+    /// `(A Δv - b)_i` (N·s) of the last solve for particle `i`, from its row of `A` alone (the
+    /// constraint impulses need only the constrained particles' rows; module docs for the row).
+    pub(crate) fn row_residual(&self, i: usize) -> DVec3 {
+        let k = self.front + i;
+        let get = |a: &Soa, j: usize| DVec3::new(a[0][j], a[1][j], a[2][j]);
+        // The symmetric block at index j times d.
+        let sym = |b: &[Vec<f64>; 6], j: usize, d: DVec3| {
             DVec3::new(
-                self.ap[0][k] - self.rhs[0][k],
-                self.ap[1][k] - self.rhs[1][k],
-                self.ap[2][k] - self.rhs[2][k],
+                b[0][j] * d.x + b[1][j] * d.y + b[2][j] * d.z,
+                b[1][j] * d.x + b[3][j] * d.y + b[4][j] * d.z,
+                b[2][j] * d.x + b[4][j] * d.y + b[5][j] * d.z,
             )
+        };
+        let p = get(&self.dv, k);
+        let mut row = self.mass[k] * p;
+        for g in &self.groups {
+            row += sym(&g.b, k, p - get(&self.dv, k + g.delta));
+            row -= sym(&g.b, k - g.delta, get(&self.dv, k - g.delta) - p);
         }
-    }
-}
-
-/// `A p` into `out` with the kernel of the last assembly.
-fn apply_dispatch(sys: &Lattice, p: &Soa, out: &mut Soa) {
-    match sys.kernel {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: the kernel was chosen for this CPU.
-        Some(Kernel::Avx512) => unsafe { apply_avx512(sys, p, out) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as above.
-        Some(Kernel::Avx2) => unsafe { apply_avx2(sys, p, out) },
-        _ => apply::<Plain>(sys, p, out),
+        self.free[k] * row - get(&self.rhs, k)
     }
 }
 
@@ -272,12 +320,15 @@ fn put_triple<V: Lanes>(a: &mut Soa, i: usize, value: [V; 3]) {
 /// The assembly: the springs' blocks and `dt² K_s (v_b - v_a)` group by group, then the
 /// diagonal blocks (inverted) and the right-hand side gathered particle by particle.
 #[inline(always)]
-fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64) {
+fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, springs: bool) {
     let front = sys.front;
     let dt2 = dt * dt;
     let (one, zero) = (V::splat(1.0), V::zero());
+    let mut elastic = 0.0;
     for (blocks, g) in sys.groups.iter_mut().zip(stencil.group_views()) {
+        let mut stretch2 = V::zero();
         let (k_dt2, kd_dt) = (V::splat(g.stiffness * dt2), V::splat(g.damping * dt));
+        let k_dt = V::splat(g.stiffness * dt);
         for p in (0..g.starts).step_by(LANES) {
             let (i, j) = (front + p, front + p + g.delta);
             let d = [
@@ -319,12 +370,27 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64) {
             ];
             let along = n[0].mul(dv[0]).add(n[1].mul(dv[1])).add(n[2].mul(dv[2]));
             let s = one.sub(t).mul(along);
+            // With `springs`: + dt f_a = dt (k (L - L0) + k_d (v_b - v_a)·n) n, which rows a
+            // and b get with the same signs as dt² K (v_b - v_a).
+            let f_dt = if springs {
+                k_dt.mul(length.sub(at(g.rest_length, p)))
+                    .add(kd_dt.mul(along))
+            } else {
+                zero
+            };
             for c in 0..3 {
-                let kv = k_dt2.mul(s.mul(n[c]).add(t.mul(dv[c])));
+                let kv = k_dt2.mul(s.mul(n[c]).add(t.mul(dv[c]))).add(f_dt.mul(n[c]));
                 put(&mut blocks.kv[c], i, kv.select(keep));
             }
+            // ½ k (L - L0)², as `elastic_body` sums it.
+            let stretch = length
+                .sub(at(g.rest_length, p))
+                .select(g.present[p / LANES]);
+            stretch2 = stretch2.add(stretch.mul(stretch));
         }
+        elastic += 0.5 * g.stiffness * sum_lanes(stretch2);
     }
+    sys.start_elastic = elastic;
     // Per particle: A_qq = (m + dt c) I + Σ (B_δ[q] + B_δ[q-δ]); b_q += Σ (kv_δ[q] - kv_δ[q-δ]).
     for q in (0..sys.n.next_multiple_of(LANES)).step_by(LANES) {
         let i = front + q;
@@ -363,9 +429,40 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64) {
     }
 }
 
-/// `out = A p` (see the module docs), zero at pinned particles and in the margins.
+/// `Σ ½ k (L - L0)²` over the groups' springs at the positions in `sys.x`.
 #[inline(always)]
-fn apply<V: Lanes>(sys: &Lattice, p: &Soa, out: &mut Soa) {
+fn elastic_body<V: Lanes>(sys: &Lattice, stencil: &Stencil) -> f64 {
+    let front = sys.front;
+    let mut total = 0.0;
+    for g in stencil.group_views() {
+        let mut sum = V::zero();
+        for p in (0..g.starts).step_by(LANES) {
+            let (i, j) = (front + p, front + p + g.delta);
+            let d = [
+                at::<V>(&sys.x[0], j).sub(at(&sys.x[0], i)),
+                at::<V>(&sys.x[1], j).sub(at(&sys.x[1], i)),
+                at::<V>(&sys.x[2], j).sub(at(&sys.x[2], i)),
+            ];
+            let length = d[0]
+                .mul(d[0])
+                .add(d[1].mul(d[1]))
+                .add(d[2].mul(d[2]))
+                .sqrt();
+            let stretch = length
+                .sub(at(g.rest_length, p))
+                .select(g.present[p / LANES]);
+            sum = sum.add(stretch.mul(stretch));
+        }
+        total += 0.5 * g.stiffness * sum_lanes(sum);
+    }
+    total
+}
+
+/// `out = A p` (see the module docs), zero at pinned particles and in the margins; returns
+/// `p·out` (the conjugate-gradient step's `pᵀ A p`, summed in the same pass).
+#[inline(always)]
+fn apply<V: Lanes>(sys: &Lattice, p: &Soa, out: &mut Soa) -> f64 {
+    let mut p_out = V::zero();
     for q in (0..sys.n.next_multiple_of(LANES)).step_by(LANES) {
         let i = sys.front + q;
         let pq = triple::<V>(p, i);
@@ -395,12 +492,22 @@ fn apply<V: Lanes>(sys: &Lattice, p: &Soa, out: &mut Soa) {
             }
         }
         let free: V = at(&sys.free, i);
-        put_triple(
-            out,
-            i,
-            [acc[0].mul(free), acc[1].mul(free), acc[2].mul(free)],
-        );
+        let y = [acc[0].mul(free), acc[1].mul(free), acc[2].mul(free)];
+        p_out = p_out
+            .add(pq[0].mul(y[0]))
+            .add(pq[1].mul(y[1]))
+            .add(pq[2].mul(y[2]));
+        put_triple(out, i, y);
     }
+    sum_lanes(p_out)
+}
+
+/// The sum of the lanes of `v`, in a fixed order.
+#[inline(always)]
+fn sum_lanes<V: Lanes>(v: V) -> f64 {
+    let mut values = [0.0; LANES];
+    v.store(&mut values);
+    values.iter().sum()
 }
 
 /// `Σ a·b` over all particles, in lanes, added in a fixed order.
@@ -478,7 +585,7 @@ fn solve_body<V: Lanes>(
             dv[2][k] += (c.dv_n - along) * n.z;
         }
         // r = S (b - A z_0), pinned rows zero; |b|² over the free particles.
-        apply::<V>(sys, &dv, &mut ap);
+        let _ = apply::<V>(sys, &dv, &mut ap);
         let mut b2 = V::zero();
         for i in chunks() {
             let free: V = at(&sys.free, i);
@@ -514,25 +621,38 @@ fn solve_body<V: Lanes>(
         let mut r_norm2 = dot::<V>(sys, &r, &r);
         let mut iterations = 0;
         while r_norm2 > tol2 && iterations < max_iterations {
-            apply::<V>(sys, &p, &mut ap);
+            // p ⊥ N at the constrained particles, so pᵀ S A p = pᵀ A p: the product's own sum.
+            let p_ap = apply::<V>(sys, &p, &mut ap);
             filter(front, constraints, &mut ap);
-            let p_ap = dot::<V>(sys, &p, &ap);
             if p_ap.is_nan() || p_ap <= 0.0 {
                 break;
             }
+            // One pass: Δv += α p, r -= α S A p, |r|², z = P⁻¹ r and r·z (r = S r, so
+            // r·S z = r·z: the filter of z can follow).
             let alpha = V::splat(rz / p_ap);
+            let (mut rr, mut rzv) = (V::zero(), V::zero());
             for i in chunks() {
+                let mut rn = [V::zero(); 3];
                 for c in 0..3 {
                     let d = at::<V>(&dv[c], i).add(alpha.mul(at(&p[c], i)));
                     put(&mut dv[c], i, d);
-                    let e = at::<V>(&r[c], i).sub(alpha.mul(at(&ap[c], i)));
-                    put(&mut r[c], i, e);
+                    rn[c] = at::<V>(&r[c], i).sub(alpha.mul(at(&ap[c], i)));
+                    put(&mut r[c], i, rn[c]);
                 }
+                let y = sym_mul(&block::<V>(&sys.diag_inv, i), rn);
+                put_triple(&mut z, i, y);
+                rr = rr
+                    .add(rn[0].mul(rn[0]))
+                    .add(rn[1].mul(rn[1]))
+                    .add(rn[2].mul(rn[2]));
+                rzv = rzv
+                    .add(rn[0].mul(y[0]))
+                    .add(rn[1].mul(y[1]))
+                    .add(rn[2].mul(y[2]));
             }
-            r_norm2 = dot::<V>(sys, &r, &r);
-            precondition::<V>(sys, &r, &mut z);
+            r_norm2 = sum_lanes(rr);
             filter(front, constraints, &mut z);
-            let rz_new = dot::<V>(sys, &r, &z);
+            let rz_new = sum_lanes(rzv);
             let beta = V::splat(rz_new / rz);
             rz = rz_new;
             for i in chunks() {
@@ -556,14 +676,14 @@ fn solve_body<V: Lanes>(
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn assemble_avx512(sys: &mut Lattice, stencil: &Stencil, dt: f64) {
-    assemble_body::<Avx512>(sys, stencil, dt);
+fn assemble_avx512(sys: &mut Lattice, stencil: &Stencil, dt: f64, springs: bool) {
+    assemble_body::<Avx512>(sys, stencil, dt, springs);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn assemble_avx2(sys: &mut Lattice, stencil: &Stencil, dt: f64) {
-    assemble_body::<Avx2>(sys, stencil, dt);
+fn assemble_avx2(sys: &mut Lattice, stencil: &Stencil, dt: f64, springs: bool) {
+    assemble_body::<Avx2>(sys, stencil, dt, springs);
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -592,12 +712,12 @@ fn solve_avx2(
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn apply_avx512(sys: &Lattice, p: &Soa, out: &mut Soa) {
-    apply::<Avx512>(sys, p, out);
+fn elastic_avx512(sys: &Lattice, stencil: &Stencil) -> f64 {
+    elastic_body::<Avx512>(sys, stencil)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn apply_avx2(sys: &Lattice, p: &Soa, out: &mut Soa) {
-    apply::<Avx2>(sys, p, out);
+fn elastic_avx2(sys: &Lattice, stencil: &Stencil) -> f64 {
+    elastic_body::<Avx2>(sys, stencil)
 }
