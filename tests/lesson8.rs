@@ -2,7 +2,8 @@
 //! `advise jelly-bowl --tolerance 0.01`). Their output is recorded in `docs/studies/`. This test
 //! checks (1) every number the lesson quotes against the recorded output, formatted with the
 //! digits the lesson shows, and (2) the recorded output against the code: the cheapest levels of
-//! the resolution study are run again and must agree bit for bit (the runs are deterministic).
+//! the resolution study are run again and must agree to 1e-9 (the runs are deterministic on one
+//! machine; kernels chosen for other CPUs change the last digits).
 
 use std::process::Command;
 
@@ -187,7 +188,11 @@ fn lesson_8_quotes_the_recorded_advice() {
     assert_eq!(v["holds"], true);
 }
 
-/// The recording still holds for the code: the two cheapest levels again, bit for bit.
+/// The recording still holds for the code: the two cheapest levels again, to 1e-9 relative.
+/// Not bit for bit: the spring kernel is chosen for the CPU (AVX-512, AVX2 or portable, see
+/// `src/physics/stencil.rs`), and kernels differ in the last bit of a force, so a machine
+/// other than the recording's gives sags that differ in their last digits; a change of the
+/// physics or of the study moves them by far more.
 #[test]
 fn the_recorded_resolution_study_matches_the_code() {
     let r = recorded("resolution-cloth-sphere.json");
@@ -211,12 +216,10 @@ fn the_recorded_resolution_study_matches_the_code() {
     for n in [9, 13] {
         for kinds in ["all", "no-bend", "no-shear"] {
             let (old, new) = (level(&r, n, kinds), level(&now, n, kinds));
-            assert_eq!(
-                sag(old).to_bits(),
-                sag(new).to_bits(),
-                "n = {n}, {kinds}: recorded {} but the code gives {}; run scripts/record-lesson8-studies.sh",
-                sag(old),
-                sag(new)
+            let (old_sag, new_sag) = (sag(old), sag(new));
+            assert!(
+                (old_sag - new_sag).abs() <= 1e-9 * old_sag.abs().max(1e-3),
+                "n = {n}, {kinds}: recorded {old_sag} but the code gives {new_sag}; run scripts/record-lesson8-studies.sh"
             );
             assert_eq!(old["run"]["dt"], new["run"]["dt"]);
             assert_eq!(old["run"]["steps"], new["run"]["steps"]);

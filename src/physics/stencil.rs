@@ -65,17 +65,19 @@
 //! A 512-bit square root or division keeps the divider busy for about 13–16 cycles (measured on
 //! the benchmark machine; Intel Intrinsics Guide, `VSQRTPD`, `VDIVPD`), as long as the twenty
 //! other operations of a spring together. With AVX-512F the processor also offers an estimate
-//! `y₀ ≈ 1/√a` with relative error below 2⁻¹⁴ (`VRSQRT14PD`, about 1.6 cycles per vector),
-//! which Newton–Raphson on `g(y) = 1/y² - a` refines:
+//! `y₀ ≈ 1/√a` with relative error below 2⁻¹⁴ (`VRSQRT14PD`, about 1.6 cycles per vector).
+//! With `e = 1 - a y₀²` the exact value is `1/√a = y₀ (1 - e)^(-1/2)`, whose series is cut after
+//! the cubic term:
 //!
 //! ```text
-//! e      = 1 - a y_k²                    relative residual (one fused multiply-add)
-//! y_k+1  = y_k + ½ y_k e                 error ε_k+1 ≈ 1.5 ε_k²: 2⁻¹⁴ → 2⁻²⁷ → 2⁻⁵³
-//! 1/L    = y₂,   L = a · y₂              (a = d·d)
+//! e      = 1 - a y₀²                             relative residual, |e| < 2⁻¹³
+//! 1/L    = y₀ + y₀ e (½ + e (⅜ + e 5⁄16))        truncation error (35/128) e⁴ < 2⁻⁵³
+//! L      = a · (1/L)                             (a = d·d)
 //! ```
-//! Two steps reach the last bit or two of an f64 (relative error ≈ 1e-16, against 2.2e-16 for
-//! one rounding), cheaper than one division. The result is not always the correctly rounded
-//! `1/√a`.
+//! Six operations (multiplications and fused multiply-adds, Horner form), where the two
+//! Newton–Raphson steps `y ← y + ½ y (1 - a y²)` that reach the same accuracy take eight; the
+//! result is within a rounding or two of an f64 (relative error ≈ 1e-16, against 2.2e-16 for one
+//! rounding), cheaper than one division, but not always the correctly rounded `1/√a`.
 //!
 //! **Three kernels** ([`Kernel`]), chosen at run time for the CPU: `Portable` (plain Rust,
 //! `sqrt` then `1/L`), `Avx2` (the same operations on 256-bit registers, so the same bits) and
@@ -93,7 +95,7 @@
 //! Computation Optimization and Auto-tuning on State-of-the-Art Multicore Architectures",
 //! SC 2008); Intel Intrinsics Guide, `_mm512_rsqrt14_pd`, `_mm512_fmadd_pd`,
 //! <https://www.intel.com/content/www/us/en/docs/intrinsics-guide/>; C. Lomont, "Fast Inverse
-//! Square Root", Purdue University technical report, 2003 (the Newton step for `1/√a`);
+//! Square Root", Purdue University technical report, 2003 (refining an estimate of `1/√a`);
 //! `docs/workloads.md` (the peer benchmark's lattices and their spring order).
 
 mod contacts;
@@ -147,7 +149,7 @@ pub enum Kernel {
     Portable,
     /// The same operations on AVX2 registers (x86-64): the same results bit for bit.
     Avx2,
-    /// AVX-512F (x86-64): reciprocal square root estimate, two Newton steps and fused
+    /// AVX-512F (x86-64): reciprocal square root estimate, one fourth-order refinement and fused
     /// multiply-adds.
     Avx512,
 }

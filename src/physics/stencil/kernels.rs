@@ -1,7 +1,7 @@
 //! The spring kernels of the stencil, one per instruction set (see the parent module's docs,
 //! "One reciprocal square root" and "Three kernels"): the exact one (`sqrt`, then `1/L`) in
 //! plain Rust and on AVX2 registers, and the AVX-512F one with the reciprocal square root
-//! estimate and two Newton steps. Each instantiates the streaming loop of [`super::passes`].
+//! estimate and one fourth-order refinement. Each instantiates the streaming loop of [`super::passes`].
 
 use super::passes::*;
 #[allow(clippy::wildcard_imports)]
@@ -136,7 +136,7 @@ pub(super) fn range_avx512<const POWER: bool>(
 }
 
 /// The springs of one chunk with AVX-512F: `1/L` from the reciprocal square root estimate and
-/// two Newton steps (see the module docs), fused multiply-adds.
+/// one fourth-order refinement (see the module docs), fused multiply-adds.
 ///
 /// Not itself a `target_feature` function, so that the compiler inlines it (a function with
 /// more target features than its caller is never inlined); it is only called from
@@ -182,13 +182,13 @@ pub(super) unsafe fn springs_avx512(
         let damper = _mm512_mul_pd(_mm512_set1_pd(g.damping), dv_d);
         // y₀ ≈ 1/√a to 2⁻¹⁴, and 0 where a = 0 (a zero-length spring has no direction, no force).
         let nonzero = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(a, _mm512_setzero_pd());
-        let mut y = _mm512_maskz_rsqrt14_pd(nonzero, a);
-        let (one, half) = (_mm512_set1_pd(1.0), _mm512_set1_pd(0.5));
-        for _ in 0..2 {
-            // e = 1 - a y², y ← y + ½ y e (Newton–Raphson for 1/√a).
-            let e = _mm512_fnmadd_pd(_mm512_mul_pd(a, y), y, one);
-            y = _mm512_fmadd_pd(_mm512_mul_pd(half, y), e, y);
-        }
+        let y0 = _mm512_maskz_rsqrt14_pd(nonzero, a);
+        // e = 1 - a y₀², then y = y₀ (1 + ½e + ⅜e² + 5⁄16 e³) (the series of y₀ (1 - e)^(-½),
+        // Horner form): six operations where two Newton steps take eight.
+        let e = _mm512_fnmadd_pd(_mm512_mul_pd(a, y0), y0, _mm512_set1_pd(1.0));
+        let series = _mm512_fmadd_pd(_mm512_set1_pd(5.0 / 16.0), e, _mm512_set1_pd(3.0 / 8.0));
+        let series = _mm512_fmadd_pd(series, e, _mm512_set1_pd(0.5));
+        let y = _mm512_fmadd_pd(y0, _mm512_mul_pd(series, e), y0);
         // L = a / √a = a y; tension = k (L - L0) + k_d (v_b - v_a)·d / L
         let stretch = _mm512_fmsub_pd(a, y, load(&g.rest_length, p));
         let damper_n = _mm512_mul_pd(damper, y);
