@@ -370,21 +370,36 @@ fn power_if(
         return Power::default();
     }
     if let Some(stencil) = model.stencil() {
-        let output = Output::Power(model.dynamics(true));
-        stencil.write(
-            x,
-            v,
-            [&mut [], &mut [], &mut []],
-            scratch.chunks(stencil),
-            output,
-        );
-        let (dampers_and_drag, contact) = Stencil::sum_power(&scratch.chunks);
-        return Power {
-            dampers_and_drag,
-            contact,
-        };
+        let parts = stencil.parallel_parts(crate::physics::pool::Pool::global().threads());
+        return stencil_power(stencil, model, x, v, scratch, parts);
     }
     dissipated_power(model, x, v, &mut scratch.forces)
+}
+
+/// The dissipated power at `(x, v)` from one pass of `stencil` split into `parts` ranges (the
+/// sums do not depend on the split, see [`Stencil::write_in_parts`]).
+fn stencil_power(
+    stencil: &Stencil,
+    model: &Model,
+    x: &[DVec3],
+    v: &[DVec3],
+    scratch: &mut PowerScratch,
+    parts: usize,
+) -> Power {
+    let output = Output::Power(model.dynamics(true));
+    stencil.write_in_parts(
+        x,
+        v,
+        [&mut [], &mut [], &mut []],
+        scratch.chunks(stencil),
+        output,
+        parts,
+    );
+    let (dampers_and_drag, contact) = Stencil::sum_power(&scratch.chunks);
+    Power {
+        dampers_and_drag,
+        contact,
+    }
 }
 
 // ---------------------------------------------------------------------------------------------

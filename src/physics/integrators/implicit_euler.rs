@@ -100,9 +100,10 @@ use crate::physics::collide::Contact;
 use crate::physics::energy::Power;
 use crate::physics::energy::{Energy, energy, energy_with_elastic};
 use crate::physics::forces::{Model, forces};
-use crate::physics::integrators::{MethodParams, PowerScratch, Workspace, fused, power_if};
+use crate::physics::integrators::{
+    MethodParams, PowerScratch, Workspace, fused, power_if, stencil_power,
+};
 use crate::physics::particles::State;
-use crate::physics::stencil::Output;
 use crate::physics::stencil::Stencil;
 
 use super::implicit_lattice::Forces;
@@ -506,20 +507,7 @@ fn power_one_part(
     if !account {
         return Power::default();
     }
-    let output = Output::Power(model.dynamics(true));
-    stencil.write_in_parts(
-        x,
-        v,
-        [&mut [], &mut [], &mut []],
-        scratch.chunks(stencil),
-        output,
-        1,
-    );
-    let (dampers_and_drag, contact) = Stencil::sum_power(&scratch.chunks);
-    Power {
-        dampers_and_drag,
-        contact,
-    }
+    stencil_power(stencil, model, x, v, scratch, 1)
 }
 
 /// Adds or updates a constraint for every free particle that `x_n + dt (v_n + Δv)` puts inside

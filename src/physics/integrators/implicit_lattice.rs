@@ -276,6 +276,23 @@ fn at<V: Lanes>(a: &[f64], i: usize) -> V {
     V::load(lanes(a, i))
 }
 
+/// The springs from window index `i` to `j` (eight at a time): `d = x_j - x_i` (m) and
+/// `L = |d|` (m), from the positions `x` (one array per component).
+#[inline(always)]
+fn spring_vector<V: Lanes>(x: &Soa, i: usize, j: usize) -> ([V; 3], V) {
+    let d = [
+        at::<V>(&x[0], j).sub(at(&x[0], i)),
+        at::<V>(&x[1], j).sub(at(&x[1], i)),
+        at::<V>(&x[2], j).sub(at(&x[2], i)),
+    ];
+    let length = d[0]
+        .mul(d[0])
+        .add(d[1].mul(d[1]))
+        .add(d[2].mul(d[2]))
+        .sqrt();
+    (d, length)
+}
+
 /// Writes `value` to `a[i..i + LANES]`.
 #[inline(always)]
 fn put<V: Lanes>(a: &mut [f64], i: usize, value: V) {
@@ -331,16 +348,7 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, spring
         let k_dt = V::splat(g.stiffness * dt);
         for p in (0..g.starts).step_by(LANES) {
             let (i, j) = (front + p, front + p + g.delta);
-            let d = [
-                at::<V>(&sys.x[0], j).sub(at(&sys.x[0], i)),
-                at::<V>(&sys.x[1], j).sub(at(&sys.x[1], i)),
-                at::<V>(&sys.x[2], j).sub(at(&sys.x[2], i)),
-            ];
-            let length = d[0]
-                .mul(d[0])
-                .add(d[1].mul(d[1]))
-                .add(d[2].mul(d[2]))
-                .sqrt();
+            let (d, length) = spring_vector::<V>(&sys.x, i, j);
             // n = d / L; a zero-length spring gets no block (as in the textbook loop).
             let keep = g.present[p / LANES] & zero.less_than(length);
             let inv = one.div(length).select(keep);
@@ -438,16 +446,7 @@ fn elastic_body<V: Lanes>(sys: &Lattice, stencil: &Stencil) -> f64 {
         let mut sum = V::zero();
         for p in (0..g.starts).step_by(LANES) {
             let (i, j) = (front + p, front + p + g.delta);
-            let d = [
-                at::<V>(&sys.x[0], j).sub(at(&sys.x[0], i)),
-                at::<V>(&sys.x[1], j).sub(at(&sys.x[1], i)),
-                at::<V>(&sys.x[2], j).sub(at(&sys.x[2], i)),
-            ];
-            let length = d[0]
-                .mul(d[0])
-                .add(d[1].mul(d[1]))
-                .add(d[2].mul(d[2]))
-                .sqrt();
+            let (_, length) = spring_vector::<V>(&sys.x, i, j);
             let stretch = length
                 .sub(at(g.rest_length, p))
                 .select(g.present[p / LANES]);
