@@ -24,6 +24,7 @@
 //! `E + D - E_0` shrinks with the method's order. [`Workspace::dissipated`] holds the result.
 
 mod explicit_euler;
+mod implicit_constraint;
 mod implicit_euler;
 mod implicit_lattice;
 mod midpoint;

@@ -106,6 +106,7 @@ use crate::physics::integrators::{
 use crate::physics::particles::State;
 use crate::physics::stencil::Stencil;
 
+pub(crate) use super::implicit_constraint::Constraint;
 use super::implicit_lattice::Forces;
 
 /// At most this many solves per step: the first without contact constraints, each further one
@@ -168,16 +169,6 @@ impl SolveStats {
                 .to_string()
         })
     }
-}
-
-/// One contact constraint: particle `i` gets the velocity change `dv_n` along the unit `normal`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Constraint {
-    pub(super) i: usize,
-    pub(super) normal: DVec3,
-    pub(super) dv_n: f64,
-    /// The dynamic sphere it touches (index into `State::spheres`), `None` for a collider.
-    pub(super) sphere: Option<usize>,
 }
 
 /// The method as the formulas above write it: the spring list, 3×3 blocks, textbook CG.

@@ -33,7 +33,7 @@
 
 use glam::DVec3;
 
-use super::implicit_euler::Constraint;
+use super::implicit_constraint::Constraint;
 #[cfg(target_arch = "x86_64")]
 use crate::physics::lanes::{Avx2, Avx512};
 use crate::physics::lanes::{LANES, Lanes, Plain, lanes};
