@@ -45,7 +45,7 @@ use serde::{Serialize, Serializer};
 use super::energy::{Dissipated, Power, dissipated_power};
 use super::forces::Model;
 use super::particles::State;
-use super::stencil::{After, Output, Stencil, Update};
+use super::stencil::{After, Base, Output, Stencil, Update};
 
 pub use implicit_euler::{MAX_CONTACT_PASSES, SolveStats, guard_energy, guard_start_energy};
 
@@ -470,6 +470,57 @@ fn one_pass_step(
     work.projected = true;
     state.history_valid = false;
     1
+}
+
+/// A two-pass step on a lattice, the shape midpoint and the predictor–corrector share: the
+/// first pass writes the stage `(x + h v, v + h a)` from the state into the stage buffers, the
+/// second advances the state in place from the stage, `x += dt v_stage`, `v += dt a(stage)`
+/// (with the projection), and the dissipated power at the stage. Returns the force
+/// evaluations (2).
+fn stage_then_step(
+    stencil: &Stencil,
+    model: &Model,
+    state: &mut State,
+    dt: f64,
+    h: f64,
+    work: &mut Workspace,
+) -> u64 {
+    let Workspace {
+        x_stage,
+        v_stage,
+        account,
+        dissipated,
+        power_f,
+        projection,
+        projected,
+        ..
+    } = work;
+    let dynamics = model.dynamics(true);
+    let stage = Output::Step {
+        dynamics,
+        update: Update::Euler {
+            h,
+            base: Base::Input,
+        },
+        after: None,
+    };
+    let outs = [&mut x_stage[..], &mut v_stage[..], &mut []];
+    fused_pass(stencil, &state.x, &state.v, outs, stage, false, power_f);
+    let last = Output::Step {
+        dynamics,
+        update: Update::Euler {
+            h: dt,
+            base: Base::InPlace,
+        },
+        after: after(projection),
+    };
+    let outs = [&mut state.x[..], &mut state.v[..], &mut []];
+    // D_{n+1} = D_n + dt P(stage), when accounting: from the pass at the stage.
+    let p = fused_pass(stencil, x_stage, v_stage, outs, last, *account, power_f);
+    dissipated.add_power(dt, p);
+    *projected = true;
+    state.history_valid = false;
+    2
 }
 
 /// The projection as the stencil's per-tile hook.

@@ -28,9 +28,9 @@
 //! 2nd ed., Springer 1993, §II.1 (eq. 1.7); NYCU Computer Animation HW1 (2021–2023).
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, after, fused, fused_pass, power_if};
+use crate::physics::integrators::{Workspace, fused, power_if, stage_then_step};
 use crate::physics::particles::State;
-use crate::physics::stencil::{Base, Output, Stencil, Update};
+use crate::physics::stencil::Stencil;
 
 /// The method as the formula writes it: two force evaluations and two loops.
 fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
@@ -81,41 +81,5 @@ fn step_fused(
     dt: f64,
     work: &mut Workspace,
 ) -> u64 {
-    let Workspace {
-        x_stage,
-        v_stage,
-        account,
-        dissipated,
-        power_f,
-        projection,
-        projected,
-        ..
-    } = work;
-    let half = 0.5 * dt;
-    let dynamics = model.dynamics(true);
-    let stage = Output::Step {
-        dynamics,
-        update: Update::Euler {
-            h: half,
-            base: Base::Input,
-        },
-        after: None,
-    };
-    let outs = [&mut x_stage[..], &mut v_stage[..], &mut []];
-    fused_pass(stencil, &state.x, &state.v, outs, stage, false, power_f);
-    let last = Output::Step {
-        dynamics,
-        update: Update::Euler {
-            h: dt,
-            base: Base::InPlace,
-        },
-        after: after(projection),
-    };
-    let outs = [&mut state.x[..], &mut state.v[..], &mut []];
-    // D_{n+1} = D_n + dt P(x_mid, v_mid), when accounting: from the pass at the midpoint.
-    let p = fused_pass(stencil, x_stage, v_stage, outs, last, *account, power_f);
-    dissipated.add_power(dt, p);
-    *projected = true;
-    state.history_valid = false;
-    2
+    stage_then_step(stencil, model, state, dt, 0.5 * dt, work)
 }

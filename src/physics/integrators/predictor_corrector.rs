@@ -36,9 +36,9 @@
 //! (2021–2024), `integrator.cpp`.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, after, fused, fused_pass, power_if};
+use crate::physics::integrators::{Workspace, fused, power_if, stage_then_step};
 use crate::physics::particles::State;
-use crate::physics::stencil::{Base, Output, Stencil, Update};
+use crate::physics::stencil::Stencil;
 
 /// The method as the formula writes it: predictor, then corrector.
 fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
@@ -87,40 +87,5 @@ fn step_fused(
     dt: f64,
     work: &mut Workspace,
 ) -> u64 {
-    let Workspace {
-        x_stage,
-        v_stage,
-        account,
-        dissipated,
-        power_f,
-        projection,
-        projected,
-        ..
-    } = work;
-    let dynamics = model.dynamics(true);
-    let stage = Output::Step {
-        dynamics,
-        update: Update::Euler {
-            h: dt,
-            base: Base::Input,
-        },
-        after: None,
-    };
-    let outs = [&mut x_stage[..], &mut v_stage[..], &mut []];
-    fused_pass(stencil, &state.x, &state.v, outs, stage, false, power_f);
-    let last = Output::Step {
-        dynamics,
-        update: Update::Euler {
-            h: dt,
-            base: Base::InPlace,
-        },
-        after: after(projection),
-    };
-    let outs = [&mut state.x[..], &mut state.v[..], &mut []];
-    // D_{n+1} = D_n + dt P(x̃, ṽ), when accounting: from the corrector's pass.
-    let p = fused_pass(stencil, x_stage, v_stage, outs, last, *account, power_f);
-    dissipated.add_power(dt, p);
-    *projected = true;
-    state.history_valid = false;
-    2
+    stage_then_step(stencil, model, state, dt, dt, work)
 }
