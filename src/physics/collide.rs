@@ -433,28 +433,65 @@ impl Collider {
     }
 }
 
+/// A collider as the broad phase sees it, for contacts closer than `epsilon` (m): its
+/// geometry and the bounds of the tests without square roots that [`Collider::may_touch`] (one
+/// particle) and the stencil's chunk test (eight at a time) both make, each bound widened by a
+/// relative margin of 10⁻⁹ against rounding, so that no particle the exact
+/// [`Collider::contact`] would put within `epsilon` is left out. Points in m, `normal` a unit
+/// vector.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Broad {
+    /// May touch when the height `φ = (x - point)·normal < phi_max` (m).
+    Plane {
+        point: DVec3,
+        normal: DVec3,
+        phi_max: f64,
+    },
+    /// `|x - c| - r < ε  ⇔  |x - c|² < (r + ε)²`: may touch when `|x - center|² < d2_max` (m²).
+    Sphere { center: DVec3, d2_max: f64 },
+    /// `r - |x - c| < ε  ⇔  |x - c|² > (r - ε)²` (the rim is left to the exact test): may touch
+    /// when `|x - center|² ≥ d2_min` (m²).
+    Bowl { center: DVec3, d2_min: f64 },
+    /// Every contact has the height `h = (x - point)·normal < h_max`; below the floor
+    /// (`h < h_floor`) only the shaft's wall band `ρ > R - ε` and the solid touch: `ρ² ≥
+    /// rho2_min` (m²), `ρ` the distance from the hole's axis through `hole_center`.
+    HolePlane {
+        point: DVec3,
+        normal: DVec3,
+        hole_center: DVec3,
+        h_max: f64,
+        h_floor: f64,
+        rho2_min: f64,
+    },
+}
+
 impl Collider {
-    /// False when `x` (m) is certainly farther than `epsilon` (m) from the collider's surface on
-    /// its free side, so that [`Collider::contact`] would give no `φ < epsilon`: a test without
-    /// square roots (squared distances, a height), with a relative margin of 10⁻⁹ against
-    /// rounding, for the broad phase of the contact loops. True also for NaN.
+    /// The collider as the broad phase sees it for contacts closer than `epsilon` (m).
     #[must_use]
-    pub fn may_touch(&self, x: DVec3, epsilon: f64) -> bool {
+    pub(crate) fn broad(&self, epsilon: f64) -> Broad {
         const MARGIN: f64 = 1e-9;
         match *self {
-            // A plane's φ costs no more than any test.
-            Collider::Plane { .. } => true,
+            Collider::Plane { point, normal } => {
+                let scale = point.abs().max_element() + 1.0;
+                Broad::Plane {
+                    point,
+                    normal,
+                    phi_max: epsilon + MARGIN * scale,
+                }
+            }
             Collider::Sphere { center, radius } => {
-                // |x - c| - r < ε  ⇔  |x - c|² < (r + ε)²
                 let reach = (radius + epsilon).max(0.0);
-                let d2 = (x - center).length_squared();
-                d2 < reach * reach * (1.0 + MARGIN) + MARGIN || d2.is_nan()
+                Broad::Sphere {
+                    center,
+                    d2_max: reach * reach * (1.0 + MARGIN) + MARGIN,
+                }
             }
             Collider::Bowl { center, radius, .. } => {
-                // r - |x - c| < ε  ⇔  |x - c|² > (r - ε)²
                 let inner = (radius - epsilon).max(0.0);
-                let d2 = (x - center).length_squared();
-                d2 >= inner * inner * (1.0 - MARGIN) || d2.is_nan()
+                Broad::Bowl {
+                    center,
+                    d2_min: inner * inner * (1.0 - MARGIN),
+                }
             }
             Collider::HolePlane {
                 point,
@@ -462,20 +499,54 @@ impl Collider {
                 hole_center,
                 hole_radius,
             } => {
-                // Every contact has the height h < ε; below the floor only the shaft's wall
-                // band (ρ > R - ε) and the solid (ρ ≥ R) touch.
                 let scale = point.abs().max_element() + hole_center.abs().max_element() + 1.0;
+                let inner = (hole_radius - epsilon).max(0.0);
+                Broad::HolePlane {
+                    point,
+                    normal,
+                    hole_center,
+                    h_max: epsilon + MARGIN * scale,
+                    h_floor: -MARGIN * scale,
+                    rho2_min: inner * inner * (1.0 - MARGIN),
+                }
+            }
+        }
+    }
+
+    /// False when `x` (m) is certainly farther than `epsilon` (m) from the collider's surface on
+    /// its free side, so that [`Collider::contact`] would give no `φ < epsilon`: the bounds of
+    /// [`Collider::broad`] (squared distances, a height). True also for NaN.
+    #[must_use]
+    pub fn may_touch(&self, x: DVec3, epsilon: f64) -> bool {
+        match self.broad(epsilon) {
+            // A plane's φ costs no more than any test.
+            Broad::Plane { .. } => true,
+            Broad::Sphere { center, d2_max } => {
+                let d2 = (x - center).length_squared();
+                d2 < d2_max || d2.is_nan()
+            }
+            Broad::Bowl { center, d2_min } => {
+                let d2 = (x - center).length_squared();
+                d2 >= d2_min || d2.is_nan()
+            }
+            Broad::HolePlane {
+                point,
+                normal,
+                hole_center,
+                h_max,
+                h_floor,
+                rho2_min,
+            } => {
                 let h = (x - point).dot(normal);
-                if h >= epsilon + MARGIN * scale {
+                if h >= h_max {
                     return false;
                 }
-                if h >= -MARGIN * scale {
+                if h >= h_floor {
                     return true;
                 }
                 let q = x - hole_center;
                 let rho2 = (q - q.dot(normal) * normal).length_squared();
-                let inner = (hole_radius - epsilon).max(0.0);
-                rho2 >= inner * inner * (1.0 - MARGIN) || rho2.is_nan()
+                rho2 >= rho2_min || rho2.is_nan()
             }
         }
     }

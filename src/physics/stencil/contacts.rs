@@ -4,13 +4,13 @@
 
 #[allow(clippy::wildcard_imports)]
 use super::*;
+use crate::physics::collide::Broad;
 
 /// The chunk's particles (bit `l` for lane `l`) that may touch one of `colliders` (closer than
-/// `epsilon`, m, or inside): a test without square roots with a relative margin of 10⁻⁹, so
+/// `epsilon`, m, or inside): the bounds of [`Collider::broad`], eight particles at a time, so
 /// that it never leaves out a particle that [`Collider::contact`] would put within `epsilon`.
 #[inline(always)]
 pub(super) fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3]) -> u8 {
-    const MARGIN: f64 = 1e-9;
     let dot = |p: [V; 3], n: DVec3| {
         p[0].mul(V::splat(n.x))
             .add(p[1].mul(V::splat(n.y)))
@@ -26,38 +26,34 @@ pub(super) fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3
     let squared = |d: [V; 3]| d[0].mul(d[0]).add(d[1].mul(d[1])).add(d[2].mul(d[2]));
     let mut mask = 0u8;
     for collider in colliders {
-        mask |= match *collider {
-            Collider::Plane { point, normal } => {
-                // φ = (x - p)·n < ε, with a margin for rounding.
-                let phi = dot(minus(point), normal);
-                let scale = point.abs().max_element() + 1.0;
+        mask |= match collider.broad(epsilon) {
+            Broad::Plane {
+                point,
+                normal,
+                phi_max,
+            } => {
                 // NaN: let the exact test decide.
-                phi.less_than(V::splat(epsilon + MARGIN * scale)) | phi.nan_lanes()
+                let phi = dot(minus(point), normal);
+                phi.less_than(V::splat(phi_max)) | phi.nan_lanes()
             }
-            Collider::Sphere { center, radius } => {
-                // |x - c| - r < ε  ⇔  |x - c|² < (r + ε)².
-                let reach = (radius + epsilon).max(0.0);
+            Broad::Sphere { center, d2_max } => {
                 let d2 = squared(minus(center));
-                d2.less_than(V::splat(reach * reach * (1.0 + MARGIN) + MARGIN)) | d2.nan_lanes()
+                d2.less_than(V::splat(d2_max)) | d2.nan_lanes()
             }
-            Collider::Bowl { center, radius, .. } => {
-                // r - |x - c| < ε  ⇔  |x - c|² > (r - ε)² (when r > ε; the rim is left to the
-                // exact test).
-                let inner = (radius - epsilon).max(0.0);
+            Broad::Bowl { center, d2_min } => {
                 let d2 = squared(minus(center));
-                !d2.less_than(V::splat(inner * inner * (1.0 - MARGIN)))
+                !d2.less_than(V::splat(d2_min))
             }
-            Collider::HolePlane {
+            Broad::HolePlane {
                 point,
                 normal,
                 hole_center,
-                hole_radius,
+                h_max,
+                h_floor,
+                rho2_min,
             } => {
-                // Every contact needs the height h = (x - p)·n < ε; below the floor (h < 0)
-                // only the shaft's wall band ρ > R - ε or the solid, so ρ² > (R - ε)².
-                let scale = point.abs().max_element() + hole_center.abs().max_element() + 1.0;
                 let h = dot(minus(point), normal);
-                let low = h.less_than(V::splat(epsilon + MARGIN * scale)) | h.nan_lanes();
+                let low = h.less_than(V::splat(h_max)) | h.nan_lanes();
                 let q = minus(hole_center);
                 let along = dot(q, normal);
                 let radial = [
@@ -65,10 +61,8 @@ pub(super) fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3
                     q[1].sub(along.mul(V::splat(normal.y))),
                     q[2].sub(along.mul(V::splat(normal.z))),
                 ];
-                let rho2 = squared(radial);
-                let inner = (hole_radius - epsilon).max(0.0);
-                let near_wall = !rho2.less_than(V::splat(inner * inner * (1.0 - MARGIN)));
-                let above = !h.less_than(V::splat(-MARGIN * scale));
+                let near_wall = !squared(radial).less_than(V::splat(rho2_min));
+                let above = !h.less_than(V::splat(h_floor));
                 low & (above | near_wall)
             }
         };
