@@ -121,12 +121,40 @@ impl Method {
         work.dissipated = Dissipated::default();
         work.projected = false;
         let evals = match self {
-            Method::ExplicitEuler => explicit_euler::step(model, state, dt, work),
-            Method::SemiImplicitEuler => semi_implicit_euler::step(model, state, dt, work),
-            Method::Midpoint => midpoint::step(model, state, dt, work),
-            Method::Rk4 => rk4::step(model, state, dt, work),
+            Method::ExplicitEuler => explicit_step(
+                model,
+                state,
+                dt,
+                work,
+                explicit_euler::textbook,
+                explicit_euler::step_fused,
+            ),
+            Method::SemiImplicitEuler => explicit_step(
+                model,
+                state,
+                dt,
+                work,
+                semi_implicit_euler::textbook,
+                semi_implicit_euler::step_fused,
+            ),
+            Method::Midpoint => explicit_step(
+                model,
+                state,
+                dt,
+                work,
+                midpoint::textbook,
+                midpoint::step_fused,
+            ),
+            Method::Rk4 => explicit_step(model, state, dt, work, rk4::textbook, rk4::step_fused),
             Method::ImplicitEuler => implicit_euler::step(model, state, dt, params, work),
-            Method::PredictorCorrector => predictor_corrector::step(model, state, dt, work),
+            Method::PredictorCorrector => explicit_step(
+                model,
+                state,
+                dt,
+                work,
+                predictor_corrector::textbook,
+                predictor_corrector::step_fused,
+            ),
             Method::Verlet => verlet::step(model, state, dt, params, work),
             Method::Xpbd => xpbd::step(model, state, dt, params, work),
         };
@@ -406,6 +434,29 @@ fn stencil_power(
 // ---------------------------------------------------------------------------------------------
 // The seam between the textbook loops and the fused passes
 // ---------------------------------------------------------------------------------------------
+
+/// An explicit method's textbook step (its file's `textbook`): the loops of its formulas.
+type TextbookStep = fn(&Model, &mut State, f64, &mut Workspace) -> u64;
+
+/// The same step in the stencil's fused passes (its file's `step_fused`): the same numbers,
+/// tested per method.
+type FusedStep = fn(&Stencil, &Model, &mut State, f64, &mut Workspace) -> u64;
+
+/// The seam of every explicit method: `fast` on a lattice when the fused passes are wanted
+/// ([`fused`]), else `textbook`. Returns the force evaluations.
+fn explicit_step(
+    model: &Model,
+    state: &mut State,
+    dt: f64,
+    work: &mut Workspace,
+    textbook: TextbookStep,
+    fast: FusedStep,
+) -> u64 {
+    match fused(model, work) {
+        Some(stencil) => fast(stencil, model, state, dt, work),
+        None => textbook(model, state, dt, work),
+    }
+}
 
 /// The stencil, when the method should fuse its stages into the stencil's passes: a lattice,
 /// and `work.textbook` not set.

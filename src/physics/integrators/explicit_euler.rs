@@ -17,8 +17,8 @@
 //! `dt λ` stays inside the unit circle around -1.
 //!
 //! **Fast path.** The textbook loop (`textbook`, first below) is the method. On a lattice,
-//! `step` hands the same arithmetic, stage by stage, to the stencil's fused passes through the
-//! one seam (`integrators::fused` and `fused_pass`, which call
+//! [`Method::step`](super::Method::step) hands the same arithmetic, stage by stage, to the
+//! stencil's fused passes through the one seam (`integrators::fused` and `fused_pass`, which call
 //! [`Stencil::write`](crate::physics::stencil::Stencil::write)): `step_fused`, last in this
 //! file, does the same operations in the same order, bit for bit (tested).
 //!
@@ -26,12 +26,12 @@
 //! 2nd ed., Springer 1993, §I.7 and §II.1; GAMES101 assignment 8 (2020), §1.2.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, fused, one_pass_step, power_if};
+use crate::physics::integrators::{Workspace, one_pass_step, power_if};
 use crate::physics::particles::State;
 use crate::physics::stencil::{Base, Stencil, Update};
 
 /// The method as the formula writes it: one force evaluation, then the two lines.
-fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
+pub(super) fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
     // D_{n+1} = D_n + dt P(x_n, v_n), when accounting.
     let p = power_if(work.account, model, &state.x, &state.v, &mut work.power_f);
     work.dissipated.add_power(dt, p);
@@ -47,16 +47,9 @@ fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> 
     1
 }
 
-pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
-    match fused(model, work) {
-        Some(stencil) => step_fused(stencil, model, state, dt, work),
-        None => textbook(model, state, dt, work),
-    }
-}
-
 /// The same step on a lattice in one stencil pass: `x' = x + dt v`, `v' = v + dt a` per
 /// particle (an Euler stage from the pass's own input), into fresh buffers.
-fn step_fused(
+pub(super) fn step_fused(
     stencil: &Stencil,
     model: &Model,
     state: &mut State,

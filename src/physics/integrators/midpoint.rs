@@ -19,8 +19,8 @@
 //! explicit Euler.
 //!
 //! **Fast path.** The textbook loop (`textbook`, first below) is the method. On a lattice,
-//! `step` hands the same arithmetic, stage by stage, to the stencil's fused passes through the
-//! one seam (`integrators::fused` and `fused_pass`, which call
+//! [`Method::step`](super::Method::step) hands the same arithmetic, stage by stage, to the
+//! stencil's fused passes through the one seam (`integrators::fused` and `fused_pass`, which call
 //! [`Stencil::write`](crate::physics::stencil::Stencil::write)): `step_fused`, last in this
 //! file, does the same operations in the same order, bit for bit (tested).
 //!
@@ -28,12 +28,12 @@
 //! 2nd ed., Springer 1993, §II.1 (eq. 1.7); NYCU Computer Animation HW1 (2021–2023).
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, fused, power_if, stage_then_step};
+use crate::physics::integrators::{Workspace, power_if, stage_then_step};
 use crate::physics::particles::State;
 use crate::physics::stencil::Stencil;
 
 /// The method as the formula writes it: two force evaluations and two loops.
-fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
+pub(super) fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
     let half = 0.5 * dt;
     let Workspace {
         a,
@@ -64,17 +64,10 @@ fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> 
     2
 }
 
-pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
-    match fused(model, work) {
-        Some(stencil) => step_fused(stencil, model, state, dt, work),
-        None => textbook(model, state, dt, work),
-    }
-}
-
 /// The same step on a lattice in two stencil passes: the first writes the midpoint
 /// `(x + dt/2 v, v + dt/2 a)`, the second advances the state in place from it (the loops above,
 /// per particle, so the same numbers), with the dissipated power at the midpoint.
-fn step_fused(
+pub(super) fn step_fused(
     stencil: &Stencil,
     model: &Model,
     state: &mut State,

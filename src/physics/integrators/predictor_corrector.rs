@@ -26,8 +26,8 @@
 //! A real implicit Euler is [`super::implicit_euler`].
 //!
 //! **Fast path.** The textbook loop (`textbook`, first below) is the method. On a lattice,
-//! `step` hands the same arithmetic, stage by stage, to the stencil's fused passes through the
-//! one seam (`integrators::fused` and `fused_pass`, which call
+//! [`Method::step`](super::Method::step) hands the same arithmetic, stage by stage, to the
+//! stencil's fused passes through the one seam (`integrators::fused` and `fused_pass`, which call
 //! [`Stencil::write`](crate::physics::stencil::Stencil::write)): `step_fused`, last in this
 //! file, does the same operations in the same order, bit for bit (tested).
 //!
@@ -36,12 +36,12 @@
 //! (2021–2024), `integrator.cpp`.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, fused, power_if, stage_then_step};
+use crate::physics::integrators::{Workspace, power_if, stage_then_step};
 use crate::physics::particles::State;
 use crate::physics::stencil::Stencil;
 
 /// The method as the formula writes it: predictor, then corrector.
-fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
+pub(super) fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
     let Workspace {
         a,
         x_stage,
@@ -69,18 +69,11 @@ fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> 
     2
 }
 
-pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
-    match fused(model, work) {
-        Some(stencil) => step_fused(stencil, model, state, dt, work),
-        None => textbook(model, state, dt, work),
-    }
-}
-
 /// The same step on a lattice in two stencil passes: the first writes the predicted state
 /// `(x + dt v, v + dt a)`, the second applies the corrector's slope from the old state in
 /// place (the loops above, per particle, so the same numbers), with the dissipated power at
 /// the predicted state.
-fn step_fused(
+pub(super) fn step_fused(
     stencil: &Stencil,
     model: &Model,
     state: &mut State,

@@ -24,8 +24,8 @@
 //! Inside that range it loses a little energy each step (`|R|² = 1 - (dt ω)⁶/72 + (dt ω)⁸/576`).
 //!
 //! **Fast path.** The textbook loop (`textbook`, first below) is the method. On a lattice,
-//! `step` hands the same arithmetic, stage by stage, to the stencil's fused passes through the
-//! one seam (`integrators::fused` and `fused_pass`, which call
+//! [`Method::step`](super::Method::step) hands the same arithmetic, stage by stage, to the
+//! stencil's fused passes through the one seam (`integrators::fused` and `fused_pass`, which call
 //! [`Stencil::write`](crate::physics::stencil::Stencil::write)): `step_fused`, last in this
 //! file, does the same operations in the same order, bit for bit (tested).
 //!
@@ -35,12 +35,12 @@
 
 use crate::physics::energy::Power;
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, after, fused, fused_pass, power_if};
+use crate::physics::integrators::{Workspace, after, fused_pass, power_if};
 use crate::physics::particles::State;
 use crate::physics::stencil::{Base, Output, Stencil, Update};
 
 /// The method as the formula writes it: four force evaluations, the stage loops between them.
-fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
+pub(super) fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
     let n = state.x.len();
     let half = 0.5 * dt;
     let Workspace {
@@ -98,13 +98,6 @@ fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> 
     4
 }
 
-pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
-    match fused(model, work) {
-        Some(stencil) => step_fused(stencil, model, state, dt, work),
-        None => textbook(model, state, dt, work),
-    }
-}
-
 /// The same step on a lattice in four stencil passes, each ending with the next stage's loop
 /// for its own particles (the loops above, so the same numbers):
 ///
@@ -117,7 +110,7 @@ pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspa
 /// with `k1x = v_n`, `k2x = v_2`, `k3x = v_3`, `k4x = v_4`: the slopes of positions are the
 /// stages' velocities, so they need no buffers of their own. Each pass also integrates the
 /// dissipated power of its stage when accounting.
-fn step_fused(
+pub(super) fn step_fused(
     stencil: &Stencil,
     model: &Model,
     state: &mut State,

@@ -19,8 +19,8 @@
 //! -1 as a double root and the amplitude grows linearly; beyond, one grows exponentially.
 //!
 //! **Fast path.** The textbook loop (`textbook`, first below) is the method. On a lattice,
-//! `step` hands the same arithmetic, stage by stage, to the stencil's fused passes through the
-//! one seam (`integrators::fused` and `fused_pass`, which call
+//! [`Method::step`](super::Method::step) hands the same arithmetic, stage by stage, to the
+//! stencil's fused passes through the one seam (`integrators::fused` and `fused_pass`, which call
 //! [`Stencil::write`](crate::physics::stencil::Stencil::write)): `step_fused`, last in this
 //! file, does the same operations in the same order, bit for bit (tested). On a small lattice
 //! (a rope) many steps can also be taken in one call (`steps`, after it): the stencil then
@@ -35,7 +35,7 @@ use crate::physics::particles::State;
 use crate::physics::stencil::{Stencil, Update};
 
 /// The method as the formula writes it: one force evaluation, then the two lines.
-fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
+pub(super) fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
     // D_{n+1} = D_n + dt P(x_n, v_n), when accounting.
     let p = power_if(work.account, model, &state.x, &state.v, &mut work.power_f);
     work.dissipated.add_power(dt, p);
@@ -51,18 +51,11 @@ fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> 
     1
 }
 
-pub(super) fn step(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
-    match fused(model, work) {
-        Some(stencil) => step_fused(stencil, model, state, dt, work),
-        None => textbook(model, state, dt, work),
-    }
-}
-
 /// The same step on a lattice, fused into the stencil's pass (`physics::stencil`): every thread
 /// computes the accelerations of its particles and advances them with the two lines above (so
 /// the same numbers), the dissipated power and the projection in the same pass, into fresh
 /// buffers, because the other threads still read the old positions and velocities.
-fn step_fused(
+pub(super) fn step_fused(
     stencil: &Stencil,
     model: &Model,
     state: &mut State,
