@@ -289,6 +289,28 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
     }
 }
 
+/// Semi-implicit Euler on a chunk: `v' = v + dt a`, then `x' = x + dt v'` (positions in m,
+/// velocities in m/s, accelerations in m/s², `dt` in s in every lane). Returns `(x', v')`.
+#[inline(always)]
+pub(super) fn semi_implicit_euler<V: Lanes>(
+    x: [V; 3],
+    v: [V; 3],
+    a: [V; 3],
+    dt: V,
+) -> ([V; 3], [V; 3]) {
+    let v_new = [
+        v[0].add(dt.mul(a[0])),
+        v[1].add(dt.mul(a[1])),
+        v[2].add(dt.mul(a[2])),
+    ];
+    let x_new = [
+        x[0].add(dt.mul(v_new[0])),
+        x[1].add(dt.mul(v_new[1])),
+        x[2].add(dt.mul(v_new[2])),
+    ];
+    (x_new, v_new)
+}
+
 /// One chunk of particles in pass 2: particle `q` (a multiple of `LANES`) is index `at` of the
 /// part's outputs; `count` of its `LANES` particles exist; `x`, `v` are the pass's input.
 pub(super) struct Chunk<V> {
@@ -358,18 +380,7 @@ pub(super) fn finish<V: Lanes, const POWER: bool>(
             let [xo, vo, ao] = &mut part.outs;
             match update {
                 Update::SemiImplicitEuler { dt } => {
-                    let dt = V::splat(dt);
-                    // v' = v + dt a; then x' = x + dt v'.
-                    let v_new = [
-                        v[0].add(dt.mul(a[0])),
-                        v[1].add(dt.mul(a[1])),
-                        v[2].add(dt.mul(a[2])),
-                    ];
-                    let x_new = [
-                        x[0].add(dt.mul(v_new[0])),
-                        x[1].add(dt.mul(v_new[1])),
-                        x[2].add(dt.mul(v_new[2])),
-                    ];
+                    let (x_new, v_new) = semi_implicit_euler(x, v, a, V::splat(dt));
                     store_chunk(x_new, &mut xo[at..], count);
                     store_chunk(v_new, &mut vo[at..], count);
                 }

@@ -26,7 +26,7 @@
 #[cfg(target_arch = "x86_64")]
 use super::kernels::springs_avx512;
 use super::kernels::springs_exact;
-use super::passes::{Forces, Window, load_padded, weight_drag_springs};
+use super::passes::{Forces, Window, load_padded, semi_implicit_euler, weight_drag_springs};
 #[allow(clippy::wildcard_imports)]
 use super::*;
 
@@ -247,17 +247,7 @@ fn small_body<V: Lanes>(
             let f = weight_drag_springs(m, d.gravity, d.drag, v, sum);
             let w = load_padded::<V>(d.inv_mass, q, count);
             let a = [f[0].mul(w), f[1].mul(w), f[2].mul(w)];
-            // v' = v + dt a; then x' = x + dt v'.
-            let v_new = [
-                v[0].add(dt_lanes.mul(a[0])),
-                v[1].add(dt_lanes.mul(a[1])),
-                v[2].add(dt_lanes.mul(a[2])),
-            ];
-            let x_new = [
-                x[0].add(dt_lanes.mul(v_new[0])),
-                x[1].add(dt_lanes.mul(v_new[1])),
-                x[2].add(dt_lanes.mul(v_new[2])),
-            ];
+            let (x_new, v_new) = semi_implicit_euler(x, v, a, dt_lanes);
             // Past the last particle the window stays zero, as the streaming loop's.
             let keep = if count == LANES {
                 u8::MAX
