@@ -518,8 +518,11 @@ impl Collider {
     /// [`Collider::broad`] (squared distances, a height). True also for NaN.
     #[must_use]
     pub fn may_touch(&self, x: DVec3, epsilon: f64) -> bool {
+        if let Collider::Plane { .. } = self {
+            // A plane's φ costs no more than any test (and no bounds are needed).
+            return true;
+        }
         match self.broad(epsilon) {
-            // A plane's φ costs no more than any test.
             Broad::Plane { .. } => true,
             Broad::Sphere { center, d2_max } => {
                 let d2 = (x - center).length_squared();
