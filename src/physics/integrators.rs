@@ -172,9 +172,10 @@ impl Method {
 impl Method {
     /// `n` steps of [`Method::step`]; returns the force evaluations they took.
     ///
-    /// Semi-implicit Euler on a small lattice (a rope) without energy accounting or projection
-    /// takes them in one call, with the particles in the stencil's layout in between: the same
-    /// numbers bit for bit, without converting the state at every step.
+    /// Semi-implicit Euler on a lattice without energy accounting takes them in one call, the
+    /// same numbers bit for bit: on a small lattice (a rope, no projection) with the particles
+    /// in the stencil's layout in between, without converting the state at every step; on a
+    /// large one as one team of threads, without handing each step to the pool.
     pub fn steps(
         self,
         model: &Model,
@@ -184,6 +185,7 @@ impl Method {
         work: &mut Workspace,
         n: u64,
     ) -> u64 {
+        work.resize(model.particle_count(), model.springs.len());
         if self == Method::SemiImplicitEuler
             && n > 1
             && let Some(evals) = semi_implicit_euler::steps(model, state, dt, work, n)
@@ -575,6 +577,6 @@ fn stage_then_step(
 }
 
 /// The projection as the stencil's per-tile hook.
-fn after(projection: &Option<Projection>) -> Option<After<'_>> {
+pub(super) fn after(projection: &Option<Projection>) -> Option<After<'_>> {
     projection.as_ref().map(|p| &*p.0 as After)
 }
