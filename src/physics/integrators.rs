@@ -172,10 +172,11 @@ impl Method {
 impl Method {
     /// `n` steps of [`Method::step`]; returns the force evaluations they took.
     ///
-    /// Semi-implicit Euler on a lattice without energy accounting takes them in one call, the
-    /// same numbers bit for bit: on a small lattice (a rope, no projection) with the particles
-    /// in the stencil's layout in between, without converting the state at every step; on a
-    /// large one as one team of threads, without handing each step to the pool.
+    /// Semi-implicit Euler and RK4 on a lattice without energy accounting take them in one
+    /// call, the same numbers bit for bit: on a large lattice as one team of threads, without
+    /// handing each pass to the pool; semi-implicit Euler on a small lattice (a rope, no
+    /// projection) with the particles in the stencil's layout in between, without converting
+    /// the state at every step.
     pub fn steps(
         self,
         model: &Model,
@@ -186,10 +187,13 @@ impl Method {
         n: u64,
     ) -> u64 {
         work.resize(model.particle_count(), model.springs.len());
-        if self == Method::SemiImplicitEuler
-            && n > 1
-            && let Some(evals) = semi_implicit_euler::steps(model, state, dt, work, n)
-        {
+        let many = match self {
+            _ if n < 2 => None,
+            Method::SemiImplicitEuler => semi_implicit_euler::steps(model, state, dt, work, n),
+            Method::Rk4 => rk4::steps(model, state, dt, work, n),
+            _ => None,
+        };
+        if let Some(evals) = many {
             work.dissipated = Dissipated::default();
             return evals;
         }
