@@ -43,8 +43,9 @@ use crate::physics::stencil::{Kernel, Stencil};
 #[derive(Clone, Debug, Default)]
 struct Blocks {
     delta: usize,
-    /// `B_δ[p]`: entries xx, xy, xz, yy, yz, zz (kg) at index `front + p`.
-    b: [Vec<f64>; 6],
+    /// `B_δ[p]`: entries xx, xy, xz, yy, yz, zz (kg), entry `e` at index `e len + front + p`
+    /// (one array, so that the product needs one address per group).
+    b: Vec<f64>,
     /// `dt² K_s (v_b - v_a)` (N·s) at index `front + p`.
     kv: [Vec<f64>; 3],
 }
@@ -113,7 +114,7 @@ impl Lattice {
             .group_views()
             .map(|g| Blocks {
                 delta: g.delta,
-                b: std::array::from_fn(|_| zeros.clone()),
+                b: vec![0.0; 6 * len],
                 kv: soa(),
             })
             .collect();
@@ -253,11 +254,13 @@ impl Lattice {
         let k = self.front + i;
         let get = |a: &Soa, j: usize| DVec3::new(a[0][j], a[1][j], a[2][j]);
         // The symmetric block at index j times d.
-        let sym = |b: &[Vec<f64>; 6], j: usize, d: DVec3| {
+        let len = self.len;
+        let sym = |b: &[f64], j: usize, d: DVec3| {
+            let e = |e: usize| b[e * len + j];
             DVec3::new(
-                b[0][j] * d.x + b[1][j] * d.y + b[2][j] * d.z,
-                b[1][j] * d.x + b[3][j] * d.y + b[4][j] * d.z,
-                b[2][j] * d.x + b[4][j] * d.y + b[5][j] * d.z,
+                e(0) * d.x + e(1) * d.y + e(2) * d.z,
+                e(1) * d.x + e(3) * d.y + e(4) * d.z,
+                e(2) * d.x + e(4) * d.y + e(5) * d.z,
             )
         };
         let p = get(&self.dv, k);
@@ -338,7 +341,7 @@ fn put_triple<V: Lanes>(a: &mut Soa, i: usize, value: [V; 3]) {
 /// diagonal blocks (inverted) and the right-hand side gathered particle by particle.
 #[inline(always)]
 fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, springs: bool) {
-    let front = sys.front;
+    let (front, len) = (sys.front, sys.len);
     let dt2 = dt * dt;
     let (one, zero) = (V::splat(1.0), V::zero());
     let mut elastic = 0.0;
@@ -367,8 +370,8 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, spring
                 c_nn.mul(n[1].mul(n[2])),
                 c_nn.mul(n[2].mul(n[2])).add(c_id),
             ];
-            for (b, e) in blocks.b.iter_mut().zip(entries) {
-                put(b, i, e.select(keep));
+            for (e, value) in entries.into_iter().enumerate() {
+                put(&mut blocks.b, e * len + i, value.select(keep));
             }
             // dt² K (v_b - v_a) = dt² k ((1 - t) n (n·dv) + t dv).
             let dv = [
@@ -406,7 +409,8 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, spring
         let mut a = [m, zero, zero, m, zero, m];
         let mut b = triple::<V>(&sys.rhs, i);
         for g in &sys.groups {
-            let (here, before) = (block::<V>(&g.b, i), block::<V>(&g.b, i - g.delta));
+            let here = group_block::<V>(&g.b, len, i);
+            let before = group_block::<V>(&g.b, len, i - g.delta);
             for e in 0..6 {
                 a[e] = a[e].add(here[e]).add(before[e]);
             }
@@ -459,46 +463,129 @@ fn elastic_body<V: Lanes>(sys: &Lattice, stencil: &Stencil) -> f64 {
 
 /// `out = A p` (see the module docs), zero at pinned particles and in the margins; returns
 /// `p·out` (the conjugate-gradient step's `pᵀ A p`, summed in the same pass).
+///
+/// The conjugate gradients spend most of their time here, so the loop reads its arrays through
+/// addresses taken once before it, without a bounds check per load: the checks are made once,
+/// for the whole loop, by the asserts at the top (every index is `front + q ± δ` with
+/// `δ ≤ front` and `front + q + δ + LANES ≤ len`). The arithmetic is the formula's, in its
+/// order: a test compares it bit for bit with the same product written with checked loads.
 #[inline(always)]
 fn apply<V: Lanes>(sys: &Lattice, p: &Soa, out: &mut Soa) -> f64 {
+    let (front, len, end) = (
+        sys.front,
+        sys.len,
+        sys.front + sys.n.next_multiple_of(LANES),
+    );
+    assert!(p.iter().chain(out.iter()).all(|a| a.len() == len));
+    assert!(sys.mass.len() == len && sys.free.len() == len && end + front + LANES <= len);
+    assert!(
+        sys.groups
+            .iter()
+            .all(|g| g.delta <= front && g.b.len() == 6 * len)
+    );
+    let p = [p[0].as_ptr(), p[1].as_ptr(), p[2].as_ptr()];
+    let out = [
+        out[0].as_mut_ptr(),
+        out[1].as_mut_ptr(),
+        out[2].as_mut_ptr(),
+    ];
+    let (mass, free) = (sys.mass.as_ptr(), sys.free.as_ptr());
     let mut p_out = V::zero();
-    for q in (0..sys.n.next_multiple_of(LANES)).step_by(LANES) {
-        let i = sys.front + q;
-        let pq = triple::<V>(p, i);
-        let m: V = at(&sys.mass, i);
-        let mut acc = [m.mul(pq[0]), m.mul(pq[1]), m.mul(pq[2])];
-        for g in &sys.groups {
-            let ahead = triple::<V>(p, i + g.delta);
-            let behind = triple::<V>(p, i - g.delta);
-            let y1 = sym_mul(
-                &block::<V>(&g.b, i),
-                [
-                    pq[0].sub(ahead[0]),
-                    pq[1].sub(ahead[1]),
-                    pq[2].sub(ahead[2]),
-                ],
-            );
-            let y2 = sym_mul(
-                &block::<V>(&g.b, i - g.delta),
-                [
-                    behind[0].sub(pq[0]),
-                    behind[1].sub(pq[1]),
-                    behind[2].sub(pq[2]),
-                ],
-            );
+    for i in (front..end).step_by(LANES) {
+        // SAFETY (every load and store below): `i - δ ≥ 0` and `i + δ + LANES ≤ len` for every
+        // group's δ, and every array has `len` values (the asserts above); `out` is not `p`.
+        unsafe {
+            let pq = raw_triple::<V>(p, i);
+            let m: V = raw(mass, i);
+            let mut acc = [m.mul(pq[0]), m.mul(pq[1]), m.mul(pq[2])];
+            for g in &sys.groups {
+                let b = g.b.as_ptr();
+                let ahead = raw_triple::<V>(p, i + g.delta);
+                let behind = raw_triple::<V>(p, i - g.delta);
+                let y1 = sym_mul(
+                    &raw_block::<V>(b, len, i),
+                    [
+                        pq[0].sub(ahead[0]),
+                        pq[1].sub(ahead[1]),
+                        pq[2].sub(ahead[2]),
+                    ],
+                );
+                let y2 = sym_mul(
+                    &raw_block::<V>(b, len, i - g.delta),
+                    [
+                        behind[0].sub(pq[0]),
+                        behind[1].sub(pq[1]),
+                        behind[2].sub(pq[2]),
+                    ],
+                );
+                for c in 0..3 {
+                    acc[c] = acc[c].add(y1[c]).sub(y2[c]);
+                }
+            }
+            let free: V = raw(free, i);
+            let y = [acc[0].mul(free), acc[1].mul(free), acc[2].mul(free)];
+            p_out = p_out
+                .add(pq[0].mul(y[0]))
+                .add(pq[1].mul(y[1]))
+                .add(pq[2].mul(y[2]));
             for c in 0..3 {
-                acc[c] = acc[c].add(y1[c]).sub(y2[c]);
+                y[c].store(&mut *out[c].add(i).cast::<[f64; LANES]>());
             }
         }
-        let free: V = at(&sys.free, i);
-        let y = [acc[0].mul(free), acc[1].mul(free), acc[2].mul(free)];
-        p_out = p_out
-            .add(pq[0].mul(y[0]))
-            .add(pq[1].mul(y[1]))
-            .add(pq[2].mul(y[2]));
-        put_triple(out, i, y);
     }
     sum_lanes(p_out)
+}
+
+/// `LANES` values from `a + i`.
+///
+/// # Safety
+/// `a + i .. a + i + LANES` must be inside one array of `f64`.
+#[inline(always)]
+unsafe fn raw<V: Lanes>(a: *const f64, i: usize) -> V {
+    // SAFETY: as the caller promises; `[f64; LANES]` has the alignment of `f64`.
+    V::load(unsafe { &*a.add(i).cast::<[f64; LANES]>() })
+}
+
+/// The three components at `i` of a vector whose components start at `a`.
+///
+/// # Safety
+/// As [`raw`], for each component.
+#[inline(always)]
+unsafe fn raw_triple<V: Lanes>(a: [*const f64; 3], i: usize) -> [V; 3] {
+    // SAFETY: as the caller promises.
+    unsafe { [raw(a[0], i), raw(a[1], i), raw(a[2], i)] }
+}
+
+/// The six entries at `i` of a group's blocks (entry `e` at `b + e len`).
+///
+/// # Safety
+/// As [`raw`], for each entry.
+#[inline(always)]
+unsafe fn raw_block<V: Lanes>(b: *const f64, len: usize, i: usize) -> [V; 6] {
+    // SAFETY: as the caller promises.
+    unsafe {
+        [
+            raw(b, i),
+            raw(b, len + i),
+            raw(b, 2 * len + i),
+            raw(b, 3 * len + i),
+            raw(b, 4 * len + i),
+            raw(b, 5 * len + i),
+        ]
+    }
+}
+
+/// The six entries at `i` of a group's blocks (entry `e` at index `e len + i`).
+#[inline(always)]
+fn group_block<V: Lanes>(b: &[f64], len: usize, i: usize) -> [V; 6] {
+    [
+        at(b, i),
+        at(b, len + i),
+        at(b, 2 * len + i),
+        at(b, 3 * len + i),
+        at(b, 4 * len + i),
+        at(b, 5 * len + i),
+    ]
 }
 
 /// The sum of the lanes of `v`, in a fixed order.
@@ -555,9 +642,9 @@ fn solve_body<V: Lanes>(
     max_iterations: u32,
     warm: bool,
 ) -> (u32, f64, bool) {
-    let front = sys.front;
+    let (front, n) = (sys.front, sys.n);
     let chunks = || {
-        (0..sys.n.next_multiple_of(LANES))
+        (0..n.next_multiple_of(LANES))
             .step_by(LANES)
             .map(|q| front + q)
     };
@@ -719,4 +806,166 @@ fn elastic_avx512(sys: &Lattice, stencil: &Stencil) -> f64 {
 #[target_feature(enable = "avx2")]
 fn elastic_avx2(sys: &Lattice, stencil: &Stencil) -> f64 {
     elastic_body::<Avx2>(sys, stencil)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::scene::builder::Builder;
+    use crate::scene::lattice::{ClothSpec, cloth};
+
+    /// `out = A p` and `p·out` as [`apply`] computes them, with a bounds check on every load and
+    /// store (the loop as it was written before the checks were hoisted).
+    fn apply_checked<V: Lanes>(sys: &Lattice, p: &Soa, out: &mut Soa) -> f64 {
+        let mut p_out = V::zero();
+        for q in (0..sys.n.next_multiple_of(LANES)).step_by(LANES) {
+            let i = sys.front + q;
+            let pq = triple::<V>(p, i);
+            let m: V = at(&sys.mass, i);
+            let mut acc = [m.mul(pq[0]), m.mul(pq[1]), m.mul(pq[2])];
+            for g in &sys.groups {
+                let ahead = triple::<V>(p, i + g.delta);
+                let behind = triple::<V>(p, i - g.delta);
+                let y1 = sym_mul(
+                    &group_block::<V>(&g.b, sys.len, i),
+                    [
+                        pq[0].sub(ahead[0]),
+                        pq[1].sub(ahead[1]),
+                        pq[2].sub(ahead[2]),
+                    ],
+                );
+                let y2 = sym_mul(
+                    &group_block::<V>(&g.b, sys.len, i - g.delta),
+                    [
+                        behind[0].sub(pq[0]),
+                        behind[1].sub(pq[1]),
+                        behind[2].sub(pq[2]),
+                    ],
+                );
+                for c in 0..3 {
+                    acc[c] = acc[c].add(y1[c]).sub(y2[c]);
+                }
+            }
+            let free: V = at(&sys.free, i);
+            let y = [acc[0].mul(free), acc[1].mul(free), acc[2].mul(free)];
+            p_out = p_out
+                .add(pq[0].mul(y[0]))
+                .add(pq[1].mul(y[1]))
+                .add(pq[2].mul(y[2]));
+            put_triple(out, i, y);
+        }
+        sum_lanes(p_out)
+    }
+
+    /// A value in [-1, 1) from `seed` (a fixed hash: the same numbers on every run).
+    fn noise(seed: u64) -> f64 {
+        let mut x = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+        x ^= x >> 31;
+        x = x.wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        x ^= x >> 29;
+        (x >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+
+    /// The 2022 course cloth (25 × 25, corners pinned), shaken, assembled for a step of 5 ms.
+    fn assembled() -> (Lattice, Stencil) {
+        let mut b = Builder::new();
+        cloth(&mut b, &ClothSpec::course_2022());
+        let (model, mut state) = b.build(DVec3::new(0.0, -9.8, 0.0), 0.3);
+        for (i, (x, v)) in state.x.iter_mut().zip(&mut state.v).enumerate() {
+            let s = 6 * i as u64;
+            *x += 0.02 * DVec3::new(noise(s), noise(s + 1), noise(s + 2));
+            *v = DVec3::new(noise(s + 3), noise(s + 4), noise(s + 5));
+        }
+        let stencil = model.stencil().expect("a lattice").clone();
+        let mut sys = Lattice::default();
+        let forces = Forces::Springs {
+            gravity: model.gravity,
+        };
+        sys.assemble(
+            &stencil,
+            &model.mass,
+            &model.inv_mass,
+            model.drag,
+            0.005,
+            &state.x,
+            &state.v,
+            forces,
+        );
+        (sys, stencil)
+    }
+
+    fn field(sys: &Lattice, seed: u64) -> Soa {
+        let mut a: Soa = std::array::from_fn(|_| vec![0.0; sys.len]);
+        for (c, a) in a.iter_mut().enumerate() {
+            for i in 0..sys.n {
+                a[sys.front + i] = noise(seed + (3 * i + c) as u64);
+            }
+        }
+        a
+    }
+
+    fn same_bits(a: f64, b: f64) -> bool {
+        a.to_bits() == b.to_bits() || (a == 0.0 && b == 0.0)
+    }
+
+    #[test]
+    fn the_product_without_bounds_checks_is_the_checked_product_bit_for_bit() {
+        let (sys, _) = assembled();
+        assert_eq!(sys.groups.len(), 6, "the 2022 cloth has six offsets");
+        let p = field(&sys, 1_000_000);
+        let mut out_ref: Soa = std::array::from_fn(|_| vec![0.0; sys.len]);
+        let sum_ref = apply_checked::<Plain>(&sys, &p, &mut out_ref);
+        // Margins zero, as `resize` leaves them; NaN where the product must write.
+        let mut out: Soa = std::array::from_fn(|_| vec![0.0; sys.len]);
+        for c in &mut out {
+            c[sys.front..sys.front + sys.n].fill(f64::NAN);
+        }
+        let sum = apply::<Plain>(&sys, &p, &mut out);
+        assert!(same_bits(sum, sum_ref), "pᵀAp {sum} vs {sum_ref}");
+        assert!(sum > 0.0, "A is positive definite: {sum}");
+        for c in 0..3 {
+            for i in 0..sys.len {
+                assert!(
+                    same_bits(out[c][i], out_ref[c][i]),
+                    "(Ap)[{c}][{i}] {} vs {}",
+                    out[c][i],
+                    out_ref[c][i]
+                );
+            }
+        }
+        // Not all zero: the pinned corners are zero, the rest is not.
+        let nonzero = (0..sys.n).filter(|&i| out[0][sys.front + i] != 0.0).count();
+        assert_eq!(nonzero, sys.n - 4);
+    }
+
+    #[test]
+    fn the_solve_leaves_the_residual_it_reports_on_every_kernel() {
+        for kernel in Kernel::ALL {
+            if !kernel.is_available() {
+                continue;
+            }
+            let (mut sys, stencil) = assembled();
+            let stencil = stencil.with_kernel(kernel);
+            sys.kernel = Some(stencil.kernel());
+            let (iterations, residual, converged) = sys.solve(&[], 1e-10, 1000, false, None);
+            assert!(converged && residual <= 1e-10, "{kernel:?}: {residual}");
+            assert!((10..1000).contains(&iterations), "{kernel:?}: {iterations}");
+            // The residual row by row (each particle's own row of A, as the module docs write
+            // it, not the product's pass).
+            let (mut r2, mut b2) = (0.0, 0.0);
+            for i in (0..sys.n).filter(|&i| sys.free[sys.front + i] != 0.0) {
+                let k = sys.front + i;
+                let b = DVec3::new(sys.rhs[0][k], sys.rhs[1][k], sys.rhs[2][k]);
+                r2 += sys.row_residual(i).length_squared();
+                b2 += b.length_squared();
+            }
+            let measured = (r2 / b2).sqrt();
+            assert!(
+                measured <= 2e-10,
+                "{kernel:?}: |A Δv - b| / |b| = {measured:e}"
+            );
+        }
+    }
 }
