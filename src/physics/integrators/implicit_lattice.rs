@@ -349,16 +349,45 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, spring
         let mut stretch2 = V::zero();
         let (k_dt2, kd_dt) = (V::splat(g.stiffness * dt2), V::splat(g.damping * dt));
         let k_dt = V::splat(g.stiffness * dt);
+        // The loop reads and writes through addresses taken here, without a bounds check per
+        // load (as `apply`): every index is `front + p (+ δ)` with `p < starts ≤ n`, `δ ≤ front`.
+        assert!(g.delta <= front && g.starts <= sys.n);
+        assert!(g.rest_length.len() >= g.starts.next_multiple_of(LANES));
+        assert!(blocks.b.len() == 6 * len && blocks.kv.iter().all(|k| k.len() == len));
+        assert!(sys.x.iter().chain(&sys.v).all(|a| a.len() == len));
+        let (x, v) = (soa_ptrs(&sys.x), soa_ptrs(&sys.v));
+        let (b, rest) = (blocks.b.as_mut_ptr(), g.rest_length.as_ptr());
+        let kv = [
+            blocks.kv[0].as_mut_ptr(),
+            blocks.kv[1].as_mut_ptr(),
+            blocks.kv[2].as_mut_ptr(),
+        ];
         for p in (0..g.starts).step_by(LANES) {
-            let (i, j) = (front + p, front + p + g.delta);
-            let (d, length) = spring_vector::<V>(&sys.x, i, j);
+            // SAFETY (every raw load and store in this loop): the asserts above.
+            let (x_i, x_j, v_i, v_j, rest_p) = unsafe {
+                let (i, j) = (front + p, front + p + g.delta);
+                (
+                    raw_triple::<V>(x, i),
+                    raw_triple::<V>(x, j),
+                    raw_triple::<V>(v, i),
+                    raw_triple::<V>(v, j),
+                    raw::<V>(rest, p),
+                )
+            };
+            let i = front + p;
+            let d = [x_j[0].sub(x_i[0]), x_j[1].sub(x_i[1]), x_j[2].sub(x_i[2])];
+            let length = d[0]
+                .mul(d[0])
+                .add(d[1].mul(d[1]))
+                .add(d[2].mul(d[2]))
+                .sqrt();
             // n = d / L; a zero-length spring gets no block (as in the textbook loop).
             let keep = g.present[p / LANES] & zero.less_than(length);
             let inv = one.div(length).select(keep);
             let n = [d[0].mul(inv), d[1].mul(inv), d[2].mul(inv)];
             // K = k [n nᵀ + t (I - n nᵀ)], t = max(0, 1 - L0/L); D = k_d n nᵀ;
             // B = dt D + dt² K = (dt k_d + dt² k (1 - t)) n nᵀ + dt² k t I.
-            let t = one.sub(at::<V>(g.rest_length, p).mul(inv));
+            let t = one.sub(rest_p.mul(inv));
             let t = t.where_positive(t);
             let c_nn = kd_dt.add(k_dt2.mul(one.sub(t)));
             let c_id = k_dt2.mul(t);
@@ -371,51 +400,72 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, spring
                 c_nn.mul(n[2].mul(n[2])).add(c_id),
             ];
             for (e, value) in entries.into_iter().enumerate() {
-                put(&mut blocks.b, e * len + i, value.select(keep));
+                // SAFETY: see the loop's start.
+                unsafe {
+                    value
+                        .select(keep)
+                        .store(&mut *b.add(e * len + i).cast::<[f64; LANES]>())
+                };
             }
             // dt² K (v_b - v_a) = dt² k ((1 - t) n (n·dv) + t dv).
-            let dv = [
-                at::<V>(&sys.v[0], j).sub(at(&sys.v[0], i)),
-                at::<V>(&sys.v[1], j).sub(at(&sys.v[1], i)),
-                at::<V>(&sys.v[2], j).sub(at(&sys.v[2], i)),
-            ];
+            let dv = [v_j[0].sub(v_i[0]), v_j[1].sub(v_i[1]), v_j[2].sub(v_i[2])];
             let along = n[0].mul(dv[0]).add(n[1].mul(dv[1])).add(n[2].mul(dv[2]));
             let s = one.sub(t).mul(along);
             // With `springs`: + dt f_a = dt (k (L - L0) + k_d (v_b - v_a)·n) n, which rows a
             // and b get with the same signs as dt² K (v_b - v_a).
             let f_dt = if springs {
-                k_dt.mul(length.sub(at(g.rest_length, p)))
-                    .add(kd_dt.mul(along))
+                k_dt.mul(length.sub(rest_p)).add(kd_dt.mul(along))
             } else {
                 zero
             };
             for c in 0..3 {
-                let kv = k_dt2.mul(s.mul(n[c]).add(t.mul(dv[c]))).add(f_dt.mul(n[c]));
-                put(&mut blocks.kv[c], i, kv.select(keep));
+                let kv_c = k_dt2.mul(s.mul(n[c]).add(t.mul(dv[c]))).add(f_dt.mul(n[c]));
+                // SAFETY: see the loop's start.
+                unsafe {
+                    kv_c.select(keep)
+                        .store(&mut *kv[c].add(i).cast::<[f64; LANES]>())
+                };
             }
             // ½ k (L - L0)², as `elastic_body` sums it.
-            let stretch = length
-                .sub(at(g.rest_length, p))
-                .select(g.present[p / LANES]);
+            let stretch = length.sub(rest_p).select(g.present[p / LANES]);
             stretch2 = stretch2.add(stretch.mul(stretch));
         }
         elastic += 0.5 * g.stiffness * sum_lanes(stretch2);
     }
     sys.start_elastic = elastic;
     // Per particle: A_qq = (m + dt c) I + Σ (B_δ[q] + B_δ[q-δ]); b_q += Σ (kv_δ[q] - kv_δ[q-δ]).
+    // Read without a bounds check per load (as `apply`): indices `front + q ± δ`, `δ ≤ front`.
+    assert!(
+        sys.groups
+            .iter()
+            .all(|g| g.delta <= front && g.b.len() == 6 * len)
+    );
+    assert!(
+        sys.groups
+            .iter()
+            .all(|g| g.kv.iter().all(|k| k.len() == len))
+    );
     for q in (0..sys.n.next_multiple_of(LANES)).step_by(LANES) {
         let i = front + q;
         let m: V = at(&sys.mass, i);
         let mut a = [m, zero, zero, m, zero, m];
         let mut b = triple::<V>(&sys.rhs, i);
         for g in &sys.groups {
-            let here = group_block::<V>(&g.b, len, i);
-            let before = group_block::<V>(&g.b, len, i - g.delta);
+            // SAFETY: the asserts above.
+            let (here, before, kv_here, kv_before) = unsafe {
+                let (blocks, kv) = (g.b.as_ptr(), soa_ptrs(&g.kv));
+                (
+                    raw_block::<V>(blocks, len, i),
+                    raw_block::<V>(blocks, len, i - g.delta),
+                    raw_triple::<V>(kv, i),
+                    raw_triple::<V>(kv, i - g.delta),
+                )
+            };
             for e in 0..6 {
                 a[e] = a[e].add(here[e]).add(before[e]);
             }
-            for (c, b) in b.iter_mut().enumerate() {
-                *b = b.add(at(&g.kv[c], i)).sub(at(&g.kv[c], i - g.delta));
+            for c in 0..3 {
+                b[c] = b[c].add(kv_here[c]).sub(kv_before[c]);
             }
         }
         put_triple(&mut sys.rhs, i, b);
@@ -536,6 +586,11 @@ fn apply<V: Lanes>(sys: &Lattice, p: &Soa, out: &mut Soa) -> f64 {
     sum_lanes(p_out)
 }
 
+/// The addresses of a vector's three components.
+fn soa_ptrs(a: &Soa) -> [*const f64; 3] {
+    [a[0].as_ptr(), a[1].as_ptr(), a[2].as_ptr()]
+}
+
 /// `LANES` values from `a + i`.
 ///
 /// # Safety
@@ -575,8 +630,8 @@ unsafe fn raw_block<V: Lanes>(b: *const f64, len: usize, i: usize) -> [V; 6] {
     }
 }
 
-/// The six entries at `i` of a group's blocks (entry `e` at index `e len + i`).
-#[inline(always)]
+/// The six entries at `i` of a group's blocks (entry `e` at index `e len + i`), checked.
+#[cfg(test)]
 fn group_block<V: Lanes>(b: &[f64], len: usize, i: usize) -> [V; 6] {
     [
         at(b, i),
@@ -586,6 +641,93 @@ fn group_block<V: Lanes>(b: &[f64], len: usize, i: usize) -> [V; 6] {
         at(b, 4 * len + i),
         at(b, 5 * len + i),
     ]
+}
+
+/// The conjugate-gradient step's pass after the product: `Δv += α p`, `r -= α S A p`,
+/// `z = P⁻¹ r`; returns `|r|²` and `r·z` (summed in lanes, in a fixed order). `dv_r_z` are Δv,
+/// r and z. Reads through addresses without a bounds check per load, like [`apply`].
+#[inline(always)]
+fn descend<V: Lanes>(
+    sys: &Lattice,
+    alpha: f64,
+    dv_r_z: [&mut Soa; 3],
+    p: &Soa,
+    ap: &Soa,
+) -> (f64, f64) {
+    let (len, end) = (sys.len, sys.front + sys.n.next_multiple_of(LANES));
+    let [dv, r, z] = dv_r_z;
+    assert!(
+        [&*dv, &*r, &*z, p, ap]
+            .iter()
+            .all(|a| a.iter().all(|c| c.len() == len))
+    );
+    assert!(sys.diag_inv.iter().all(|d| d.len() == len) && end <= len);
+    let ptrs = |a: &mut Soa| [a[0].as_mut_ptr(), a[1].as_mut_ptr(), a[2].as_mut_ptr()];
+    let (dv, r, z) = (ptrs(dv), ptrs(r), ptrs(z));
+    let p = [p[0].as_ptr(), p[1].as_ptr(), p[2].as_ptr()];
+    let ap = [ap[0].as_ptr(), ap[1].as_ptr(), ap[2].as_ptr()];
+    let d = &sys.diag_inv;
+    let d = [
+        d[0].as_ptr(),
+        d[1].as_ptr(),
+        d[2].as_ptr(),
+        d[3].as_ptr(),
+        d[4].as_ptr(),
+        d[5].as_ptr(),
+    ];
+    let alpha = V::splat(alpha);
+    let (mut rr, mut rz) = (V::zero(), V::zero());
+    for i in (sys.front..end).step_by(LANES) {
+        // SAFETY: `i + LANES ≤ end ≤ len`, and every array has `len` values (asserts above).
+        unsafe {
+            let mut rn = [V::zero(); 3];
+            for c in 0..3 {
+                let next = raw::<V>(dv[c], i).add(alpha.mul(raw(p[c], i)));
+                next.store(&mut *dv[c].add(i).cast::<[f64; LANES]>());
+                rn[c] = raw::<V>(r[c], i).sub(alpha.mul(raw(ap[c], i)));
+                rn[c].store(&mut *r[c].add(i).cast::<[f64; LANES]>());
+            }
+            let block = [
+                raw(d[0], i),
+                raw(d[1], i),
+                raw(d[2], i),
+                raw(d[3], i),
+                raw(d[4], i),
+                raw(d[5], i),
+            ];
+            let y = sym_mul::<V>(&block, rn);
+            for c in 0..3 {
+                y[c].store(&mut *z[c].add(i).cast::<[f64; LANES]>());
+            }
+            rr = rr
+                .add(rn[0].mul(rn[0]))
+                .add(rn[1].mul(rn[1]))
+                .add(rn[2].mul(rn[2]));
+            rz = rz
+                .add(rn[0].mul(y[0]))
+                .add(rn[1].mul(y[1]))
+                .add(rn[2].mul(y[2]));
+        }
+    }
+    (sum_lanes(rr), sum_lanes(rz))
+}
+
+/// The new direction `p = z + β p`, without a bounds check per load, like [`apply`].
+#[inline(always)]
+fn redirect<V: Lanes>(sys: &Lattice, beta: f64, z: &Soa, p: &mut Soa) {
+    let (len, end) = (sys.len, sys.front + sys.n.next_multiple_of(LANES));
+    assert!(z.iter().chain(p.iter()).all(|a| a.len() == len) && end <= len);
+    let beta = V::splat(beta);
+    for (p, z) in p.iter_mut().zip(z) {
+        let (p, z) = (p.as_mut_ptr(), z.as_ptr());
+        for i in (sys.front..end).step_by(LANES) {
+            // SAFETY: `i + LANES ≤ end ≤ len` values in both arrays (assert above).
+            unsafe {
+                let next = raw::<V>(z, i).add(beta.mul(raw(p, i)));
+                next.store(&mut *p.add(i).cast::<[f64; LANES]>());
+            }
+        }
+    }
 }
 
 /// The sum of the lanes of `v`, in a fixed order.
@@ -715,38 +857,11 @@ fn solve_body<V: Lanes>(
             }
             // One pass: Δv += α p, r -= α S A p, |r|², z = P⁻¹ r and r·z (r = S r, so
             // r·S z = r·z: the filter of z can follow).
-            let alpha = V::splat(rz / p_ap);
-            let (mut rr, mut rzv) = (V::zero(), V::zero());
-            for i in chunks() {
-                let mut rn = [V::zero(); 3];
-                for c in 0..3 {
-                    let d = at::<V>(&dv[c], i).add(alpha.mul(at(&p[c], i)));
-                    put(&mut dv[c], i, d);
-                    rn[c] = at::<V>(&r[c], i).sub(alpha.mul(at(&ap[c], i)));
-                    put(&mut r[c], i, rn[c]);
-                }
-                let y = sym_mul(&block::<V>(&sys.diag_inv, i), rn);
-                put_triple(&mut z, i, y);
-                rr = rr
-                    .add(rn[0].mul(rn[0]))
-                    .add(rn[1].mul(rn[1]))
-                    .add(rn[2].mul(rn[2]));
-                rzv = rzv
-                    .add(rn[0].mul(y[0]))
-                    .add(rn[1].mul(y[1]))
-                    .add(rn[2].mul(y[2]));
-            }
-            r_norm2 = sum_lanes(rr);
+            let (r2, rz_new) = descend::<V>(sys, rz / p_ap, [&mut dv, &mut r, &mut z], &p, &ap);
+            r_norm2 = r2;
             filter(front, constraints, &mut z);
-            let rz_new = sum_lanes(rzv);
-            let beta = V::splat(rz_new / rz);
+            redirect::<V>(sys, rz_new / rz, &z, &mut p);
             rz = rz_new;
-            for i in chunks() {
-                for c in 0..3 {
-                    let d = at::<V>(&z[c], i).add(beta.mul(at(&p[c], i)));
-                    put(&mut p[c], i, d);
-                }
-            }
             iterations += 1;
         }
         let residual = if b_norm2 > 0.0 {
