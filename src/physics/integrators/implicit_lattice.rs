@@ -30,6 +30,17 @@
 //! The sums run in another order than the spring-list loops, so the matrix and the solution
 //! agree with the textbook system to rounding, not bit for bit (the solve stops at the same
 //! relative residual).
+//!
+//! **The seam of the hot loops.** The product, the conjugate-gradient update passes and the
+//! assembly's loops read and write through addresses taken once before each loop, without a
+//! bounds check per load: each function asserts once, at its top, that every array has the
+//! length the indices need (`front + q ± δ` with `δ ≤ front`, plus `LANES`). With a check per
+//! load (an index comparison, and each array's address loaded again after every store), `perf`
+//! put about 30 % of the conjugate gradients' samples on index arithmetic; without, 3 s of
+//! `cloth-spheres` take about 9 % less CPU time (docs/performance.md). The arithmetic is unchanged, so the results are the same
+//! bit for bit (a test compares the product with the same formula written with checked loads).
+//! The blocks of one offset group are one array (entry `e` at `e len + p`), one address per
+//! group in the product.
 
 use glam::DVec3;
 
