@@ -30,6 +30,17 @@
 //! The sums run in another order than the spring-list loops, so the matrix and the solution
 //! agree with the textbook system to rounding, not bit for bit (the solve stops at the same
 //! relative residual).
+//!
+//! **The seam of the hot loops.** The product, the conjugate-gradient update passes and the
+//! assembly's loops read and write through addresses taken once before each loop, without a
+//! bounds check per load: each function asserts once, at its top, that every array has the
+//! length the indices need (`front + q ± δ` with `δ ≤ front`, plus `LANES`). With a check per
+//! load (an index comparison, and each array's address loaded again after every store), `perf`
+//! put about 30 % of the conjugate gradients' samples on index arithmetic; without, 3 s of
+//! `cloth-spheres` take about 9 % less CPU time (docs/performance.md). The arithmetic is unchanged, so the results are the same
+//! bit for bit (a test compares the product with the same formula written with checked loads).
+//! The blocks of one offset group are one array (entry `e` at `e len + p`), one address per
+//! group in the product.
 
 use glam::DVec3;
 
@@ -43,8 +54,9 @@ use crate::physics::stencil::{Kernel, Stencil};
 #[derive(Clone, Debug, Default)]
 struct Blocks {
     delta: usize,
-    /// `B_δ[p]`: entries xx, xy, xz, yy, yz, zz (kg) at index `front + p`.
-    b: [Vec<f64>; 6],
+    /// `B_δ[p]`: entries xx, xy, xz, yy, yz, zz (kg), entry `e` at index `e len + front + p`
+    /// (one array, so that the product needs one address per group).
+    b: Vec<f64>,
     /// `dt² K_s (v_b - v_a)` (N·s) at index `front + p`.
     kv: [Vec<f64>; 3],
 }
@@ -113,7 +125,7 @@ impl Lattice {
             .group_views()
             .map(|g| Blocks {
                 delta: g.delta,
-                b: std::array::from_fn(|_| zeros.clone()),
+                b: vec![0.0; 6 * len],
                 kv: soa(),
             })
             .collect();
@@ -253,11 +265,13 @@ impl Lattice {
         let k = self.front + i;
         let get = |a: &Soa, j: usize| DVec3::new(a[0][j], a[1][j], a[2][j]);
         // The symmetric block at index j times d.
-        let sym = |b: &[Vec<f64>; 6], j: usize, d: DVec3| {
+        let len = self.len;
+        let sym = |b: &[f64], j: usize, d: DVec3| {
+            let e = |e: usize| b[e * len + j];
             DVec3::new(
-                b[0][j] * d.x + b[1][j] * d.y + b[2][j] * d.z,
-                b[1][j] * d.x + b[3][j] * d.y + b[4][j] * d.z,
-                b[2][j] * d.x + b[4][j] * d.y + b[5][j] * d.z,
+                e(0) * d.x + e(1) * d.y + e(2) * d.z,
+                e(1) * d.x + e(3) * d.y + e(4) * d.z,
+                e(2) * d.x + e(4) * d.y + e(5) * d.z,
             )
         };
         let p = get(&self.dv, k);
@@ -338,7 +352,7 @@ fn put_triple<V: Lanes>(a: &mut Soa, i: usize, value: [V; 3]) {
 /// diagonal blocks (inverted) and the right-hand side gathered particle by particle.
 #[inline(always)]
 fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, springs: bool) {
-    let front = sys.front;
+    let (front, len) = (sys.front, sys.len);
     let dt2 = dt * dt;
     let (one, zero) = (V::splat(1.0), V::zero());
     let mut elastic = 0.0;
@@ -346,16 +360,45 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, spring
         let mut stretch2 = V::zero();
         let (k_dt2, kd_dt) = (V::splat(g.stiffness * dt2), V::splat(g.damping * dt));
         let k_dt = V::splat(g.stiffness * dt);
+        // The loop reads and writes through addresses taken here, without a bounds check per
+        // load (as `apply`): every index is `front + p (+ δ)` with `p < starts ≤ n`, `δ ≤ front`.
+        assert!(g.delta <= front && g.starts <= sys.n);
+        assert!(g.rest_length.len() >= g.starts.next_multiple_of(LANES));
+        assert!(blocks.b.len() == 6 * len && blocks.kv.iter().all(|k| k.len() == len));
+        assert!(sys.x.iter().chain(&sys.v).all(|a| a.len() == len));
+        let (x, v) = (soa_ptrs(&sys.x), soa_ptrs(&sys.v));
+        let (b, rest) = (blocks.b.as_mut_ptr(), g.rest_length.as_ptr());
+        let kv = [
+            blocks.kv[0].as_mut_ptr(),
+            blocks.kv[1].as_mut_ptr(),
+            blocks.kv[2].as_mut_ptr(),
+        ];
         for p in (0..g.starts).step_by(LANES) {
-            let (i, j) = (front + p, front + p + g.delta);
-            let (d, length) = spring_vector::<V>(&sys.x, i, j);
+            // SAFETY (every raw load and store in this loop): the asserts above.
+            let (x_i, x_j, v_i, v_j, rest_p) = unsafe {
+                let (i, j) = (front + p, front + p + g.delta);
+                (
+                    raw_triple::<V>(x, i),
+                    raw_triple::<V>(x, j),
+                    raw_triple::<V>(v, i),
+                    raw_triple::<V>(v, j),
+                    raw::<V>(rest, p),
+                )
+            };
+            let i = front + p;
+            let d = [x_j[0].sub(x_i[0]), x_j[1].sub(x_i[1]), x_j[2].sub(x_i[2])];
+            let length = d[0]
+                .mul(d[0])
+                .add(d[1].mul(d[1]))
+                .add(d[2].mul(d[2]))
+                .sqrt();
             // n = d / L; a zero-length spring gets no block (as in the textbook loop).
             let keep = g.present[p / LANES] & zero.less_than(length);
             let inv = one.div(length).select(keep);
             let n = [d[0].mul(inv), d[1].mul(inv), d[2].mul(inv)];
             // K = k [n nᵀ + t (I - n nᵀ)], t = max(0, 1 - L0/L); D = k_d n nᵀ;
             // B = dt D + dt² K = (dt k_d + dt² k (1 - t)) n nᵀ + dt² k t I.
-            let t = one.sub(at::<V>(g.rest_length, p).mul(inv));
+            let t = one.sub(rest_p.mul(inv));
             let t = t.where_positive(t);
             let c_nn = kd_dt.add(k_dt2.mul(one.sub(t)));
             let c_id = k_dt2.mul(t);
@@ -367,51 +410,73 @@ fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, spring
                 c_nn.mul(n[1].mul(n[2])),
                 c_nn.mul(n[2].mul(n[2])).add(c_id),
             ];
-            for (b, e) in blocks.b.iter_mut().zip(entries) {
-                put(b, i, e.select(keep));
+            for (e, value) in entries.into_iter().enumerate() {
+                // SAFETY: see the loop's start.
+                unsafe {
+                    value
+                        .select(keep)
+                        .store(&mut *b.add(e * len + i).cast::<[f64; LANES]>())
+                };
             }
             // dt² K (v_b - v_a) = dt² k ((1 - t) n (n·dv) + t dv).
-            let dv = [
-                at::<V>(&sys.v[0], j).sub(at(&sys.v[0], i)),
-                at::<V>(&sys.v[1], j).sub(at(&sys.v[1], i)),
-                at::<V>(&sys.v[2], j).sub(at(&sys.v[2], i)),
-            ];
+            let dv = [v_j[0].sub(v_i[0]), v_j[1].sub(v_i[1]), v_j[2].sub(v_i[2])];
             let along = n[0].mul(dv[0]).add(n[1].mul(dv[1])).add(n[2].mul(dv[2]));
             let s = one.sub(t).mul(along);
             // With `springs`: + dt f_a = dt (k (L - L0) + k_d (v_b - v_a)·n) n, which rows a
             // and b get with the same signs as dt² K (v_b - v_a).
             let f_dt = if springs {
-                k_dt.mul(length.sub(at(g.rest_length, p)))
-                    .add(kd_dt.mul(along))
+                k_dt.mul(length.sub(rest_p)).add(kd_dt.mul(along))
             } else {
                 zero
             };
             for c in 0..3 {
-                let kv = k_dt2.mul(s.mul(n[c]).add(t.mul(dv[c]))).add(f_dt.mul(n[c]));
-                put(&mut blocks.kv[c], i, kv.select(keep));
+                let kv_c = k_dt2.mul(s.mul(n[c]).add(t.mul(dv[c]))).add(f_dt.mul(n[c]));
+                // SAFETY: see the loop's start.
+                unsafe {
+                    kv_c.select(keep)
+                        .store(&mut *kv[c].add(i).cast::<[f64; LANES]>())
+                };
             }
             // ½ k (L - L0)², as `elastic_body` sums it.
-            let stretch = length
-                .sub(at(g.rest_length, p))
-                .select(g.present[p / LANES]);
+            let stretch = length.sub(rest_p).select(g.present[p / LANES]);
             stretch2 = stretch2.add(stretch.mul(stretch));
         }
         elastic += 0.5 * g.stiffness * sum_lanes(stretch2);
     }
     sys.start_elastic = elastic;
     // Per particle: A_qq = (m + dt c) I + Σ (B_δ[q] + B_δ[q-δ]); b_q += Σ (kv_δ[q] - kv_δ[q-δ]).
+    // Read without a bounds check per load (as `apply`): indices `front + q ± δ`, `δ ≤ front`.
+    assert!(
+        sys.groups
+            .iter()
+            .all(|g| g.delta <= front && g.b.len() == 6 * len)
+    );
+    assert!(
+        sys.groups
+            .iter()
+            .all(|g| g.kv.iter().all(|k| k.len() == len))
+    );
     for q in (0..sys.n.next_multiple_of(LANES)).step_by(LANES) {
         let i = front + q;
         let m: V = at(&sys.mass, i);
         let mut a = [m, zero, zero, m, zero, m];
         let mut b = triple::<V>(&sys.rhs, i);
         for g in &sys.groups {
-            let (here, before) = (block::<V>(&g.b, i), block::<V>(&g.b, i - g.delta));
+            // SAFETY: the asserts above.
+            let (here, before, kv_here, kv_before) = unsafe {
+                let (blocks, kv) = (g.b.as_ptr(), soa_ptrs(&g.kv));
+                (
+                    raw_block::<V>(blocks, len, i),
+                    raw_block::<V>(blocks, len, i - g.delta),
+                    raw_triple::<V>(kv, i),
+                    raw_triple::<V>(kv, i - g.delta),
+                )
+            };
             for e in 0..6 {
                 a[e] = a[e].add(here[e]).add(before[e]);
             }
-            for (c, b) in b.iter_mut().enumerate() {
-                *b = b.add(at(&g.kv[c], i)).sub(at(&g.kv[c], i - g.delta));
+            for c in 0..3 {
+                b[c] = b[c].add(kv_here[c]).sub(kv_before[c]);
             }
         }
         put_triple(&mut sys.rhs, i, b);
@@ -459,46 +524,221 @@ fn elastic_body<V: Lanes>(sys: &Lattice, stencil: &Stencil) -> f64 {
 
 /// `out = A p` (see the module docs), zero at pinned particles and in the margins; returns
 /// `p·out` (the conjugate-gradient step's `pᵀ A p`, summed in the same pass).
+///
+/// The conjugate gradients spend most of their time here, so the loop reads its arrays through
+/// addresses taken once before it, without a bounds check per load: the checks are made once,
+/// for the whole loop, by the asserts at the top (every index is `front + q ± δ` with
+/// `δ ≤ front` and `front + q + δ + LANES ≤ len`). The arithmetic is the formula's, in its
+/// order: a test compares it bit for bit with the same product written with checked loads.
 #[inline(always)]
 fn apply<V: Lanes>(sys: &Lattice, p: &Soa, out: &mut Soa) -> f64 {
+    let (front, len, end) = (
+        sys.front,
+        sys.len,
+        sys.front + sys.n.next_multiple_of(LANES),
+    );
+    assert!(p.iter().chain(out.iter()).all(|a| a.len() == len));
+    assert!(sys.mass.len() == len && sys.free.len() == len && end + front + LANES <= len);
+    assert!(
+        sys.groups
+            .iter()
+            .all(|g| g.delta <= front && g.b.len() == 6 * len)
+    );
+    let p = [p[0].as_ptr(), p[1].as_ptr(), p[2].as_ptr()];
+    let out = [
+        out[0].as_mut_ptr(),
+        out[1].as_mut_ptr(),
+        out[2].as_mut_ptr(),
+    ];
+    let (mass, free) = (sys.mass.as_ptr(), sys.free.as_ptr());
     let mut p_out = V::zero();
-    for q in (0..sys.n.next_multiple_of(LANES)).step_by(LANES) {
-        let i = sys.front + q;
-        let pq = triple::<V>(p, i);
-        let m: V = at(&sys.mass, i);
-        let mut acc = [m.mul(pq[0]), m.mul(pq[1]), m.mul(pq[2])];
-        for g in &sys.groups {
-            let ahead = triple::<V>(p, i + g.delta);
-            let behind = triple::<V>(p, i - g.delta);
-            let y1 = sym_mul(
-                &block::<V>(&g.b, i),
-                [
-                    pq[0].sub(ahead[0]),
-                    pq[1].sub(ahead[1]),
-                    pq[2].sub(ahead[2]),
-                ],
-            );
-            let y2 = sym_mul(
-                &block::<V>(&g.b, i - g.delta),
-                [
-                    behind[0].sub(pq[0]),
-                    behind[1].sub(pq[1]),
-                    behind[2].sub(pq[2]),
-                ],
-            );
+    for i in (front..end).step_by(LANES) {
+        // SAFETY (every load and store below): `i - δ ≥ 0` and `i + δ + LANES ≤ len` for every
+        // group's δ, and every array has `len` values (the asserts above); `out` is not `p`.
+        unsafe {
+            let pq = raw_triple::<V>(p, i);
+            let m: V = raw(mass, i);
+            let mut acc = [m.mul(pq[0]), m.mul(pq[1]), m.mul(pq[2])];
+            for g in &sys.groups {
+                let b = g.b.as_ptr();
+                let ahead = raw_triple::<V>(p, i + g.delta);
+                let behind = raw_triple::<V>(p, i - g.delta);
+                let y1 = sym_mul(
+                    &raw_block::<V>(b, len, i),
+                    [
+                        pq[0].sub(ahead[0]),
+                        pq[1].sub(ahead[1]),
+                        pq[2].sub(ahead[2]),
+                    ],
+                );
+                let y2 = sym_mul(
+                    &raw_block::<V>(b, len, i - g.delta),
+                    [
+                        behind[0].sub(pq[0]),
+                        behind[1].sub(pq[1]),
+                        behind[2].sub(pq[2]),
+                    ],
+                );
+                for c in 0..3 {
+                    acc[c] = acc[c].add(y1[c]).sub(y2[c]);
+                }
+            }
+            let free: V = raw(free, i);
+            let y = [acc[0].mul(free), acc[1].mul(free), acc[2].mul(free)];
+            p_out = p_out
+                .add(pq[0].mul(y[0]))
+                .add(pq[1].mul(y[1]))
+                .add(pq[2].mul(y[2]));
             for c in 0..3 {
-                acc[c] = acc[c].add(y1[c]).sub(y2[c]);
+                y[c].store(&mut *out[c].add(i).cast::<[f64; LANES]>());
             }
         }
-        let free: V = at(&sys.free, i);
-        let y = [acc[0].mul(free), acc[1].mul(free), acc[2].mul(free)];
-        p_out = p_out
-            .add(pq[0].mul(y[0]))
-            .add(pq[1].mul(y[1]))
-            .add(pq[2].mul(y[2]));
-        put_triple(out, i, y);
     }
     sum_lanes(p_out)
+}
+
+/// The addresses of a vector's three components.
+fn soa_ptrs(a: &Soa) -> [*const f64; 3] {
+    [a[0].as_ptr(), a[1].as_ptr(), a[2].as_ptr()]
+}
+
+/// `LANES` values from `a + i`.
+///
+/// # Safety
+/// `a + i .. a + i + LANES` must be inside one array of `f64`.
+#[inline(always)]
+unsafe fn raw<V: Lanes>(a: *const f64, i: usize) -> V {
+    // SAFETY: as the caller promises; `[f64; LANES]` has the alignment of `f64`.
+    V::load(unsafe { &*a.add(i).cast::<[f64; LANES]>() })
+}
+
+/// The three components at `i` of a vector whose components start at `a`.
+///
+/// # Safety
+/// As [`raw`], for each component.
+#[inline(always)]
+unsafe fn raw_triple<V: Lanes>(a: [*const f64; 3], i: usize) -> [V; 3] {
+    // SAFETY: as the caller promises.
+    unsafe { [raw(a[0], i), raw(a[1], i), raw(a[2], i)] }
+}
+
+/// The six entries at `i` of a group's blocks (entry `e` at `b + e len`).
+///
+/// # Safety
+/// As [`raw`], for each entry.
+#[inline(always)]
+unsafe fn raw_block<V: Lanes>(b: *const f64, len: usize, i: usize) -> [V; 6] {
+    // SAFETY: as the caller promises.
+    unsafe {
+        [
+            raw(b, i),
+            raw(b, len + i),
+            raw(b, 2 * len + i),
+            raw(b, 3 * len + i),
+            raw(b, 4 * len + i),
+            raw(b, 5 * len + i),
+        ]
+    }
+}
+
+/// The six entries at `i` of a group's blocks (entry `e` at index `e len + i`), checked.
+#[cfg(test)]
+fn group_block<V: Lanes>(b: &[f64], len: usize, i: usize) -> [V; 6] {
+    [
+        at(b, i),
+        at(b, len + i),
+        at(b, 2 * len + i),
+        at(b, 3 * len + i),
+        at(b, 4 * len + i),
+        at(b, 5 * len + i),
+    ]
+}
+
+/// The conjugate-gradient step's pass after the product: `Δv += α p`, `r -= α S A p`,
+/// `z = P⁻¹ r`; returns `|r|²` and `r·z` (summed in lanes, in a fixed order). `dv_r_z` are Δv,
+/// r and z. Reads through addresses without a bounds check per load, like [`apply`].
+#[inline(always)]
+fn descend<V: Lanes>(
+    sys: &Lattice,
+    alpha: f64,
+    dv_r_z: [&mut Soa; 3],
+    p: &Soa,
+    ap: &Soa,
+) -> (f64, f64) {
+    let (len, end) = (sys.len, sys.front + sys.n.next_multiple_of(LANES));
+    let [dv, r, z] = dv_r_z;
+    assert!(
+        [&*dv, &*r, &*z, p, ap]
+            .iter()
+            .all(|a| a.iter().all(|c| c.len() == len))
+    );
+    assert!(sys.diag_inv.iter().all(|d| d.len() == len) && end <= len);
+    let ptrs = |a: &mut Soa| [a[0].as_mut_ptr(), a[1].as_mut_ptr(), a[2].as_mut_ptr()];
+    let (dv, r, z) = (ptrs(dv), ptrs(r), ptrs(z));
+    let p = [p[0].as_ptr(), p[1].as_ptr(), p[2].as_ptr()];
+    let ap = [ap[0].as_ptr(), ap[1].as_ptr(), ap[2].as_ptr()];
+    let d = &sys.diag_inv;
+    let d = [
+        d[0].as_ptr(),
+        d[1].as_ptr(),
+        d[2].as_ptr(),
+        d[3].as_ptr(),
+        d[4].as_ptr(),
+        d[5].as_ptr(),
+    ];
+    let alpha = V::splat(alpha);
+    let (mut rr, mut rz) = (V::zero(), V::zero());
+    for i in (sys.front..end).step_by(LANES) {
+        // SAFETY: `i + LANES ≤ end ≤ len`, and every array has `len` values (asserts above).
+        unsafe {
+            let mut rn = [V::zero(); 3];
+            for c in 0..3 {
+                let next = raw::<V>(dv[c], i).add(alpha.mul(raw(p[c], i)));
+                next.store(&mut *dv[c].add(i).cast::<[f64; LANES]>());
+                rn[c] = raw::<V>(r[c], i).sub(alpha.mul(raw(ap[c], i)));
+                rn[c].store(&mut *r[c].add(i).cast::<[f64; LANES]>());
+            }
+            let block = [
+                raw(d[0], i),
+                raw(d[1], i),
+                raw(d[2], i),
+                raw(d[3], i),
+                raw(d[4], i),
+                raw(d[5], i),
+            ];
+            let y = sym_mul::<V>(&block, rn);
+            for c in 0..3 {
+                y[c].store(&mut *z[c].add(i).cast::<[f64; LANES]>());
+            }
+            rr = rr
+                .add(rn[0].mul(rn[0]))
+                .add(rn[1].mul(rn[1]))
+                .add(rn[2].mul(rn[2]));
+            rz = rz
+                .add(rn[0].mul(y[0]))
+                .add(rn[1].mul(y[1]))
+                .add(rn[2].mul(y[2]));
+        }
+    }
+    (sum_lanes(rr), sum_lanes(rz))
+}
+
+/// The new direction `p = z + β p`, without a bounds check per load, like [`apply`].
+#[inline(always)]
+fn redirect<V: Lanes>(sys: &Lattice, beta: f64, z: &Soa, p: &mut Soa) {
+    let (len, end) = (sys.len, sys.front + sys.n.next_multiple_of(LANES));
+    assert!(z.iter().chain(p.iter()).all(|a| a.len() == len) && end <= len);
+    let beta = V::splat(beta);
+    for (p, z) in p.iter_mut().zip(z) {
+        let (p, z) = (p.as_mut_ptr(), z.as_ptr());
+        for i in (sys.front..end).step_by(LANES) {
+            // SAFETY: `i + LANES ≤ end ≤ len` values in both arrays (assert above).
+            unsafe {
+                let next = raw::<V>(z, i).add(beta.mul(raw(p, i)));
+                next.store(&mut *p.add(i).cast::<[f64; LANES]>());
+            }
+        }
+    }
 }
 
 /// The sum of the lanes of `v`, in a fixed order.
@@ -555,9 +795,9 @@ fn solve_body<V: Lanes>(
     max_iterations: u32,
     warm: bool,
 ) -> (u32, f64, bool) {
-    let front = sys.front;
+    let (front, n) = (sys.front, sys.n);
     let chunks = || {
-        (0..sys.n.next_multiple_of(LANES))
+        (0..n.next_multiple_of(LANES))
             .step_by(LANES)
             .map(|q| front + q)
     };
@@ -628,38 +868,11 @@ fn solve_body<V: Lanes>(
             }
             // One pass: Δv += α p, r -= α S A p, |r|², z = P⁻¹ r and r·z (r = S r, so
             // r·S z = r·z: the filter of z can follow).
-            let alpha = V::splat(rz / p_ap);
-            let (mut rr, mut rzv) = (V::zero(), V::zero());
-            for i in chunks() {
-                let mut rn = [V::zero(); 3];
-                for c in 0..3 {
-                    let d = at::<V>(&dv[c], i).add(alpha.mul(at(&p[c], i)));
-                    put(&mut dv[c], i, d);
-                    rn[c] = at::<V>(&r[c], i).sub(alpha.mul(at(&ap[c], i)));
-                    put(&mut r[c], i, rn[c]);
-                }
-                let y = sym_mul(&block::<V>(&sys.diag_inv, i), rn);
-                put_triple(&mut z, i, y);
-                rr = rr
-                    .add(rn[0].mul(rn[0]))
-                    .add(rn[1].mul(rn[1]))
-                    .add(rn[2].mul(rn[2]));
-                rzv = rzv
-                    .add(rn[0].mul(y[0]))
-                    .add(rn[1].mul(y[1]))
-                    .add(rn[2].mul(y[2]));
-            }
-            r_norm2 = sum_lanes(rr);
+            let (r2, rz_new) = descend::<V>(sys, rz / p_ap, [&mut dv, &mut r, &mut z], &p, &ap);
+            r_norm2 = r2;
             filter(front, constraints, &mut z);
-            let rz_new = sum_lanes(rzv);
-            let beta = V::splat(rz_new / rz);
+            redirect::<V>(sys, rz_new / rz, &z, &mut p);
             rz = rz_new;
-            for i in chunks() {
-                for c in 0..3 {
-                    let d = at::<V>(&z[c], i).add(beta.mul(at(&p[c], i)));
-                    put(&mut p[c], i, d);
-                }
-            }
             iterations += 1;
         }
         let residual = if b_norm2 > 0.0 {
@@ -719,4 +932,166 @@ fn elastic_avx512(sys: &Lattice, stencil: &Stencil) -> f64 {
 #[target_feature(enable = "avx2")]
 fn elastic_avx2(sys: &Lattice, stencil: &Stencil) -> f64 {
     elastic_body::<Avx2>(sys, stencil)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::scene::builder::Builder;
+    use crate::scene::lattice::{ClothSpec, cloth};
+
+    /// `out = A p` and `p·out` as [`apply`] computes them, with a bounds check on every load and
+    /// store (the loop as it was written before the checks were hoisted).
+    fn apply_checked<V: Lanes>(sys: &Lattice, p: &Soa, out: &mut Soa) -> f64 {
+        let mut p_out = V::zero();
+        for q in (0..sys.n.next_multiple_of(LANES)).step_by(LANES) {
+            let i = sys.front + q;
+            let pq = triple::<V>(p, i);
+            let m: V = at(&sys.mass, i);
+            let mut acc = [m.mul(pq[0]), m.mul(pq[1]), m.mul(pq[2])];
+            for g in &sys.groups {
+                let ahead = triple::<V>(p, i + g.delta);
+                let behind = triple::<V>(p, i - g.delta);
+                let y1 = sym_mul(
+                    &group_block::<V>(&g.b, sys.len, i),
+                    [
+                        pq[0].sub(ahead[0]),
+                        pq[1].sub(ahead[1]),
+                        pq[2].sub(ahead[2]),
+                    ],
+                );
+                let y2 = sym_mul(
+                    &group_block::<V>(&g.b, sys.len, i - g.delta),
+                    [
+                        behind[0].sub(pq[0]),
+                        behind[1].sub(pq[1]),
+                        behind[2].sub(pq[2]),
+                    ],
+                );
+                for c in 0..3 {
+                    acc[c] = acc[c].add(y1[c]).sub(y2[c]);
+                }
+            }
+            let free: V = at(&sys.free, i);
+            let y = [acc[0].mul(free), acc[1].mul(free), acc[2].mul(free)];
+            p_out = p_out
+                .add(pq[0].mul(y[0]))
+                .add(pq[1].mul(y[1]))
+                .add(pq[2].mul(y[2]));
+            put_triple(out, i, y);
+        }
+        sum_lanes(p_out)
+    }
+
+    /// A value in [-1, 1) from `seed` (a fixed hash: the same numbers on every run).
+    fn noise(seed: u64) -> f64 {
+        let mut x = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+        x ^= x >> 31;
+        x = x.wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        x ^= x >> 29;
+        (x >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+
+    /// The 2022 course cloth (25 × 25, corners pinned), shaken, assembled for a step of 5 ms.
+    fn assembled() -> (Lattice, Stencil) {
+        let mut b = Builder::new();
+        cloth(&mut b, &ClothSpec::course_2022());
+        let (model, mut state) = b.build(DVec3::new(0.0, -9.8, 0.0), 0.3);
+        for (i, (x, v)) in state.x.iter_mut().zip(&mut state.v).enumerate() {
+            let s = 6 * i as u64;
+            *x += 0.02 * DVec3::new(noise(s), noise(s + 1), noise(s + 2));
+            *v = DVec3::new(noise(s + 3), noise(s + 4), noise(s + 5));
+        }
+        let stencil = model.stencil().expect("a lattice").clone();
+        let mut sys = Lattice::default();
+        let forces = Forces::Springs {
+            gravity: model.gravity,
+        };
+        sys.assemble(
+            &stencil,
+            &model.mass,
+            &model.inv_mass,
+            model.drag,
+            0.005,
+            &state.x,
+            &state.v,
+            forces,
+        );
+        (sys, stencil)
+    }
+
+    fn field(sys: &Lattice, seed: u64) -> Soa {
+        let mut a: Soa = std::array::from_fn(|_| vec![0.0; sys.len]);
+        for (c, a) in a.iter_mut().enumerate() {
+            for i in 0..sys.n {
+                a[sys.front + i] = noise(seed + (3 * i + c) as u64);
+            }
+        }
+        a
+    }
+
+    fn same_bits(a: f64, b: f64) -> bool {
+        a.to_bits() == b.to_bits() || (a == 0.0 && b == 0.0)
+    }
+
+    #[test]
+    fn the_product_without_bounds_checks_is_the_checked_product_bit_for_bit() {
+        let (sys, _) = assembled();
+        assert_eq!(sys.groups.len(), 6, "the 2022 cloth has six offsets");
+        let p = field(&sys, 1_000_000);
+        let mut out_ref: Soa = std::array::from_fn(|_| vec![0.0; sys.len]);
+        let sum_ref = apply_checked::<Plain>(&sys, &p, &mut out_ref);
+        // Margins zero, as `resize` leaves them; NaN where the product must write.
+        let mut out: Soa = std::array::from_fn(|_| vec![0.0; sys.len]);
+        for c in &mut out {
+            c[sys.front..sys.front + sys.n].fill(f64::NAN);
+        }
+        let sum = apply::<Plain>(&sys, &p, &mut out);
+        assert!(same_bits(sum, sum_ref), "pᵀAp {sum} vs {sum_ref}");
+        assert!(sum > 0.0, "A is positive definite: {sum}");
+        for c in 0..3 {
+            for i in 0..sys.len {
+                assert!(
+                    same_bits(out[c][i], out_ref[c][i]),
+                    "(Ap)[{c}][{i}] {} vs {}",
+                    out[c][i],
+                    out_ref[c][i]
+                );
+            }
+        }
+        // Not all zero: the pinned corners are zero, the rest is not.
+        let nonzero = (0..sys.n).filter(|&i| out[0][sys.front + i] != 0.0).count();
+        assert_eq!(nonzero, sys.n - 4);
+    }
+
+    #[test]
+    fn the_solve_leaves_the_residual_it_reports_on_every_kernel() {
+        for kernel in Kernel::ALL {
+            if !kernel.is_available() {
+                continue;
+            }
+            let (mut sys, stencil) = assembled();
+            let stencil = stencil.with_kernel(kernel);
+            sys.kernel = Some(stencil.kernel());
+            let (iterations, residual, converged) = sys.solve(&[], 1e-10, 1000, false, None);
+            assert!(converged && residual <= 1e-10, "{kernel:?}: {residual}");
+            assert!((10..1000).contains(&iterations), "{kernel:?}: {iterations}");
+            // The residual row by row (each particle's own row of A, as the module docs write
+            // it, not the product's pass).
+            let (mut r2, mut b2) = (0.0, 0.0);
+            for i in (0..sys.n).filter(|&i| sys.free[sys.front + i] != 0.0) {
+                let k = sys.front + i;
+                let b = DVec3::new(sys.rhs[0][k], sys.rhs[1][k], sys.rhs[2][k]);
+                r2 += sys.row_residual(i).length_squared();
+                b2 += b.length_squared();
+            }
+            let measured = (r2 / b2).sqrt();
+            assert!(
+                measured <= 2e-10,
+                "{kernel:?}: |A Δv - b| / |b| = {measured:e}"
+            );
+        }
+    }
 }
