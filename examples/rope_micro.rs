@@ -1,5 +1,7 @@
-//! CPU time per call of `accelerations` (stencil and spring list) and per semi-implicit Euler
-//! step on the 64-node rope of `rope-se`: `cargo run --release --example rope_micro`.
+//! CPU time per call of `accelerations` (stencil and spring list), per semi-implicit Euler
+//! step taken one at a time (`Method::step`) and per step of 1000 taken in one call
+//! (`Method::steps`, the bench's path) on the 64-node rope of `rope-se`:
+//! `cargo run --release --example rope_micro`.
 use glam::DVec3;
 use springlab::bench::{Workload, setup};
 use springlab::physics::{Method, MethodParams, Workspace, accelerations};
@@ -45,11 +47,26 @@ fn main() {
             std::hint::black_box(&a);
         }
         let accl = (cpu() - t) / n as f64;
+        let mut s = state.clone();
+        let t = cpu();
+        for _ in 0..n / 1000 {
+            Method::SemiImplicitEuler.steps(
+                &model,
+                &mut s,
+                1e-4,
+                &MethodParams::default(),
+                &mut w,
+                1000,
+            );
+        }
+        let many = (cpu() - t) / (n / 1000 * 1000) as f64;
+        std::hint::black_box(&s);
         println!(
-            "accelerations {:.0} ns  (list {:.0} ns)  SE step {:.0} ns",
+            "accelerations {:.0} ns  (list {:.0} ns)  SE step {:.0} ns  SE steps(1000) {:.0} ns/step",
             acc * 1e9,
             accl * 1e9,
-            step * 1e9
+            step * 1e9,
+            many * 1e9
         );
     }
 }
