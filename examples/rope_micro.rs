@@ -75,7 +75,10 @@ fn main() {
     let n = 16i32;
     for r in 0..n {
         for c in 0..n {
-            b.particle(DVec3::new(f64::from(c) * 0.1, 1.0, f64::from(r) * 0.1), 0.02);
+            b.particle(
+                DVec3::new(f64::from(c) * 0.1, 1.0, f64::from(r) * 0.1),
+                0.02,
+            );
         }
     }
     b.pinned[0] = true;
