@@ -3,6 +3,10 @@
 //! same positions and velocities bit for bit on the lattice workloads, with the explicit, RK4
 //! and implicit methods.
 //!
+//! Many steps in one call (`Method::steps`, which runs them as one team of threads on a large
+//! lattice) give the same bits as one step at a time; a team's misuse and a panicking part end
+//! with a panic, never a hang.
+//!
 //! Only one test of this file touches the process-wide pool, on purpose: it sizes the pool
 //! through `SPRINGLAB_THREADS` before anything starts it, which no other test may race.
 
@@ -23,10 +27,11 @@ fn lattice_runs_are_bit_identical_for_1_2_3_4_and_8_threads() {
     unsafe { std::env::set_var(THREADS_ENV, "8") };
     let pool = Pool::global();
     assert_eq!(pool.threads(), 8, "{THREADS_ENV}=8 sizes the pool");
+    // Odd step counts: a team that alternates between two pairs of buffers ends in the second.
     let cases = [
-        (Workload::JellySe, Method::SemiImplicitEuler, 200),
-        (Workload::JellyRk4, Method::Rk4, 60),
-        (Workload::Cloth64Se, Method::SemiImplicitEuler, 100),
+        (Workload::JellySe, Method::SemiImplicitEuler, 201),
+        (Workload::JellyRk4, Method::Rk4, 61),
+        (Workload::Cloth64Se, Method::SemiImplicitEuler, 101),
         (Workload::Cloth64Se, Method::Midpoint, 50),
         (Workload::JellySe, Method::ImplicitEuler, 20),
     ];
@@ -44,6 +49,99 @@ fn lattice_runs_are_bit_identical_for_1_2_3_4_and_8_threads() {
                 "{w} with {method}: {threads} threads differ from 1"
             );
         }
+        // One step per call, on two threads: the same bits as all steps in one call.
+        pool.set_threads(2);
+        let mut r = Run::with_method(w, method);
+        for _ in 0..steps {
+            r.step();
+        }
+        assert!(
+            bits(&r.state) == one,
+            "{w} with {method}: step by step differs"
+        );
+    }
+    pool.set_threads(8);
+    a_team_fails_loudly();
+}
+
+/// A pass that reads its own output, a thread that panics before its first pass, and a part
+/// that panics while the other threads wait for it at the barrier: each ends in a panic of the
+/// caller, never a hang, and teams still work afterwards.
+fn a_team_fails_loudly() {
+    use glam::DVec3;
+    use springlab::physics::stencil::After;
+    use std::panic::{AssertUnwindSafe, catch_unwind};
+    let r = Run::new(Workload::JellySe);
+    let stencil = r.model.stencil().expect("a lattice").clone();
+    let dynamics = r.model.dynamics(true);
+    let pass = |s: usize, after: Option<After<'static>>| step_pass(s, dynamics, after);
+    let (mut x, mut v) = (r.state.x.clone(), r.state.v.clone());
+    let (mut x2, mut v2) = (x.clone(), v.clone());
+    // The last particle is in the last part; a rule that fails on it fails that part.
+    fn marked(x: &mut [DVec3], _: &mut [DVec3]) {
+        assert!(x.iter().all(|p| p.x < 1e29), "the marked particle");
+    }
+    for parts in [2, 3] {
+        let mut buffers = [&mut x[..], &mut v[..], &mut x2[..], &mut v2[..]];
+        let own_output = catch_unwind(AssertUnwindSafe(|| {
+            stencil.team(parts, &mut buffers, &|crew| {
+                let mut p = pass(0, None);
+                p.outs[1] = Some(1);
+                crew.pass(&p);
+            });
+        }));
+        assert!(own_output.is_err(), "a pass that reads its own output");
+        let late_panic = catch_unwind(AssertUnwindSafe(|| {
+            stencil.team(parts, &mut buffers, &|crew| {
+                assert!(crew.home() != 1, "thread 1 fails");
+                for s in 0..4 {
+                    crew.pass(&pass(s, None));
+                }
+            });
+        }));
+        assert!(late_panic.is_err(), "a thread that panics");
+        buffers[0].last_mut().expect("particles").x = 1e30;
+        let part_panic = catch_unwind(AssertUnwindSafe(|| {
+            stencil.team(parts, &mut buffers, &|crew| {
+                for s in 0..4 {
+                    crew.pass(&pass(s, Some(&marked)));
+                }
+            });
+        }));
+        assert!(part_panic.is_err(), "a part that panics");
+    }
+    // Teams still work: four steps in a team, against four single steps.
+    let (mut x, mut v) = (r.state.x.clone(), r.state.v.clone());
+    let mut buffers = [&mut x[..], &mut v[..], &mut x2[..], &mut v2[..]];
+    stencil.team(2, &mut buffers, &|crew| {
+        for s in 0..4 {
+            crew.pass(&pass(s, None));
+        }
+    });
+    let mut state = r.state.clone();
+    let mut work = springlab::physics::Workspace::new();
+    let params = springlab::physics::MethodParams::default();
+    for _ in 0..4 {
+        Method::SemiImplicitEuler.step(&r.model, &mut state, 1e-4, &params, &mut work);
+    }
+    assert!(x == state.x && v == state.v);
+}
+
+/// Step `s` of semi-implicit Euler in a team whose buffers 0, 1 and 2, 3 hold two states.
+fn step_pass<'a>(
+    s: usize,
+    dynamics: springlab::physics::stencil::Dynamics<'a>,
+    after: Option<springlab::physics::stencil::After<'a>>,
+) -> springlab::physics::stencil::Pass<'a> {
+    use springlab::physics::stencil::{Pass, TeamUpdate};
+    let (from, to) = if s.is_multiple_of(2) { (0, 2) } else { (2, 0) };
+    Pass {
+        x: from,
+        v: from + 1,
+        outs: [Some(to), Some(to + 1), None],
+        dynamics,
+        update: TeamUpdate::SemiImplicitEuler { dt: 1e-4 },
+        after,
     }
 }
 

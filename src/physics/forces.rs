@@ -389,7 +389,7 @@ pub fn accelerations(model: &Model, x: &[DVec3], v: &[DVec3], a: &mut [DVec3]) {
 
 impl Model {
     /// Weight, drag, masses and (when `contact`) the colliders, for the stencil's fused passes.
-    pub(crate) fn dynamics(&self, contact: bool) -> Dynamics<'_> {
+    pub fn dynamics(&self, contact: bool) -> Dynamics<'_> {
         Dynamics {
             mass: &self.mass,
             inv_mass: &self.inv_mass,

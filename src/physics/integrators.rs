@@ -172,9 +172,11 @@ impl Method {
 impl Method {
     /// `n` steps of [`Method::step`]; returns the force evaluations they took.
     ///
-    /// Semi-implicit Euler on a small lattice (a rope) without energy accounting or projection
-    /// takes them in one call, with the particles in the stencil's layout in between: the same
-    /// numbers bit for bit, without converting the state at every step.
+    /// Semi-implicit Euler and RK4 on a lattice without energy accounting take them in one
+    /// call, the same numbers bit for bit: on a large lattice as one team of threads, without
+    /// handing each pass to the pool; semi-implicit Euler on a small lattice (a rope, no
+    /// projection) with the particles in the stencil's layout in between, without converting
+    /// the state at every step.
     pub fn steps(
         self,
         model: &Model,
@@ -184,10 +186,14 @@ impl Method {
         work: &mut Workspace,
         n: u64,
     ) -> u64 {
-        if self == Method::SemiImplicitEuler
-            && n > 1
-            && let Some(evals) = semi_implicit_euler::steps(model, state, dt, work, n)
-        {
+        work.resize(model.particle_count(), model.springs.len());
+        let many = match self {
+            _ if n < 2 => None,
+            Method::SemiImplicitEuler => semi_implicit_euler::steps(model, state, dt, work, n),
+            Method::Rk4 => rk4::steps(model, state, dt, work, n),
+            _ => None,
+        };
+        if let Some(evals) = many {
             work.dissipated = Dissipated::default();
             return evals;
         }
@@ -575,6 +581,6 @@ fn stage_then_step(
 }
 
 /// The projection as the stencil's per-tile hook.
-fn after(projection: &Option<Projection>) -> Option<After<'_>> {
+pub(super) fn after(projection: &Option<Projection>) -> Option<After<'_>> {
     projection.as_ref().map(|p| &*p.0 as After)
 }

@@ -202,6 +202,9 @@ impl Pool {
         {
             let mut open = lock(&shared.job);
             shared.next.store(0, Ordering::SeqCst);
+            // A worker's panic in an earlier job whose caller panicked too (and so never looked
+            // at the flag) belongs to that job, not this one.
+            shared.panicked.store(false, Ordering::SeqCst);
             *open = Some(Job { function, parts });
         }
         shared.epoch.fetch_add(1, Ordering::SeqCst);
@@ -419,5 +422,20 @@ mod tests {
             count.fetch_add(1, Ordering::SeqCst);
         });
         assert_eq!(count.load(Ordering::SeqCst), 2);
+    }
+
+    #[test]
+    fn a_panic_belongs_to_its_own_job() {
+        let pool = Pool::new(2);
+        for _ in 0..20 {
+            // Every part panics, the caller's too: the caller unwinds without looking at the
+            // workers' flag.
+            let result = catch_unwind(AssertUnwindSafe(|| {
+                pool.run(2, &|_| panic!("every part fails"));
+            }));
+            assert!(result.is_err());
+            // The next job has no panic, and must not report one.
+            pool.run(2, &|_| {});
+        }
     }
 }

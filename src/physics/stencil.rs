@@ -102,6 +102,7 @@ mod contacts;
 mod kernels;
 mod passes;
 mod small;
+mod team;
 
 use std::cell::RefCell;
 use std::sync::Mutex;
@@ -118,6 +119,7 @@ use kernels::range_portable;
 #[cfg(target_arch = "x86_64")]
 use kernels::{range_avx2, range_avx512};
 use passes::{Part, SCRATCH, Scratch, cut, take};
+pub use team::{Crew, Pass, TeamUpdate};
 
 /// At most this many offset groups: more would make the passes slower than the spring list.
 const MAX_GROUPS: usize = 32;

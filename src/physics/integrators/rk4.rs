@@ -27,7 +27,9 @@
 //! [`Method::step`](super::Method::step) hands the same arithmetic, stage by stage, to the
 //! stencil's fused passes through the one seam (`integrators::fused` and `fused_pass`, which call
 //! [`Stencil::write`](crate::physics::stencil::Stencil::write)): `step_fused`, last in this
-//! file, does the same operations in the same order, bit for bit (tested).
+//! file, does the same operations in the same order, bit for bit (tested). Many steps in one
+//! call (`steps`, after it) run those passes on one team of threads, with the same numbers
+//! (tested).
 //!
 //! Reference: W. Kutta, "Beitrag zur näherungsweisen Integration totaler
 //! Differentialgleichungen", Z. Math. Phys. 46 (1901); E. Hairer, S. P. Nørsett, G. Wanner,
@@ -35,9 +37,10 @@
 
 use crate::physics::energy::Power;
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, after, fused_pass, power_if};
+use crate::physics::integrators::{Workspace, after, fused, fused_pass, power_if};
 use crate::physics::particles::State;
-use crate::physics::stencil::{Base, Output, Stencil, Update};
+use crate::physics::pool::Pool;
+use crate::physics::stencil::{Base, Output, Pass, Stencil, TeamUpdate, Update};
 
 /// The method as the formula writes it: four force evaluations, the stage loops between them.
 pub(super) fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
@@ -191,4 +194,81 @@ pub(super) fn step_fused(
     *projected = true;
     state.history_valid = false;
     4
+}
+
+/// `n` steps in one call on a lattice large enough for several threads, the same numbers bit
+/// for bit as `n` calls of `step`: the four passes of `step_fused` for each step, all run by
+/// one team of threads ([`Stencil::team`]) instead of one pool job per pass. `None`, having done
+/// nothing, where that does not apply: no lattice, the textbook loop asked for, energy
+/// accounting, or one thread.
+pub(super) fn steps(
+    model: &Model,
+    state: &mut State,
+    dt: f64,
+    work: &mut Workspace,
+    n: u64,
+) -> Option<u64> {
+    let stencil = fused(model, work)?;
+    let parts = stencil.parallel_parts(Pool::global().threads());
+    if work.account || parts < 2 {
+        return None;
+    }
+    let (half, sixth) = (0.5 * dt, dt / 6.0);
+    let dynamics = model.dynamics(true);
+    let after = after(&work.projection);
+    // The buffers of `step_fused`, by index: the state (0, 1), x_2 and x_4 (2), x_3 (3),
+    // v_2, v_3, v_4 (4, 5, 6), k1v, k2v, k3v (7, 8, 9).
+    let stage = |x, v, outs, h| Pass {
+        x,
+        v,
+        outs,
+        dynamics,
+        update: TeamUpdate::Euler {
+            h,
+            base: Some([0, 1]),
+        },
+        after: None,
+    };
+    let passes = [
+        stage(0, 1, [Some(2), Some(4), Some(7)], half),
+        stage(2, 4, [Some(3), Some(5), Some(8)], half),
+        stage(3, 5, [Some(2), Some(6), Some(9)], dt),
+        Pass {
+            x: 2,
+            v: 6,
+            outs: [Some(0), Some(1), None],
+            dynamics,
+            update: TeamUpdate::Rk4 {
+                sixth,
+                a: [7, 8, 9],
+                v: [4, 5],
+            },
+            after,
+        },
+    ];
+    let Workspace { x_stage, k, kx, .. } = work;
+    let [k1v, k2v, k3v, _] = k;
+    let [x3, v2, v3, v4] = kx;
+    let mut buffers = [
+        &mut state.x[..],
+        &mut state.v[..],
+        &mut x_stage[..],
+        &mut x3[..],
+        &mut v2[..],
+        &mut v3[..],
+        &mut v4[..],
+        &mut k1v[..],
+        &mut k2v[..],
+        &mut k3v[..],
+    ];
+    stencil.team(parts, &mut buffers, &|crew| {
+        for _ in 0..n {
+            for pass in &passes {
+                crew.pass(pass);
+            }
+        }
+    });
+    work.projected = true;
+    state.history_valid = false;
+    Some(4 * n)
 }

@@ -30,9 +30,10 @@
 //! Springer 2006, §I.1.2 and §VI.3; GAMES101 assignment 8 (2020), §1.2.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, fused, one_pass_step, power_if};
+use crate::physics::integrators::{Workspace, after, fused, one_pass_step, power_if};
 use crate::physics::particles::State;
-use crate::physics::stencil::{Stencil, Update};
+use crate::physics::pool::Pool;
+use crate::physics::stencil::{Pass, Stencil, TeamUpdate, Update};
 
 /// The method as the formula writes it: one force evaluation, then the two lines.
 pub(super) fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
@@ -72,11 +73,13 @@ pub(super) fn step_fused(
     )
 }
 
-/// `n` steps in one call on a small lattice (at most 256 particles, no colliders), the same
-/// numbers bit for bit as `n` calls of `step`
-/// ([`Stencil::semi_implicit_euler_steps`](crate::physics::stencil::Stencil::semi_implicit_euler_steps));
-/// `None`, having done nothing, where that does not apply: no lattice, the textbook loop asked
-/// for, energy accounting or a per-step projection.
+/// `n` steps in one call on a lattice, the same numbers bit for bit as `n` calls of `step`:
+/// on a small lattice (at most 256 particles, no colliders, no projection) the stencil keeps
+/// the particles in its own layout between the steps
+/// ([`Stencil::semi_implicit_euler_steps`]); on a lattice large enough for several threads they
+/// run all `n` steps as one team, alternating between the state and the stage buffers
+/// ([`Stencil::team`]). `None`, having done nothing, where neither applies: no lattice, the
+/// textbook loop asked for, energy accounting, or one thread.
 pub(super) fn steps(
     model: &Model,
     state: &mut State,
@@ -85,13 +88,49 @@ pub(super) fn steps(
     n: u64,
 ) -> Option<u64> {
     let stencil = fused(model, work)?;
-    if work.account || work.projection.is_some() {
+    if work.account {
         return None;
     }
     let dynamics = model.dynamics(true);
-    if !stencil.semi_implicit_euler_steps(&mut state.x, &mut state.v, &dynamics, dt, n) {
+    if work.projection.is_none()
+        && stencil.semi_implicit_euler_steps(&mut state.x, &mut state.v, &dynamics, dt, n)
+    {
+        state.history_valid = false;
+        return Some(n);
+    }
+    let parts = stencil.parallel_parts(Pool::global().threads());
+    if parts < 2 {
         return None;
     }
+    // Buffers 0, 1: the state; 2, 3: the stage. Step s reads one pair and writes the other.
+    let pass = |s: u64| {
+        let (from, to) = if s.is_multiple_of(2) { (0, 2) } else { (2, 0) };
+        Pass {
+            x: from,
+            v: from + 1,
+            outs: [Some(to), Some(to + 1), None],
+            dynamics,
+            update: TeamUpdate::SemiImplicitEuler { dt },
+            after: after(&work.projection),
+        }
+    };
+    let (x_new, v_new) = (&mut work.x_stage, &mut work.v_stage);
+    let mut buffers = [
+        &mut state.x[..],
+        &mut state.v[..],
+        &mut x_new[..],
+        &mut v_new[..],
+    ];
+    stencil.team(parts, &mut buffers, &|crew| {
+        for s in 0..n {
+            crew.pass(&pass(s));
+        }
+    });
+    if !n.is_multiple_of(2) {
+        std::mem::swap(&mut state.x, x_new);
+        std::mem::swap(&mut state.v, v_new);
+    }
+    work.projected = true;
     state.history_valid = false;
     Some(n)
 }

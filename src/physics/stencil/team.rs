@@ -1,0 +1,384 @@
+//! Many passes in one job of the worker pool: a "team" of threads that runs pass after pass
+//! (the stages of many steps) over the same split of the particles into parts, and waits for
+//! the others only at the boundary between two passes.
+//!
+//! [`Stencil::write`] is one job of the pool per pass: the caller publishes it, the workers pick
+//! it up, and the caller waits until every part has finished. On the jelly cube a pass is about
+//! 15 µs per thread, and that hand-over costs a microsecond or two of it. A team hands over
+//! once, for all the passes of `n` steps:
+//!
+//! ```text
+//! pass s:  claim a part of pass s, run it; again while one is left (see "stealing")
+//!          wait until every part of pass s is done                     (a barrier)
+//! ```
+//! where running part `k` of a pass reads the buffers the previous passes wrote (the
+//! neighbouring parts' particles too, within the stencil's reach) and writes only part `k`'s
+//! particles of the pass's outputs. The barrier makes that safe: while any part of pass `s`
+//! runs, every part of pass `s - 1` is done (so the inputs are complete) and none of pass
+//! `s + 1` has started (so no one writes what pass `s` reads, provided a pass never reads its
+//! own outputs, which [`Crew::pass`] checks).
+//!
+//! **The same numbers.** Each part of a pass is computed exactly once, as the same pass of
+//! [`Stencil::write`] computes it with the same split, whichever thread runs it; so `n` steps in
+//! a team are bit for bit `n` single steps, for any number of parts and threads (tested).
+//!
+//! **Stealing.** Every thread of the team has a home part, which it claims first in every pass
+//! (so a part's particles stay in one core's cache from pass to pass). A thread that has
+//! finished its part and finds another part of the pass still unclaimed after a few
+//! microseconds takes it: its owner has been paused by the operating system (a busy machine)
+//! and may not run again for milliseconds. Until the owner is back, its part is taken at once.
+//! So a team never waits for a thread that is not running, and on a busy machine it runs at the
+//! speed of the threads that are (at worst one), where a fixed part per thread would stall.
+//! Parts with no thread of their own (more parts than threads) are taken at once.
+//!
+//! **The barrier** is a counter per part (each on its own cache line): whoever finishes part
+//! `k` of pass `s` stores `s + 1` there, and a pass is done when every counter has reached it.
+//! A part is claimed by a compare-and-swap of another counter per part from `s` to `s + 1`, so
+//! exactly one thread runs it. A thread that panics raises a flag that makes the others stop
+//! waiting, so the job always ends.
+//!
+//! References: M. Herlihy, N. Shavit, *The Art of Multiprocessor Programming*, 2nd ed., Morgan
+//! Kaufmann 2020, §16 (work stealing) and §17 (barriers); Datta et al., SC 2008 (see the parent
+//! module), on time-stepping stencils with one thread per subdomain.
+
+use std::cell::Cell;
+use std::marker::PhantomData;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+#[allow(clippy::wildcard_imports)]
+use super::*;
+
+/// At most this many buffers in a team.
+pub const MAX_BUFFERS: usize = 12;
+
+/// How long a thread that has finished its part waits for the owner of another unclaimed part
+/// before it takes that part itself (a running owner claims it within a fraction of this).
+const PATIENCE: Duration = Duration::from_micros(5);
+
+/// How long a thread spins at the barrier before it starts giving its time slice away.
+const SPIN: Duration = Duration::from_micros(50);
+
+/// One pass of a team: [`Output::Step`] at positions `buffers[x]` and velocities `buffers[v]`
+/// into `buffers[outs[..]]`, with buffers named by their index in the call of
+/// [`Stencil::team`].
+#[derive(Clone, Copy)]
+pub struct Pass<'a> {
+    /// Positions (m) read by the pass.
+    pub x: usize,
+    /// Velocities (m/s) read by the pass.
+    pub v: usize,
+    /// Where the stage's positions, velocities and (for [`TeamUpdate::Euler`], optionally)
+    /// accelerations go.
+    pub outs: [Option<usize>; 3],
+    /// Weight, drag, contact and masses.
+    pub dynamics: Dynamics<'a>,
+    /// What the stage writes.
+    pub update: TeamUpdate,
+    /// Applied to each tile's new positions and velocities.
+    pub after: Option<After<'a>>,
+}
+
+/// [`Update`] with buffers named by index (see [`Pass`]).
+#[derive(Clone, Copy, Debug)]
+pub enum TeamUpdate {
+    /// [`Update::SemiImplicitEuler`] with step `dt` (s).
+    SemiImplicitEuler {
+        /// Time step (s).
+        dt: f64,
+    },
+    /// [`Update::Euler`] with the base `(x_b, v_b)` the pass's input (`None`) or two buffers.
+    Euler {
+        /// Stage length (s).
+        h: f64,
+        /// The buffers of `x_b` and `v_b`, or the input.
+        base: Option<[usize; 2]>,
+    },
+    /// [`Update::Rk4`]: the slopes `a_1..a_3` and velocities `v_2`, `v_3` from buffers.
+    Rk4 {
+        /// `dt/6` (s).
+        sixth: f64,
+        /// The buffers of `a_1`, `a_2`, `a_3`.
+        a: [usize; 3],
+        /// The buffers of `v_2`, `v_3`.
+        v: [usize; 2],
+    },
+}
+
+impl TeamUpdate {
+    /// The buffers this update reads besides the pass's input and its own outputs.
+    fn reads(&self) -> impl Iterator<Item = usize> + Clone {
+        let list: [Option<usize>; 5] = match *self {
+            TeamUpdate::SemiImplicitEuler { .. } | TeamUpdate::Euler { base: None, .. } => {
+                [None; 5]
+            }
+            TeamUpdate::Euler {
+                base: Some([x, v]), ..
+            } => [Some(x), Some(v), None, None, None],
+            TeamUpdate::Rk4 { a, v, .. } => {
+                [Some(a[0]), Some(a[1]), Some(a[2]), Some(v[0]), Some(v[1])]
+            }
+        };
+        list.into_iter().flatten()
+    }
+}
+
+/// A buffer shared by the threads of a team: a pointer and a length, valid while
+/// [`Stencil::team`] runs (it holds the exclusive borrow).
+#[derive(Clone, Copy)]
+struct Shared {
+    ptr: *mut DVec3,
+    len: usize,
+}
+
+/// A counter on a cache line of its own (so that threads do not slow each other down by
+/// writing neighbouring counters).
+#[repr(align(64))]
+#[derive(Default)]
+struct Padded(AtomicU64);
+
+/// The team's shared state: the stencil, the split, the buffers and the counters.
+struct Common<'b> {
+    stencil: &'b Stencil,
+    /// Part `k` is particles `bounds[k]..bounds[k + 1]`.
+    bounds: [usize; MAX_PARTS + 1],
+    parts: usize,
+    /// Threads of the team: parts `0..homes` have one of their own.
+    homes: usize,
+    buffers: [Shared; MAX_BUFFERS],
+    count: usize,
+    /// `claimed[k]`: passes of part `k` some thread has taken.
+    claimed: [Padded; MAX_PARTS],
+    /// `done[k]`: passes of part `k` finished.
+    done: [Padded; MAX_PARTS],
+    /// Set when a thread panicked: the others stop waiting.
+    abort: AtomicBool,
+    _borrow: PhantomData<&'b mut [DVec3]>,
+}
+
+// SAFETY: the raw pointers are only dereferenced in `Common::run_part`, under the barrier
+// discipline of the module docs (whole reads of buffers no one writes during the pass, writes
+// only of the running part's own disjoint piece); the rest is `Sync`.
+unsafe impl Sync for Common<'_> {}
+
+impl Common<'_> {
+    /// Takes part `k` of pass `s` if no thread has: true for exactly one caller.
+    fn claim(&self, k: usize, s: u64) -> bool {
+        self.claimed[k]
+            .0
+            .compare_exchange(s, s + 1, Ordering::AcqRel, Ordering::Relaxed)
+            .is_ok()
+    }
+
+    /// True when every part of pass `s` is done.
+    fn pass_done(&self, s: u64) -> bool {
+        self.done[..self.parts]
+            .iter()
+            .all(|d| d.0.load(Ordering::Acquire) > s)
+    }
+
+    /// Runs part `k` of `pass` (the `s`-th pass), claimed by this thread, and marks it done.
+    fn run_part(&self, k: usize, s: u64, pass: &Pass) {
+        let n = self.stencil.particles;
+        let (q0, q1) = (self.bounds[k], self.bounds[k + 1]);
+        // SAFETY (all reads and pieces below): `Crew::pass` checked that the outputs are
+        // distinct from each other and from every buffer the pass reads; by the barrier no
+        // thread writes a buffer during a pass that reads it; each part writes only its own
+        // particles q0..q1 (disjoint between parts, and each part of a pass runs once); every
+        // buffer holds at least n ≥ q1 values (checked by `Stencil::team`).
+        let read = |i: usize| -> &[DVec3] {
+            let b = self.buffers[i];
+            unsafe { std::slice::from_raw_parts(b.ptr, b.len) }
+        };
+        let piece = |o: Option<usize>| -> &mut [DVec3] {
+            match o {
+                Some(i) => unsafe {
+                    std::slice::from_raw_parts_mut(self.buffers[i].ptr.add(q0), q1 - q0)
+                },
+                None => &mut [],
+            }
+        };
+        let update = match pass.update {
+            TeamUpdate::SemiImplicitEuler { dt } => Update::SemiImplicitEuler { dt },
+            TeamUpdate::Euler { h, base } => Update::Euler {
+                h,
+                base: match base {
+                    None => Base::Input,
+                    Some([x, v]) => Base::Slices(read(x), read(v)),
+                },
+            },
+            TeamUpdate::Rk4 { sixth, a, v } => Update::Rk4 {
+                sixth,
+                a: a.map(read),
+                v: v.map(read),
+            },
+        };
+        let output = Output::Step {
+            dynamics: pass.dynamics,
+            update,
+            after: pass.after,
+        };
+        output.check(n);
+        let mut part = Part {
+            outs: pass.outs.map(piece),
+            power: &mut [],
+        };
+        let (x, v) = (&read(pass.x)[..n], &read(pass.v)[..n]);
+        SCRATCH.with(|scratch| {
+            let scratch = &mut scratch.borrow_mut();
+            self.stencil
+                .range(scratch, x, v, q0, q1, &mut part, &output);
+        });
+        self.done[k].0.store(s + 1, Ordering::Release);
+    }
+}
+
+/// One thread of a team, as the body sees it: call [`Crew::pass`] for each pass, the same
+/// passes in the same order on every thread.
+pub struct Crew<'t> {
+    common: &'t Common<'t>,
+    /// This thread's home part.
+    home: usize,
+    /// Passes this thread has been through.
+    passes: Cell<u64>,
+    /// The last pass needed a part whose owner did not come: take such parts at once.
+    alone: Cell<bool>,
+}
+
+impl Crew<'_> {
+    /// This thread's home part (0, 1, …).
+    #[must_use]
+    pub fn home(&self) -> usize {
+        self.home
+    }
+
+    /// Runs `pass` over all parts of the particles with the other threads of the team (see the
+    /// module docs), and returns when every part of it is done.
+    ///
+    /// # Panics
+    /// If a buffer index is out of range, a pass reads one of its own outputs or writes one
+    /// twice, or another thread of the team panicked.
+    pub fn pass(&self, pass: &Pass) {
+        let c = self.common;
+        let outs = pass.outs;
+        let written = outs.iter().flatten();
+        for (i, &o) in written.clone().enumerate() {
+            assert!(o < c.count, "no buffer {o}");
+            assert!(
+                written.clone().skip(i + 1).all(|&p| p != o),
+                "buffer {o} written twice"
+            );
+        }
+        for r in [pass.x, pass.v].into_iter().chain(pass.update.reads()) {
+            assert!(r < c.count, "no buffer {r}");
+            assert!(!outs.contains(&Some(r)), "a pass reads its own output {r}");
+        }
+        let s = self.passes.get();
+        self.passes.set(s + 1);
+        if c.claim(self.home, s) {
+            c.run_part(self.home, s, pass);
+        }
+        // Parts without a thread of their own: at once.
+        for k in c.homes..c.parts {
+            if c.claim(k, s) {
+                c.run_part(k, s, pass);
+            }
+        }
+        let start = Instant::now();
+        let mut stole = false;
+        let mut spins = 0u32;
+        while !c.pass_done(s) {
+            assert!(
+                !c.abort.load(Ordering::Relaxed),
+                "another thread of the team panicked"
+            );
+            spins += 1;
+            if !spins.is_multiple_of(32) {
+                std::hint::spin_loop();
+                continue;
+            }
+            let waited = start.elapsed();
+            if self.alone.get() || waited >= PATIENCE {
+                for k in 0..c.homes {
+                    if c.claim(k, s) {
+                        c.run_part(k, s, pass);
+                        stole = true;
+                    }
+                }
+            }
+            if waited >= SPIN {
+                std::thread::yield_now();
+            } else {
+                std::hint::spin_loop();
+            }
+        }
+        self.alone.set(stole);
+    }
+}
+
+/// Raises the team's abort flag when dropped during a panic.
+struct AbortOnPanic<'a>(&'a AtomicBool);
+
+impl Drop for AbortOnPanic<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.store(true, Ordering::Relaxed);
+        }
+    }
+}
+
+impl Stencil {
+    /// Runs `body` on a team of threads of the global pool, one per part (at most the pool's
+    /// threads; see the module docs), for the particles split into `parts` parts as
+    /// [`Stencil::write_in_parts`] splits them; the body calls [`Crew::pass`] for each pass,
+    /// which runs all parts of it. The same numbers as the passes one by one with
+    /// [`Stencil::write_in_parts`], for any `parts` and however many threads take part.
+    ///
+    /// # Panics
+    /// If there are more than [`MAX_BUFFERS`] buffers, one is shorter than the particle count,
+    /// or `body` panics.
+    pub fn team(&self, parts: usize, buffers: &mut [&mut [DVec3]], body: &(dyn Fn(&Crew) + Sync)) {
+        let parts = parts.clamp(1, MAX_PARTS);
+        assert!(buffers.len() <= MAX_BUFFERS, "too many buffers");
+        assert!(
+            buffers.iter().all(|b| b.len() >= self.particles),
+            "a buffer shorter than the particle count"
+        );
+        let mut shared = [Shared {
+            ptr: std::ptr::null_mut(),
+            len: 0,
+        }; MAX_BUFFERS];
+        for (s, b) in shared.iter_mut().zip(buffers.iter_mut()) {
+            *s = Shared {
+                ptr: b.as_mut_ptr(),
+                len: b.len(),
+            };
+        }
+        let pool = Pool::global();
+        let homes = parts.min(pool.threads());
+        let common = Common {
+            stencil: self,
+            bounds: self.split(parts),
+            parts,
+            homes,
+            buffers: shared,
+            count: buffers.len(),
+            claimed: std::array::from_fn(|_| Padded::default()),
+            done: std::array::from_fn(|_| Padded::default()),
+            abort: AtomicBool::new(false),
+            _borrow: PhantomData,
+        };
+        let common = &common;
+        // One job for all the passes; a thread that comes late (or not at all, when another
+        // thread is using the pool and the caller runs every home itself) finds the parts done.
+        pool.run(homes, &|home| {
+            let _abort = AbortOnPanic(&common.abort);
+            body(&Crew {
+                common,
+                home,
+                passes: Cell::new(0),
+                alone: Cell::new(false),
+            });
+        });
+    }
+}
