@@ -85,7 +85,9 @@ impl Spring {
     /// # Panics
     /// If `a` or `b` is out of range of `x` or `v`.
     #[must_use]
-    #[inline]
+    // Always: the spring-list loop of `forces::applied_forces` is this call and little else,
+    // and the compiler's own choice changes with how the crate's code is split for compiling.
+    #[inline(always)]
     pub fn force_on_a(&self, x: &[DVec3], v: &[DVec3]) -> DVec3 {
         let (a, b) = (self.a as usize, self.b as usize);
         let d = x[b] - x[a];

@@ -22,6 +22,45 @@
 //! the same bit for bit as that many single steps (tested). Only for small lattices without
 //! colliders, dissipated-power accounting or per-step projections (see
 //! [`Stencil::semi_implicit_euler_steps`]).
+//!
+//! # One pass per step (AVX-512, at most six offset groups)
+//!
+//! The two passes above are the textbook form, and what the portable and AVX2 kernels run.
+//! With AVX-512 (`fused_avx512`, below the seam at the end of the file) each step is a single
+//! pass over the chunks, the same operations on the same values:
+//!
+//! ```text
+//! each step, each chunk c (particles 8c..8c+8), in order:
+//!     own    = x, v of chunk c                                  (6 registers, old values)
+//!     each group δ = 8k + r with 8c < starts:
+//!         second = lanes r.. of chunks c+k, c+k+1 (one permute per component; old values:
+//!                  chunks after c are not written yet this step)
+//!         f_δ[c] = springs(own, second);   plus = (0 + f_δ₁[c]) + f_δ₂[c] + …
+//!     minus  = 0 + (lanes 8-r.. of f_δ₁[c-k-1], f_δ₁[c-k]) + …  (forces ending in chunk c,
+//!              all computed already: they start δ particles earlier)
+//!     F = plus - minus;  f = (m g - c v) + F;  a = f · (1/m);  v' = v + dt a;  x' = x + dt v'
+//!     store x', v' into chunk c
+//! ```
+//! where `f_δ[c]` is zero for a chunk before the first (`c < 0`) or past the group's springs.
+//! Four things make this faster than the two passes (on the 64-particle rope of `rope-se`
+//! about 150 ns a step instead of about 310, measured with `examples/rope_micro.rs`):
+//! - The springs' second ends and the forces that end in a chunk are lane permutations
+//!   (`VPERMT2PD`) of whole chunks already in registers or just stored, instead of loads that
+//!   straddle two chunks written a moment earlier: such a load cannot take its value from the
+//!   pending stores and waits until they reach the cache.
+//! - For `δ < 8` (the rope: `δ = 1`) the forces that end in chunk `c` come from chunks `c - 1`
+//!   and `c`, both still in registers: nothing is stored. Larger offsets keep a short history
+//!   per group (aligned lines of eight values).
+//! - The state is one aligned line per component and chunk (a load is one cache line), and
+//!   what does not change between steps is computed once per call: the weight `m g`, `1/m`
+//!   with zeros past the last particle, the permutation indices.
+//! - The group count is a compile-time constant (`G` = 1 to 6), so the loop over groups is
+//!   unrolled and each group's constants stay in registers.
+//!
+//! The kernel's arithmetic is that of [`springs_avx512`] (`springs_in_registers` takes both
+//! ends in registers) and every sum keeps its order, so the results are the same bits as the
+//! single steps (tested for 1 to 6 groups, offsets below, equal to and above a chunk, sizes
+//! that are not a multiple of eight, pinned particles; seven groups take the two passes).
 
 #[cfg(target_arch = "x86_64")]
 use super::kernels::springs_avx512;
@@ -29,6 +68,13 @@ use super::kernels::springs_exact;
 use super::passes::{Forces, Window, load_padded, semi_implicit_euler, weight_drag_springs};
 #[allow(clippy::wildcard_imports)]
 use super::*;
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::{
+    __m512d, __m512i, _CMP_GT_OQ, _mm512_add_pd, _mm512_cmp_pd_mask, _mm512_fmadd_pd,
+    _mm512_fmsub_pd, _mm512_fnmadd_pd, _mm512_load_pd, _mm512_loadu_pd, _mm512_loadu_si512,
+    _mm512_maskz_mov_pd, _mm512_maskz_mul_pd, _mm512_maskz_rsqrt14_pd, _mm512_mul_pd,
+    _mm512_permutex2var_pd, _mm512_set1_pd, _mm512_setzero_pd, _mm512_store_pd, _mm512_sub_pd,
+};
 
 /// Up to this many particles a lattice is "small": its state stays in the first-level cache,
 /// and one thread does the whole pass (see `MIN_SLOTS_PER_PART`).
@@ -77,6 +123,13 @@ impl Stencil {
             dynamics.mass.len() >= n && dynamics.inv_mass.len() >= n,
             "masses too short"
         );
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `with_kernel` and `Kernel::best` only choose `Avx512` on a CPU that supports
+        // AVX-512F.
+        if self.kernel == Kernel::Avx512 && unsafe { fused_steps(self, dynamics, x, v, dt, steps) }
+        {
+            return true;
+        }
         SMALL.with(|s| {
             let s = &mut *s.borrow_mut();
             s.load(self, x, v);
@@ -264,6 +317,341 @@ fn small_body<V: Lanes>(
     }
 }
 
+// ---------------------------------------------------------------------------------------------
+// The fused path (AVX-512, at most `FUSED_GROUPS` offset groups): the same numbers as
+// `small_body`, one pass over the chunks per step. See the module docs, "One pass per step".
+// ---------------------------------------------------------------------------------------------
+
+/// At most this many offset groups take the fused path (a cloth's six offsets); the groups'
+/// constants then stay in registers. More groups take `small_body`.
+#[cfg(target_arch = "x86_64")]
+const FUSED_GROUPS: usize = 6;
+
+/// `LANES` values on a 64-byte boundary: one cache line, loaded and stored whole.
+#[derive(Clone, Copy, Default)]
+#[repr(C, align(64))]
+struct Line([f64; LANES]);
+
+/// The arrays of the fused path (reused, so calls do not allocate).
+#[derive(Default)]
+struct FusedScratch {
+    /// Per chunk `c`: `[x, y, z, v_x, v_y, v_z]` of particles `8c..8c+8` (m, m/s); zero past
+    /// the last particle, including the chunks after the last that the springs' second ends
+    /// reach.
+    state: Vec<[Line; 6]>,
+    /// Per chunk: the weight `m g` (N), as pass 2 computes it (zero past the last particle).
+    weight: Vec<[Line; 3]>,
+    /// Per chunk: `1/m` (1/kg), zero past the last particle.
+    inv_mass: Vec<Line>,
+    /// Per group of offset `δ = 8k + r`: the forces of the springs starting in chunk `c` at
+    /// index `c + k + 1`, after `k + 1` chunks of zeros (a particle `q < δ` ends no spring).
+    history: Vec<Vec<[Line; 3]>>,
+}
+
+thread_local! {
+    static FUSED: RefCell<FusedScratch> = RefCell::new(FusedScratch::default());
+}
+
+impl FusedScratch {
+    /// Sizes the arrays for `st` and copies `x`, `v` and the masses in.
+    fn load(&mut self, st: &Stencil, d: &Dynamics, x: &[DVec3], v: &[DVec3]) {
+        let n = st.particles;
+        let chunks = n.div_ceil(LANES);
+        // The second ends of the last chunk's springs reach chunk `chunks - 1 + k + 1`.
+        let ahead = st.reach / LANES + 1;
+        self.state.clear();
+        self.state.resize(chunks + ahead, [Line::default(); 6]);
+        for (i, (p, u)) in x.iter().zip(v).enumerate() {
+            let (c, l) = (i / LANES, i % LANES);
+            let line = &mut self.state[c];
+            (line[0].0[l], line[1].0[l], line[2].0[l]) = (p.x, p.y, p.z);
+            (line[3].0[l], line[4].0[l], line[5].0[l]) = (u.x, u.y, u.z);
+        }
+        self.weight.clear();
+        self.inv_mass.clear();
+        for q in (0..n).step_by(LANES) {
+            let count = (n - q).min(LANES);
+            // As pass 2 of `small_body`: `m g` with the same multiplication, lanes past the last
+            // particle from a zero mass.
+            let m = load_padded::<Plain>(d.mass, q, count);
+            let mut weight = [Line::default(); 3];
+            for (line, g) in weight
+                .iter_mut()
+                .zip([d.gravity.x, d.gravity.y, d.gravity.z])
+            {
+                m.mul(Plain::splat(g)).store(&mut line.0);
+            }
+            self.weight.push(weight);
+            let mut w = Line::default();
+            load_padded::<Plain>(d.inv_mass, q, count).store(&mut w.0);
+            self.inv_mass.push(w);
+        }
+        self.history.resize_with(st.groups.len(), Vec::new);
+        for (g, h) in st.groups.iter().zip(&mut self.history) {
+            h.clear();
+            h.resize(chunks + g.delta / LANES + 1, [Line::default(); 3]);
+        }
+    }
+
+    /// Copies the positions and velocities out.
+    fn store(&self, x: &mut [DVec3], v: &mut [DVec3]) {
+        for (i, (p, u)) in x.iter_mut().zip(v).enumerate() {
+            let (c, l) = (i / LANES, i % LANES);
+            let line = &self.state[c];
+            *p = DVec3::new(line[0].0[l], line[1].0[l], line[2].0[l]);
+            *u = DVec3::new(line[3].0[l], line[4].0[l], line[5].0[l]);
+        }
+    }
+}
+
+/// The fused steps for a lattice of `G` groups, or false (nothing done) for more groups than
+/// `FUSED_GROUPS`.
+///
+/// # Safety
+/// The CPU must support AVX-512F.
+#[cfg(target_arch = "x86_64")]
+unsafe fn fused_steps(
+    st: &Stencil,
+    d: &Dynamics,
+    x: &mut [DVec3],
+    v: &mut [DVec3],
+    dt: f64,
+    steps: u64,
+) -> bool {
+    if st.groups.is_empty() || st.groups.len() > FUSED_GROUPS {
+        return false;
+    }
+    FUSED.with(|s| {
+        let s = &mut *s.borrow_mut();
+        s.load(st, d, x, v);
+        // SAFETY: the caller guarantees AVX-512F; `load` sized the arrays for `st`.
+        unsafe {
+            match st.groups.len() {
+                1 => fused_avx512::<1>(st, s, d, dt, steps),
+                2 => fused_avx512::<2>(st, s, d, dt, steps),
+                3 => fused_avx512::<3>(st, s, d, dt, steps),
+                4 => fused_avx512::<4>(st, s, d, dt, steps),
+                5 => fused_avx512::<5>(st, s, d, dt, steps),
+                _ => fused_avx512::<6>(st, s, d, dt, steps),
+            }
+        }
+        s.store(x, v);
+    });
+    true
+}
+
+/// The springs of one chunk with both ends in registers: the operations of
+/// [`springs_avx512`] (its forces, not the dampers' power) in the same order, so the same
+/// bits. `first`, `second`: `[x, y, z, v_x, v_y, v_z]` of the first and second ends; `rest`:
+/// the rest lengths (m); `present`: the lanes that hold a spring.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn springs_in_registers(
+    first: &[__m512d; 6],
+    second: &[__m512d; 6],
+    stiffness: __m512d,
+    damping: __m512d,
+    rest: __m512d,
+    present: u8,
+) -> [__m512d; 3] {
+    // SAFETY: only called from `fused_avx512`, which runs where AVX-512F was detected.
+    unsafe {
+        let dx = _mm512_sub_pd(second[0], first[0]);
+        let dy = _mm512_sub_pd(second[1], first[1]);
+        let dz = _mm512_sub_pd(second[2], first[2]);
+        let a = _mm512_fmadd_pd(dz, dz, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dx, dx)));
+        let dvx = _mm512_sub_pd(second[3], first[3]);
+        let dvy = _mm512_sub_pd(second[4], first[4]);
+        let dvz = _mm512_sub_pd(second[5], first[5]);
+        let dv_d = _mm512_fmadd_pd(dvz, dz, _mm512_fmadd_pd(dvy, dy, _mm512_mul_pd(dvx, dx)));
+        let damper = _mm512_mul_pd(damping, dv_d);
+        let nonzero = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(a, _mm512_setzero_pd());
+        let y0 = _mm512_maskz_rsqrt14_pd(nonzero, a);
+        let e = _mm512_fnmadd_pd(_mm512_mul_pd(a, y0), y0, _mm512_set1_pd(1.0));
+        let series = _mm512_fmadd_pd(_mm512_set1_pd(5.0 / 16.0), e, _mm512_set1_pd(3.0 / 8.0));
+        let series = _mm512_fmadd_pd(series, e, _mm512_set1_pd(0.5));
+        let y = _mm512_fmadd_pd(y0, _mm512_mul_pd(series, e), y0);
+        let stretch = _mm512_fmsub_pd(a, y, rest);
+        let damper_n = _mm512_mul_pd(damper, y);
+        let tension = _mm512_fmadd_pd(stiffness, stretch, damper_n);
+        let scale = _mm512_maskz_mul_pd(present, tension, y);
+        [
+            _mm512_mul_pd(dx, scale),
+            _mm512_mul_pd(dy, scale),
+            _mm512_mul_pd(dz, scale),
+        ]
+    }
+}
+
+/// The constants of one group in the fused loop.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct FusedGroup {
+    /// `k = δ / 8`: the second ends of chunk `c` are in chunks `c + k` and `c + k + 1`.
+    k: usize,
+    /// Chunks that hold springs: `⌈starts / 8⌉`.
+    chunks: usize,
+    /// Lane `l` of the second ends: lane `r + l` of chunks `c + k`, `c + k + 1` (`r = δ mod 8`).
+    second: __m512i,
+    /// Lane `l` of the forces ending in chunk `c`: lane `8 + l - r` of the forces of chunks
+    /// `c - k - 1`, `c - k`.
+    minus: __m512i,
+    stiffness: __m512d,
+    damping: __m512d,
+}
+
+/// `steps` semi-implicit Euler steps on the arrays of `s`, one pass over the chunks per step
+/// (see the module docs, "One pass per step"), for a lattice of exactly `G` groups.
+///
+/// # Safety
+/// The CPU must support AVX-512F, `st.groups.len() == G`, and `s` must have been loaded for
+/// `st` ([`FusedScratch::load`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn fused_avx512<const G: usize>(
+    st: &Stencil,
+    s: &mut FusedScratch,
+    d: &Dynamics,
+    dt: f64,
+    steps: u64,
+) {
+    debug_assert_eq!(st.groups.len(), G);
+    let n = st.particles;
+    let chunks = n.div_ceil(LANES);
+    let groups: [FusedGroup; G] = std::array::from_fn(|g| {
+        let group = &st.groups[g];
+        let r = (group.delta % LANES) as i64;
+        let second: [i64; LANES] = std::array::from_fn(|l| r + l as i64);
+        let minus: [i64; LANES] = std::array::from_fn(|l| LANES as i64 + l as i64 - r);
+        // SAFETY: AVX-512F (this function's target feature); the arrays hold 8 values.
+        unsafe {
+            FusedGroup {
+                k: group.delta / LANES,
+                chunks: group.starts.div_ceil(LANES),
+                second: _mm512_loadu_si512(second.as_ptr().cast()),
+                minus: _mm512_loadu_si512(minus.as_ptr().cast()),
+                stiffness: _mm512_set1_pd(group.stiffness),
+                damping: _mm512_set1_pd(group.damping),
+            }
+        }
+    });
+    let rest: [&[f64]; G] = std::array::from_fn(|g| &st.groups[g].rest_length[..]);
+    let present: [&[u8]; G] = std::array::from_fn(|g| &st.groups[g].present[..]);
+    // The last chunk's lanes past the last particle stay zero, as in `small_body`.
+    let last_keep = if n.is_multiple_of(LANES) {
+        u8::MAX
+    } else {
+        (1u8 << (n % LANES)) - 1
+    };
+    let FusedScratch {
+        state,
+        weight,
+        inv_mass,
+        history,
+    } = s;
+    debug_assert!(state.len() > chunks + st.reach / LANES && weight.len() == chunks);
+    let state = state.as_mut_ptr();
+    let history: [*mut [Line; 3]; G] = std::array::from_fn(|g| history[g].as_mut_ptr());
+    // SAFETY (the whole loop): AVX-512F is enabled here. Every index is inside its array as
+    // `FusedScratch::load` sized them: `state` has `chunks + reach / 8 + 1` lines and
+    // is read at `c + k + 1 <= chunks - 1 + reach / 8 + 1`; `history[g]` has `chunks + k + 1`
+    // and is written at `c + k + 1` and read at `c`, `c + 1` (`c < chunks`); a group's
+    // `rest_length` and `present` are padded to `chunks_g` chunks and read at `c < chunks_g`.
+    unsafe {
+        let dt_lanes = _mm512_set1_pd(dt);
+        let drag = _mm512_set1_pd(d.drag);
+        let zero = _mm512_setzero_pd();
+        let line = |p: *const [Line; 6], i: usize| _mm512_load_pd((*p)[i].0.as_ptr());
+        for _ in 0..steps {
+            // The forces of the previous chunk, for the groups with δ < 8 (k = 0).
+            let mut previous = [[zero; 3]; G];
+            for c in 0..chunks {
+                let own = state.add(c);
+                let first: [__m512d; 6] = std::array::from_fn(|i| line(own, i));
+                // Pass 1 of the chunk: each group's springs starting here, and their sum.
+                let mut plus = [zero; 3];
+                let mut current = [[zero; 3]; G];
+                for g in 0..G {
+                    let group = &groups[g];
+                    if c >= group.chunks {
+                        // The groups a chunk has are a prefix of the list.
+                        break;
+                    }
+                    let (a, b) = (state.add(c + group.k), state.add(c + group.k + 1));
+                    let second: [__m512d; 6] = std::array::from_fn(|i| {
+                        _mm512_permutex2var_pd(line(a, i), group.second, line(b, i))
+                    });
+                    let f = springs_in_registers(
+                        &first,
+                        &second,
+                        group.stiffness,
+                        group.damping,
+                        _mm512_loadu_pd(rest[g].as_ptr().add(c * LANES)),
+                        *present[g].get_unchecked(c),
+                    );
+                    if group.k > 0 {
+                        let slot = &mut *history[g].add(c + group.k + 1);
+                        for (out, value) in slot.iter_mut().zip(f) {
+                            _mm512_store_pd(out.0.as_mut_ptr(), value);
+                        }
+                    }
+                    for (total, part) in plus.iter_mut().zip(f) {
+                        *total = _mm512_add_pd(*total, part);
+                    }
+                    current[g] = f;
+                }
+                // Pass 2 of the chunk: minus the springs that end here (they started δ
+                // earlier: a lane shift of two chunks of forces), then the step.
+                let mut minus = [zero; 3];
+                for g in 0..G {
+                    let group = &groups[g];
+                    let (low, high) = if group.k == 0 {
+                        (previous[g], current[g])
+                    } else {
+                        let (low, high) = (&*history[g].add(c), &*history[g].add(c + 1));
+                        (
+                            std::array::from_fn(|i| _mm512_load_pd(low[i].0.as_ptr())),
+                            std::array::from_fn(|i| _mm512_load_pd(high[i].0.as_ptr())),
+                        )
+                    };
+                    for i in 0..3 {
+                        let f = _mm512_permutex2var_pd(low[i], group.minus, high[i]);
+                        minus[i] = _mm512_add_pd(minus[i], f);
+                    }
+                }
+                previous = current;
+                let weight = &*weight.as_ptr().add(c);
+                let w = _mm512_load_pd((*inv_mass.as_ptr().add(c)).0.as_ptr());
+                let keep = if c + 1 == chunks { last_keep } else { u8::MAX };
+                let own = &mut *own;
+                for i in 0..3 {
+                    // F = plus - minus;  f = (m g - c v) + F;  a = f · (1/m)
+                    let spring = _mm512_sub_pd(plus[i], minus[i]);
+                    let drag_force = _mm512_mul_pd(drag, first[3 + i]);
+                    let f = _mm512_add_pd(
+                        _mm512_sub_pd(_mm512_load_pd(weight[i].0.as_ptr()), drag_force),
+                        spring,
+                    );
+                    let a = _mm512_mul_pd(f, w);
+                    // v' = v + dt a;  x' = x + dt v'
+                    let v_new = _mm512_add_pd(first[3 + i], _mm512_mul_pd(dt_lanes, a));
+                    let x_new = _mm512_add_pd(first[i], _mm512_mul_pd(dt_lanes, v_new));
+                    let (x_new, v_new) = if keep == u8::MAX {
+                        (x_new, v_new)
+                    } else {
+                        (
+                            _mm512_maskz_mov_pd(keep, x_new),
+                            _mm512_maskz_mov_pd(keep, v_new),
+                        )
+                    };
+                    _mm512_store_pd(own[i].0.as_mut_ptr(), x_new);
+                    _mm512_store_pd(own[3 + i].0.as_mut_ptr(), v_new);
+                }
+            }
+        }
+    }
+}
+
 /// `values[at..at + LANES]` as one chunk.
 #[inline(always)]
 fn chunk_mut(values: &mut [f64], at: usize) -> &mut [f64; LANES] {
@@ -280,9 +668,9 @@ mod tests {
     use crate::physics::{Method, MethodParams, SpringKind, Workspace};
     use crate::scene::builder::Builder;
 
-    /// Moves every particle and gives it a velocity (deterministic), so that every spring is
-    /// stretched and every damper works.
-    fn shaken(mut state: State) -> State {
+    /// Moves every particle that is not pinned and gives it a velocity (deterministic), so that
+    /// every spring is stretched and every damper works.
+    fn shaken(model: &Model, mut state: State) -> State {
         let mut seed = 0x5eed_u64;
         let mut next = || {
             seed = seed
@@ -290,43 +678,72 @@ mod tests {
                 .wrapping_add(1_442_695_040_888_963_407);
             (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         };
-        for (x, v) in state.x.iter_mut().zip(&mut state.v) {
-            *x += 0.01 * DVec3::new(next(), next(), next());
-            *v = DVec3::new(next(), next(), next());
+        for ((x, v), &w) in state.x.iter_mut().zip(&mut state.v).zip(&model.inv_mass) {
+            let (dx, dv) = (
+                DVec3::new(next(), next(), next()),
+                DVec3::new(next(), next(), next()),
+            );
+            if w != 0.0 {
+                *x += 0.01 * dx;
+                *v = dv;
+            }
         }
         state
     }
 
-    /// The rope of `rope-se`, and a 7×7 cloth with drag (49 particles: a last chunk of one
-    /// particle; six offset groups), two corners pinned.
-    fn lattices() -> Vec<(Model, State)> {
-        let (rope, rope_state) = setup(Workload::RopeSe);
+    /// A `rows × cols` grid (10 cm apart, 20 g each) with a spring from every particle to its
+    /// neighbour at each `(row, column)` offset (offset `k`: stiffness `500 + 100 k` N/m), drag
+    /// 0.3 N·s/m, the particles `pinned` fixed. In particle order (row by row) the offset
+    /// `(dr, dc)` is the index offset `δ = dr · cols + dc`.
+    fn grid(rows: i32, cols: i32, offsets: &[(i32, i32)], pinned: &[usize]) -> (Model, State) {
         let mut b = Builder::new();
-        let n = 7u32;
-        for r in 0..n {
-            for c in 0..n {
+        for r in 0..rows {
+            for c in 0..cols {
                 b.particle(
                     DVec3::new(f64::from(c) * 0.1, 1.0, f64::from(r) * 0.1),
                     0.02,
                 );
             }
         }
-        b.pinned[0] = true;
-        b.pinned[n as usize - 1] = true;
-        let offsets = [(0, 1), (1, 0), (1, 1), (1, -1), (0, 2), (2, 0)];
-        for (k, (dr, dc)) in offsets.into_iter().enumerate() {
-            for r in 0..n as i32 {
-                for c in 0..n as i32 {
+        for &p in pinned {
+            b.pinned[p] = true;
+        }
+        for (k, (dr, dc)) in offsets.iter().enumerate() {
+            for r in 0..rows {
+                for c in 0..cols {
                     let (qr, qc) = (r + dr, c + dc);
-                    if (0..n as i32).contains(&qr) && (0..n as i32).contains(&qc) {
-                        let (p, q) = ((r * n as i32 + c) as u32, (qr * n as i32 + qc) as u32);
+                    if (0..rows).contains(&qr) && (0..cols).contains(&qc) {
+                        let (p, q) = ((r * cols + c) as u32, (qr * cols + qc) as u32);
                         b.spring(p, q, 500.0 + 100.0 * k as f64, 0.05, SpringKind::Struct);
                     }
                 }
             }
         }
-        let (cloth, cloth_state) = b.build(DVec3::new(0.0, -9.8, 0.0), 0.3);
-        vec![(rope, shaken(rope_state)), (cloth, shaken(cloth_state))]
+        let (model, state) = b.build(DVec3::new(0.0, -9.8, 0.0), 0.3);
+        let state = shaken(&model, state);
+        (model, state)
+    }
+
+    /// Lattices with 1 to 7 offset groups (`(label, groups, model, state)`): the rope of
+    /// `rope-se` (64 particles); a rope of 37 with bending springs (δ = 1, 2); a 5×10 strip
+    /// (δ = 1, 10, 11: second ends a chunk and more ahead); a 5×8 cloth (δ = 1, 8, 9, 7: a
+    /// whole-chunk offset); 7×7 cloths with 5, 6 and 7 offsets (49 particles: a last chunk of
+    /// one particle); a 16×16 cloth (256 particles, δ up to 17). Some particles pinned.
+    fn lattices() -> Vec<(&'static str, usize, Model, State)> {
+        let (rope, rope_state) = setup(Workload::RopeSe);
+        let rope_state = shaken(&rope, rope_state);
+        let cloth = [(0, 1), (1, 0), (1, 1), (1, -1), (0, 2), (2, 0), (2, 2)];
+        let with = |label, groups, (model, state)| (label, groups, model, state);
+        vec![
+            ("rope-se", 1, rope, rope_state),
+            with("bent rope", 2, grid(1, 37, &[(0, 1), (0, 2)], &[0, 20])),
+            with("strip", 3, grid(5, 10, &cloth[..3], &[0, 9])),
+            with("5×8 cloth", 4, grid(5, 8, &cloth[..4], &[0])),
+            with("7×7, 5 offsets", 5, grid(7, 7, &cloth[..5], &[0, 6])),
+            with("7×7, 6 offsets", 6, grid(7, 7, &cloth[..6], &[0, 6])),
+            with("7×7, 7 offsets", 7, grid(7, 7, &cloth, &[0, 6])),
+            with("16×16 cloth", 4, grid(16, 16, &cloth[..4], &[0, 15])),
+        ]
     }
 
     fn bits(x: &[DVec3]) -> Vec<[u64; 3]> {
@@ -338,11 +755,12 @@ mod tests {
     #[test]
     fn many_steps_in_one_call_are_the_single_steps_bit_for_bit() {
         let params = MethodParams::default();
-        for (model, state) in lattices() {
+        for (name, groups, model, state) in lattices() {
             for kernel in Kernel::ALL.into_iter().filter(|k| k.is_available()) {
                 let model = model.clone().with_kernel(kernel);
                 let stencil = model.stencil().expect("a lattice");
-                let label = format!("{} particles, {kernel:?}", stencil.particles());
+                let label = format!("{name}, {kernel:?}");
+                assert_eq!(stencil.groups.len(), groups, "{label}: groups");
                 let mut single = state.clone();
                 let mut work = Workspace::new();
                 for _ in 0..40 {
@@ -372,9 +790,47 @@ mod tests {
                 assert_eq!(evals, 40);
                 assert_eq!(bits(&via.x), bits(&single.x), "{label}: Method::steps");
                 assert_eq!(bits(&via.v), bits(&single.v), "{label}: Method::steps");
-                // And the state moved.
+                // The state moved, and the pinned particles did not.
                 assert_ne!(bits(&single.x), bits(&state.x));
+                for (i, &w) in model.inv_mass.iter().enumerate() {
+                    if w == 0.0 {
+                        assert_eq!(bits(&single.x[i..=i]), bits(&state.x[i..=i]), "{label}");
+                    }
+                }
             }
+        }
+    }
+
+    /// The fused path itself (not `small_body`) takes the lattices of up to `FUSED_GROUPS`
+    /// groups, with the same bits as single steps of the same kernel; more groups are left to
+    /// `small_body`.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn the_fused_path_gives_the_single_steps_bits() {
+        if !Kernel::Avx512.is_available() {
+            return;
+        }
+        let params = MethodParams::default();
+        for (name, groups, model, state) in lattices() {
+            let model = model.with_kernel(Kernel::Avx512);
+            let stencil = model.stencil().expect("a lattice");
+            let dynamics = model.dynamics(true);
+            let mut fused = state.clone();
+            // SAFETY: AVX-512F is available (checked above).
+            let taken =
+                unsafe { fused_steps(stencil, &dynamics, &mut fused.x, &mut fused.v, 1e-4, 40) };
+            assert_eq!(taken, groups <= FUSED_GROUPS, "{name}");
+            if !taken {
+                assert_eq!(bits(&fused.x), bits(&state.x), "{name}: changed");
+                continue;
+            }
+            let mut single = state.clone();
+            let mut work = Workspace::new();
+            for _ in 0..40 {
+                Method::SemiImplicitEuler.step(&model, &mut single, 1e-4, &params, &mut work);
+            }
+            assert_eq!(bits(&fused.x), bits(&single.x), "{name}: positions");
+            assert_eq!(bits(&fused.v), bits(&single.v), "{name}: velocities");
         }
     }
 
