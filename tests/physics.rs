@@ -673,7 +673,7 @@ fn editing_springs_through_the_model_keeps_its_caches_right() {
 
 /// A jittered `nx × ny` grid lattice (`nx` odd, particle count not a multiple of 8) whose
 /// springs join `p` to `p + δ` for δ = 1, 2, nx - 1, nx, nx + 1, 2 nx and 3 nx + 5: a reach
-/// larger than the stencil's tile of 64 particles, and rows whose ends have no spring of
+/// larger than the stencil's tiles (32 particles) and several of them, and rows whose ends have no spring of
 /// δ = 1, 2 (lanes without a spring). The groups δ = 1 and 2 nx have one rest length each
 /// (the lattice spacing, twice it), the others the distance at the start times 0.9–1.1;
 /// velocities are random.
