@@ -155,31 +155,77 @@ pub(super) unsafe fn springs_avx512(
     i: usize,
     p: usize,
 ) -> (Forces<Avx512>, Avx512) {
-    use std::arch::x86_64::{
-        _CMP_GT_OQ, _mm512_cmp_pd_mask, _mm512_fmadd_pd, _mm512_fmsub_pd, _mm512_fnmadd_pd,
-        _mm512_loadu_pd, _mm512_maskz_mul_pd, _mm512_maskz_rsqrt14_pd, _mm512_mul_pd,
-        _mm512_set1_pd, _mm512_setzero_pd, _mm512_sub_pd,
-    };
+    use std::arch::x86_64::{_mm512_loadu_pd, _mm512_set1_pd};
     let j = i + g.delta;
     debug_assert!(j + LANES <= w.x[0].len() && p + LANES <= g.rest_length.len());
     // SAFETY (the intrinsics): the caller guarantees AVX-512F, and that LANES = 8 values exist
-    // from every index loaded below (window: `i` and `j = i + δ`; group arrays: `p`), which is
-    // what one unaligned 512-bit load reads.
+    // from every index loaded below (window: `j = i + δ`; group arrays: `p`), which is what one
+    // unaligned 512-bit load reads.
     unsafe {
         let load = |values: &[f64], at: usize| _mm512_loadu_pd(values.as_ptr().add(at));
+        let second = [
+            load(w.x[0], j),
+            load(w.x[1], j),
+            load(w.x[2], j),
+            load(w.v[0], j),
+            load(w.v[1], j),
+            load(w.v[2], j),
+        ];
+        // Written out, not with `map`: its closure would not be inlined, and neither would the
+        // AVX-512 operations inside it.
+        let first = [
+            first[0].0, first[1].0, first[2].0, first[3].0, first[4].0, first[5].0,
+        ];
+        let ([fx, fy, fz], power) = spring_lanes_avx512(
+            &first,
+            &second,
+            _mm512_set1_pd(g.stiffness),
+            _mm512_set1_pd(g.damping),
+            load(&g.rest_length, p),
+            g.present[p / LANES],
+        );
+        ([Avx512(fx), Avx512(fy), Avx512(fz)], Avx512(power))
+    }
+}
+
+/// The arithmetic of [`springs_avx512`] on ends already in registers: the forces of eight
+/// springs and their dampers' power (W). `first`, `second`: `[x, y, z, v_x, v_y, v_z]` of the
+/// first and second ends (m, m/s); `stiffness` `k` (N/m), `damping` `k_d` (N·s/m) and `rest`
+/// `L0` (m) per lane; `present`: the lanes that hold a spring. Also used by the small lattices'
+/// fused pass (`small.rs`), which keeps both ends in registers, so both give the same bits.
+///
+/// # Safety
+/// The CPU must support AVX-512F.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(super) unsafe fn spring_lanes_avx512(
+    first: &[std::arch::x86_64::__m512d; 6],
+    second: &[std::arch::x86_64::__m512d; 6],
+    stiffness: std::arch::x86_64::__m512d,
+    damping: std::arch::x86_64::__m512d,
+    rest: std::arch::x86_64::__m512d,
+    present: u8,
+) -> ([std::arch::x86_64::__m512d; 3], std::arch::x86_64::__m512d) {
+    use std::arch::x86_64::{
+        _CMP_GT_OQ, _mm512_cmp_pd_mask, _mm512_fmadd_pd, _mm512_fmsub_pd, _mm512_fnmadd_pd,
+        _mm512_maskz_mul_pd, _mm512_maskz_rsqrt14_pd, _mm512_mul_pd, _mm512_set1_pd,
+        _mm512_setzero_pd, _mm512_sub_pd,
+    };
+    // SAFETY (the intrinsics): the caller guarantees AVX-512F; nothing is loaded or stored.
+    unsafe {
         // d = x_b - x_a
-        let dx = _mm512_sub_pd(load(w.x[0], j), first[0].0);
-        let dy = _mm512_sub_pd(load(w.x[1], j), first[1].0);
-        let dz = _mm512_sub_pd(load(w.x[2], j), first[2].0);
+        let dx = _mm512_sub_pd(second[0], first[0]);
+        let dy = _mm512_sub_pd(second[1], first[1]);
+        let dz = _mm512_sub_pd(second[2], first[2]);
         // a = d·d = L²
         let a = _mm512_fmadd_pd(dz, dz, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dx, dx)));
         // k_d (v_b - v_a)·d, computed while the square root is refined: (v_b - v_a)·n is
         // this times 1/L.
-        let dvx = _mm512_sub_pd(load(w.v[0], j), first[3].0);
-        let dvy = _mm512_sub_pd(load(w.v[1], j), first[4].0);
-        let dvz = _mm512_sub_pd(load(w.v[2], j), first[5].0);
+        let dvx = _mm512_sub_pd(second[3], first[3]);
+        let dvy = _mm512_sub_pd(second[4], first[4]);
+        let dvz = _mm512_sub_pd(second[5], first[5]);
         let dv_d = _mm512_fmadd_pd(dvz, dz, _mm512_fmadd_pd(dvy, dy, _mm512_mul_pd(dvx, dx)));
-        let damper = _mm512_mul_pd(_mm512_set1_pd(g.damping), dv_d);
+        let damper = _mm512_mul_pd(damping, dv_d);
         // y₀ ≈ 1/√a to 2⁻¹⁴, and 0 where a = 0 (a zero-length spring has no direction, no force).
         let nonzero = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(a, _mm512_setzero_pd());
         let y0 = _mm512_maskz_rsqrt14_pd(nonzero, a);
@@ -190,22 +236,21 @@ pub(super) unsafe fn springs_avx512(
         let series = _mm512_fmadd_pd(series, e, _mm512_set1_pd(0.5));
         let y = _mm512_fmadd_pd(y0, _mm512_mul_pd(series, e), y0);
         // L = a / √a = a y; tension = k (L - L0) + k_d (v_b - v_a)·d / L
-        let stretch = _mm512_fmsub_pd(a, y, load(&g.rest_length, p));
+        let stretch = _mm512_fmsub_pd(a, y, rest);
         let damper_n = _mm512_mul_pd(damper, y);
-        let tension = _mm512_fmadd_pd(_mm512_set1_pd(g.stiffness), stretch, damper_n);
+        let tension = _mm512_fmadd_pd(stiffness, stretch, damper_n);
         // f = tension n = (tension / L) d, zero where there is no spring.
-        let present = g.present[p / LANES];
         let scale = _mm512_maskz_mul_pd(present, tension, y);
         // The damper's power k_d ((v_b - v_a)·n)² = (k_d (v_b - v_a)·n) ((v_b - v_a)·d / L);
         // unused (and not computed) unless the caller asks for the power.
         let power = _mm512_maskz_mul_pd(present, damper_n, _mm512_mul_pd(dv_d, y));
         (
             [
-                Avx512(_mm512_mul_pd(dx, scale)),
-                Avx512(_mm512_mul_pd(dy, scale)),
-                Avx512(_mm512_mul_pd(dz, scale)),
+                _mm512_mul_pd(dx, scale),
+                _mm512_mul_pd(dy, scale),
+                _mm512_mul_pd(dz, scale),
             ],
-            Avx512(power),
+            power,
         )
     }
 }

@@ -57,23 +57,22 @@
 //! - The group count is a compile-time constant (`G` = 1 to 6), so the loop over groups is
 //!   unrolled and each group's constants stay in registers.
 //!
-//! The kernel's arithmetic is that of [`springs_avx512`] (`springs_in_registers` takes both
-//! ends in registers) and every sum keeps its order, so the results are the same bits as the
+//! The kernel's arithmetic is that of [`springs_avx512`] (both call `spring_lanes_avx512`, which
+//! takes both ends in registers) and every sum keeps its order, so the results are the same bits as the
 //! single steps (tested for 1 to 6 groups, offsets below, equal to and above a chunk, sizes
 //! that are not a multiple of eight, pinned particles; seven groups take the two passes).
 
-#[cfg(target_arch = "x86_64")]
-use super::kernels::springs_avx512;
 use super::kernels::springs_exact;
+#[cfg(target_arch = "x86_64")]
+use super::kernels::{spring_lanes_avx512, springs_avx512};
 use super::passes::{Forces, Window, load_padded, semi_implicit_euler, weight_drag_springs};
 #[allow(clippy::wildcard_imports)]
 use super::*;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::{
-    __m512d, __m512i, _CMP_GT_OQ, _mm512_add_pd, _mm512_cmp_pd_mask, _mm512_fmadd_pd,
-    _mm512_fmsub_pd, _mm512_fnmadd_pd, _mm512_load_pd, _mm512_loadu_pd, _mm512_loadu_si512,
-    _mm512_maskz_mov_pd, _mm512_maskz_mul_pd, _mm512_maskz_rsqrt14_pd, _mm512_mul_pd,
-    _mm512_permutex2var_pd, _mm512_set1_pd, _mm512_setzero_pd, _mm512_store_pd, _mm512_sub_pd,
+    __m512d, __m512i, _mm512_add_pd, _mm512_load_pd, _mm512_loadu_pd, _mm512_loadu_si512,
+    _mm512_maskz_mov_pd, _mm512_mul_pd, _mm512_permutex2var_pd, _mm512_set1_pd, _mm512_setzero_pd,
+    _mm512_store_pd, _mm512_sub_pd,
 };
 
 /// Up to this many particles a lattice is "small": its state stays in the first-level cache,
@@ -440,49 +439,6 @@ unsafe fn fused_steps(
     true
 }
 
-/// The springs of one chunk with both ends in registers: the operations of
-/// [`springs_avx512`] (its forces, not the dampers' power) in the same order, so the same
-/// bits. `first`, `second`: `[x, y, z, v_x, v_y, v_z]` of the first and second ends; `rest`:
-/// the rest lengths (m); `present`: the lanes that hold a spring.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-unsafe fn springs_in_registers(
-    first: &[__m512d; 6],
-    second: &[__m512d; 6],
-    stiffness: __m512d,
-    damping: __m512d,
-    rest: __m512d,
-    present: u8,
-) -> [__m512d; 3] {
-    // SAFETY: only called from `fused_avx512`, which runs where AVX-512F was detected.
-    unsafe {
-        let dx = _mm512_sub_pd(second[0], first[0]);
-        let dy = _mm512_sub_pd(second[1], first[1]);
-        let dz = _mm512_sub_pd(second[2], first[2]);
-        let a = _mm512_fmadd_pd(dz, dz, _mm512_fmadd_pd(dy, dy, _mm512_mul_pd(dx, dx)));
-        let dvx = _mm512_sub_pd(second[3], first[3]);
-        let dvy = _mm512_sub_pd(second[4], first[4]);
-        let dvz = _mm512_sub_pd(second[5], first[5]);
-        let dv_d = _mm512_fmadd_pd(dvz, dz, _mm512_fmadd_pd(dvy, dy, _mm512_mul_pd(dvx, dx)));
-        let damper = _mm512_mul_pd(damping, dv_d);
-        let nonzero = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(a, _mm512_setzero_pd());
-        let y0 = _mm512_maskz_rsqrt14_pd(nonzero, a);
-        let e = _mm512_fnmadd_pd(_mm512_mul_pd(a, y0), y0, _mm512_set1_pd(1.0));
-        let series = _mm512_fmadd_pd(_mm512_set1_pd(5.0 / 16.0), e, _mm512_set1_pd(3.0 / 8.0));
-        let series = _mm512_fmadd_pd(series, e, _mm512_set1_pd(0.5));
-        let y = _mm512_fmadd_pd(y0, _mm512_mul_pd(series, e), y0);
-        let stretch = _mm512_fmsub_pd(a, y, rest);
-        let damper_n = _mm512_mul_pd(damper, y);
-        let tension = _mm512_fmadd_pd(stiffness, stretch, damper_n);
-        let scale = _mm512_maskz_mul_pd(present, tension, y);
-        [
-            _mm512_mul_pd(dx, scale),
-            _mm512_mul_pd(dy, scale),
-            _mm512_mul_pd(dz, scale),
-        ]
-    }
-}
-
 /// The constants of one group in the fused loop.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
@@ -581,7 +537,7 @@ unsafe fn fused_avx512<const G: usize>(
                     let second: [__m512d; 6] = std::array::from_fn(|i| {
                         _mm512_permutex2var_pd(line(a, i), group.second, line(b, i))
                     });
-                    let f = springs_in_registers(
+                    let (f, _) = spring_lanes_avx512(
                         &first,
                         &second,
                         group.stiffness,
