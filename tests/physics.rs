@@ -12,25 +12,14 @@ use springlab::scene::{self};
 use springlab::simulation::Simulation;
 
 /// A random system of `n` particles and `m` springs (some of zero rest length), no gravity.
+/// A vector with each component uniform in `[-r, r)`.
+fn random_vector(rng: &mut Rng, r: f64) -> DVec3 {
+    DVec3::new(rng.range(-r, r), rng.range(-r, r), rng.range(-r, r))
+}
+
 fn random_system(rng: &mut Rng, n: usize, m: usize) -> (Model, State) {
-    let x: Vec<DVec3> = (0..n)
-        .map(|_| {
-            DVec3::new(
-                rng.range(-2.0, 2.0),
-                rng.range(-2.0, 2.0),
-                rng.range(-2.0, 2.0),
-            )
-        })
-        .collect();
-    let v: Vec<DVec3> = (0..n)
-        .map(|_| {
-            DVec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            )
-        })
-        .collect();
+    let x: Vec<DVec3> = (0..n).map(|_| random_vector(rng, 2.0)).collect();
+    let v: Vec<DVec3> = (0..n).map(|_| random_vector(rng, 1.0)).collect();
     let springs = (0..m)
         .map(|i| {
             let a = (rng.range(0.0, n as f64) as u32).min(n as u32 - 1);
@@ -238,16 +227,8 @@ fn the_same_run_twice_is_bit_identical() {
 fn shaken(workload: springlab::bench::Workload, rng: &mut Rng) -> (Model, State) {
     let (model, mut state) = springlab::bench::setup(workload);
     for (x, v) in state.x.iter_mut().zip(state.v.iter_mut()) {
-        *x += DVec3::new(
-            rng.range(-0.02, 0.02),
-            rng.range(-0.02, 0.02),
-            rng.range(-0.02, 0.02),
-        );
-        *v = DVec3::new(
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-        );
+        *x += random_vector(rng, 0.02);
+        *v = random_vector(rng, 1.0);
     }
     state.x[1] = state.x[0];
     (model, state)
@@ -690,15 +671,7 @@ fn jittered_lattice(rng: &mut Rng, nx: usize, ny: usize) -> (Vec<Spring>, Vec<DV
             )
         })
         .collect();
-    let v: Vec<DVec3> = (0..n)
-        .map(|_| {
-            DVec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            )
-        })
-        .collect();
+    let v: Vec<DVec3> = (0..n).map(|_| random_vector(rng, 1.0)).collect();
     let offsets = [1, 2, nx - 1, nx, nx + 1, 2 * nx, 3 * nx + 5];
     let mut springs = Vec::new();
     for (k, &delta) in offsets.iter().enumerate() {
