@@ -26,12 +26,14 @@ fn one_step(c: &mut Criterion) {
     group.finish();
 }
 
-/// A hundred steps of each rope in one [`Run::advance`] call, as `springlab bench` takes them:
-/// semi-implicit Euler on the rope keeps the particles in the stencil's layout between the steps
-/// (`Method::steps`), so this is less than a hundred times one step.
-fn hundred_rope_steps(c: &mut Criterion) {
+/// A hundred steps of each workload in one [`Run::advance`] call, as `springlab bench` takes
+/// them (`Method::steps`): semi-implicit Euler on the rope keeps the particles in the stencil's
+/// layout between the steps, and semi-implicit Euler and RK4 on the jelly and the cloths run the
+/// hundred steps as one team of threads (`stencil/team.rs`), so this is less than a hundred
+/// times one step.
+fn hundred_steps(c: &mut Criterion) {
     let mut group = c.benchmark_group("workload 100 steps");
-    for w in [Workload::RopeSe, Workload::RopeVerlet] {
+    for w in Workload::ALL {
         let mut run = Run::new(w);
         group.bench_function(w.name(), |b| {
             b.iter(|| {
@@ -43,5 +45,5 @@ fn hundred_rope_steps(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, one_step, hundred_rope_steps);
+criterion_group!(benches, one_step, hundred_steps);
 criterion_main!(benches);
