@@ -470,6 +470,15 @@ fn fused<'m>(model: &'m Model, work: &Workspace) -> Option<&'m Stencil> {
     if work.textbook { None } else { model.stencil() }
 }
 
+/// The stencil and its number of parts when a method's many steps can run as one team of
+/// threads ([`Stencil::team`]): a lattice with the fused passes wanted ([`fused`]), no energy
+/// accounting, and work for at least two threads.
+fn team<'m>(model: &'m Model, work: &Workspace) -> Option<(&'m Stencil, usize)> {
+    let stencil = fused(model, work).filter(|_| !work.account)?;
+    let parts = stencil.parallel_parts(crate::physics::pool::Pool::global().threads());
+    (parts >= 2).then_some((stencil, parts))
+}
+
 /// One fused pass: `output` at `(x, v)` into `outs` (see [`Stencil::write`]), and the
 /// dissipated power at `(x, v)` from the same pass when `account` (zero otherwise).
 fn fused_pass(

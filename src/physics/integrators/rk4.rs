@@ -37,9 +37,8 @@
 
 use crate::physics::energy::Power;
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, after, fused, fused_pass, power_if};
+use crate::physics::integrators::{Workspace, after, fused_pass, power_if, team};
 use crate::physics::particles::State;
-use crate::physics::pool::Pool;
 use crate::physics::stencil::{Base, Output, Pass, Stencil, TeamUpdate, Update};
 
 /// The method as the formula writes it: four force evaluations, the stage loops between them.
@@ -208,11 +207,7 @@ pub(super) fn steps(
     work: &mut Workspace,
     n: u64,
 ) -> Option<u64> {
-    let stencil = fused(model, work)?;
-    let parts = stencil.parallel_parts(Pool::global().threads());
-    if work.account || parts < 2 {
-        return None;
-    }
+    let (stencil, parts) = team(model, work)?;
     let (half, sixth) = (0.5 * dt, dt / 6.0);
     let dynamics = model.dynamics(true);
     let after = after(&work.projection);

@@ -30,9 +30,8 @@
 //! Springer 2006, §I.1.2 and §VI.3; GAMES101 assignment 8 (2020), §1.2.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, after, fused, one_pass_step, power_if};
+use crate::physics::integrators::{Workspace, after, fused, one_pass_step, power_if, team};
 use crate::physics::particles::State;
-use crate::physics::pool::Pool;
 use crate::physics::stencil::{Pass, Stencil, TeamUpdate, Update};
 
 /// The method as the formula writes it: one force evaluation, then the two lines.
@@ -87,10 +86,7 @@ pub(super) fn steps(
     work: &mut Workspace,
     n: u64,
 ) -> Option<u64> {
-    let stencil = fused(model, work)?;
-    if work.account {
-        return None;
-    }
+    let stencil = fused(model, work).filter(|_| !work.account)?;
     let dynamics = model.dynamics(true);
     if work.projection.is_none()
         && stencil.semi_implicit_euler_steps(&mut state.x, &mut state.v, &dynamics, dt, n)
@@ -98,10 +94,7 @@ pub(super) fn steps(
         state.history_valid = false;
         return Some(n);
     }
-    let parts = stencil.parallel_parts(Pool::global().threads());
-    if parts < 2 {
-        return None;
-    }
+    let (stencil, parts) = team(model, work)?;
     // Buffers 0, 1: the state; 2, 3: the stage. Step s reads one pair and writes the other.
     let pass = |s: u64| {
         let (from, to) = if s.is_multiple_of(2) { (0, 2) } else { (2, 0) };
