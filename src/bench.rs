@@ -876,13 +876,8 @@ mod tests {
     #[test]
     fn the_sphere_rule_with_its_shortcuts_is_the_peers_rule_bit_for_bit() {
         let (centre, radius) = (DVec3::new(0.5, 0.6, 0.5), 0.35);
-        let mut seed = 0x5b4e_7e00_u64;
-        let mut noise = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-        };
+        let mut rng = crate::random::XorShift64Star::new(0x5b4e_7e00);
+        let mut noise = || rng.symmetric();
         // Random points in a box around the sphere, points on and next to its surface (in
         // every direction, so also just above and below it in y), and a NaN.
         let mut x: Vec<DVec3> = (0..4000)

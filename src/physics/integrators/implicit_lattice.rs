@@ -939,6 +939,7 @@ mod tests {
     use glam::DVec3;
 
     use super::*;
+    use crate::random::XorShift64Star;
     use crate::scene::builder::Builder;
     use crate::scene::lattice::{ClothSpec, cloth};
 
@@ -985,24 +986,16 @@ mod tests {
         sum_lanes(p_out)
     }
 
-    /// A value in [-1, 1) from `seed` (a fixed hash: the same numbers on every run).
-    fn noise(seed: u64) -> f64 {
-        let mut x = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15);
-        x ^= x >> 31;
-        x = x.wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        x ^= x >> 29;
-        (x >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-    }
-
     /// The 2022 course cloth (25 × 25, corners pinned), shaken, assembled for a step of 5 ms.
     fn assembled() -> (Lattice, Stencil) {
         let mut b = Builder::new();
         cloth(&mut b, &ClothSpec::course_2022());
         let (model, mut state) = b.build(DVec3::new(0.0, -9.8, 0.0), 0.3);
-        for (i, (x, v)) in state.x.iter_mut().zip(&mut state.v).enumerate() {
-            let s = 6 * i as u64;
-            *x += 0.02 * DVec3::new(noise(s), noise(s + 1), noise(s + 2));
-            *v = DVec3::new(noise(s + 3), noise(s + 4), noise(s + 5));
+        let mut rng = XorShift64Star::new(1);
+        let mut noise = || rng.symmetric();
+        for (x, v) in state.x.iter_mut().zip(&mut state.v) {
+            *x += 0.02 * DVec3::new(noise(), noise(), noise());
+            *v = DVec3::new(noise(), noise(), noise());
         }
         let stencil = model.stencil().expect("a lattice").clone();
         let mut sys = Lattice::default();
@@ -1023,10 +1016,11 @@ mod tests {
     }
 
     fn field(sys: &Lattice, seed: u64) -> Soa {
+        let mut rng = XorShift64Star::new(seed);
         let mut a: Soa = std::array::from_fn(|_| vec![0.0; sys.len]);
-        for (c, a) in a.iter_mut().enumerate() {
-            for i in 0..sys.n {
-                a[sys.front + i] = noise(seed + (3 * i + c) as u64);
+        for a in &mut a {
+            for value in &mut a[sys.front..sys.front + sys.n] {
+                *value = rng.symmetric();
             }
         }
         a

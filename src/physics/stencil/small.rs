@@ -627,13 +627,8 @@ mod tests {
     /// Moves every particle that is not pinned and gives it a velocity (deterministic), so that
     /// every spring is stretched and every damper works.
     fn shaken(model: &Model, mut state: State) -> State {
-        let mut seed = 0x5eed_u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rng = crate::random::XorShift64Star::new(0x5eed);
+        let mut next = || rng.unit() - 0.5;
         for ((x, v), &w) in state.x.iter_mut().zip(&mut state.v).zip(&model.inv_mass) {
             let (dx, dv) = (
                 DVec3::new(next(), next(), next()),
