@@ -350,10 +350,29 @@ fn real_time_factor_and_steps_per_second_come_from_the_wall_times_given() {
     for _ in 0..40 {
         app.tick(1.0 / 60.0);
     }
+    // dt = 0.01 s against frames of 1/60 s: a frame takes one or two steps and the rest waits
+    // in the accumulator. Nothing is dropped, so the factor is exactly 1 (to rounding), not the
+    // 0.98–1.02 that whole steps alone would give.
     let rtf = run(&app).real_time_factor().expect("measured after 0.5 s");
-    assert!((rtf - 1.0).abs() < 0.05, "{rtf}");
+    assert!((rtf - 1.0).abs() < 1e-9, "{rtf}");
     let sps = run(&app).steps_per_second().expect("measured");
     assert!((sps - 100.0).abs() < 5.0, "{sps}");
+    // Capped at one step a frame, 0.01 s of every 0.025 s frame is kept and the rest dropped:
+    // ×0.4 (80 frames: at least one half-second window of capped frames only).
+    app.lesson_mut().expect("open").set_max_steps_per_frame(1);
+    for _ in 0..80 {
+        app.tick(0.025);
+    }
+    let rtf = run(&app).real_time_factor().expect("measured");
+    assert!((rtf - 0.4).abs() < 1e-9, "{rtf}");
+    // Half speed, nothing dropped: exactly 0.5 simulated seconds per wall second.
+    app.lesson_mut().expect("open").set_max_steps_per_frame(4096);
+    key(&mut app, KeyCode::Char('<'));
+    for _ in 0..80 {
+        app.tick(1.0 / 60.0);
+    }
+    let rtf = run(&app).real_time_factor().expect("measured");
+    assert!((rtf - 0.5).abs() < 1e-9, "{rtf}");
 }
 
 #[test]

@@ -87,7 +87,9 @@ struct Rates {
     wall: f64,
     simulated: f64,
     steps: u64,
-    /// Simulated seconds per wall second over the last half second.
+    /// Simulated seconds per wall second over the last half second, where the time that waits
+    /// in the accumulator for the next whole step (less than one step) counts as kept: the
+    /// factor is the speed exactly while no time is dropped, and below it by the time dropped.
     real_time_factor: Option<f64>,
     /// Steps per wall second over the last half second.
     steps_per_second: Option<f64>,
@@ -777,6 +779,7 @@ impl LessonRun {
         } else {
             0.0
         };
+        let owed_before = self.accumulator;
         self.accumulator += wall_dt * self.speed;
         let dt = self.sim.dt();
         // Whole steps that fit, with a billionth of a step of slack against rounding
@@ -811,7 +814,9 @@ impl LessonRun {
         };
         self.last_frame_steps = taken;
         self.version += 1;
-        self.rates.add(wall_dt, taken as f64 * dt, taken);
+        // Kept: the steps taken and what the accumulator still owes (dropped time is not).
+        let kept = taken as f64 * dt + (self.accumulator - owed_before);
+        self.rates.add(wall_dt, kept, taken);
         if self.follow {
             self.follow_bodies();
         }
