@@ -366,7 +366,9 @@ fn real_time_factor_and_steps_per_second_come_from_the_wall_times_given() {
     let rtf = run(&app).real_time_factor().expect("measured");
     assert!((rtf - 0.4).abs() < 1e-9, "{rtf}");
     // Half speed, nothing dropped: exactly 0.5 simulated seconds per wall second.
-    app.lesson_mut().expect("open").set_max_steps_per_frame(4096);
+    app.lesson_mut()
+        .expect("open")
+        .set_max_steps_per_frame(4096);
     key(&mut app, KeyCode::Char('<'));
     for _ in 0..80 {
         app.tick(1.0 / 60.0);
