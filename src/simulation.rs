@@ -40,7 +40,9 @@
 //!
 //! - **a linearisation error** (the one Newton step's neglected `½ f''(dt v)²` term) is `O(dt³)`
 //!   per step, so its rate falls fourfold per halving or faster: on `jelly-bowl` at dt = 0.1 to
-//!   0.3 s the halves rose at 0.7 % to 16 % of the whole step's rate, or not at all;
+//!   0.3 s a halving cut the rate to 0.7 % – 16 % (or the halves did not rise at all), or left
+//!   it at 58 % – 200 % (accepted, under the twofold rule too); none fell between a quarter and
+//!   a half, so there the rule takes the decisions the twofold one took;
 //! - **a resting contact** (the cloth lands on where a sphere would end the step, and the sphere
 //!   gets the reaction a step later) pumps `O(dt²)` per step into the up-and-down of the contact,
 //!   which the next steps take out again: halving only halves the rate (measured on
