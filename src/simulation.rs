@@ -47,8 +47,8 @@
 //!   gets the reaction a step later) pumps `O(dt²)` per step into the up-and-down of the contact,
 //!   which the next steps take out again: halving only halves the rate (measured on
 //!   `cloth-spheres` at rest, from t ≈ 6 s: 285, 134, 61, 22 W at dt = 5, 2.5, 1.25 and
-//!   0.625 ms), and the energy falls from second to second with or without the guard. Halving
-//!   it all the way cost 63 solves a step, slower than real time; now it costs 3.
+//!   0.625 ms), and without the guard the energy falls from second to second (6 to 15 s).
+//!   Halving it all the way cost 63 solves a step, slower than real time; now it costs 3 to 5.
 //!
 //! The report counts the whole steps halved (`solver.halved_steps`). A driven (kinematic)
 //! sphere that moves does work on the cloth, so bodies with one are not guarded.
