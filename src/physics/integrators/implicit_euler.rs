@@ -110,10 +110,10 @@ use crate::physics::integrators::{
     MethodParams, PowerScratch, Workspace, fused, power_if, stencil_power,
 };
 use crate::physics::particles::State;
-use crate::physics::stencil::Stencil;
+use crate::physics::stencil::{Kernel, Stencil};
 
 pub(crate) use super::implicit_constraint::Constraint;
-use super::implicit_lattice::{Forces, usable};
+use super::implicit_lattice::{Forces, inside_spheres, usable};
 
 /// At most this many solves per step: the first without contact constraints, each further one
 /// with the particles the previous solve carried into a collider.
@@ -480,12 +480,28 @@ fn step_lattice(
         }
     }
     remember((last_dv, last_dt), (before_dv, before_dt), dv, dt);
-    advance(model, state, dt, dv);
-    // D_{n+1} = D_n + dt P(x_{n+1}, v_{n+1}), when accounting.
-    dissipated.add_power(
+    // D_{n+1} = D_n + dt P(x_{n+1}, v_{n+1}), when accounting: the dampers' and the drag's power
+    // from the update's pass, the colliders' contact forces (a pass of their own) where there
+    // are colliders.
+    let lattice_power = *account && model.colliders.is_empty();
+    let dampers_and_drag = lattice.advance(
+        stencil,
         dt,
-        power_one_part(*account, stencil, model, &state.x, &state.v, power_f),
+        model.drag,
+        lattice_power,
+        &mut state.x,
+        &mut state.v,
     );
+    state.history_valid = false;
+    let power = if lattice_power {
+        Power {
+            dampers_and_drag,
+            contact: 0.0,
+        }
+    } else {
+        power_one_part(*account, stencil, model, &state.x, &state.v, power_f)
+    };
+    dissipated.add_power(dt, power);
     1
 }
 
@@ -521,22 +537,23 @@ fn add_contacts(
     // Deeper than this (m) counts as inside: rounding of a landing exactly on the surface is not.
     const DEPTH: f64 = 1e-12;
     let ends = sphere_ends(model, state, dt);
-    // Without colliders, only a point inside the box around the spheres can be inside one.
-    let (low, high) = ends.iter().fold(
-        (DVec3::INFINITY, DVec3::NEG_INFINITY),
-        |(low, high), &(center, radius)| (low.min(center - radius), high.max(center + radius)),
-    );
-    let boxed = model.colliders.is_empty();
+    // Without colliders, only the particles that the test of `nearest_contact` finds inside a
+    // sphere, taken eight at a time first.
+    let mut inside = Vec::new();
+    let candidates: &mut dyn Iterator<Item = usize> = if model.colliders.is_empty() {
+        let kernel = model.stencil().map_or_else(Kernel::best, Stencil::kernel);
+        inside_spheres(kernel, &state.x, &state.v, dv, dt, &ends, &mut inside);
+        &mut inside.iter().copied()
+    } else {
+        &mut (0..state.x.len())
+    };
     let mut changed = false;
-    for i in 0..state.x.len() {
+    for i in candidates {
         if model.inv_mass[i] == 0.0 {
             continue;
         }
         let v = state.v[i] + dv[i];
         let x = state.x[i] + dt * v;
-        if boxed && (x.cmplt(low).any() || x.cmpgt(high).any()) {
-            continue;
-        }
         let Some((contact, sphere)) =
             nearest_contact(model, &ends, x, true).filter(|(c, _)| c.phi < -DEPTH)
         else {

@@ -64,7 +64,7 @@ use glam::DVec3;
 use super::implicit_constraint::Constraint;
 #[cfg(target_arch = "x86_64")]
 use crate::physics::lanes::{Avx2, Avx512};
-use crate::physics::lanes::{LANES, Lanes, Plain, lanes};
+use crate::physics::lanes::{LANES, Lanes, Plain, from_lanes, lanes, to_lanes};
 use crate::physics::stencil::{Kernel, Stencil};
 
 /// Whether the lattice system can hold `stencil`'s springs: every group's stiffness and
@@ -97,6 +97,17 @@ pub(crate) enum Forces<'a> {
     /// Weight `m g` and drag `-c v` with `gravity` (m/s²), and the springs' forces summed by the
     /// assembly: `f_a = (k (L - L0) + k_d (v_b - v_a)·n) n`, `f_b = -f_a`.
     Springs { gravity: DVec3 },
+}
+
+/// What the assembly reads per particle: masses (kg), inverse masses (1/kg; zero when pinned),
+/// the drag (N·s/m), positions (m), velocities (m/s) and where `f_n` comes from.
+struct Particles<'a> {
+    mass: &'a [f64],
+    inv_mass: &'a [f64],
+    drag: f64,
+    x: &'a [DVec3],
+    v: &'a [DVec3],
+    forces: Forces<'a>,
 }
 
 /// Three components as structure of arrays, indexed `front + particle`.
@@ -186,32 +197,28 @@ impl Lattice {
     ) {
         self.resize(stencil);
         self.kernel = Some(stencil.kernel());
-        let (n, front) = (self.n, self.front);
-        for i in 0..n {
-            let k = front + i;
-            self.mass[k] = mass[i] + dt * drag;
-            self.free[k] = if inv_mass[i] != 0.0 { 1.0 } else { 0.0 };
-            for c in 0..3 {
-                self.x[c][k] = x[i][c];
-                self.v[c][k] = v[i][c];
-                // b = dt f_n (then + dt² ∂f/∂x v_n): f_n given, or weight and drag here and
-                // the springs' forces with the blocks.
-                self.rhs[c][k] = dt
-                    * match forces {
-                        Forces::Given(f) => f[i][c],
-                        Forces::Springs { gravity } => mass[i] * gravity[c] - drag * v[i][c],
-                    };
-            }
-        }
-        let springs = matches!(forces, Forces::Springs { .. });
+        let n = self.n;
+        assert!(mass.len() == n && inv_mass.len() == n && x.len() == n && v.len() == n);
+        let forces = match forces {
+            Forces::Given(f) => Forces::Given(&f[..n]),
+            springs => springs,
+        };
+        let particles = Particles {
+            mass,
+            inv_mass,
+            drag,
+            x,
+            v,
+            forces,
+        };
         match stencil.kernel() {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: the stencil chooses AVX-512 only on a CPU that has it.
-            Kernel::Avx512 => unsafe { assemble_avx512(self, stencil, dt, springs) },
+            Kernel::Avx512 => unsafe { assemble_avx512(self, stencil, dt, &particles) },
             #[cfg(target_arch = "x86_64")]
             // SAFETY: the stencil chooses AVX2 only on a CPU that has it.
-            Kernel::Avx2 => unsafe { assemble_avx2(self, stencil, dt, springs) },
-            _ => assemble_body::<Plain>(self, stencil, dt, springs),
+            Kernel::Avx2 => unsafe { assemble_avx2(self, stencil, dt, &particles) },
+            _ => assemble_body::<Plain>(self, stencil, dt, &particles),
         }
     }
 
@@ -268,6 +275,37 @@ impl Lattice {
             // SAFETY: the stencil chooses AVX2 only on a CPU that has it.
             Kernel::Avx2 => unsafe { elastic_avx2(self, stencil) },
             _ => elastic_body::<Plain>(self, stencil),
+        }
+    }
+
+    /// The step's update from the solved `Δv` (m/s) on the free particles, into the state `x`
+    /// (m) and `v` (m/s) and into the lattice's position and velocity arrays (as
+    /// `implicit_euler::advance` writes it, the same numbers):
+    ///
+    /// ```text
+    /// v_{n+1} = v_n + Δv,   x_{n+1} = x_n + dt v_{n+1}
+    /// ```
+    /// With `power`, returns the power of the springs' dampers and of the drag `c` (N·s/m) at
+    /// the new state (W), as [`crate::physics::energy::dissipated_power`] writes it, summed by
+    /// offset group (equal to it up to rounding); else zero.
+    pub(crate) fn advance(
+        &mut self,
+        stencil: &Stencil,
+        dt: f64,
+        drag: f64,
+        power: bool,
+        x: &mut [DVec3],
+        v: &mut [DVec3],
+    ) -> f64 {
+        assert!(x.len() == self.n && v.len() == self.n);
+        match self.kernel {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `assemble` recorded the stencil's kernel, chosen for this CPU.
+            Some(Kernel::Avx512) => unsafe { advance_avx512(self, stencil, dt, drag, power, x, v) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as above.
+            Some(Kernel::Avx2) => unsafe { advance_avx2(self, stencil, dt, drag, power, x, v) },
+            _ => advance_body::<Plain>(self, stencil, dt, drag, power, x, v),
         }
     }
 
@@ -388,10 +426,86 @@ fn put_triple<V: Lanes>(a: &mut Soa, i: usize, value: [V; 3]) {
     }
 }
 
-/// The assembly: the springs' blocks and `dt² K_s (v_b - v_a)` group by group, then the
-/// diagonal blocks (inverted) and the right-hand side gathered particle by particle.
+/// The particles into the lattice's arrays, eight at a time: `m + dt c`, whether free, `x`, `v`
+/// and `b = dt f_n` (then `+ dt² ∂f/∂x v_n` from the blocks): `f_n` given, or weight and drag
+/// here (and the springs' forces with the blocks). Past the last particle every lane is zero.
 #[inline(always)]
-fn assemble_body<V: Lanes>(sys: &mut Lattice, stencil: &Stencil, dt: f64, springs: bool) {
+fn load_particles<V: Lanes>(sys: &mut Lattice, dt: f64, particles: &Particles<'_>) {
+    let Particles {
+        mass,
+        inv_mass,
+        drag,
+        x,
+        v,
+        forces,
+    } = *particles;
+    let (n, front) = (sys.n, sys.front);
+    let (dt_v, drag_v, zero) = (V::splat(dt), V::splat(drag), V::zero());
+    for q in (0..n).step_by(LANES) {
+        let i = front + q;
+        let live = if n - q >= LANES {
+            u8::MAX
+        } else {
+            (1u8 << (n - q)) - 1
+        };
+        let m = scalar_chunk::<V>(mass, q);
+        put(&mut sys.mass, i, m.add(dt_v.mul(drag_v)).select(live));
+        let w = scalar_chunk::<V>(inv_mass, q);
+        let free = V::splat(1.0).select(zero.less_than(w) | w.less_than(zero));
+        put(&mut sys.free, i, free);
+        let (xq, vq) = (vector_chunk::<V>(x, q), vector_chunk::<V>(v, q));
+        // Written out, not with `from_fn`: its closure would not be inlined (nor the AVX-512
+        // operations inside it).
+        let b = match forces {
+            Forces::Given(f) => vector_chunk::<V>(f, q),
+            Forces::Springs { gravity } => [
+                m.mul(V::splat(gravity.x)).sub(drag_v.mul(vq[0])),
+                m.mul(V::splat(gravity.y)).sub(drag_v.mul(vq[1])),
+                m.mul(V::splat(gravity.z)).sub(drag_v.mul(vq[2])),
+            ],
+        };
+        for c in 0..3 {
+            put(&mut sys.x[c], i, xq[c]);
+            put(&mut sys.v[c], i, vq[c]);
+            put(&mut sys.rhs[c], i, dt_v.mul(b[c]));
+        }
+    }
+}
+
+/// `a[q..q + LANES]` as lanes, zero past the end of `a`.
+#[inline(always)]
+fn scalar_chunk<V: Lanes>(a: &[f64], q: usize) -> V {
+    match a.get(q..q + LANES) {
+        Some(chunk) => V::load(chunk.try_into().expect("LANES values")),
+        None => {
+            let mut values = [0.0; LANES];
+            values[..a.len() - q].copy_from_slice(&a[q..]);
+            V::load(&values)
+        }
+    }
+}
+
+/// The vectors `a[q..q + LANES]` as lanes `[x, y, z]`, zero past the end of `a`.
+#[inline(always)]
+fn vector_chunk<V: Lanes>(a: &[DVec3], q: usize) -> [V; 3] {
+    match a.get(q..q + LANES) {
+        Some(chunk) => V::load_vectors(chunk.try_into().expect("LANES vectors")),
+        None => to_lanes::<V>(&a[q..]),
+    }
+}
+
+/// The assembly: the particles' arrays, the springs' blocks and `dt² K_s (v_b - v_a)` group by
+/// group, then the diagonal blocks (inverted) and the right-hand side gathered particle by
+/// particle.
+#[inline(always)]
+fn assemble_body<V: Lanes>(
+    sys: &mut Lattice,
+    stencil: &Stencil,
+    dt: f64,
+    particles: &Particles<'_>,
+) {
+    load_particles::<V>(sys, dt, particles);
+    let springs = matches!(particles.forces, Forces::Springs { .. });
     let (front, len) = (sys.front, sys.len);
     let dt2 = dt * dt;
     let (one, zero) = (V::splat(1.0), V::zero());
@@ -561,6 +675,144 @@ fn elastic_body<V: Lanes>(sys: &Lattice, stencil: &Stencil) -> f64 {
         total += 0.5 * g.stiffness * sum_lanes(sum);
     }
     total
+}
+
+/// The particles that `x + dt (v + Δv)` puts inside one of the spheres `ends` (centre in m,
+/// radius in m), in order, into `out`: eight particles at a time, with the same arithmetic as
+/// the contact search's test (`|x̃ - c|² < r²`, in `implicit_euler::nearest_contact`), so that
+/// the search needs to look only at these. `x` (m), `v` and `dv` (m/s) have one entry per
+/// particle.
+pub(crate) fn inside_spheres(
+    kernel: Kernel,
+    x: &[DVec3],
+    v: &[DVec3],
+    dv: &[DVec3],
+    dt: f64,
+    ends: &[(DVec3, f64)],
+    out: &mut Vec<usize>,
+) {
+    assert!(v.len() == x.len() && dv.len() == x.len());
+    out.clear();
+    match kernel {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: a stencil's kernel is chosen for this CPU.
+        Kernel::Avx512 => unsafe { inside_avx512(x, v, dv, dt, ends, out) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as above.
+        Kernel::Avx2 => unsafe { inside_avx2(x, v, dv, dt, ends, out) },
+        _ => inside_body::<Plain>(x, v, dv, dt, ends, out),
+    }
+}
+
+#[inline(always)]
+fn inside_body<V: Lanes>(
+    x: &[DVec3],
+    v: &[DVec3],
+    dv: &[DVec3],
+    dt: f64,
+    ends: &[(DVec3, f64)],
+    out: &mut Vec<usize>,
+) {
+    let dt_v = V::splat(dt);
+    for q in (0..x.len()).step_by(LANES) {
+        let (xq, vq, dq) = (
+            vector_chunk::<V>(x, q),
+            vector_chunk::<V>(v, q),
+            vector_chunk::<V>(dv, q),
+        );
+        let end = [
+            xq[0].add(dt_v.mul(vq[0].add(dq[0]))),
+            xq[1].add(dt_v.mul(vq[1].add(dq[1]))),
+            xq[2].add(dt_v.mul(vq[2].add(dq[2]))),
+        ];
+        let mut inside = 0u8;
+        for &(center, radius) in ends {
+            let d = [
+                end[0].sub(V::splat(center.x)),
+                end[1].sub(V::splat(center.y)),
+                end[2].sub(V::splat(center.z)),
+            ];
+            let distance2 = d[0].mul(d[0]).add(d[1].mul(d[1])).add(d[2].mul(d[2]));
+            inside |= distance2.less_than(V::splat(radius * radius));
+        }
+        let live = if x.len() - q >= LANES {
+            u8::MAX
+        } else {
+            (1u8 << (x.len() - q)) - 1
+        };
+        let mut bits = inside & live;
+        while bits != 0 {
+            out.push(q + bits.trailing_zeros() as usize);
+            bits &= bits - 1;
+        }
+    }
+}
+
+/// [`Lattice::advance`]: the update eight particles at a time, then the dissipated power from
+/// the new arrays.
+#[inline(always)]
+fn advance_body<V: Lanes>(
+    sys: &mut Lattice,
+    stencil: &Stencil,
+    dt: f64,
+    drag: f64,
+    power: bool,
+    x: &mut [DVec3],
+    v: &mut [DVec3],
+) -> f64 {
+    let (n, front) = (sys.n, sys.front);
+    let dt_v = V::splat(dt);
+    let mut drag_sum = V::zero();
+    for q in (0..n).step_by(LANES) {
+        let i = front + q;
+        let free = V::zero().less_than(at::<V>(&sys.free, i));
+        let (dv, mut vq, mut xq) = (
+            triple::<V>(&sys.dv, i),
+            triple::<V>(&sys.v, i),
+            triple::<V>(&sys.x, i),
+        );
+        for c in 0..3 {
+            vq[c] = vq[c].add(dv[c]).blend(vq[c], free);
+            xq[c] = xq[c].add(dt_v.mul(vq[c])).blend(xq[c], free);
+        }
+        put_triple(&mut sys.v, i, vq);
+        put_triple(&mut sys.x, i, xq);
+        let squared = vq[0].mul(vq[0]).add(vq[1].mul(vq[1])).add(vq[2].mul(vq[2]));
+        drag_sum = drag_sum.add(squared.select(free));
+        match (x.get_mut(q..q + LANES), v.get_mut(q..q + LANES)) {
+            (Some(x), Some(v)) => {
+                V::store_vectors(xq, x.try_into().expect("LANES vectors"));
+                V::store_vectors(vq, v.try_into().expect("LANES vectors"));
+            }
+            _ => {
+                from_lanes(xq, &mut x[q..]);
+                from_lanes(vq, &mut v[q..]);
+            }
+        }
+    }
+    if !power {
+        return 0.0;
+    }
+    // Σ k_d ((v_b - v_a)·n)², n = d / L, over the springs of nonzero length.
+    let mut dampers = 0.0;
+    for g in stencil.group_views().filter(|g| g.damping != 0.0) {
+        let mut sum = V::zero();
+        for p in (0..g.starts).step_by(LANES) {
+            let (i, j) = (front + p, front + p + g.delta);
+            let (d, length) = spring_vector::<V>(&sys.x, i, j);
+            let (vi, vj) = (triple::<V>(&sys.v, i), triple::<V>(&sys.v, j));
+            let along = vj[0]
+                .sub(vi[0])
+                .mul(d[0])
+                .add(vj[1].sub(vi[1]).mul(d[1]))
+                .add(vj[2].sub(vi[2]).mul(d[2]));
+            let keep = g.present[p / LANES] & V::zero().less_than(length);
+            let rate = along.div(length).select(keep);
+            sum = sum.add(rate.mul(rate));
+        }
+        dampers += g.damping * sum_lanes(sum);
+    }
+    dampers + drag * sum_lanes(drag_sum)
 }
 
 /// `out = A p` (see the module docs), zero at pinned particles and in the margins; returns
@@ -925,14 +1177,14 @@ fn solve_body<V: Lanes>(
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn assemble_avx512(sys: &mut Lattice, stencil: &Stencil, dt: f64, springs: bool) {
-    assemble_body::<Avx512>(sys, stencil, dt, springs);
+fn assemble_avx512(sys: &mut Lattice, stencil: &Stencil, dt: f64, particles: &Particles<'_>) {
+    assemble_body::<Avx512>(sys, stencil, dt, particles);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn assemble_avx2(sys: &mut Lattice, stencil: &Stencil, dt: f64, springs: bool) {
-    assemble_body::<Avx2>(sys, stencil, dt, springs);
+fn assemble_avx2(sys: &mut Lattice, stencil: &Stencil, dt: f64, particles: &Particles<'_>) {
+    assemble_body::<Avx2>(sys, stencil, dt, particles);
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -961,6 +1213,60 @@ fn solve_avx2(
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
+fn inside_avx512(
+    x: &[DVec3],
+    v: &[DVec3],
+    dv: &[DVec3],
+    dt: f64,
+    ends: &[(DVec3, f64)],
+    out: &mut Vec<usize>,
+) {
+    inside_body::<Avx512>(x, v, dv, dt, ends, out);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn inside_avx2(
+    x: &[DVec3],
+    v: &[DVec3],
+    dv: &[DVec3],
+    dt: f64,
+    ends: &[(DVec3, f64)],
+    out: &mut Vec<usize>,
+) {
+    inside_body::<Avx2>(x, v, dv, dt, ends, out);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn advance_avx512(
+    sys: &mut Lattice,
+    stencil: &Stencil,
+    dt: f64,
+    drag: f64,
+    power: bool,
+    x: &mut [DVec3],
+    v: &mut [DVec3],
+) -> f64 {
+    advance_body::<Avx512>(sys, stencil, dt, drag, power, x, v)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn advance_avx2(
+    sys: &mut Lattice,
+    stencil: &Stencil,
+    dt: f64,
+    drag: f64,
+    power: bool,
+    x: &mut [DVec3],
+    v: &mut [DVec3],
+) -> f64 {
+    advance_body::<Avx2>(sys, stencil, dt, drag, power, x, v)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
 fn elastic_avx512(sys: &Lattice, stencil: &Stencil) -> f64 {
     elastic_body::<Avx512>(sys, stencil)
 }
@@ -976,6 +1282,9 @@ mod tests {
     use glam::DVec3;
 
     use super::*;
+    use crate::physics::energy::dissipated_power;
+    use crate::physics::forces::Model;
+    use crate::physics::particles::State;
     use crate::random::XorShift64Star;
     use crate::scene::builder::Builder;
     use crate::scene::lattice::{ClothSpec, cloth};
@@ -1023,8 +1332,8 @@ mod tests {
         sum_lanes(p_out)
     }
 
-    /// The 2022 course cloth (25 × 25, corners pinned), shaken, assembled for a step of 5 ms.
-    fn assembled() -> (Lattice, Stencil) {
+    /// The 2022 course cloth (25 × 25, corners pinned, drag 0.3 N·s/m), shaken.
+    fn shaken_cloth() -> (Model, State) {
         let mut b = Builder::new();
         cloth(&mut b, &ClothSpec::course_2022());
         let (model, mut state) = b.build(DVec3::new(0.0, -9.8, 0.0), 0.3);
@@ -1034,6 +1343,12 @@ mod tests {
             *x += 0.02 * DVec3::new(noise(), noise(), noise());
             *v = DVec3::new(noise(), noise(), noise());
         }
+        (model, state)
+    }
+
+    /// [`shaken_cloth`] assembled for a step of 5 ms.
+    fn assembled() -> (Lattice, Stencil) {
+        let (model, state) = shaken_cloth();
         let stencil = model.stencil().expect("a lattice").clone();
         let mut sys = Lattice::default();
         let forces = Forces::Springs {
@@ -1123,6 +1438,151 @@ mod tests {
                 measured <= 2e-10,
                 "{kernel:?}: |A Δv - b| / |b| = {measured:e}"
             );
+        }
+    }
+
+    fn available() -> impl Iterator<Item = Kernel> {
+        Kernel::ALL.into_iter().filter(|k| k.is_available())
+    }
+
+    #[test]
+    fn the_assembly_copies_the_particles_and_leaves_the_margins_zero_on_every_kernel() {
+        let (model, state) = shaken_cloth();
+        let dt = 0.005;
+        for kernel in available() {
+            let stencil = model
+                .stencil()
+                .expect("a lattice")
+                .clone()
+                .with_kernel(kernel);
+            let mut sys = Lattice::default();
+            let forces = Forces::Springs {
+                gravity: model.gravity,
+            };
+            sys.assemble(
+                &stencil,
+                &model.mass,
+                &model.inv_mass,
+                model.drag,
+                dt,
+                &state.x,
+                &state.v,
+                forces,
+            );
+            let n = state.x.len();
+            assert_eq!(
+                n % LANES,
+                1,
+                "the last chunk has one particle and seven empty lanes"
+            );
+            for k in 0..sys.len {
+                let Some(i) = k.checked_sub(sys.front).filter(|&i| i < n) else {
+                    for a in [&sys.mass, &sys.free, &sys.x[0], &sys.v[2], &sys.rhs[1]] {
+                        assert_eq!(a[k], 0.0, "{kernel:?}: margin {k}");
+                    }
+                    continue;
+                };
+                let free = if model.inv_mass[i] != 0.0 { 1.0 } else { 0.0 };
+                assert!(same_bits(sys.mass[k], model.mass[i] + dt * model.drag));
+                assert!(same_bits(sys.free[k], free), "{kernel:?}: particle {i}");
+                for c in 0..3 {
+                    assert!(same_bits(sys.x[c][k], state.x[i][c]));
+                    assert!(same_bits(sys.v[c][k], state.v[i][c]));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_update_is_the_textbook_update_and_its_power_the_spring_lists_on_every_kernel() {
+        let (model, state) = shaken_cloth();
+        let dt = 0.005;
+        for kernel in available() {
+            let stencil = model
+                .stencil()
+                .expect("a lattice")
+                .clone()
+                .with_kernel(kernel);
+            let mut sys = Lattice::default();
+            let forces = Forces::Springs {
+                gravity: model.gravity,
+            };
+            sys.assemble(
+                &stencil,
+                &model.mass,
+                &model.inv_mass,
+                model.drag,
+                dt,
+                &state.x,
+                &state.v,
+                forces,
+            );
+            // A Δv everywhere, the pinned corners too: the update must leave those alone.
+            sys.dv = field(&sys, 9);
+            let (mut x, mut v) = (state.x.clone(), state.v.clone());
+            let power = sys.advance(&stencil, dt, model.drag, true, &mut x, &mut v);
+            let mut expected = state.clone();
+            for i in 0..x.len() {
+                if model.inv_mass[i] != 0.0 {
+                    expected.v[i] += sys.dv(i);
+                    expected.x[i] += dt * expected.v[i];
+                }
+                assert!(
+                    x[i].to_array()
+                        .iter()
+                        .zip(expected.x[i].to_array())
+                        .all(|(a, b)| same_bits(*a, b))
+                );
+                assert!(
+                    v[i].to_array()
+                        .iter()
+                        .zip(expected.v[i].to_array())
+                        .all(|(a, b)| same_bits(*a, b))
+                );
+            }
+            assert_eq!(x[0], state.x[0], "a pinned corner moved");
+            let mut scratch = vec![DVec3::ZERO; x.len()];
+            let textbook = dissipated_power(&model, &x, &v, &mut scratch).dampers_and_drag;
+            assert!(
+                (power - textbook).abs() <= 1e-12 * textbook && textbook > 0.0,
+                "{kernel:?}: {power} W vs {textbook} W"
+            );
+            let without = sys.advance(&stencil, dt, model.drag, false, &mut x, &mut v);
+            assert_eq!(without, 0.0);
+        }
+    }
+
+    #[test]
+    fn the_particles_inside_the_spheres_are_the_ones_the_scalar_test_finds_on_every_kernel() {
+        let (model, state) = shaken_cloth();
+        let dt = 0.005;
+        let mut rng = XorShift64Star::new(3);
+        let dv: Vec<DVec3> = (0..state.x.len())
+            .map(|_| DVec3::new(rng.symmetric(), rng.symmetric(), rng.symmetric()))
+            .collect();
+        // Four spheres of the course's size on the cloth, one with its centre on a particle's end.
+        let end = |i: usize| state.x[i] + dt * (state.v[i] + dv[i]);
+        let ends = [
+            (end(312), 0.5),
+            (DVec3::new(-1.0, 0.1, -1.0), 0.5),
+            (DVec3::new(1.2, -0.2, 0.9), 0.3),
+            (DVec3::new(0.0, 5.0, 0.0), 0.5),
+        ];
+        let expected: Vec<usize> = (0..state.x.len())
+            .filter(|&i| {
+                ends.iter()
+                    .any(|&(c, r)| (end(i) - c).length_squared() < r * r)
+            })
+            .collect();
+        assert!(
+            expected.len() > 20 && expected.len() < 300,
+            "{}",
+            expected.len()
+        );
+        for kernel in available() {
+            let mut found = vec![7];
+            inside_spheres(kernel, &state.x, &state.v, &dv, dt, &ends, &mut found);
+            assert_eq!(found, expected, "{kernel:?}");
         }
     }
 }
