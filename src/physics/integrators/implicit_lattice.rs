@@ -1554,7 +1554,7 @@ mod tests {
 
     #[test]
     fn the_particles_inside_the_spheres_are_the_ones_the_scalar_test_finds_on_every_kernel() {
-        let (model, state) = shaken_cloth();
+        let (_, state) = shaken_cloth();
         let dt = 0.005;
         let mut rng = XorShift64Star::new(3);
         let dv: Vec<DVec3> = (0..state.x.len())
