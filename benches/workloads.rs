@@ -2,6 +2,8 @@
 //! workload's contact projection. `springlab bench` times whole runs of N steps and checks the
 //! checksums; this measures the per-step cost with criterion's statistics.
 //!
+//! Also the spring kernels' ceiling on data in the first-level cache (`kernel_ceiling`).
+//!
 //! Run with `cargo bench --bench workloads`.
 
 use std::hint::black_box;
@@ -45,5 +47,20 @@ fn hundred_steps(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, one_step, hundred_steps);
+/// The ceiling of the streaming loop (`src/physics/stencil/ceiling.rs`): a thousand chunks of
+/// eight springs with each kernel this CPU has, operands in the first-level cache. 8 000 springs
+/// over the time per iteration is the kernel's springs per second on one thread.
+fn kernel_ceiling(c: &mut Criterion) {
+    use springlab::physics::stencil::{Kernel, ceiling::Rope};
+    let mut group = c.benchmark_group("spring kernel, 8000 springs");
+    let rope = Rope::default();
+    for kernel in Kernel::ALL.into_iter().filter(|k| k.is_available()) {
+        group.bench_function(format!("{kernel:?}"), |b| {
+            b.iter(|| black_box(rope.evaluate(kernel, 1000)));
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, one_step, hundred_steps, kernel_ceiling);
 criterion_main!(benches);

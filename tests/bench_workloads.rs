@@ -261,6 +261,46 @@ fn cli_json_has_the_design_shape() {
         out.stderr.is_empty(),
         "no progress when stderr is not a terminal"
     );
+    // The machine's ceiling: the fastest kernel here, per thread, on every thread of the pool.
+    let c = &v["ceiling"];
+    let best = springlab::physics::stencil::Kernel::best();
+    assert_eq!(c["kernel"], format!("{best:?}"));
+    let (per_thread, threads) = (
+        c["per_thread"].as_f64().expect("per_thread"),
+        c["threads"].as_u64().expect("threads"),
+    );
+    assert!(per_thread > 0.0 && threads >= 1, "{c}");
+    assert_eq!(
+        c["springs_per_second"].as_f64(),
+        Some(per_thread * threads as f64)
+    );
+}
+
+#[test]
+fn cli_table_states_each_workloads_share_of_the_ceiling() {
+    let out = springlab(&["bench", "jelly-rk4", "--repeats", "1"]);
+    assert!(out.status.success());
+    let table = String::from_utf8_lossy(&out.stdout);
+    let row = table
+        .lines()
+        .find(|l| l.starts_with("jelly-rk4"))
+        .expect("a row");
+    let last = table.lines().last().expect("the ceiling line");
+    // "… = 3.8e9 springs/s": the ceiling of the whole machine.
+    let ceiling: f64 = last
+        .rsplit(" = ")
+        .next()
+        .and_then(|t| t.trim_end_matches(" springs/s").parse().ok())
+        .expect("the ceiling");
+    // The row: springs·steps/s, then the share in per cent; RK4 evaluates the springs 4 times
+    // a step.
+    let fields: Vec<&str> = row.split_whitespace().collect();
+    let spring_steps: f64 = fields[6].parse().expect("springs·steps/s");
+    let share: f64 = fields[7].trim_end_matches('%').parse().expect("a share");
+    assert!(
+        (share - 100.0 * 4.0 * spring_steps / ceiling).abs() <= 0.51,
+        "{row}\n{last}"
+    );
 }
 
 #[test]

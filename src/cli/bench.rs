@@ -9,6 +9,8 @@ use serde::Serialize;
 use crate::bench::{self, BenchResult, Workload};
 use crate::budget;
 use crate::physics::Method;
+use crate::physics::pool::Pool;
+use crate::physics::stencil::{Kernel, ceiling};
 
 /// Options of `springlab bench`.
 #[derive(Debug, Args)]
@@ -59,6 +61,43 @@ pub fn estimate(workloads: &[Workload], repeats: u32, seconds: f64) -> budget::E
 #[derive(Serialize)]
 struct Report<'a> {
     workloads: &'a [BenchResult],
+    ceiling: &'a Ceiling,
+}
+
+/// The machine's ceiling for the springs (`physics::stencil::ceiling`): what the fastest spring
+/// kernel this CPU has evaluates on data in the first-level cache, on every thread of the pool.
+#[derive(Debug, Serialize)]
+pub struct Ceiling {
+    /// The kernel (`Portable`, `Avx2` or `Avx512`).
+    pub kernel: String,
+    /// Spring evaluations per second on one thread (1/s).
+    pub per_thread: f64,
+    /// Threads of the worker pool (`SPRINGLAB_THREADS` sets it).
+    pub threads: usize,
+    /// `per_thread · threads` (1/s).
+    pub springs_per_second: f64,
+}
+
+impl Ceiling {
+    /// Measures it (about 15 ms).
+    #[must_use]
+    pub fn measure() -> Ceiling {
+        let kernel = Kernel::best();
+        let per_thread = ceiling::ceiling(kernel);
+        let threads = Pool::global().threads();
+        Ceiling {
+            kernel: format!("{kernel:?}"),
+            per_thread,
+            threads,
+            springs_per_second: per_thread * threads as f64,
+        }
+    }
+
+    /// The fraction of the ceiling that `r`'s spring evaluations per second reach.
+    #[must_use]
+    pub fn fraction(&self, r: &BenchResult) -> f64 {
+        r.spring_steps_per_second * r.force_evals_per_step as f64 / self.springs_per_second
+    }
 }
 
 /// The workloads named on the command line, or all of them.
@@ -127,17 +166,19 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         }
     }
     progress.finish();
+    let ceiling = Ceiling::measure();
     let mut out = std::io::stdout().lock();
     if args.json {
         serde_json::to_writer(
             &mut out,
             &Report {
                 workloads: &results,
+                ceiling: &ceiling,
             },
         )?;
         writeln!(out)?;
     } else {
-        print_table(&mut out, &results)?;
+        print_table(&mut out, &results, &ceiling)?;
     }
     out.flush()?;
     let bad: Vec<&str> = results
@@ -159,10 +200,14 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
 ///
 /// # Errors
 /// Only when `out` cannot be written.
-pub fn print_table(out: &mut impl Write, results: &[BenchResult]) -> std::io::Result<()> {
+pub fn print_table(
+    out: &mut impl Write,
+    results: &[BenchResult],
+    ceiling: &Ceiling,
+) -> std::io::Result<()> {
     writeln!(
         out,
-        "{:<12} {:<20} {:>9} {:>9} {:>7} {:>11} {:>15}  {:<44} {:>17}  checksum",
+        "{:<12} {:<20} {:>9} {:>9} {:>7} {:>11} {:>15} {:>7}  {:<44} {:>17}  checksum",
         "workload",
         "method",
         "particles",
@@ -170,6 +215,7 @@ pub fn print_table(out: &mut impl Write, results: &[BenchResult]) -> std::io::Re
         "steps",
         "steps/s",
         "springs·steps/s",
+        "ceiling",
         "centroid (m)",
         "energy (J)"
     )?;
@@ -190,7 +236,7 @@ pub fn print_table(out: &mut impl Write, results: &[BenchResult]) -> std::io::Re
         };
         writeln!(
             out,
-            "{:<12} {:<20} {:>9} {:>9} {:>7} {:>11.0} {:>15.3e}  {:<44} {:>17.10}  {}",
+            "{:<12} {:<20} {:>9} {:>9} {:>7} {:>11.0} {:>15.3e} {:>6.0}%  {:<44} {:>17.10}  {}",
             r.workload.name(),
             r.method.name(),
             r.particles,
@@ -198,6 +244,7 @@ pub fn print_table(out: &mut impl Write, results: &[BenchResult]) -> std::io::Re
             r.steps,
             r.steps_per_second,
             r.spring_steps_per_second,
+            100.0 * ceiling.fraction(r),
             centroid,
             r.energy,
             ok
@@ -209,5 +256,12 @@ pub fn print_table(out: &mut impl Write, results: &[BenchResult]) -> std::io::Re
         "median of {repeats} run(s) of N steps each; checksum: centroid and energy after N steps \
          vs the C++ f64 reference (relative tolerance {:e}; in brackets the largest deviation)",
         bench::REL_TOL
+    )?;
+    writeln!(
+        out,
+        "ceiling: springs·steps/s times the force evaluations per step, against the {} spring \
+         kernel on data in the first-level cache: {:.3e} springs/s per thread × {} thread(s) = \
+         {:.3e} springs/s",
+        ceiling.kernel, ceiling.per_thread, ceiling.threads, ceiling.springs_per_second
     )
 }

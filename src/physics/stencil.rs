@@ -98,6 +98,7 @@
 //! Square Root", Purdue University technical report, 2003 (refining an estimate of `1/√a`);
 //! `docs/workloads.md` (the peer benchmark's lattices and their spring order).
 
+pub mod ceiling;
 mod contacts;
 mod kernels;
 mod passes;
