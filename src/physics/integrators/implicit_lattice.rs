@@ -1175,107 +1175,76 @@ fn solve_body<V: Lanes>(
     outcome
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn assemble_avx512(sys: &mut Lattice, stencil: &Stencil, dt: f64, particles: &Particles<'_>) {
-    assemble_body::<Avx512>(sys, stencil, dt, particles);
+/// The AVX-512 and AVX2 instances of a body generic over [`Lanes`], each compiled with its
+/// target feature so that the inlined body runs on those registers. The callers run them only
+/// where the stencil's kernel says the CPU has the feature.
+macro_rules! instances {
+    ($avx512:ident, $avx2:ident, $body:ident, ($($arg:ident: $ty:ty),*) -> $ret:ty) => {
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f")]
+        fn $avx512($($arg: $ty),*) -> $ret {
+            $body::<Avx512>($($arg),*)
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        fn $avx2($($arg: $ty),*) -> $ret {
+            $body::<Avx2>($($arg),*)
+        }
+    };
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn assemble_avx2(sys: &mut Lattice, stencil: &Stencil, dt: f64, particles: &Particles<'_>) {
-    assemble_body::<Avx2>(sys, stencil, dt, particles);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn solve_avx512(
-    sys: &mut Lattice,
-    constraints: &[Constraint],
-    tolerance: f64,
-    max_iterations: u32,
-    warm: bool,
-) -> (u32, f64, bool) {
-    solve_body::<Avx512>(sys, constraints, tolerance, max_iterations, warm)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn solve_avx2(
-    sys: &mut Lattice,
-    constraints: &[Constraint],
-    tolerance: f64,
-    max_iterations: u32,
-    warm: bool,
-) -> (u32, f64, bool) {
-    solve_body::<Avx2>(sys, constraints, tolerance, max_iterations, warm)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn inside_avx512(
-    x: &[DVec3],
-    v: &[DVec3],
-    dv: &[DVec3],
-    dt: f64,
-    ends: &[(DVec3, f64)],
-    out: &mut Vec<usize>,
-) {
-    inside_body::<Avx512>(x, v, dv, dt, ends, out);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn inside_avx2(
-    x: &[DVec3],
-    v: &[DVec3],
-    dv: &[DVec3],
-    dt: f64,
-    ends: &[(DVec3, f64)],
-    out: &mut Vec<usize>,
-) {
-    inside_body::<Avx2>(x, v, dv, dt, ends, out);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn advance_avx512(
-    sys: &mut Lattice,
-    stencil: &Stencil,
-    dt: f64,
-    drag: f64,
-    power: bool,
-    x: &mut [DVec3],
-    v: &mut [DVec3],
-) -> f64 {
-    advance_body::<Avx512>(sys, stencil, dt, drag, power, x, v)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn advance_avx2(
-    sys: &mut Lattice,
-    stencil: &Stencil,
-    dt: f64,
-    drag: f64,
-    power: bool,
-    x: &mut [DVec3],
-    v: &mut [DVec3],
-) -> f64 {
-    advance_body::<Avx2>(sys, stencil, dt, drag, power, x, v)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn elastic_avx512(sys: &Lattice, stencil: &Stencil) -> f64 {
-    elastic_body::<Avx512>(sys, stencil)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn elastic_avx2(sys: &Lattice, stencil: &Stencil) -> f64 {
-    elastic_body::<Avx2>(sys, stencil)
-}
+instances!(
+    assemble_avx512,
+    assemble_avx2,
+    assemble_body,
+    (sys: &mut Lattice, stencil: &Stencil, dt: f64, particles: &Particles<'_>) -> ()
+);
+instances!(
+    solve_avx512,
+    solve_avx2,
+    solve_body,
+    (
+        sys: &mut Lattice,
+        constraints: &[Constraint],
+        tolerance: f64,
+        max_iterations: u32,
+        warm: bool
+    ) -> (u32, f64, bool)
+);
+instances!(
+    inside_avx512,
+    inside_avx2,
+    inside_body,
+    (
+        x: &[DVec3],
+        v: &[DVec3],
+        dv: &[DVec3],
+        dt: f64,
+        ends: &[(DVec3, f64)],
+        out: &mut Vec<usize>
+    ) -> ()
+);
+instances!(
+    advance_avx512,
+    advance_avx2,
+    advance_body,
+    (
+        sys: &mut Lattice,
+        stencil: &Stencil,
+        dt: f64,
+        drag: f64,
+        power: bool,
+        x: &mut [DVec3],
+        v: &mut [DVec3]
+    ) -> f64
+);
+instances!(
+    elastic_avx512,
+    elastic_avx2,
+    elastic_body,
+    (sys: &Lattice, stencil: &Stencil) -> f64
+);
 
 #[cfg(test)]
 mod tests {
@@ -1346,10 +1315,18 @@ mod tests {
         (model, state)
     }
 
-    /// [`shaken_cloth`] assembled for a step of 5 ms.
-    fn assembled() -> (Lattice, Stencil) {
+    /// The step of the assembled systems below (s).
+    const DT: f64 = 0.005;
+
+    /// [`shaken_cloth`], its stencil with `kernel`, and the system assembled for a step of
+    /// [`DT`].
+    fn assembled_on(kernel: Kernel) -> (Model, State, Stencil, Lattice) {
         let (model, state) = shaken_cloth();
-        let stencil = model.stencil().expect("a lattice").clone();
+        let stencil = model
+            .stencil()
+            .expect("a lattice")
+            .clone()
+            .with_kernel(kernel);
         let mut sys = Lattice::default();
         let forces = Forces::Springs {
             gravity: model.gravity,
@@ -1359,11 +1336,17 @@ mod tests {
             &model.mass,
             &model.inv_mass,
             model.drag,
-            0.005,
+            DT,
             &state.x,
             &state.v,
             forces,
         );
+        (model, state, stencil, sys)
+    }
+
+    /// [`assembled_on`] the fastest kernel here.
+    fn assembled() -> (Lattice, Stencil) {
+        let (_, _, stencil, sys) = assembled_on(Kernel::best());
         (sys, stencil)
     }
 
@@ -1447,28 +1430,8 @@ mod tests {
 
     #[test]
     fn the_assembly_copies_the_particles_and_leaves_the_margins_zero_on_every_kernel() {
-        let (model, state) = shaken_cloth();
-        let dt = 0.005;
         for kernel in available() {
-            let stencil = model
-                .stencil()
-                .expect("a lattice")
-                .clone()
-                .with_kernel(kernel);
-            let mut sys = Lattice::default();
-            let forces = Forces::Springs {
-                gravity: model.gravity,
-            };
-            sys.assemble(
-                &stencil,
-                &model.mass,
-                &model.inv_mass,
-                model.drag,
-                dt,
-                &state.x,
-                &state.v,
-                forces,
-            );
+            let (model, state, _, sys) = assembled_on(kernel);
             let n = state.x.len();
             assert_eq!(
                 n % LANES,
@@ -1483,7 +1446,7 @@ mod tests {
                     continue;
                 };
                 let free = if model.inv_mass[i] != 0.0 { 1.0 } else { 0.0 };
-                assert!(same_bits(sys.mass[k], model.mass[i] + dt * model.drag));
+                assert!(same_bits(sys.mass[k], model.mass[i] + DT * model.drag));
                 assert!(same_bits(sys.free[k], free), "{kernel:?}: particle {i}");
                 for c in 0..3 {
                     assert!(same_bits(sys.x[c][k], state.x[i][c]));
@@ -1495,28 +1458,9 @@ mod tests {
 
     #[test]
     fn the_update_is_the_textbook_update_and_its_power_the_spring_lists_on_every_kernel() {
-        let (model, state) = shaken_cloth();
-        let dt = 0.005;
+        let dt = DT;
         for kernel in available() {
-            let stencil = model
-                .stencil()
-                .expect("a lattice")
-                .clone()
-                .with_kernel(kernel);
-            let mut sys = Lattice::default();
-            let forces = Forces::Springs {
-                gravity: model.gravity,
-            };
-            sys.assemble(
-                &stencil,
-                &model.mass,
-                &model.inv_mass,
-                model.drag,
-                dt,
-                &state.x,
-                &state.v,
-                forces,
-            );
+            let (model, state, stencil, mut sys) = assembled_on(kernel);
             // A Δv everywhere, the pinned corners too: the update must leave those alone.
             sys.dv = field(&sys, 9);
             let (mut x, mut v) = (state.x.clone(), state.v.clone());
@@ -1555,7 +1499,7 @@ mod tests {
     #[test]
     fn the_particles_inside_the_spheres_are_the_ones_the_scalar_test_finds_on_every_kernel() {
         let (_, state) = shaken_cloth();
-        let dt = 0.005;
+        let dt = DT;
         let mut rng = XorShift64Star::new(3);
         let dv: Vec<DVec3> = (0..state.x.len())
             .map(|_| DVec3::new(rng.symmetric(), rng.symmetric(), rng.symmetric()))
