@@ -292,6 +292,9 @@ pub struct Workspace {
     pub last_solve: SolveStats,
     /// Implicit Euler: the contact constraints of the current step.
     pub(crate) constraints: Vec<implicit_euler::Constraint>,
+    /// Implicit Euler: the particles that a solve's `Δv` carries inside a sphere (the contact
+    /// search's candidates).
+    pub(crate) inside: Vec<usize>,
     /// When true, every step also integrates the dissipated power with the method's own stages
     /// (energy accounting, [`crate::physics::energy::dissipated_power`]); costs about one more
     /// pass over the springs per stage, and one more force evaluation with colliders.

@@ -152,6 +152,51 @@ impl Lanes for Plain {
     }
 }
 
+/// The mask of the first `count` lanes (all of them from `LANES` on): the lanes of a chunk that
+/// hold values when `count` are left.
+#[inline(always)]
+pub(crate) fn first_lanes(count: usize) -> u8 {
+    if count >= LANES {
+        u8::MAX
+    } else {
+        (1u8 << count) - 1
+    }
+}
+
+/// `values[q..q + count]` as lanes, zero past `count`.
+#[inline(always)]
+pub(crate) fn load_padded<V: Lanes>(values: &[f64], q: usize, count: usize) -> V {
+    if count == LANES {
+        V::load(lanes(values, q))
+    } else {
+        // The last chunk of a range that does not end on a multiple of LANES.
+        let mut chunk = [0.0; LANES];
+        chunk[..count].copy_from_slice(&values[q..q + count]);
+        V::load(&chunk)
+    }
+}
+
+/// The first `count` (at most `LANES`) vectors of `vectors` as lanes `[x, y, z]`, zero past
+/// `count`.
+#[inline(always)]
+pub(crate) fn load_chunk<V: Lanes>(vectors: &[DVec3], count: usize) -> [V; 3] {
+    if count == LANES {
+        V::load_vectors(vectors[..LANES].try_into().expect("a chunk"))
+    } else {
+        to_lanes(&vectors[..count])
+    }
+}
+
+/// Writes lanes `[x, y, z]` into the first `count` (at most `LANES`) vectors of `vectors`.
+#[inline(always)]
+pub(crate) fn store_chunk<V: Lanes>(lanes: [V; 3], vectors: &mut [DVec3], count: usize) {
+    if count == LANES {
+        V::store_vectors(lanes, (&mut vectors[..LANES]).try_into().expect("a chunk"));
+    } else {
+        from_lanes(lanes, &mut vectors[..count]);
+    }
+}
+
 /// The components of up to `LANES` vectors as lanes `[x, y, z]` (zero past the end).
 #[inline(always)]
 pub(crate) fn to_lanes<V: Lanes>(vectors: &[DVec3]) -> [V; 3] {

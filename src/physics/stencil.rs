@@ -113,7 +113,7 @@ use glam::DVec3;
 use super::collide::{Collider, ContactParams, contact_force};
 #[cfg(target_arch = "x86_64")]
 use super::lanes::{Avx2, Avx512};
-use super::lanes::{LANES, Lanes, Plain, from_lanes, lanes, to_lanes};
+use super::lanes::{LANES, Lanes, Plain, lanes};
 use super::pool::Pool;
 use super::springs::Spring;
 use kernels::range_portable;

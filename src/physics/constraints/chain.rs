@@ -37,7 +37,7 @@ use glam::DVec3;
 use super::Rod;
 #[cfg(target_arch = "x86_64")]
 use crate::physics::lanes::{Avx2, Avx512};
-use crate::physics::lanes::{LANES, Lanes, Plain, lanes};
+use crate::physics::lanes::{LANES, Lanes, Plain, first_lanes, lanes};
 use crate::physics::stencil::Kernel;
 
 /// The chain in structure-of-arrays form (reused, so steps do not allocate).
@@ -190,11 +190,7 @@ fn colour<V: Lanes>(
         // d = x_b - x_a, L = |d|
         let (dx, dy, dz) = (xb.sub(xa), yb.sub(ya), zb.sub(za));
         let length = dx.mul(dx).add(dy.mul(dy)).add(dz.mul(dz)).sqrt();
-        let wanted = if valid == LANES {
-            u8::MAX
-        } else {
-            (1u8 << valid) - 1
-        };
+        let wanted = first_lanes(valid);
         if V::zero().less_than(length) & wanted != wanted {
             // A rod of zero length (skipped) or NaN: the textbook's code, rod by rod.
             for r in k..k + valid {

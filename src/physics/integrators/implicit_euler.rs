@@ -194,6 +194,7 @@ fn textbook(
         cg,
         last_solve,
         constraints,
+        inside,
         account,
         dissipated,
         power_f,
@@ -250,7 +251,7 @@ fn textbook(
     };
     let contacts = has_contacts(model, state);
     if warm && contacts {
-        start_contacts(model, state, dt, &cg[0], constraints);
+        start_contacts(model, state, dt, &cg[0], constraints, inside);
     } else {
         constraints.clear();
     }
@@ -274,7 +275,7 @@ fn textbook(
             system.apply(dv, ap);
             release_pulling(constraints, |i| ap[i] - system.rhs[i])
         };
-        if !(add_contacts(model, state, dt, dv, constraints) || released) {
+        if !(add_contacts(model, state, dt, dv, constraints, inside) || released) {
             break;
         }
     }
@@ -409,6 +410,7 @@ fn step_lattice(
         cg,
         last_solve,
         constraints,
+        inside,
         account,
         dissipated,
         power_f,
@@ -444,7 +446,7 @@ fn step_lattice(
     let contacts = has_contacts(model, state);
     let dv = &mut cg[0];
     if warm && contacts {
-        start_contacts(model, state, dt, dv, constraints);
+        start_contacts(model, state, dt, dv, constraints, inside);
     } else {
         constraints.clear();
     }
@@ -464,7 +466,7 @@ fn step_lattice(
             break;
         }
         let released = release_pulling(constraints, |i| lattice.row_residual(i));
-        if !(add_contacts(model, state, dt, dv, constraints) || released) {
+        if !(add_contacts(model, state, dt, dv, constraints, inside) || released) {
             break;
         }
     }
@@ -526,23 +528,23 @@ fn power_one_part(
 /// Adds or updates a constraint for every free particle that `x_n + dt (v_n + Δv)` puts inside
 /// a collider (module docs): a constrained particle that still ends inside (a curved surface, or
 /// another face of the terrain) gets the new normal and target. Returns whether anything
-/// changed; keeps `constraints` sorted by particle.
+/// changed; keeps `constraints` sorted by particle. `inside` is scratch.
 fn add_contacts(
     model: &Model,
     state: &State,
     dt: f64,
     dv: &[DVec3],
     constraints: &mut Vec<Constraint>,
+    inside: &mut Vec<usize>,
 ) -> bool {
     // Deeper than this (m) counts as inside: rounding of a landing exactly on the surface is not.
     const DEPTH: f64 = 1e-12;
     let ends = sphere_ends(model, state, dt);
     // Without colliders, only the particles that the test of `nearest_contact` finds inside a
     // sphere, taken eight at a time first.
-    let mut inside = Vec::new();
     let candidates: &mut dyn Iterator<Item = usize> = if model.colliders.is_empty() {
         let kernel = model.stencil().map_or_else(Kernel::best, Stencil::kernel);
-        inside_spheres(kernel, &state.x, &state.v, dv, dt, &ends, &mut inside);
+        inside_spheres(kernel, &state.x, &state.v, dv, dt, &ends, inside);
         &mut inside.iter().copied()
     } else {
         &mut (0..state.x.len())
@@ -578,17 +580,18 @@ fn add_contacts(
 
 /// The contact set the first solve starts from, with the warm start `dv` (module docs, "Warm
 /// start"): the last step's contacts re-aimed ([`carry_over`]) and, when the only things to touch
-/// are spheres, the particles `dv` carries inside one ([`add_contacts`]).
+/// are spheres, the particles `dv` carries inside one ([`add_contacts`]; `inside` is scratch).
 fn start_contacts(
     model: &Model,
     state: &State,
     dt: f64,
     dv: &[DVec3],
     constraints: &mut Vec<Constraint>,
+    inside: &mut Vec<usize>,
 ) {
     carry_over(model, state, dt, dv, constraints);
     if model.colliders.is_empty() {
-        add_contacts(model, state, dt, dv, constraints);
+        add_contacts(model, state, dt, dv, constraints, inside);
     }
 }
 

@@ -64,7 +64,9 @@ use glam::DVec3;
 use super::implicit_constraint::Constraint;
 #[cfg(target_arch = "x86_64")]
 use crate::physics::lanes::{Avx2, Avx512};
-use crate::physics::lanes::{LANES, Lanes, Plain, from_lanes, lanes, to_lanes};
+use crate::physics::lanes::{
+    LANES, Lanes, Plain, first_lanes, lanes, load_chunk, load_padded, store_chunk,
+};
 use crate::physics::stencil::{Kernel, Stencil};
 
 /// Whether the lattice system can hold `stencil`'s springs: every group's stiffness and
@@ -199,10 +201,6 @@ impl Lattice {
         self.kernel = Some(stencil.kernel());
         let n = self.n;
         assert!(mass.len() == n && inv_mass.len() == n && x.len() == n && v.len() == n);
-        let forces = match forces {
-            Forces::Given(f) => Forces::Given(&f[..n]),
-            springs => springs,
-        };
         let particles = Particles {
             mass,
             inv_mass,
@@ -211,15 +209,7 @@ impl Lattice {
             v,
             forces,
         };
-        match stencil.kernel() {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: the stencil chooses AVX-512 only on a CPU that has it.
-            Kernel::Avx512 => unsafe { assemble_avx512(self, stencil, dt, &particles) },
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: the stencil chooses AVX2 only on a CPU that has it.
-            Kernel::Avx2 => unsafe { assemble_avx2(self, stencil, dt, &particles) },
-            _ => assemble_body::<Plain>(self, stencil, dt, &particles),
-        }
+        assemble_on(stencil.kernel(), self, stencil, dt, &particles);
     }
 
     /// Preconditioned conjugate gradients, as the textbook's `System::solve`: writes Δv,
@@ -242,19 +232,9 @@ impl Lattice {
             }
         }
         let warm = warm || start.is_some();
-        match self.kernel {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `assemble` recorded the stencil's kernel, chosen for this CPU.
-            Some(Kernel::Avx512) => unsafe {
-                solve_avx512(self, constraints, tolerance, max_iterations, warm)
-            },
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: as above.
-            Some(Kernel::Avx2) => unsafe {
-                solve_avx2(self, constraints, tolerance, max_iterations, warm)
-            },
-            _ => solve_body::<Plain>(self, constraints, tolerance, max_iterations, warm),
-        }
+        // `assemble` recorded the stencil's kernel.
+        let kernel = self.kernel.unwrap_or(Kernel::Portable);
+        solve_on(kernel, self, constraints, tolerance, max_iterations, warm)
     }
 
     /// The springs' elastic energy `Σ ½ k (|x_{p+δ} - x_p| - L0)²` (J) at `x` (m): the spring
@@ -267,15 +247,7 @@ impl Lattice {
                 self.x[c][self.front + i] = xi[c];
             }
         }
-        match stencil.kernel() {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: the stencil chooses AVX-512 only on a CPU that has it.
-            Kernel::Avx512 => unsafe { elastic_avx512(self, stencil) },
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: the stencil chooses AVX2 only on a CPU that has it.
-            Kernel::Avx2 => unsafe { elastic_avx2(self, stencil) },
-            _ => elastic_body::<Plain>(self, stencil),
-        }
+        elastic_on(stencil.kernel(), self, stencil)
     }
 
     /// The step's update from the solved `Δv` (m/s) on the free particles, into the state `x`
@@ -298,15 +270,9 @@ impl Lattice {
         v: &mut [DVec3],
     ) -> f64 {
         assert!(x.len() == self.n && v.len() == self.n);
-        match self.kernel {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `assemble` recorded the stencil's kernel, chosen for this CPU.
-            Some(Kernel::Avx512) => unsafe { advance_avx512(self, stencil, dt, drag, power, x, v) },
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: as above.
-            Some(Kernel::Avx2) => unsafe { advance_avx2(self, stencil, dt, drag, power, x, v) },
-            _ => advance_body::<Plain>(self, stencil, dt, drag, power, x, v),
-        }
+        // `assemble` recorded the stencil's kernel.
+        let kernel = self.kernel.unwrap_or(Kernel::Portable);
+        advance_on(kernel, self, stencil, dt, drag, power, x, v)
     }
 
     /// The springs' elastic energy `Σ ½ k (L - L0)²` (J) at the positions of the last assembly,
@@ -442,22 +408,24 @@ fn load_particles<V: Lanes>(sys: &mut Lattice, dt: f64, particles: &Particles<'_
     let (n, front) = (sys.n, sys.front);
     let (dt_v, drag_v, zero) = (V::splat(dt), V::splat(drag), V::zero());
     for q in (0..n).step_by(LANES) {
-        let i = front + q;
-        let live = if n - q >= LANES {
-            u8::MAX
-        } else {
-            (1u8 << (n - q)) - 1
-        };
-        let m = scalar_chunk::<V>(mass, q);
-        put(&mut sys.mass, i, m.add(dt_v.mul(drag_v)).select(live));
-        let w = scalar_chunk::<V>(inv_mass, q);
+        let (i, count) = (front + q, (n - q).min(LANES));
+        let m = load_padded::<V>(mass, q, count);
+        put(
+            &mut sys.mass,
+            i,
+            m.add(dt_v.mul(drag_v)).select(first_lanes(count)),
+        );
+        let w = load_padded::<V>(inv_mass, q, count);
         let free = V::splat(1.0).select(zero.less_than(w) | w.less_than(zero));
         put(&mut sys.free, i, free);
-        let (xq, vq) = (vector_chunk::<V>(x, q), vector_chunk::<V>(v, q));
+        let (xq, vq) = (
+            load_chunk::<V>(&x[q..], count),
+            load_chunk::<V>(&v[q..], count),
+        );
         // Written out, not with `from_fn`: its closure would not be inlined (nor the AVX-512
         // operations inside it).
         let b = match forces {
-            Forces::Given(f) => vector_chunk::<V>(f, q),
+            Forces::Given(f) => load_chunk::<V>(&f[q..], count),
             Forces::Springs { gravity } => [
                 m.mul(V::splat(gravity.x)).sub(drag_v.mul(vq[0])),
                 m.mul(V::splat(gravity.y)).sub(drag_v.mul(vq[1])),
@@ -469,28 +437,6 @@ fn load_particles<V: Lanes>(sys: &mut Lattice, dt: f64, particles: &Particles<'_
             put(&mut sys.v[c], i, vq[c]);
             put(&mut sys.rhs[c], i, dt_v.mul(b[c]));
         }
-    }
-}
-
-/// `a[q..q + LANES]` as lanes, zero past the end of `a`.
-#[inline(always)]
-fn scalar_chunk<V: Lanes>(a: &[f64], q: usize) -> V {
-    match a.get(q..q + LANES) {
-        Some(chunk) => V::load(chunk.try_into().expect("LANES values")),
-        None => {
-            let mut values = [0.0; LANES];
-            values[..a.len() - q].copy_from_slice(&a[q..]);
-            V::load(&values)
-        }
-    }
-}
-
-/// The vectors `a[q..q + LANES]` as lanes `[x, y, z]`, zero past the end of `a`.
-#[inline(always)]
-fn vector_chunk<V: Lanes>(a: &[DVec3], q: usize) -> [V; 3] {
-    match a.get(q..q + LANES) {
-        Some(chunk) => V::load_vectors(chunk.try_into().expect("LANES vectors")),
-        None => to_lanes::<V>(&a[q..]),
     }
 }
 
@@ -693,15 +639,7 @@ pub(crate) fn inside_spheres(
 ) {
     assert!(v.len() == x.len() && dv.len() == x.len());
     out.clear();
-    match kernel {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: a stencil's kernel is chosen for this CPU.
-        Kernel::Avx512 => unsafe { inside_avx512(x, v, dv, dt, ends, out) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as above.
-        Kernel::Avx2 => unsafe { inside_avx2(x, v, dv, dt, ends, out) },
-        _ => inside_body::<Plain>(x, v, dv, dt, ends, out),
-    }
+    inside_on(kernel, x, v, dv, dt, ends, out);
 }
 
 #[inline(always)]
@@ -715,10 +653,11 @@ fn inside_body<V: Lanes>(
 ) {
     let dt_v = V::splat(dt);
     for q in (0..x.len()).step_by(LANES) {
+        let count = (x.len() - q).min(LANES);
         let (xq, vq, dq) = (
-            vector_chunk::<V>(x, q),
-            vector_chunk::<V>(v, q),
-            vector_chunk::<V>(dv, q),
+            load_chunk::<V>(&x[q..], count),
+            load_chunk::<V>(&v[q..], count),
+            load_chunk::<V>(&dv[q..], count),
         );
         let end = [
             xq[0].add(dt_v.mul(vq[0].add(dq[0]))),
@@ -735,12 +674,7 @@ fn inside_body<V: Lanes>(
             let distance2 = d[0].mul(d[0]).add(d[1].mul(d[1])).add(d[2].mul(d[2]));
             inside |= distance2.less_than(V::splat(radius * radius));
         }
-        let live = if x.len() - q >= LANES {
-            u8::MAX
-        } else {
-            (1u8 << (x.len() - q)) - 1
-        };
-        let mut bits = inside & live;
+        let mut bits = inside & first_lanes(count);
         while bits != 0 {
             out.push(q + bits.trailing_zeros() as usize);
             bits &= bits - 1;
@@ -779,16 +713,9 @@ fn advance_body<V: Lanes>(
         put_triple(&mut sys.x, i, xq);
         let squared = vq[0].mul(vq[0]).add(vq[1].mul(vq[1])).add(vq[2].mul(vq[2]));
         drag_sum = drag_sum.add(squared.select(free));
-        match (x.get_mut(q..q + LANES), v.get_mut(q..q + LANES)) {
-            (Some(x), Some(v)) => {
-                V::store_vectors(xq, x.try_into().expect("LANES vectors"));
-                V::store_vectors(vq, v.try_into().expect("LANES vectors"));
-            }
-            _ => {
-                from_lanes(xq, &mut x[q..]);
-                from_lanes(vq, &mut v[q..]);
-            }
-        }
+        let count = (n - q).min(LANES);
+        store_chunk(xq, &mut x[q..], count);
+        store_chunk(vq, &mut v[q..], count);
     }
     if !power {
         return 0.0;
@@ -1175,34 +1102,48 @@ fn solve_body<V: Lanes>(
     outcome
 }
 
-/// The AVX-512 and AVX2 instances of a body generic over [`Lanes`], each compiled with its
-/// target feature so that the inlined body runs on those registers. The callers run them only
-/// where the stencil's kernel says the CPU has the feature.
-macro_rules! instances {
-    ($avx512:ident, $avx2:ident, $body:ident, ($($arg:ident: $ty:ty),*) -> $ret:ty) => {
-        #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = "avx512f")]
-        fn $avx512($($arg: $ty),*) -> $ret {
-            $body::<Avx512>($($arg),*)
-        }
+/// `$name(kernel, args…)`: the body generic over [`Lanes`] on `kernel`'s registers, through an
+/// AVX-512 and an AVX2 instance, each compiled with its target feature so that the inlined
+/// body runs on those registers. `kernel` must be one this CPU has, as a stencil's kernel
+/// ([`Stencil::kernel`]) and [`Kernel::best`] are.
+macro_rules! on_kernel {
+    ($name:ident, $body:ident, ($($arg:ident: $ty:ty),*) -> $ret:ty) => {
+        #[allow(clippy::too_many_arguments)]
+        fn $name(kernel: Kernel, $($arg: $ty),*) -> $ret {
+            #[cfg(target_arch = "x86_64")]
+            #[target_feature(enable = "avx512f")]
+            #[allow(clippy::too_many_arguments)]
+            fn avx512($($arg: $ty),*) -> $ret {
+                $body::<Avx512>($($arg),*)
+            }
 
-        #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = "avx2")]
-        fn $avx2($($arg: $ty),*) -> $ret {
-            $body::<Avx2>($($arg),*)
+            #[cfg(target_arch = "x86_64")]
+            #[target_feature(enable = "avx2")]
+            #[allow(clippy::too_many_arguments)]
+            fn avx2($($arg: $ty),*) -> $ret {
+                $body::<Avx2>($($arg),*)
+            }
+
+            match kernel {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: the caller passes a kernel this CPU has (macro docs).
+                Kernel::Avx512 => unsafe { avx512($($arg),*) },
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: as above.
+                Kernel::Avx2 => unsafe { avx2($($arg),*) },
+                _ => $body::<Plain>($($arg),*),
+            }
         }
     };
 }
 
-instances!(
-    assemble_avx512,
-    assemble_avx2,
+on_kernel!(
+    assemble_on,
     assemble_body,
     (sys: &mut Lattice, stencil: &Stencil, dt: f64, particles: &Particles<'_>) -> ()
 );
-instances!(
-    solve_avx512,
-    solve_avx2,
+on_kernel!(
+    solve_on,
     solve_body,
     (
         sys: &mut Lattice,
@@ -1212,9 +1153,8 @@ instances!(
         warm: bool
     ) -> (u32, f64, bool)
 );
-instances!(
-    inside_avx512,
-    inside_avx2,
+on_kernel!(
+    inside_on,
     inside_body,
     (
         x: &[DVec3],
@@ -1225,9 +1165,8 @@ instances!(
         out: &mut Vec<usize>
     ) -> ()
 );
-instances!(
-    advance_avx512,
-    advance_avx2,
+on_kernel!(
+    advance_on,
     advance_body,
     (
         sys: &mut Lattice,
@@ -1239,9 +1178,8 @@ instances!(
         v: &mut [DVec3]
     ) -> f64
 );
-instances!(
-    elastic_avx512,
-    elastic_avx2,
+on_kernel!(
+    elastic_on,
     elastic_body,
     (sys: &Lattice, stencil: &Stencil) -> f64
 );

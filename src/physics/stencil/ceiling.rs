@@ -30,12 +30,6 @@ pub struct Rope {
     v: [Vec<f64>; 3],
 }
 
-impl Default for Rope {
-    fn default() -> Rope {
-        rope()
-    }
-}
-
 /// The rope's springs: neighbours `(i, i + 1)`, `L0` 1 m, `k` 100 N/m, `k_d` 0.1 N·s/m.
 fn springs() -> Vec<Spring> {
     (0..ROPE as u32 - 1)
@@ -50,27 +44,29 @@ fn springs() -> Vec<Spring> {
         .collect()
 }
 
-fn rope() -> Rope {
-    let stencil = Stencil::detect(ROPE, &springs()).expect("a rope is a lattice");
-    let component = |f: fn(usize) -> f64| {
-        let mut a = vec![0.0; ROPE.next_multiple_of(LANES)];
-        for (i, value) in a.iter_mut().enumerate().take(ROPE) {
-            *value = f(i);
+impl Default for Rope {
+    fn default() -> Rope {
+        let stencil = Stencil::detect(ROPE, &springs()).expect("a rope is a lattice");
+        let component = |f: fn(usize) -> f64| {
+            let mut a = vec![0.0; ROPE.next_multiple_of(LANES)];
+            for (i, value) in a.iter_mut().enumerate().take(ROPE) {
+                *value = f(i);
+            }
+            a
+        };
+        Rope {
+            stencil,
+            x: [
+                component(|i| 1.1 * i as f64),
+                component(|i| 0.01 * (i % 3) as f64),
+                component(|_| 0.0),
+            ],
+            v: [
+                component(|i| 0.1 * (i % 5) as f64),
+                component(|_| -0.2),
+                component(|i| 0.05 * (i % 2) as f64),
+            ],
         }
-        a
-    };
-    Rope {
-        stencil,
-        x: [
-            component(|i| 1.1 * i as f64),
-            component(|i| 0.01 * (i % 3) as f64),
-            component(|_| 0.0),
-        ],
-        v: [
-            component(|i| 0.1 * (i % 5) as f64),
-            component(|_| -0.2),
-            component(|i| 0.05 * (i % 2) as f64),
-        ],
     }
 }
 
@@ -83,27 +79,23 @@ impl Rope {
     /// When this CPU cannot run `kernel`.
     #[must_use]
     pub fn evaluate(&self, kernel: Kernel, chunks: u64) -> f64 {
-        evaluate(self, kernel, chunks)
-    }
-}
-
-fn evaluate(rope: &Rope, kernel: Kernel, chunks: u64) -> f64 {
-    assert!(kernel.is_available(), "{kernel:?} is not available here");
-    let g = &rope.stencil.groups[0];
-    let w = Window {
-        x: [&rope.x[0], &rope.x[1], &rope.x[2]],
-        v: [&rope.v[0], &rope.v[1], &rope.v[2]],
-    };
-    match kernel {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: available (asserted above).
-        Kernel::Avx512 => unsafe { chunks_avx512(g, &w, chunks) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: available (asserted above).
-        Kernel::Avx2 => unsafe { chunks_avx2(g, &w, chunks) },
-        _ => chunks_body::<Plain>(g, &w, chunks, |g, first, w, i, p| {
-            kernels::springs_exact::<Plain>(g, first, w, i, p)
-        }),
+        assert!(kernel.is_available(), "{kernel:?} is not available here");
+        let g = &self.stencil.groups[0];
+        let w = Window {
+            x: [&self.x[0], &self.x[1], &self.x[2]],
+            v: [&self.v[0], &self.v[1], &self.v[2]],
+        };
+        match kernel {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: available (asserted above).
+            Kernel::Avx512 => unsafe { chunks_avx512(g, &w, chunks) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: available (asserted above).
+            Kernel::Avx2 => unsafe { chunks_avx2(g, &w, chunks) },
+            _ => chunks_body::<Plain>(g, &w, chunks, |g, first, w, i, p| {
+                kernels::springs_exact::<Plain>(g, first, w, i, p)
+            }),
+        }
     }
 }
 
@@ -113,7 +105,7 @@ fn evaluate(rope: &Rope, kernel: Kernel, chunks: u64) -> f64 {
 pub fn ceiling(kernel: Kernel) -> f64 {
     // About 5 ms at 2e9 springs/s.
     const CHUNKS: u64 = 1_250_000;
-    let rope = rope();
+    let rope = Rope::default();
     (0..3)
         .map(|_| {
             let start = Instant::now();
@@ -180,7 +172,7 @@ mod tests {
     fn every_kernel_gives_the_ropes_forces_for_every_chunk() {
         // The x components of the forces on the first ends of springs 0..16, summed, times the
         // number of times each chunk was evaluated: the spring list's own forces.
-        let rope = rope();
+        let rope = Rope::default();
         let springs = springs();
         let at = |a: &[Vec<f64>; 3], i: usize| DVec3::new(a[0][i], a[1][i], a[2][i]);
         let x: Vec<DVec3> = (0..ROPE).map(|i| at(&rope.x, i)).collect();

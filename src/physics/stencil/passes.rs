@@ -6,6 +6,7 @@
 use super::contacts::*;
 #[allow(clippy::wildcard_imports)]
 use super::*;
+pub(super) use crate::physics::lanes::{load_chunk, load_padded, store_chunk};
 
 impl Output<'_> {
     /// How many of `outs` this output writes (always the first ones), and whether `outs[2]`
@@ -482,40 +483,6 @@ pub(super) fn weight_drag_springs<V: Lanes>(
         m.mul(V::splat(g.y)).sub(c.mul(v[1])).add(spring[1]),
         m.mul(V::splat(g.z)).sub(c.mul(v[2])).add(spring[2]),
     ]
-}
-
-/// `values[q..q + count]` as lanes, zero past `count`.
-#[inline(always)]
-pub(super) fn load_padded<V: Lanes>(values: &[f64], q: usize, count: usize) -> V {
-    if count == LANES {
-        V::load(lanes(values, q))
-    } else {
-        // The last chunk of a range that does not end on a multiple of LANES.
-        let mut chunk = [0.0; LANES];
-        chunk[..count].copy_from_slice(&values[q..q + count]);
-        V::load(&chunk)
-    }
-}
-
-/// The first `count` (at most `LANES`) vectors of `vectors` as lanes `[x, y, z]`, zero past
-/// `count`.
-#[inline(always)]
-pub(super) fn load_chunk<V: Lanes>(vectors: &[DVec3], count: usize) -> [V; 3] {
-    if count == LANES {
-        V::load_vectors(vectors[..LANES].try_into().expect("a chunk"))
-    } else {
-        to_lanes(&vectors[..count])
-    }
-}
-
-/// Writes lanes `[x, y, z]` into the first `count` (at most `LANES`) vectors of `vectors`.
-#[inline(always)]
-pub(super) fn store_chunk<V: Lanes>(lanes: [V; 3], vectors: &mut [DVec3], count: usize) {
-    if count == LANES {
-        V::store_vectors(lanes, (&mut vectors[..LANES]).try_into().expect("a chunk"));
-    } else {
-        from_lanes(lanes, &mut vectors[..count]);
-    }
 }
 
 /// Keeps the forces of the chunk of springs starting at `p` (a multiple of `LANES`) in the

@@ -68,6 +68,7 @@ use super::kernels::{spring_lanes_avx512, springs_avx512};
 use super::passes::{Forces, Window, load_padded, semi_implicit_euler, weight_drag_springs};
 #[allow(clippy::wildcard_imports)]
 use super::*;
+use crate::physics::lanes::first_lanes;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::{
     __m512d, __m512i, _mm512_add_pd, _mm512_load_pd, _mm512_loadu_pd, _mm512_loadu_si512,
@@ -301,11 +302,7 @@ fn small_body<V: Lanes>(
             let a = [f[0].mul(w), f[1].mul(w), f[2].mul(w)];
             let (x_new, v_new) = semi_implicit_euler(x, v, a, dt_lanes);
             // Past the last particle the window stays zero, as the streaming loop's.
-            let keep = if count == LANES {
-                u8::MAX
-            } else {
-                (1u8 << count) - 1
-            };
+            let keep = first_lanes(count);
             for (new, values) in x_new.into_iter().zip(xs.iter_mut()) {
                 new.select(keep).store(chunk_mut(values, q));
             }
@@ -497,7 +494,7 @@ unsafe fn fused_avx512<const G: usize>(
     let last_keep = if n.is_multiple_of(LANES) {
         u8::MAX
     } else {
-        (1u8 << (n % LANES)) - 1
+        first_lanes(n % LANES)
     };
     let FusedScratch {
         state,
