@@ -67,6 +67,7 @@ pub mod remote;
 mod report;
 mod rope;
 pub mod runner;
+pub mod sandbox;
 mod shared;
 mod system;
 
@@ -77,6 +78,7 @@ pub use assignments::{
 pub use reference::Reference;
 pub use report::{
     CheckOutcome, CheckReport, Feedback, ItemReport, ItemStatus, NotGraded, Report, points,
+    write_result,
 };
 pub use runner::{DEFAULT_SEED, DEFAULT_TIME_LIMIT, Options};
 pub use system::{Matrix, Physics, flatten, unflatten};

@@ -8,11 +8,12 @@ use std::time::Duration;
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
 
-use crate::grade::build::default_target_dir;
+use crate::grade::build::{BuildLimits, default_target_dir};
 use crate::grade::external::{ExternalOptions, GradeError, expand, grade_all};
 use crate::grade::homework::{new_homework, this_springlab};
 use crate::grade::remote::Limits;
-use crate::grade::{Assignment, Options, Report, autograder, points};
+use crate::grade::sandbox::{self, Sandbox};
+use crate::grade::{Assignment, Options, Report, autograder, points, write_result};
 
 /// Options of `springlab homework`.
 #[derive(Debug, Args)]
@@ -47,9 +48,29 @@ pub enum HomeworkCommand {
 /// Options of `springlab grade`.
 #[derive(Debug, Args)]
 pub struct GradeArgs {
-    /// Homework crates (made by `springlab homework new`), or folders of them (a class).
-    #[arg(required = true, value_name = "DIR")]
+    /// Homework crates (made by `springlab homework new`), or folders of them (a class: each
+    /// folder in it is one submission, wherever its crate sits inside).
+    #[arg(required_unless_present = "sandbox_report", value_name = "DIR")]
     pub dirs: Vec<PathBuf>,
+    /// Print which sandbox layers are active on this machine (and why any is missing), then
+    /// stop.
+    #[arg(long)]
+    pub sandbox_report: bool,
+    /// The user id builds and programs run as when springlab runs as root (job k of --jobs:
+    /// this + k) [default: $SPRINGLAB_SANDBOX_UID, else 65534, nobody]; 0 keeps root.
+    #[arg(long, value_name = "UID")]
+    pub sandbox_uid: Option<u32>,
+    /// Their group id [default: $SPRINGLAB_SANDBOX_GID, else 65534].
+    #[arg(long, value_name = "GID")]
+    pub sandbox_gid: Option<u32>,
+    /// Wall-clock and CPU limit of one submission's build, in seconds.
+    #[arg(long, value_name = "S", default_value_t = 60,
+          value_parser = clap::value_parser!(u64).range(1..=3600))]
+    pub build_limit_s: u64,
+    /// Address space of the compiler, in MiB.
+    #[arg(long, value_name = "MB", default_value_t = 3072,
+          value_parser = clap::value_parser!(u64).range(512..=1 << 20))]
+    pub build_memory_mb: u64,
     /// The assignment, for submissions without springlab's Cargo.toml (just src/ or lib.rs).
     #[arg(long, value_enum)]
     pub assignment: Option<Assignment>,
@@ -132,6 +153,25 @@ pub fn homework(args: &HomeworkArgs) -> anyhow::Result<()> {
 /// When an output option does not fit the submissions, a submission's assignment cannot be
 /// told, or an output file cannot be written.
 pub fn grade(args: &GradeArgs) -> anyhow::Result<()> {
+    let env_id = |key: &str| std::env::var(key).ok().and_then(|v| v.trim().parse::<u32>().ok());
+    let sandbox_config = sandbox::Config {
+        uid: args
+            .sandbox_uid
+            .or_else(|| env_id("SPRINGLAB_SANDBOX_UID"))
+            .unwrap_or(sandbox::DEFAULT_UID),
+        gid: args
+            .sandbox_gid
+            .or_else(|| env_id("SPRINGLAB_SANDBOX_GID"))
+            .unwrap_or(sandbox::DEFAULT_GID),
+        ..sandbox::Config::default()
+    };
+    if args.sandbox_report {
+        let sandbox = Sandbox::detect(&sandbox_config);
+        let mut out = std::io::stdout().lock();
+        writeln!(out, "{}", sandbox.summary())?;
+        out.write_all(sandbox.report().as_bytes())?;
+        return Ok(());
+    }
     // With --gradescope the one path is one submission, wherever its code sits inside it.
     let dirs = if args.gradescope.is_some() {
         if args.dirs.len() != 1 {
@@ -150,9 +190,15 @@ pub fn grade(args: &GradeArgs) -> anyhow::Result<()> {
             memory_bytes: args.memory_mb << 20,
             ..Limits::default()
         },
+        build: BuildLimits {
+            wall: Duration::from_secs(args.build_limit_s),
+            cpu_seconds: args.build_limit_s,
+            memory_bytes: args.build_memory_mb << 20,
+            ..BuildLimits::default()
+        },
         target_dir: args.target_dir.clone().unwrap_or_else(default_target_dir),
         assignment: args.assignment,
-        ..ExternalOptions::default()
+        sandbox: sandbox_config,
     };
     let show_progress = std::io::stderr().is_terminal();
     let progress = move |line: &str| {
@@ -168,6 +214,10 @@ pub fn grade(args: &GradeArgs) -> anyhow::Result<()> {
             Ok(report) => graded.push((dir, report)),
             Err(e) => errors.push(e),
         }
+    }
+    // A grader error is the grader's: no file claims a score for it.
+    if let Some(e) = errors.iter().find(|e| matches!(e, GradeError::Grader(_))) {
+        bail!("{e}");
     }
     // Every file is written before any error is reported.
     if let Some(path) = &args.gradescope
@@ -209,11 +259,23 @@ pub fn grade(args: &GradeArgs) -> anyhow::Result<()> {
             )?;
         }
         writeln!(out, "{} submissions graded", graded.len())?;
+        if let Some((_, first)) = graded.first()
+            && let Some(line) = &first.sandbox
+        {
+            writeln!(out, "{line}")?;
+        }
     }
-    if let Some(first) = errors.into_iter().next() {
-        return Err(first.into());
+    // Every problem, one line each; exit status 1 when any submission got no report.
+    match errors.len() {
+        0 => Ok(()),
+        1 => Err(errors.remove(0).into()),
+        n => {
+            for e in &errors {
+                eprintln!("springlab grade: {e}");
+            }
+            bail!("{n} submissions were not graded (listed above)")
+        }
     }
-    Ok(())
 }
 
 /// "all checks passed", why nothing was graded, or the items that lost points.
@@ -296,5 +358,5 @@ fn csv(graded: &[(&Path, Report)]) -> String {
 }
 
 fn write_file(path: &Path, text: &str) -> anyhow::Result<()> {
-    std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+    write_result(path, text.as_bytes()).map_err(anyhow::Error::msg)
 }

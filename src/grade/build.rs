@@ -1,33 +1,40 @@
-//! Building a submission: its `src/` against springlab's own manifest and student API.
+//! Building a submission: its `src/` against the student API, with rustc, in the sandbox.
 //!
 //! ```text
-//! <target>/springlab-grade/api-<version>/      the student API crate (springlab-homework), as
-//!                                               embedded in this binary, written once
-//! <target>/springlab-grade/crates/<digest>/    one crate per submission and content:
-//!     Cargo.toml     package `homework-<digest>`, lib `homework` = src/lib.rs, bin
-//!                    `homework-<digest>` = serve/main.rs, the only dependency the API crate,
-//!                    no build script, its own workspace
-//!     src/           a copy of the submission's src/ (regular files; symlinks are skipped)
-//!     serve/main.rs  fn main() { springlab_homework::serve_<assignment>(homework::Student) }
-//! cargo build --release --offline --manifest-path …/Cargo.toml --target-dir <target>
+//! <target>/springlab-grade/                      the grader's cache (root's, read by no sandbox)
+//!     api-<digest>/libspringlab_homework.rlib    the student API, compiled once per API and rustc
+//!     programs/<digest>                          every program built, by content
+//! <scratch>/  (springlab-grade-<pid>-<random> in the temporary directory, removed at the end)
+//!     toolchain/     the rustc sysroot, hard links, when the sandbox user cannot reach the real one
+//!     api/           the compiled API (read-only for the sandbox)
+//!     sub-<n>/crate/src/        a copy of submission n's src/ (regular files only), the grader's
+//!     sub-<n>/crate/serve/main.rs   fn main() { springlab_homework::serve_<assignment>(homework::Student) }
+//!     sub-<n>/out/   the build's only writable folder (the sandbox user's)
+//!     sub-<n>/program           the program, copied out of out/ by the grader
+//!     sub-<n>/work-<k>/         the working directory of the program's k-th start
+//! rustc --crate-type rlib --crate-name homework src/lib.rs --extern springlab_homework=…  (sandbox)
+//! rustc --crate-type bin serve/main.rs --extern homework=out/libhomework.rlib …         (sandbox)
 //! ```
-//! The digest covers the submission's path, every file's path and contents, the assignment
-//! and the API: two submissions (or two versions of one) never share a package name, a
-//! fingerprint or an executable, so any number of them can be built one after another, or at
-//! once, in one target directory and each runs its own code. The student's `Cargo.toml`,
-//! `build.rs`, `tests/` and any dependency they list are not used: nothing but the API crate can
-//! be linked into the program, and nothing runs at build time.
+//! No cargo: no `Cargo.toml`, `build.rs`, `.cargo/config.toml`, dependency or environment
+//! variable of the student's is read, and nothing runs at build time; each build writes only
+//! its own `out/`. The digest covers the assignment, the API, the compiler's version and every
+//! file's path and contents: the same code is built once and every later grade of it reuses the
+//! program.
 
 use std::collections::hash_map::DefaultHasher;
+use std::ffi::OsString;
 use std::hash::{Hash, Hasher};
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::thread;
 use std::time::{Duration, Instant};
 
 use super::Assignment;
 use super::homework::API_FILES;
+use super::sandbox::{Launch, Rlimits, Sandbox, reachable_by};
 
 /// At most this many bytes of source are copied from one submission.
 const MAX_SOURCE_BYTES: u64 = 8 << 20;
@@ -119,6 +126,7 @@ fn read_tree(src: &Path) -> Result<Vec<(String, Vec<u8>)>, String> {
     Ok(files)
 }
 
+
 /// A 128-bit digest, as 32 hex digits, of everything that goes into a build.
 fn digest(parts: &[&[u8]]) -> String {
     let mut out = String::new();
@@ -133,110 +141,29 @@ fn digest(parts: &[&[u8]]) -> String {
     out
 }
 
-/// Writes `contents` to `path` unless it already holds exactly that. The file is written beside
-/// and renamed into place, so a build reading it meanwhile sees the old or the new file whole.
-fn write_if_changed(path: &Path, contents: &[u8]) -> std::io::Result<()> {
-    if std::fs::read(path).is_ok_and(|old| old == contents) {
-        return Ok(());
-    }
-    if let Some(parent) = path.parent() {
-        std::fs::create_dir_all(parent)?;
-    }
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(format!(".{}.partial", std::process::id()));
-    std::fs::write(&tmp, contents)?;
-    std::fs::rename(&tmp, path)
+/// Limits of one build (both rustc runs together).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BuildLimits {
+    /// Wall-clock time.
+    pub wall: Duration,
+    /// CPU seconds of each rustc run.
+    pub cpu_seconds: u64,
+    /// Address space of rustc (bytes).
+    pub memory_bytes: u64,
+    /// Compiler output kept (bytes).
+    pub output_bytes: usize,
 }
 
-/// One writer of the API crate at a time in this process (`--jobs`).
-static API_WRITER: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
-/// The API crate's directory under `root`, written from the embedded copy.
-fn write_api(root: &Path) -> std::io::Result<PathBuf> {
-    let _one = API_WRITER
-        .lock()
-        .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let dir = root.join(format!(
-        "api-{}",
-        &digest(
-            &API_FILES
-                .iter()
-                .flat_map(|(p, c)| [p.as_bytes(), c.as_bytes()])
-                .collect::<Vec<_>>()
-        )[..12]
-    ));
-    for (relative, contents) in API_FILES {
-        write_if_changed(&dir.join(relative), contents.as_bytes())?;
+impl Default for BuildLimits {
+    /// One minute of wall clock and of CPU, 3 GiB of address space, 64 KiB of compiler output.
+    fn default() -> BuildLimits {
+        BuildLimits {
+            wall: Duration::from_secs(60),
+            cpu_seconds: 60,
+            memory_bytes: 3 << 30,
+            output_bytes: 64 << 10,
+        }
     }
-    Ok(dir)
-}
-
-/// A crate ready to build.
-#[derive(Clone, Debug)]
-pub struct Prepared {
-    /// The generated crate's directory.
-    pub dir: PathBuf,
-    /// The name of its executable.
-    pub bin: String,
-}
-
-/// Writes the crate that builds `submission` as `assignment` under `target/springlab-grade`.
-///
-/// # Errors
-/// A sentence: the source cannot be read or is too large, or a file cannot be written.
-pub fn prepare(
-    submission: &Submission,
-    assignment: Assignment,
-    target: &Path,
-) -> Result<Prepared, String> {
-    let files = read_tree(&submission.src)?;
-    let root = target.join("springlab-grade");
-    let api = write_api(&root).map_err(|e| format!("cannot write the student API: {e}"))?;
-    let canonical = submission
-        .src
-        .canonicalize()
-        .unwrap_or_else(|_| submission.src.clone());
-    let mut parts: Vec<&[u8]> = vec![
-        canonical.as_os_str().as_encoded_bytes(),
-        assignment.name().as_bytes(),
-        api.as_os_str().as_encoded_bytes(),
-    ];
-    for (path, contents) in &files {
-        parts.push(path.as_bytes());
-        parts.push(contents);
-    }
-    let id = &digest(&parts)[..20];
-    let bin = format!("homework-{id}");
-    let dir = root.join("crates").join(&bin);
-    let io = |e: std::io::Error| format!("cannot write the build crate {}: {e}", dir.display());
-    // A fresh copy: files removed from the submission must not linger.
-    if dir.join("src").exists() {
-        std::fs::remove_dir_all(dir.join("src")).map_err(io)?;
-    }
-    for (relative, contents) in &files {
-        write_if_changed(&dir.join("src").join(relative), contents).map_err(io)?;
-    }
-    let api_path = toml::Value::String(api.display().to_string()).to_string();
-    let manifest = format!(
-        "# Written by `springlab grade` for {}; the submission's own Cargo.toml is not used.\n\
-         [package]\nname = \"{bin}\"\nversion = \"0.0.0\"\nedition = \"2024\"\npublish = false\n\
-         build = false\nautobins = false\nautoexamples = false\nautotests = false\n\
-         autobenches = false\n\n[lib]\nname = \"homework\"\npath = \"src/lib.rs\"\n\n\
-         [[bin]]\nname = \"{bin}\"\npath = \"serve/main.rs\"\n\n\
-         [dependencies]\nspringlab-homework = {{ path = {api_path} }}\n\n\
-         [profile.release]\npanic = \"unwind\"\ndebug = false\nincremental = false\n\n\
-         [workspace]\n",
-        submission.dir.display()
-    );
-    write_if_changed(&dir.join("Cargo.toml"), manifest.as_bytes()).map_err(io)?;
-    let main = format!(
-        "// Written by `springlab grade`: serves the student's homework to the grader.\n\
-         fn main() -> std::process::ExitCode {{\n    \
-         springlab_homework::serve_{}(homework::Student)\n}}\n",
-        assignment.name()
-    );
-    write_if_changed(&dir.join("serve").join("main.rs"), main.as_bytes()).map_err(io)?;
-    Ok(Prepared { dir, bin })
 }
 
 /// Why a build gave no program.
@@ -246,8 +173,10 @@ pub enum BuildFailure {
     Compile(String),
     /// The build did not finish in time.
     TimedOut(Duration),
-    /// cargo could not be run.
-    Cargo(String),
+    /// A limit of the build was reached: which, in words.
+    Limit(String),
+    /// The grader could not build (its folders, its toolchain): not the student's doing.
+    Grader(String),
 }
 
 /// The last `n` lines of `text`.
@@ -256,111 +185,654 @@ pub(crate) fn tail(text: &str, n: usize) -> String {
     lines[lines.len().saturating_sub(n)..].join("\n")
 }
 
-/// The compiler's error messages in cargo's stderr: everything from the first line starting with
-/// `error`, without cargo's progress lines, at most 80 lines; or the tail when there is none.
+/// The compiler's error messages in rustc's stderr: everything from the first line starting
+/// with `error`, at most 80 lines of at most 300 characters; or the tail when there is none.
 fn compiler_errors(stderr: &str) -> String {
-    let Some(start) = stderr.lines().position(|l| l.starts_with("error")) else {
-        return tail(stderr, 30);
+    let cut = |l: &str| -> String {
+        if l.chars().count() > 300 {
+            let mut s: String = l.chars().take(300).collect();
+            s.push('…');
+            s
+        } else {
+            l.to_string()
+        }
     };
-    let progress = [
-        "Compiling ",
-        "Checking ",
-        "Building ",
-        "Finished ",
-        "Downloaded ",
-        "Locking ",
-        "Blocking ",
-    ];
+    let Some(start) = stderr.lines().position(|l| l.starts_with("error")) else {
+        return tail(stderr, 30).lines().map(cut).collect::<Vec<_>>().join("\n");
+    };
     stderr
         .lines()
         .skip(start)
-        .filter(|l| !progress.iter().any(|p| l.trim_start().starts_with(p)))
         .take(80)
+        .map(cut)
         .collect::<Vec<_>>()
         .join("\n")
 }
 
-/// The executable named `bin` in cargo's JSON messages.
-fn executable(stdout: &str, bin: &str) -> Option<PathBuf> {
-    stdout
-        .lines()
-        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
-        .filter(|v| v.get("reason").and_then(|r| r.as_str()) == Some("compiler-artifact"))
-        .filter(|v| {
-            v.get("target")
-                .and_then(|t| t.get("name"))
-                .and_then(|n| n.as_str())
-                == Some(bin)
-        })
-        .find_map(|v| {
-            v.get("executable")
-                .and_then(|e| e.as_str())
-                .map(PathBuf::from)
-        })
+/// The compiler: its sysroot as the sandbox sees it, and its version.
+#[derive(Clone, Debug)]
+pub struct Toolchain {
+    /// The sysroot the sandbox reads (the real one, or hard links to it in the scratch folder).
+    pub sysroot: PathBuf,
+    /// `rustc -vV`.
+    pub version: String,
 }
 
-/// Builds `prepared` in `target` with a wall-clock `limit`; returns the executable.
-///
-/// # Errors
-/// [`BuildFailure`].
-pub fn build(prepared: &Prepared, target: &Path, limit: Duration) -> Result<PathBuf, BuildFailure> {
-    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-    let mut command = Command::new(cargo);
-    command
-        .args(["build", "--release", "--offline", "--manifest-path"])
-        .arg(prepared.dir.join("Cargo.toml"))
-        .arg("--target-dir")
-        .arg(target)
-        .arg("--message-format=json-render-diagnostics")
-        .env_remove("CARGO_TARGET_DIR")
-        .env_remove("CARGO_BUILD_TARGET_DIR")
-        .current_dir(&prepared.dir)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped());
-    let mut child = command
-        .spawn()
-        .map_err(|e| BuildFailure::Cargo(format!("cannot run cargo: {e}")))?;
-    let reader = |pipe: Option<Box<dyn Read + Send>>| {
-        thread::spawn(move || {
-            let mut bytes = Vec::new();
-            if let Some(mut p) = pipe {
-                let _ = p.read_to_end(&mut bytes);
-            }
-            String::from_utf8_lossy(&bytes).into_owned()
-        })
-    };
-    let out = reader(
-        child
-            .stdout
-            .take()
-            .map(|p| Box::new(p) as Box<dyn Read + Send>),
-    );
-    let err = reader(
-        child
-            .stderr
-            .take()
-            .map(|p| Box::new(p) as Box<dyn Read + Send>),
-    );
-    let start = Instant::now();
-    let status = loop {
-        match child.try_wait() {
-            Ok(Some(status)) => break status,
-            Ok(None) if start.elapsed() > limit => {
-                let _ = child.kill();
-                let _ = child.wait();
-                return Err(BuildFailure::TimedOut(limit));
-            }
-            Ok(None) => thread::sleep(Duration::from_millis(20)),
-            Err(e) => return Err(BuildFailure::Cargo(e.to_string())),
+/// The grader's own environment for running its `rustc` (a rustup proxy needs these).
+fn toolchain_env(command: &mut Command) {
+    command.env_clear();
+    for key in [
+        "PATH",
+        "HOME",
+        "RUSTUP_HOME",
+        "RUSTUP_TOOLCHAIN",
+        "CARGO_HOME",
+        "RUSTC",
+    ] {
+        if let Some(v) = std::env::var_os(key) {
+            command.env(key, v);
         }
-    };
-    let stdout = out.join().unwrap_or_default();
-    let stderr = err.join().unwrap_or_default();
-    match executable(&stdout, &prepared.bin) {
-        Some(exe) if status.success() => Ok(exe),
-        _ => Err(BuildFailure::Compile(compiler_errors(&stderr))),
     }
+}
+
+/// Runs the grader's rustc with `args` (from `/`, so no folder's rust-toolchain file applies).
+fn ask_rustc(rustc: &Path, args: &[&str]) -> Result<String, String> {
+    let mut command = Command::new(rustc);
+    toolchain_env(&mut command);
+    let out = command
+        .args(args)
+        .current_dir("/")
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| format!("cannot run {}: {e}", rustc.display()))?;
+    if !out.status.success() {
+        return Err(format!(
+            "`{} {}` failed: {}",
+            rustc.display(),
+            args.join(" "),
+            tail(&String::from_utf8_lossy(&out.stderr), 5)
+        ));
+    }
+    Ok(String::from_utf8_lossy(&out.stdout).trim().to_string())
+}
+
+/// Hard links (or, for symbolic links, copies of the link) of `from` at `to`, recursively.
+fn link_tree(from: &Path, to: &Path) -> std::io::Result<()> {
+    let meta = std::fs::symlink_metadata(from)?;
+    if meta.file_type().is_symlink() {
+        let target = std::fs::read_link(from)?;
+        let _ = std::fs::remove_file(to);
+        std::os::unix::fs::symlink(target, to)
+    } else if meta.is_dir() {
+        std::fs::create_dir_all(to)?;
+        set_mode(to, 0o755)?;
+        for entry in std::fs::read_dir(from)? {
+            let entry = entry?;
+            link_tree(&entry.path(), &to.join(entry.file_name()))?;
+        }
+        Ok(())
+    } else {
+        let _ = std::fs::remove_file(to);
+        std::fs::hard_link(from, to)
+    }
+}
+
+fn set_mode(path: &Path, mode: u32) -> std::io::Result<()> {
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(path, std::fs::Permissions::from_mode(mode))
+}
+
+fn chown(path: &Path, owner: Option<(u32, u32)>) -> std::io::Result<()> {
+    match owner {
+        Some((uid, gid)) => std::os::unix::fs::chown(path, Some(uid), Some(gid)),
+        None => Ok(()),
+    }
+}
+
+impl Toolchain {
+    /// The grader's rustc (`$RUSTC`, else `rustc` on the PATH) and its sysroot; when the sandbox
+    /// user `owner` cannot reach the sysroot (rustup under a closed `/root`), its compiler
+    /// parts hard-linked into `scratch/toolchain`.
+    ///
+    /// # Errors
+    /// A sentence for the grader: no rustc, or a sysroot the sandbox can neither reach nor link.
+    pub fn find(scratch: &Path, owner: Option<(u32, u32)>) -> Result<Toolchain, String> {
+        let rustc = std::env::var_os("RUSTC")
+            .filter(|v| !v.is_empty())
+            .map_or_else(|| PathBuf::from("rustc"), PathBuf::from);
+        let sysroot = PathBuf::from(ask_rustc(&rustc, &["--print", "sysroot"])?);
+        let real = sysroot.join("bin").join("rustc");
+        let version = ask_rustc(&real, &["-vV"])?;
+        let reachable = owner.is_none_or(|(u, g)| reachable_by(&real, u, g));
+        if reachable {
+            return Ok(Toolchain { sysroot, version });
+        }
+        let host = version
+            .lines()
+            .find_map(|l| l.strip_prefix("host: "))
+            .ok_or_else(|| format!("`rustc -vV` names no host: {version}"))?
+            .to_string();
+        let mirror = scratch.join("toolchain");
+        let link = || -> std::io::Result<()> {
+            std::fs::create_dir_all(mirror.join("bin"))?;
+            set_mode(&mirror, 0o755)?;
+            set_mode(&mirror.join("bin"), 0o755)?;
+            link_tree(&real, &mirror.join("bin").join("rustc"))?;
+            let lib = mirror.join("lib");
+            std::fs::create_dir_all(lib.join("rustlib"))?;
+            set_mode(&lib, 0o755)?;
+            set_mode(&lib.join("rustlib"), 0o755)?;
+            for entry in std::fs::read_dir(sysroot.join("lib"))? {
+                let entry = entry?;
+                if entry.file_type()?.is_dir() {
+                    continue;
+                }
+                link_tree(&entry.path(), &lib.join(entry.file_name()))?;
+            }
+            link_tree(
+                &sysroot.join("lib").join("rustlib").join(&host),
+                &lib.join("rustlib").join(&host),
+            )
+        };
+        link().map_err(|e| {
+            format!(
+                "the toolchain at {} cannot be read by the sandbox user (a folder above it is \
+                 closed) and cannot be linked into {}: {e}; install Rust where other users can \
+                 read it (for example RUSTUP_HOME=/usr/local/rustup CARGO_HOME=/usr/local/cargo), \
+                 or run with --sandbox-uid 0",
+                sysroot.display(),
+                mirror.display()
+            )
+        })?;
+        Ok(Toolchain {
+            sysroot: mirror,
+            version,
+        })
+    }
+
+    fn rustc(&self) -> PathBuf {
+        self.sysroot.join("bin").join("rustc")
+    }
+}
+
+/// The grader's folders for one run, and the sandbox its builds run in (module docs).
+pub struct Builder {
+    /// The sandbox.
+    pub sandbox: Arc<Sandbox>,
+    /// Build limits.
+    pub limits: BuildLimits,
+    scratch: PathBuf,
+    cache: PathBuf,
+    toolchain: OnceLock<Result<Toolchain, String>>,
+    api: Mutex<Option<PathBuf>>,
+    next: AtomicU64,
+}
+
+impl std::fmt::Debug for Builder {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Builder")
+            .field("scratch", &self.scratch)
+            .field("cache", &self.cache)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Drop for Builder {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.scratch);
+    }
+}
+
+/// A built submission: the program and its folder in the scratch space.
+#[derive(Clone, Debug)]
+pub struct Built {
+    /// The program.
+    pub exe: PathBuf,
+    /// The submission's folder (working directories go beneath it).
+    pub dir: PathBuf,
+    /// True when the program came from the cache.
+    pub cached: bool,
+}
+
+impl Builder {
+    /// The cache under `target/springlab-grade` and a new scratch folder.
+    ///
+    /// # Errors
+    /// A sentence for the grader: a folder that cannot be made (an unwritable `--target-dir`).
+    pub fn new(target: &Path, sandbox: Arc<Sandbox>, limits: BuildLimits) -> Result<Builder, String> {
+        let cache = target.join("springlab-grade");
+        std::fs::create_dir_all(cache.join("programs")).map_err(|e| {
+            format!(
+                "cannot make the build cache {}: {e} (choose another --target-dir)",
+                cache.display()
+            )
+        })?;
+        let probe = cache.join(format!(".probe-{}", std::process::id()));
+        std::fs::write(&probe, b"").map_err(|e| {
+            format!(
+                "cannot write in the build cache {}: {e} (choose another --target-dir)",
+                cache.display()
+            )
+        })?;
+        let _ = std::fs::remove_file(&probe);
+        let tag: String = super::remote::random_tag();
+        let scratch = std::env::temp_dir().join(format!(
+            "springlab-grade-{}-{tag}",
+            std::process::id()
+        ));
+        std::fs::create_dir(&scratch)
+            .and_then(|()| set_mode(&scratch, 0o711))
+            .map_err(|e| format!("cannot make the scratch folder {}: {e}", scratch.display()))?;
+        if let Some(uid) = sandbox.uid(0)
+            && !reachable_by(&scratch, uid, 0)
+        {
+            let _ = std::fs::remove_dir(&scratch);
+            return Err(format!(
+                "the sandbox user {uid} cannot reach {} (a folder above it is closed); set \
+                 TMPDIR to a folder others can enter",
+                scratch.display()
+            ));
+        }
+        Ok(Builder {
+            sandbox,
+            limits,
+            scratch,
+            cache,
+            toolchain: OnceLock::new(),
+            api: Mutex::new(None),
+            next: AtomicU64::new(0),
+        })
+    }
+
+    /// Removes the scratch folder (also done when the builder is dropped; a check thread that
+    /// outlived its deadline may still hold it).
+    pub fn finish(&self) {
+        let _ = std::fs::remove_dir_all(&self.scratch);
+    }
+
+    /// The scratch folder of this run.
+    #[must_use]
+    pub fn scratch(&self) -> &Path {
+        &self.scratch
+    }
+
+    fn owner(&self, slot: u32) -> Option<(u32, u32)> {
+        self.sandbox
+            .uid(slot)
+            .map(|u| (u, self.sandbox_gid()))
+    }
+
+    fn sandbox_gid(&self) -> u32 {
+        self.sandbox.gid()
+    }
+
+    /// The toolchain (found once per run).
+    ///
+    /// # Errors
+    /// [`Toolchain::find`]'s sentence.
+    pub fn toolchain(&self) -> Result<&Toolchain, String> {
+        self.toolchain
+            .get_or_init(|| Toolchain::find(&self.scratch, self.owner(0)))
+            .as_ref()
+            .map_err(Clone::clone)
+    }
+
+    fn api_digest(&self, toolchain: &Toolchain) -> String {
+        let mut parts: Vec<&[u8]> = vec![toolchain.version.as_bytes()];
+        for (p, c) in API_FILES {
+            parts.push(p.as_bytes());
+            parts.push(c.as_bytes());
+        }
+        digest(&parts)[..16].to_string()
+    }
+
+    /// A new folder in the scratch space: the grader's (0755), or the sandbox user's (0700).
+    fn folder(&self, path: &Path, owner: Option<(u32, u32)>) -> Result<(), BuildFailure> {
+        let io = |e: std::io::Error| {
+            BuildFailure::Grader(format!("cannot make {}: {e}", path.display()))
+        };
+        std::fs::create_dir_all(path).map_err(io)?;
+        if owner.is_some() {
+            chown(path, owner).map_err(io)?;
+            set_mode(path, 0o700).map_err(io)?;
+        } else {
+            set_mode(path, 0o755).map_err(io)?;
+        }
+        Ok(())
+    }
+
+    /// A folder for a program's working directory under `dir`, the sandbox user's.
+    ///
+    /// # Errors
+    /// When it cannot be made.
+    pub fn workdir(&self, dir: &Path, slot: u32) -> std::io::Result<PathBuf> {
+        let n = self.next.fetch_add(1, Ordering::Relaxed);
+        let work = dir.join(format!("work-{n}"));
+        std::fs::create_dir(&work)?;
+        chown(&work, self.owner(slot))?;
+        set_mode(&work, 0o700)?;
+        Ok(work)
+    }
+
+    /// Runs rustc in the sandbox with `args`; its stderr (bounded) on failure.
+    #[allow(clippy::too_many_arguments)]
+    fn rustc(
+        &self,
+        toolchain: &Toolchain,
+        args: Vec<OsString>,
+        cwd: &Path,
+        read: Vec<PathBuf>,
+        out: &Path,
+        slot: u32,
+        deadline: Instant,
+    ) -> Result<(), BuildFailure> {
+        let mut env: Vec<(OsString, OsString)> = vec![
+            ("PATH".into(), "/usr/bin:/bin".into()),
+            ("TMPDIR".into(), out.as_os_str().to_owned()),
+            ("HOME".into(), out.as_os_str().to_owned()),
+        ];
+        env.push(("LC_ALL".into(), "C".into()));
+        let mut read = read;
+        read.push(toolchain.sysroot.clone());
+        let launch = Launch {
+            program: toolchain.rustc(),
+            args,
+            env,
+            cwd: cwd.to_path_buf(),
+            read,
+            write: vec![out.to_path_buf()],
+            limits: Rlimits {
+                address_space: self.limits.memory_bytes,
+                cpu_seconds: self.limits.cpu_seconds,
+                file_bytes: 256 << 20,
+                open_files: 1024,
+                processes: 256,
+            },
+            slot,
+        };
+        let mut child = self
+            .sandbox
+            .spawn(&launch, Stdio::null(), Stdio::null(), Stdio::piped())
+            .map_err(|e| BuildFailure::Grader(format!("cannot start rustc in the sandbox: {e}")))?;
+        let cap = self.limits.output_bytes;
+        let err = child.stderr.take();
+        let reader = thread::spawn(move || {
+            let mut kept = Vec::new();
+            if let Some(mut p) = err {
+                let mut chunk = [0u8; 8192];
+                while let Ok(n) = p.read(&mut chunk) {
+                    if n == 0 {
+                        break;
+                    }
+                    let room = cap.saturating_sub(kept.len());
+                    kept.extend_from_slice(&chunk[..n.min(room)]);
+                }
+            }
+            String::from_utf8_lossy(&kept).into_owned()
+        });
+        let status = loop {
+            match child.try_wait() {
+                Ok(Some(status)) => break status,
+                Ok(None) if Instant::now() > deadline => {
+                    kill_group(&mut child);
+                    let _ = reader.join();
+                    self.sandbox.sweep(slot);
+                    return Err(BuildFailure::TimedOut(self.limits.wall));
+                }
+                Ok(None) => thread::sleep(Duration::from_millis(10)),
+                Err(e) => return Err(BuildFailure::Grader(e.to_string())),
+            }
+        };
+        kill_group(&mut child);
+        let stderr = reader.join().unwrap_or_default();
+        self.sandbox.sweep(slot);
+        if status.success() {
+            return Ok(());
+        }
+        use std::os::unix::process::ExitStatusExt;
+        if let Some(memory) = stderr
+            .lines()
+            .find(|l| l.contains("memory allocation of") || l.contains("out of memory"))
+        {
+            return Err(BuildFailure::Limit(format!(
+                "the compiler ran out of memory (\"{}\"; a build may use {} MiB)",
+                memory.trim(),
+                self.limits.memory_bytes >> 20
+            )));
+        }
+        match status.signal() {
+            Some(24 | 9) if !stderr.lines().any(|l| l.starts_with("error")) => {
+                Err(BuildFailure::Limit(format!(
+                    "the compiler used up its CPU time ({} s)",
+                    self.limits.cpu_seconds
+                )))
+            }
+            _ if stderr.trim().is_empty() => Err(BuildFailure::Compile(format!(
+                "rustc ended ({status}) without a message"
+            ))),
+            _ => Err(BuildFailure::Compile(compiler_errors(&stderr))),
+        }
+    }
+
+    /// The compiled API in the scratch space (compiled in the sandbox once per API and rustc,
+    /// then kept in the cache).
+    fn api(&self, toolchain: &Toolchain) -> Result<PathBuf, BuildFailure> {
+        let mut guard = self
+            .api
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if let Some(dir) = guard.as_ref() {
+            return Ok(dir.clone());
+        }
+        let grader = |e: std::io::Error| BuildFailure::Grader(format!("the student API: {e}"));
+        let name = "libspringlab_homework.rlib";
+        let cached = self
+            .cache
+            .join(format!("api-{}", self.api_digest(toolchain)))
+            .join(name);
+        let dir = self.scratch.join("api");
+        self.folder(&dir, None)?;
+        if !cached.is_file() {
+            let src = self.scratch.join("api-src");
+            self.folder(&src, None)?;
+            for (relative, contents) in API_FILES {
+                let path = src.join(relative);
+                if let Some(parent) = path.parent() {
+                    self.folder(parent, None)?;
+                }
+                std::fs::write(&path, contents).map_err(grader)?;
+            }
+            let out = self.scratch.join("api-out");
+            self.folder(&out, self.owner(0))?;
+            let mut args = common_args();
+            args.extend(
+                [
+                    "--crate-type",
+                    "rlib",
+                    "--crate-name",
+                    "springlab_homework",
+                    "-o",
+                ]
+                .map(OsString::from),
+            );
+            args.push(out.join(name).into_os_string());
+            args.push("src/lib.rs".into());
+            let deadline = Instant::now() + self.limits.wall.max(Duration::from_secs(120));
+            match self.rustc(toolchain, args, &src, vec![src.clone()], &out, 0, deadline) {
+                Ok(()) => {}
+                Err(BuildFailure::Compile(e) | BuildFailure::Limit(e)) => {
+                    return Err(BuildFailure::Grader(format!(
+                        "this rustc cannot build the student API ({}): {e}",
+                        toolchain.version.lines().next().unwrap_or_default()
+                    )));
+                }
+                Err(other) => return Err(other),
+            }
+            copy_in(&out.join(name), &cached).map_err(grader)?;
+        }
+        copy_in(&cached, &dir.join(name)).map_err(grader)?;
+        *guard = Some(dir.clone());
+        Ok(dir)
+    }
+
+    /// Builds `submission` as `assignment` in job `slot`'s sandbox (module docs).
+    ///
+    /// # Errors
+    /// [`BuildFailure`]: the student's ([`BuildFailure::Compile`], time-out, limits) or the
+    /// grader's.
+    pub fn build(
+        &self,
+        submission: &Submission,
+        assignment: Assignment,
+        slot: u32,
+    ) -> Result<Built, BuildFailure> {
+        let start = Instant::now();
+        let files = read_tree(&submission.src).map_err(BuildFailure::Compile)?;
+        let toolchain = self.toolchain().map_err(BuildFailure::Grader)?;
+        let api = self.api(toolchain)?;
+        let mut parts: Vec<&[u8]> = vec![
+            assignment.name().as_bytes(),
+            toolchain.version.as_bytes(),
+        ];
+        let api_digest = self.api_digest(toolchain);
+        parts.push(api_digest.as_bytes());
+        for (path, contents) in &files {
+            parts.push(path.as_bytes());
+            parts.push(contents);
+        }
+        let id = digest(&parts);
+        let n = self.next.fetch_add(1, Ordering::Relaxed);
+        let dir = self.scratch.join(format!("sub-{n}"));
+        let krate = dir.join("crate");
+        self.folder(&dir, None)?;
+        let grader = |e: std::io::Error| {
+            BuildFailure::Grader(format!("cannot copy the submission into {}: {e}", dir.display()))
+        };
+        for (relative, contents) in &files {
+            let path = krate.join("src").join(relative);
+            if let Some(parent) = path.parent() {
+                self.folder(parent, None)?;
+            }
+            std::fs::write(&path, contents).map_err(grader)?;
+        }
+        self.folder(&krate.join("serve"), None)?;
+        let main = format!(
+            "// Written by `springlab grade`: serves the student's homework to the grader.\n\
+             fn main() -> std::process::ExitCode {{\n    \
+             springlab_homework::serve_{}(homework::Student)\n}}\n",
+            assignment.name()
+        );
+        std::fs::write(krate.join("serve").join("main.rs"), main).map_err(grader)?;
+        let exe = dir.join("program");
+        let cached = self.cache.join("programs").join(&id);
+        if cached.is_file() {
+            copy_in(&cached, &exe).map_err(grader)?;
+            return Ok(Built {
+                exe,
+                dir,
+                cached: true,
+            });
+        }
+        let out = dir.join("out");
+        self.folder(&out, self.owner(slot))?;
+        let deadline = start + self.limits.wall;
+        let extern_api = {
+            let mut s = OsString::from("springlab_homework=");
+            s.push(api.join("libspringlab_homework.rlib"));
+            s
+        };
+        let mut dependency = OsString::from("dependency=");
+        dependency.push(&api);
+        let read = vec![api.clone(), krate.clone()];
+        let mut lib = common_args();
+        lib.extend(["--crate-type", "rlib", "--crate-name", "homework"].map(OsString::from));
+        lib.extend(["--extern".into(), extern_api.clone(), "-L".into(), dependency.clone()]);
+        lib.push("-o".into());
+        lib.push(out.join("libhomework.rlib").into_os_string());
+        lib.push("src/lib.rs".into());
+        self.rustc(toolchain, lib, &krate, read.clone(), &out, slot, deadline)?;
+        let mut bin = common_args();
+        bin.extend(["--crate-type", "bin", "--crate-name", "serve"].map(OsString::from));
+        let mut extern_lib = OsString::from("homework=");
+        extern_lib.push(out.join("libhomework.rlib"));
+        bin.extend(["--extern".into(), extern_api, "--extern".into(), extern_lib]);
+        bin.extend(["-L".into(), dependency]);
+        bin.push("-o".into());
+        bin.push(out.join("program").into_os_string());
+        bin.push("serve/main.rs".into());
+        self.rustc(toolchain, bin, &krate, read, &out, slot, deadline)?;
+        // The build's processes are gone (sweep in rustc()); the program is copied out of the
+        // sandbox user's folder into the grader's.
+        let built = out.join("program");
+        let meta = std::fs::symlink_metadata(&built).map_err(|e| {
+            BuildFailure::Grader(format!("rustc reported success but left no program: {e}"))
+        })?;
+        if !meta.is_file() {
+            return Err(BuildFailure::Grader("the built program is not a file".into()));
+        }
+        copy_in(&built, &exe).map_err(grader)?;
+        let _ = copy_in(&exe, &cached);
+        let _ = std::fs::remove_dir_all(&out);
+        Ok(Built {
+            exe,
+            dir,
+            cached: false,
+        })
+    }
+}
+
+/// Arguments of every rustc run: the release profile of the old cargo build.
+fn common_args() -> Vec<OsString> {
+    [
+        "--edition",
+        "2024",
+        "-C",
+        "opt-level=3",
+        "-C",
+        "debuginfo=0",
+        "-C",
+        "panic=unwind",
+        "--error-format",
+        "human",
+        "--color",
+        "never",
+    ]
+    .map(OsString::from)
+    .to_vec()
+}
+
+/// Copies `from` to `to` (the grader's, 0755) through a temporary file beside it, created
+/// exclusively and renamed: a reader sees the old file or the new one, whole.
+fn copy_in(from: &Path, to: &Path) -> std::io::Result<()> {
+    use std::os::unix::fs::OpenOptionsExt;
+    if let Some(parent) = to.parent() {
+        std::fs::create_dir_all(parent)?;
+    }
+    let tmp = to.with_extension(format!("tmp-{}", super::remote::random_tag()));
+    let mut src = std::fs::File::open(from)?;
+    let mut dst = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .mode(0o755)
+        .custom_flags(nix::libc::O_NOFOLLOW)
+        .open(&tmp)?;
+    std::io::copy(&mut src, &mut dst)?;
+    drop(dst);
+    std::fs::rename(&tmp, to).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+/// Kills the sandbox's process group (A and whatever kept its group) and reaps A.
+fn kill_group(child: &mut std::process::Child) {
+    if let Ok(pid) = i32::try_from(child.id()) {
+        let _ = nix::sys::signal::killpg(
+            nix::unistd::Pid::from_raw(pid),
+            nix::sys::signal::Signal::SIGKILL,
+        );
+    }
+    let _ = child.kill();
+    let _ = child.wait();
 }
 
 /// The default target directory of `springlab grade`: `$CARGO_TARGET_DIR`, else

@@ -14,12 +14,12 @@
 //! only a directory whose assignment cannot be told is an error.
 
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::Duration;
+use std::sync::{Arc, Mutex};
 
-use super::build::{self, BuildFailure};
-use super::remote::{Limits, Remote, Session};
+use super::build::{self, BuildFailure, BuildLimits, Builder};
+use super::remote::{Limits, Place, Remote, Session};
+use super::sandbox::{self, Sandbox};
 use super::{Assignment, Options, Report, grade_cloth, grade_jelly, grade_rope};
 
 /// Settings of an external grading run.
@@ -29,30 +29,34 @@ pub struct ExternalOptions {
     pub grading: Options,
     /// Limits of the student's program.
     pub limits: Limits,
-    /// Longest time one build may take.
-    pub build_limit: Duration,
-    /// The cargo target directory shared by every build.
+    /// Limits of one build.
+    pub build: BuildLimits,
+    /// The folder of the grader's build cache (`springlab-grade/` beneath it).
     pub target_dir: PathBuf,
     /// The assignment of every submission; `None` reads it from each one's Cargo.toml.
     pub assignment: Option<Assignment>,
+    /// The sandbox's user and the layers left out.
+    pub sandbox: sandbox::Config,
 }
 
 impl Default for ExternalOptions {
-    /// Default grading options and limits, 10 minutes per build, [`build::default_target_dir`].
+    /// Default grading options and limits, [`BuildLimits::default`],
+    /// [`build::default_target_dir`], the default sandbox.
     fn default() -> ExternalOptions {
         ExternalOptions {
             grading: Options::default(),
             limits: Limits::default(),
-            build_limit: Duration::from_secs(10 * 60),
+            build: BuildLimits::default(),
             target_dir: build::default_target_dir(),
             assignment: None,
+            sandbox: sandbox::Config::default(),
         }
     }
 }
 
 /// What stops `springlab grade` from producing a report for a directory (a report with zero
 /// points is not an error).
-#[derive(Debug, thiserror::Error)]
+#[derive(Clone, Debug, thiserror::Error)]
 pub enum GradeError {
     /// DIR is not a homework crate and no assignment was given.
     #[error("{} is not a homework crate: {reason}", .dir.display())]
@@ -62,6 +66,19 @@ pub enum GradeError {
         /// What is missing.
         reason: String,
     },
+    /// The crate names another assignment than the class's.
+    #[error("{} names the {named} assignment in its Cargo.toml, but the class is graded as {class}; give --assignment to grade every crate as one assignment", .dir.display())]
+    OtherAssignment {
+        /// The directory.
+        dir: PathBuf,
+        /// What its Cargo.toml names.
+        named: &'static str,
+        /// The class's assignment.
+        class: &'static str,
+    },
+    /// The grader itself failed (its folders, its toolchain): not the student's doing.
+    #[error("grader error (not the submission's fault): {0}")]
+    Grader(String),
 }
 
 /// The assignment named in `dir/Cargo.toml` (`[package.metadata.springlab] assignment`).
@@ -144,89 +161,146 @@ pub fn expand(paths: &[PathBuf]) -> Vec<PathBuf> {
     out
 }
 
-/// Builds and grades the submission in `dir` (module docs). `progress` receives one line per
-/// stage.
+/// The sandbox and build folders of one run.
 ///
 /// # Errors
-/// [`GradeError`] only when the assignment is neither given nor in `dir/Cargo.toml`; a
-/// submission that does not build, crashes or hangs gets a report that says so.
-pub fn grade_crate(
-    dir: &Path,
-    options: &ExternalOptions,
-    progress: &(dyn Fn(&str) + Sync),
-) -> Result<Report, GradeError> {
-    let assignment = match options.assignment {
-        Some(a) => a,
-        None => assignment_of(dir)?,
-    };
-    Ok(grade_as(dir, assignment, options, progress))
+/// [`GradeError::Grader`]: the build cache cannot be made or written.
+pub fn builder(options: &ExternalOptions) -> Result<Arc<Builder>, GradeError> {
+    let target =
+        std::path::absolute(&options.target_dir).unwrap_or_else(|_| options.target_dir.clone());
+    let sandbox = Arc::new(Sandbox::detect(&options.sandbox));
+    Builder::new(&target, sandbox, options.build)
+        .map(Arc::new)
+        .map_err(GradeError::Grader)
 }
 
-fn grade_as(
+/// Builds and grades the submission in `dir` as `assignment` in job `slot` (module docs).
+///
+/// # Errors
+/// [`GradeError::Grader`] when the grader fails (its toolchain, its folders); a submission that
+/// does not build, crashes or hangs gets a report that says so.
+pub fn grade_as(
     dir: &Path,
     assignment: Assignment,
     options: &ExternalOptions,
+    builder: &Arc<Builder>,
+    slot: u32,
     progress: &(dyn Fn(&str) + Sync),
-) -> Report {
-    let not_run = |reason: &str| assignment.not_run(reason, &options.grading);
-    let target =
-        std::path::absolute(&options.target_dir).unwrap_or_else(|_| options.target_dir.clone());
+) -> Result<Report, GradeError> {
+    let summary = builder.sandbox.summary();
+    let not_run = |reason: &str| {
+        let mut r = assignment.not_run(reason, &options.grading);
+        r.sandbox = Some(summary.clone());
+        Ok(r)
+    };
     let submission = match build::locate(dir) {
         Ok(s) => s,
         Err(why) => return not_run(&format!("nothing to build: {why}")),
     };
     progress(&format!("building {}", dir.display()));
-    let prepared = match build::prepare(&submission, assignment, &target) {
-        Ok(p) => p,
-        Err(why) => return not_run(&format!("the submission could not be prepared: {why}")),
-    };
-    let exe = match build::build(&prepared, &target, options.build_limit) {
-        Ok(exe) => exe,
+    let built = match builder.build(&submission, assignment, slot) {
+        Ok(built) => built,
         Err(BuildFailure::Compile(errors)) => {
             return not_run(&format!("the crate did not build:\n{errors}"));
         }
         Err(BuildFailure::TimedOut(limit)) => {
             return not_run(&format!(
-                "the build did not finish within {} s",
-                limit.as_secs()
+                "the build did not finish within {} s (the build's time limit)",
+                limit.as_secs_f64()
             ));
         }
-        Err(BuildFailure::Cargo(why)) => {
-            return not_run(&format!("the grader could not build the crate: {why}"));
+        Err(BuildFailure::Limit(why)) => {
+            return not_run(&format!("the build was stopped: {why}"));
         }
+        Err(BuildFailure::Grader(why)) => return Err(GradeError::Grader(why)),
     };
     progress(&format!("grading {}", dir.display()));
+    let place = Place {
+        builder: Arc::clone(builder),
+        slot,
+        dir: built.dir.clone(),
+    };
     let remote = Remote::new(
-        Session::new(exe, assignment, options.limits),
+        Session::new(built.exe, assignment, options.limits, place),
         options.grading.time_limit,
     );
-    let report = match assignment {
+    let mut report = match assignment {
         Assignment::Rope => grade_rope(remote.clone(), &options.grading),
         Assignment::Jelly => grade_jelly(remote.clone(), &options.grading),
         Assignment::Cloth => grade_cloth(remote.clone(), &options.grading),
     };
     remote.shut_down();
-    report
+    builder.sandbox.sweep(slot);
+    let _ = std::fs::remove_dir_all(&built.dir);
+    report.sandbox = Some(summary);
+    Ok(report)
+}
+
+/// The assignment of each of `dirs`: `--assignment`, else each crate's Cargo.toml; in a class
+/// (several submissions) without `--assignment`, the one most crates name, and a crate naming
+/// another is an error (it is not graded as what it claims).
+fn assignments(dirs: &[PathBuf], given: Option<Assignment>) -> Vec<Result<Assignment, GradeError>> {
+    if let Some(a) = given {
+        return dirs.iter().map(|_| Ok(a)).collect();
+    }
+    let named: Vec<Result<Assignment, GradeError>> =
+        dirs.iter().map(|d| assignment_of(d)).collect();
+    let class = Assignment::ALL.into_iter().max_by_key(|a| {
+        (
+            named.iter().filter(|n| n.as_ref().ok() == Some(a)).count(),
+            // Ties: the first in ALL.
+            std::cmp::Reverse(Assignment::ALL.iter().position(|b| b == a)),
+        )
+    });
+    named
+        .into_iter()
+        .zip(dirs)
+        .map(|(n, dir)| match (n, class) {
+            (Ok(a), Some(c)) if dirs.len() > 1 && a != c => Err(GradeError::OtherAssignment {
+                dir: dir.clone(),
+                named: a.name(),
+                class: c.name(),
+            }),
+            (n, _) => n,
+        })
+        .collect()
 }
 
 /// Grades every directory of `dirs` with `jobs` submissions at a time (at least one); results
-/// in the order of `dirs`.
+/// in the order of `dirs`. When the run cannot start (the build cache), every result is that
+/// grader error. Returns after every process of the sandbox is gone.
 pub fn grade_all(
     dirs: &[PathBuf],
     options: &ExternalOptions,
     jobs: usize,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Vec<Result<Report, GradeError>> {
+    let builder = match builder(options) {
+        Ok(b) => b,
+        Err(e) => {
+            let why = e.to_string();
+            return dirs
+                .iter()
+                .map(|_| Err(GradeError::Grader(why.clone())))
+                .collect();
+        }
+    };
+    let assignments = assignments(dirs, options.assignment);
     let next = AtomicUsize::new(0);
     let results: Vec<Mutex<Option<Result<Report, GradeError>>>> =
         dirs.iter().map(|_| Mutex::new(None)).collect();
+    let workers = jobs.clamp(1, dirs.len().max(1));
     std::thread::scope(|scope| {
-        for _ in 0..jobs.clamp(1, dirs.len().max(1)) {
-            scope.spawn(|| {
+        for slot in 0..workers {
+            let (next, results, builder, assignments) = (&next, &results, &builder, &assignments);
+            scope.spawn(move || {
                 loop {
                     let i = next.fetch_add(1, Ordering::Relaxed);
                     let Some(dir) = dirs.get(i) else { break };
-                    let result = grade_crate(dir, options, progress);
+                    let result = match &assignments[i] {
+                        Ok(a) => grade_as(dir, *a, options, builder, slot as u32, progress),
+                        Err(e) => Err(e.clone()),
+                    };
                     if let Ok(mut slot) = results[i].lock() {
                         *slot = Some(result);
                     }
@@ -234,6 +308,11 @@ pub fn grade_all(
             });
         }
     });
+    // Nothing of the sandbox may be left when the results are written.
+    for slot in 0..workers {
+        builder.sandbox.sweep(slot as u32);
+    }
+    builder.finish();
     results
         .into_iter()
         .zip(dirs)

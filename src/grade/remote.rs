@@ -34,7 +34,7 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, mpsc};
 use std::thread;
@@ -57,7 +57,11 @@ mod traits;
 use convert::*;
 use frames::read_replies;
 use process::*;
+pub(crate) use process::random_tag;
 pub use traits::Remote;
+
+use super::build::Builder;
+use super::sandbox::{Launch, Rlimits};
 
 /// Limits of a student's program.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -119,8 +123,21 @@ struct Running {
     reaped: bool,
 }
 
+/// Where a session's programs run: the run's builder (its sandbox and scratch space), the
+/// job slot, and the submission's folder (working directories go beneath it).
+#[derive(Clone)]
+pub struct Place {
+    /// The run's builder.
+    pub builder: Arc<Builder>,
+    /// The job slot (`--jobs`).
+    pub slot: u32,
+    /// The submission's folder in the scratch space.
+    pub dir: PathBuf,
+}
+
 /// The student's program, started on demand and again after every crash.
 pub struct Session {
+    place: Place,
     exe: PathBuf,
     assignment: Assignment,
     limits: Limits,
@@ -146,8 +163,9 @@ impl std::fmt::Debug for Session {
 impl Session {
     /// A session for the program `exe` of `assignment`; nothing starts until the first call.
     #[must_use]
-    pub fn new(exe: PathBuf, assignment: Assignment, limits: Limits) -> Session {
+    pub fn new(exe: PathBuf, assignment: Assignment, limits: Limits, place: Place) -> Session {
         Session {
+            place,
             exe,
             assignment,
             limits,
@@ -165,25 +183,27 @@ impl Session {
     }
 
     fn spawn(&self, workdir: &Path) -> std::io::Result<Child> {
-        let mut command = Command::new(&self.exe);
-        command
-            .env_clear()
-            .current_dir(workdir)
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped());
-        #[cfg(unix)]
-        {
-            use std::os::unix::process::CommandExt;
-            let limits = self.limits;
-            command.process_group(0);
-            // SAFETY: the closure makes only setrlimit system calls, which are safe between
-            // fork and exec; it allocates nothing and takes no lock.
-            unsafe {
-                command.pre_exec(move || apply_limits(limits));
-            }
-        }
-        command.spawn()
+        let launch = Launch {
+            program: self.exe.clone(),
+            args: Vec::new(),
+            env: Vec::new(),
+            cwd: workdir.to_path_buf(),
+            read: Vec::new(),
+            write: vec![workdir.to_path_buf()],
+            limits: Rlimits {
+                address_space: self.limits.memory_bytes,
+                cpu_seconds: self.limits.cpu_seconds,
+                file_bytes: self.limits.file_bytes,
+                open_files: 32,
+                // No new processes or threads.
+                processes: 0,
+            },
+            slot: self.place.slot,
+        };
+        self.place
+            .builder
+            .sandbox
+            .spawn(&launch, Stdio::piped(), Stdio::piped(), Stdio::piped())
     }
 
     /// Starts a program and exchanges greetings.
@@ -204,7 +224,7 @@ impl Session {
     }
 
     fn try_start(&mut self, deadline: Instant) -> Result<(), CallFailure> {
-        let workdir = fresh_workdir().map_err(|e| {
+        let workdir = self.place.builder.workdir(&self.place.dir, self.place.slot).map_err(|e| {
             CallFailure::NotStarted(format!("cannot create a working directory: {e}"))
         })?;
         let mut child = match self.spawn(&workdir) {
@@ -343,6 +363,8 @@ impl Session {
             let _ = run.child.kill();
             let _ = run.child.wait();
         }
+        // Without a PID namespace, what the program started is found by its user.
+        self.place.builder.sandbox.sweep(self.place.slot);
         let _ = std::fs::remove_dir_all(&run.workdir);
     }
 

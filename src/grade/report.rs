@@ -7,6 +7,7 @@
 //! self-describing) and `execution_time` in seconds.
 
 use std::fmt::Write as _;
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
@@ -203,6 +204,10 @@ pub struct Report {
     pub time_limit_ms: u64,
     /// Wall-clock time of grading (s).
     pub seconds: f64,
+    /// The sandbox layers the student's build and program ran under (`springlab grade`), one
+    /// line; absent when the code ran in this process.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sandbox: Option<String>,
 }
 
 /// Points as text: `5`, `2.5`.
@@ -256,6 +261,9 @@ impl Report {
             points(self.max_score),
             self.scope()
         );
+        if let Some(sandbox) = &self.sandbox {
+            let _ = writeln!(out, "{sandbox}");
+        }
         let _ = writeln!(out);
         let name_width = self
             .items
@@ -342,10 +350,76 @@ impl Report {
             "score": self.score,
             "max_score": self.max_score,
             "execution_time": self.seconds,
-            "output": format!("{}\nscore {} / {} ({})", self.title, points(self.score), points(self.max_score), self.scope()),
+            "output": format!(
+                "{}\nscore {} / {} ({}){}",
+                self.title,
+                points(self.score),
+                points(self.max_score),
+                self.scope(),
+                self.sandbox.as_ref().map(|s| format!("\n{s}")).unwrap_or_default()
+            ),
             "visibility": "visible",
             "stdout_visibility": "hidden",
             "tests": tests,
         })
     }
+}
+
+/// Writes `bytes` to `path` as the grader's result: into a temporary file created beside it
+/// with `O_CREAT | O_EXCL | O_NOFOLLOW` (never through a link, never over another file), then
+/// renamed onto `path`. Whatever is at `path` and is not a regular file (a FIFO, a symbolic
+/// link, a device, a folder) is refused, neither followed nor opened.
+///
+/// # Errors
+/// A sentence naming the path and what was found or what failed.
+pub fn write_result(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    use std::io::Write as _;
+    use std::os::unix::fs::OpenOptionsExt;
+    if let Ok(meta) = std::fs::symlink_metadata(path) {
+        let ft = meta.file_type();
+        if !ft.is_file() {
+            use std::os::unix::fs::FileTypeExt;
+            let what = if ft.is_symlink() {
+                "a symbolic link"
+            } else if ft.is_fifo() {
+                "a FIFO"
+            } else if ft.is_dir() {
+                "a folder"
+            } else if ft.is_char_device() || ft.is_block_device() {
+                "a device"
+            } else if ft.is_socket() {
+                "a socket"
+            } else {
+                "not a regular file"
+            };
+            return Err(format!(
+                "{}: refusing to write a result over {what} (remove it, or choose another path)",
+                path.display()
+            ));
+        }
+    }
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "result".to_string());
+    let tmp = dir.join(format!(".{name}.{}.tmp", super::remote::random_tag()));
+    let io = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
+    let mut file = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .mode(0o644)
+        .custom_flags(nix::libc::O_NOFOLLOW)
+        .open(&tmp)
+        .map_err(io)?;
+    let written = file.write_all(bytes).and_then(|()| file.sync_all());
+    drop(file);
+    if let Err(e) = written.and_then(|()| std::fs::rename(&tmp, path)) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(io(e));
+    }
+    Ok(())
 }

@@ -462,6 +462,7 @@ fn finish<H>(
         seed: options.seed,
         time_limit_ms: u64::try_from(options.time_limit.as_millis()).unwrap_or(u64::MAX),
         seconds,
+        sandbox: None,
     }
 }
 

@@ -1,12 +1,10 @@
-//! Starting and ending a student's program: the session token, a fresh empty working
-//! directory, the limits (setrlimit) applied in the child before `exec`, reaping the process
-//! group, and what its end means in words for the report.
+//! Starting and ending a student's program: the session token, reaping the process group, and
+//! what its end means in words for the report. (The working directory, the limits and the other
+//! layers come from [`crate::grade::sandbox`].)
 
 use std::io::Read;
-use std::path::PathBuf;
 use std::process::{Child, ChildStderr, ExitStatus};
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use springlab_homework::wire::TOKEN_LEN;
 
@@ -33,43 +31,12 @@ pub(super) fn random_token() -> [u8; TOKEN_LEN] {
     token
 }
 
-pub(super) static WORKDIRS: AtomicU64 = AtomicU64::new(0);
-
-/// A new empty directory only this user can enter, for one program's working directory.
-pub(super) fn fresh_workdir() -> std::io::Result<PathBuf> {
-    let n = WORKDIRS.fetch_add(1, Ordering::Relaxed);
-    let tag: String = random_token()[..6]
+/// 12 random hex digits, for names of temporary files and folders.
+pub(crate) fn random_tag() -> String {
+    random_token()[..6]
         .iter()
         .map(|b| format!("{b:02x}"))
-        .collect();
-    let dir = std::env::temp_dir().join(format!(
-        "springlab-homework-{}-{n}-{tag}",
-        std::process::id()
-    ));
-    std::fs::create_dir(&dir)?;
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700))?;
-    }
-    Ok(dir)
-}
-
-/// Applies `limits` in the child between fork and exec (only system calls, no allocation).
-#[cfg(unix)]
-pub(super) fn apply_limits(limits: Limits) -> std::io::Result<()> {
-    use nix::sys::resource::{Resource, setrlimit};
-    let set = |resource, value: u64| {
-        setrlimit(resource, value, value).map_err(|e| std::io::Error::from_raw_os_error(e as i32))
-    };
-    set(Resource::RLIMIT_AS, limits.memory_bytes)?;
-    set(Resource::RLIMIT_CPU, limits.cpu_seconds)?;
-    set(Resource::RLIMIT_FSIZE, limits.file_bytes)?;
-    set(Resource::RLIMIT_CORE, 0)?;
-    set(Resource::RLIMIT_NOFILE, 32)?;
-    // No new processes or threads (not binding on root, which the kernel exempts).
-    set(Resource::RLIMIT_NPROC, 0)?;
-    Ok(())
+        .collect()
 }
 
 /// Keeps the last 16 KiB of the program's stderr.

@@ -1,0 +1,778 @@
+//! The sandbox every build and every student program runs in.
+//!
+//! ```text
+//! grader ─fork─▶ A  (own process group; with namespaces: unshare(pid, net, mount, ipc, uts
+//!                    [, user when not root]); waits and ends as B's program ended)
+//!                └─fork─▶ B  pid 1 of the new PID namespace (dies with A: PDEATHSIG); mounts a
+//!                         fresh /proc (hidepid=invisible); reaps; when the program ends it
+//!                         exits, and the kernel kills every process left in the namespace
+//!                         └─fork─▶ C  rlimits, setgroups/setgid/setuid to the sandbox user,
+//!                                  no_new_privs, Landlock, seccomp, exec (empty environment)
+//! ```
+//! Without namespaces (a container that forbids `unshare`) A and B are left out and C is the
+//! grader's direct child; what it started is then found by its user: [`Sandbox::sweep`] kills
+//! every process of the sandbox user (`kill(-1)` sent by a process of that user) and waits until
+//! none is left.
+//!
+//! The layers and what each stops are in `docs/grading.md`; [`Sandbox::layers`] says which are
+//! active on this machine and why any is missing (`springlab grade --sandbox-report`).
+//! Everything the child does between `fork` and `exec` is a system call on data prepared
+//! before the fork (no allocation, no lock): the Landlock ruleset and the seccomp program are
+//! built in the grader.
+
+mod landlock;
+mod seccomp;
+
+use std::ffi::OsString;
+use std::io;
+use std::os::fd::{AsRawFd, OwnedFd};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use nix::libc;
+
+/// The sandbox user when none is given: `nobody`.
+pub const DEFAULT_UID: u32 = 65534;
+/// The sandbox group when none is given: `nogroup`.
+pub const DEFAULT_GID: u32 = 65534;
+/// Names layers to leave out, comma-separated (`user,namespaces,landlock,seccomp`): for trying
+/// what the others hold alone, as in a container that forbids one.
+pub const DISABLE_ENV: &str = "SPRINGLAB_SANDBOX_DISABLE";
+
+/// What the grader asks of the sandbox.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Config {
+    /// The user id builds and programs run as (when springlab runs as root); the job `k` of
+    /// `--jobs` uses `uid + k`.
+    pub uid: u32,
+    /// Their group id.
+    pub gid: u32,
+    /// Layers left out on purpose.
+    pub disabled: Vec<Layer>,
+}
+
+impl Default for Config {
+    /// nobody/nogroup, and the layers named in `SPRINGLAB_SANDBOX_DISABLE` left out.
+    fn default() -> Config {
+        let disabled = std::env::var(DISABLE_ENV)
+            .unwrap_or_default()
+            .split(',')
+            .filter_map(|w| Layer::ALL.into_iter().find(|l| l.name() == w.trim()))
+            .collect();
+        Config {
+            uid: DEFAULT_UID,
+            gid: DEFAULT_GID,
+            disabled,
+        }
+    }
+}
+
+/// One layer of the sandbox.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layer {
+    /// Another user id and group, no supplementary groups, no_new_privs.
+    User,
+    /// PID, network, mount, IPC and UTS namespaces.
+    Namespaces,
+    /// Landlock: files, TCP, signals.
+    Landlock,
+    /// The seccomp filter.
+    Seccomp,
+    /// Resource limits (always on).
+    Limits,
+}
+
+impl Layer {
+    /// Every layer, in the order of the report.
+    pub const ALL: [Layer; 5] = [
+        Layer::User,
+        Layer::Namespaces,
+        Layer::Landlock,
+        Layer::Seccomp,
+        Layer::Limits,
+    ];
+
+    /// Its name in reports and in `SPRINGLAB_SANDBOX_DISABLE`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Layer::User => "user",
+            Layer::Namespaces => "namespaces",
+            Layer::Landlock => "landlock",
+            Layer::Seccomp => "seccomp",
+            Layer::Limits => "limits",
+        }
+    }
+}
+
+/// Whether a layer is active, and what it is or why it is missing.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LayerState {
+    /// The layer.
+    pub layer: Layer,
+    /// Active on this machine.
+    pub active: bool,
+    /// What it does here, or why it is missing.
+    pub detail: String,
+}
+
+/// Resource limits of one sandboxed process tree.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Rlimits {
+    /// Address space (bytes).
+    pub address_space: u64,
+    /// CPU seconds.
+    pub cpu_seconds: u64,
+    /// Largest file written (bytes).
+    pub file_bytes: u64,
+    /// Open files.
+    pub open_files: u64,
+    /// Processes and threads of the sandbox user (binding only when it is not root).
+    pub processes: u64,
+}
+
+/// One program to run in the sandbox.
+#[derive(Clone, Debug)]
+pub struct Launch {
+    /// The executable (an absolute path).
+    pub program: PathBuf,
+    /// Its arguments.
+    pub args: Vec<OsString>,
+    /// Its whole environment.
+    pub env: Vec<(OsString, OsString)>,
+    /// Its working directory.
+    pub cwd: PathBuf,
+    /// Paths it may read and execute beneath (besides the system's libraries).
+    pub read: Vec<PathBuf>,
+    /// Paths it may write beneath.
+    pub write: Vec<PathBuf>,
+    /// Its limits.
+    pub limits: Rlimits,
+    /// The job slot (`--jobs`): the user id is the sandbox's plus this.
+    pub slot: u32,
+}
+
+/// The system's libraries and tools a program or the linker needs to read and run.
+const SYSTEM_READ: &[&str] = &[
+    "/usr",
+    "/lib",
+    "/lib64",
+    "/lib32",
+    "/bin",
+    "/sbin",
+    "/etc/ld.so.cache",
+    "/etc/ld.so.conf",
+    "/etc/ld.so.conf.d",
+    "/dev/urandom",
+    "/dev/zero",
+];
+const DEVICES: &[&str] = &["/dev/null"];
+
+const NS_FLAGS: libc::c_int = libc::CLONE_NEWPID
+    | libc::CLONE_NEWNET
+    | libc::CLONE_NEWNS
+    | libc::CLONE_NEWIPC
+    | libc::CLONE_NEWUTS;
+
+/// The sandbox of this machine: the layers found at start.
+#[derive(Debug)]
+pub struct Sandbox {
+    config: Config,
+    root: bool,
+    user: Result<(), String>,
+    namespaces: Result<libc::c_int, String>,
+    landlock: Result<i32, String>,
+    seccomp: Result<Vec<libc::sock_filter>, String>,
+}
+
+fn os_error(what: &str, e: i32) -> String {
+    format!("{what}: {}", io::Error::from_raw_os_error(e))
+}
+
+/// Runs `probe` in a forked child and returns its exit code (0: it worked).
+fn probe(probe: impl FnOnce() -> i32) -> i32 {
+    // SAFETY: the child runs only system calls (the probes below) and _exit.
+    let pid = unsafe { libc::fork() };
+    if pid < 0 {
+        return libc::EAGAIN;
+    }
+    if pid == 0 {
+        let code = probe();
+        // SAFETY: ends the forked child without running the parent's destructors.
+        unsafe { libc::_exit(code) };
+    }
+    let mut status = 0;
+    // SAFETY: waits for our own child.
+    while unsafe { libc::waitpid(pid, &raw mut status, 0) } < 0 {
+        if io::Error::last_os_error().raw_os_error() != Some(libc::EINTR) {
+            return libc::ECHILD;
+        }
+    }
+    if libc::WIFEXITED(status) {
+        libc::WEXITSTATUS(status)
+    } else {
+        libc::EPERM
+    }
+}
+
+fn errno() -> i32 {
+    io::Error::last_os_error().raw_os_error().unwrap_or(libc::EPERM)
+}
+
+impl Sandbox {
+    /// Finds which layers this machine allows (a few forked probes, milliseconds).
+    #[must_use]
+    pub fn detect(config: &Config) -> Sandbox {
+        let off = |l: Layer| config.disabled.contains(&l);
+        let off_reason = |l: Layer| format!("left out ({DISABLE_ENV} names {})", l.name());
+        // SAFETY: geteuid cannot fail.
+        let root = unsafe { libc::geteuid() } == 0;
+        let user = if off(Layer::User) {
+            Err(off_reason(Layer::User))
+        } else if !root {
+            Err("springlab is not running as root, so it cannot switch to another user".into())
+        } else if config.uid == 0 {
+            Err("--sandbox-uid 0 keeps builds and programs as root".into())
+        } else {
+            Ok(())
+        };
+        let namespaces = if off(Layer::Namespaces) {
+            Err(off_reason(Layer::Namespaces))
+        } else {
+            let flags = NS_FLAGS | if root { 0 } else { libc::CLONE_NEWUSER };
+            // SAFETY: unshare in the forked probe only.
+            match probe(|| if unsafe { libc::unshare(flags) } == 0 { 0 } else { errno() }) {
+                0 => Ok(flags),
+                e => Err(os_error(
+                    "unshare(pid, net, mount, ipc, uts) is refused (a container's default \
+                     seccomp profile does this)",
+                    e,
+                )),
+            }
+        };
+        let landlock = if off(Layer::Landlock) {
+            Err(off_reason(Layer::Landlock))
+        } else {
+            landlock::abi()
+        };
+        let seccomp = if off(Layer::Seccomp) {
+            Err(off_reason(Layer::Seccomp))
+        } else {
+            match seccomp::filter() {
+                None => Err("no filter is written for this architecture".into()),
+                Some(filter) => {
+                    let probe_filter = filter.clone();
+                    match probe(|| {
+                        // SAFETY: prctl in the forked probe only.
+                        if unsafe { libc::prctl(libc::PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) } != 0 {
+                            return errno();
+                        }
+                        if seccomp::install(&probe_filter) { 0 } else { errno() }
+                    }) {
+                        0 => Ok(filter),
+                        e => Err(os_error("the kernel refused the filter", e)),
+                    }
+                }
+            }
+        };
+        Sandbox {
+            config: config.clone(),
+            root,
+            user,
+            namespaces,
+            landlock,
+            seccomp,
+        }
+    }
+
+    /// The user id of job `slot`, when builds and programs run as another user.
+    #[must_use]
+    pub fn uid(&self, slot: u32) -> Option<u32> {
+        self.user.is_ok().then(|| self.config.uid + slot)
+    }
+
+    /// True when a PID namespace holds every process of a launch.
+    #[must_use]
+    pub fn has_pid_namespace(&self) -> bool {
+        self.namespaces.is_ok()
+    }
+
+    /// Each layer: active or missing, and why.
+    #[must_use]
+    pub fn layers(&self) -> Vec<LayerState> {
+        let state = |layer, r: Result<String, &String>| match r {
+            Ok(detail) => LayerState {
+                layer,
+                active: true,
+                detail,
+            },
+            Err(why) => LayerState {
+                layer,
+                active: false,
+                detail: why.clone(),
+            },
+        };
+        vec![
+            state(
+                Layer::User,
+                self.user.as_ref().map(|()| {
+                    format!(
+                        "uid {} gid {} (job k of --jobs: uid {} + k), no supplementary groups, \
+                         no_new_privs",
+                        self.config.uid, self.config.gid, self.config.uid
+                    )
+                }),
+            ),
+            state(
+                Layer::Namespaces,
+                self.namespaces.as_ref().map(|f| {
+                    format!(
+                        "pid, net, mount, ipc, uts{}: nothing outlives the program, no network, \
+                         /proc shows the sandbox only",
+                        if f & libc::CLONE_NEWUSER != 0 {
+                            ", user"
+                        } else {
+                            ""
+                        }
+                    )
+                }),
+            ),
+            state(
+                Layer::Landlock,
+                self.landlock.as_ref().map(|abi| {
+                    let mut what = String::from("files (read: toolchain, submission, API; write: its own directory)");
+                    if *abi >= 4 {
+                        what.push_str(", TCP");
+                    }
+                    if *abi >= 6 {
+                        what.push_str(", signals and abstract sockets outside");
+                    }
+                    format!("ABI {abi}: {what}")
+                }),
+            ),
+            state(
+                Layer::Seccomp,
+                self.seccomp.as_ref().map(|_| {
+                    "no sockets but AF_UNIX, no ptrace, process_vm_*, io_uring, namespaces, \
+                     mounts, bpf, keyrings"
+                        .to_string()
+                }),
+            ),
+            LayerState {
+                layer: Layer::Limits,
+                active: true,
+                detail: format!(
+                    "CPU, address space, file size, open files, processes{}, no core files; \
+                     wall clock by the grader",
+                    if self.user.is_ok() {
+                        ""
+                    } else {
+                        " (not binding on root)"
+                    }
+                ),
+            },
+        ]
+    }
+
+    /// One line: `sandbox: user ✓, namespaces ✓, landlock ✓ (ABI 7), seccomp ✓, limits ✓`,
+    /// with `✗` for a missing layer.
+    #[must_use]
+    pub fn summary(&self) -> String {
+        let parts: Vec<String> = self
+            .layers()
+            .iter()
+            .map(|l| {
+                let mark = if l.active { "on" } else { "off" };
+                match (l.layer, &self.landlock) {
+                    (Layer::Landlock, Ok(abi)) => format!("landlock on (ABI {abi})"),
+                    (Layer::User, _) if l.active => format!("user on (uid {})", self.config.uid),
+                    _ => format!("{} {mark}", l.layer.name()),
+                }
+            })
+            .collect();
+        format!("sandbox: {}", parts.join(", "))
+    }
+
+    /// The full report: one line per layer.
+    #[must_use]
+    pub fn report(&self) -> String {
+        let mut out = String::new();
+        for l in self.layers() {
+            out.push_str(&format!(
+                "{:<11} {:<7} {}\n",
+                l.layer.name(),
+                if l.active { "active" } else { "missing" },
+                l.detail
+            ));
+        }
+        if self.namespaces.is_err() && self.user.is_ok() {
+            out.push_str(&format!(
+                "cleanup     active  every process of the sandbox user is killed after each build \
+                 and program (uid {} must be used by nothing else)\n",
+                self.config.uid
+            ));
+        }
+        out
+    }
+
+    /// Starts `launch` in the sandbox with the given standard streams.
+    ///
+    /// # Errors
+    /// When the Landlock ruleset cannot be built or the program cannot be started.
+    pub fn spawn(
+        &self,
+        launch: &Launch,
+        stdin: Stdio,
+        stdout: Stdio,
+        stderr: Stdio,
+    ) -> io::Result<Child> {
+        use std::os::unix::process::CommandExt;
+        let mut command = Command::new(&launch.program);
+        command
+            .args(&launch.args)
+            .env_clear()
+            .envs(launch.env.iter().map(|(k, v)| (k, v)))
+            .current_dir(&launch.cwd)
+            .stdin(stdin)
+            .stdout(stdout)
+            .stderr(stderr)
+            .process_group(0);
+        let uid = self.uid(launch.slot);
+        let gid = self.config.gid;
+        let ns = self.namespaces.as_ref().ok().copied().unwrap_or(0);
+        let userns = ns & libc::CLONE_NEWUSER != 0;
+        // SAFETY: getuid/getgid cannot fail.
+        let (my_uid, my_gid) = unsafe { (libc::getuid(), libc::getgid()) };
+        let uid_map = format!("{my_uid} {my_uid} 1");
+        let gid_map = format!("{my_gid} {my_gid} 1");
+        // /proc (a fresh one, of the sandbox's processes only) when another user is active;
+        // without namespaces or as one's own user, no /proc at all.
+        let proc_rule = ns != 0 && uid.is_some();
+        let ruleset: Option<OwnedFd> = match &self.landlock {
+            Ok(abi) => {
+                let mut read: Vec<&Path> = SYSTEM_READ.iter().map(Path::new).collect();
+                read.extend(launch.read.iter().map(PathBuf::as_path));
+                read.push(&launch.program);
+                let write: Vec<&Path> = launch.write.iter().map(PathBuf::as_path).collect();
+                let devices: Vec<&Path> = DEVICES.iter().map(Path::new).collect();
+                Some(landlock::ruleset(*abi, &read, &write, &devices)?)
+            }
+            Err(_) => None,
+        };
+        let filter = self.seccomp.as_ref().ok().cloned();
+        let limits = launch.limits;
+        let pre_exec = move || -> io::Result<()> {
+            let ruleset_fd = ruleset.as_ref().map_or(-1, AsRawFd::as_raw_fd);
+            if ns != 0 {
+                // SAFETY: system calls on data prepared before the fork (module docs).
+                unsafe { enter_namespaces(ns, userns, &uid_map, &gid_map, proc_rule, ruleset_fd)? };
+            }
+            // SAFETY: as above.
+            unsafe { confine(uid, gid, limits, ruleset_fd, filter.as_deref()) }
+        };
+        // SAFETY: the closure makes only system calls (no allocation, no lock).
+        unsafe {
+            command.pre_exec(pre_exec);
+        }
+        command.spawn()
+    }
+
+    /// Without a PID namespace: kills every process of job `slot`'s user and waits (up to 5 s)
+    /// until none is left. Returns how many were found. Without another user: nothing to find.
+    pub fn sweep(&self, slot: u32) -> usize {
+        if self.has_pid_namespace() {
+            return 0;
+        }
+        self.sweep_uid(slot)
+    }
+
+    /// Kills every process of job `slot`'s user (namespaces or not); returns how many were
+    /// found.
+    pub fn sweep_uid(&self, slot: u32) -> usize {
+        let Some(uid) = self.uid(slot) else { return 0 };
+        let gid = self.config.gid;
+        let found = processes_of(uid).len();
+        let start = Instant::now();
+        while !processes_of(uid).is_empty() && start.elapsed() < Duration::from_secs(5) {
+            probe(|| {
+                // SAFETY: in the forked child: become the sandbox user, then signal every
+                // process it may signal (all of that user but itself).
+                unsafe {
+                    if libc::setgroups(0, std::ptr::null()) != 0
+                        || libc::setresgid(gid, gid, gid) != 0
+                        || libc::setresuid(uid, uid, uid) != 0
+                    {
+                        return 1;
+                    }
+                    libc::kill(-1, libc::SIGKILL);
+                }
+                0
+            });
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        found
+    }
+
+    /// The sandbox group id.
+    #[must_use]
+    pub fn gid(&self) -> u32 {
+        self.config.gid
+    }
+
+    /// True when springlab runs as root.
+    #[must_use]
+    pub fn is_root(&self) -> bool {
+        self.root
+    }
+}
+
+/// The processes (pids) whose real user id is `uid`, from `/proc`.
+#[must_use]
+pub fn processes_of(uid: u32) -> Vec<u32> {
+    let Ok(entries) = std::fs::read_dir("/proc") else {
+        return Vec::new();
+    };
+    entries
+        .filter_map(Result::ok)
+        .filter_map(|e| e.file_name().to_str()?.parse::<u32>().ok())
+        .filter(|pid| {
+            std::fs::read_to_string(format!("/proc/{pid}/status"))
+                .ok()
+                .and_then(|s| {
+                    s.lines()
+                        .find(|l| l.starts_with("Uid:"))
+                        .and_then(|l| l.split_whitespace().nth(1)?.parse::<u32>().ok())
+                })
+                == Some(uid)
+        })
+        .collect()
+}
+
+/// Writes `data` to the file `path` (both NUL-terminated where needed); system calls only.
+unsafe fn write_file(path: &[u8], data: &[u8]) -> bool {
+    // SAFETY: path is NUL-terminated by the caller.
+    let fd = unsafe { libc::open(path.as_ptr().cast(), libc::O_WRONLY | libc::O_CLOEXEC) };
+    if fd < 0 {
+        return false;
+    }
+    // SAFETY: a valid buffer and descriptor.
+    let n = unsafe { libc::write(fd, data.as_ptr().cast(), data.len()) };
+    // SAFETY: closes the descriptor just opened.
+    unsafe { libc::close(fd) };
+    n == data.len() as isize
+}
+
+/// Closes every descriptor but `keep`.
+unsafe fn close_all_but(keep: libc::c_int) {
+    // SAFETY: close_range on ranges of this process's descriptors.
+    unsafe {
+        if keep > 0 {
+            libc::syscall(libc::SYS_close_range, 0u32, (keep - 1) as u32, 0u32);
+        }
+        libc::syscall(libc::SYS_close_range, (keep + 1) as u32, u32::MAX, 0u32);
+    }
+}
+
+/// In A (module docs): new namespaces, then B and C; returns only in C.
+unsafe fn enter_namespaces(
+    ns: libc::c_int,
+    userns: bool,
+    uid_map: &str,
+    gid_map: &str,
+    proc_rule: bool,
+    ruleset_fd: libc::c_int,
+) -> io::Result<()> {
+    // SAFETY (whole function): system calls only, on data prepared before the fork.
+    unsafe {
+        if libc::unshare(ns) != 0 {
+            return Err(io::Error::last_os_error());
+        }
+        if userns {
+            let _ = write_file(b"/proc/self/setgroups\0", b"deny");
+            if !write_file(b"/proc/self/uid_map\0", uid_map.as_bytes())
+                || !write_file(b"/proc/self/gid_map\0", gid_map.as_bytes())
+            {
+                return Err(io::Error::last_os_error());
+            }
+        }
+        let mut pipe = [0; 2];
+        if libc::pipe2(pipe.as_mut_ptr(), libc::O_CLOEXEC) != 0 {
+            return Err(io::Error::last_os_error());
+        }
+        let b = libc::fork();
+        if b < 0 {
+            return Err(io::Error::last_os_error());
+        }
+        if b > 0 {
+            // A: wait for B, then end as the program ended.
+            close_all_but(pipe[0]);
+            let mut status = 0;
+            while libc::waitpid(b, &raw mut status, 0) < 0 && errno() == libc::EINTR {}
+            let mut word = [0u8; 4];
+            if libc::read(pipe[0], word.as_mut_ptr().cast(), 4) != 4 {
+                libc::_exit(126);
+            }
+            end_as(i32::from_ne_bytes(word));
+        }
+        // B: pid 1 of the namespace; dies with A. (Its parent is outside the namespace, so
+        // getppid() is 0 here and cannot tell whether A is still alive; A closing its end of
+        // the pipe is not needed either: A only ends after B.)
+        libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL, 0, 0, 0);
+        libc::close(pipe[0]);
+        if proc_rule
+            && libc::mount(
+                std::ptr::null(),
+                c"/".as_ptr(),
+                std::ptr::null(),
+                libc::MS_REC | libc::MS_PRIVATE,
+                std::ptr::null(),
+            ) == 0
+            && libc::mount(
+                c"proc".as_ptr(),
+                c"/proc".as_ptr(),
+                c"proc".as_ptr(),
+                libc::MS_NOSUID | libc::MS_NODEV | libc::MS_NOEXEC,
+                c"hidepid=invisible".as_ptr().cast(),
+            ) == 0
+            && ruleset_fd >= 0
+        {
+            let pfd = libc::open(c"/proc".as_ptr(), libc::O_PATH | libc::O_CLOEXEC);
+            if pfd >= 0 {
+                landlock::add_rule(ruleset_fd, pfd, landlock::READ_FILE | landlock::READ_DIR);
+                libc::close(pfd);
+            }
+        }
+        let c = libc::fork();
+        if c < 0 {
+            libc::_exit(126);
+        }
+        if c > 0 {
+            // B: reap everything; when C ends, report its status and exit (the kernel then
+            // kills whatever is left in the namespace).
+            close_all_but(pipe[1]);
+            loop {
+                let mut status = 0;
+                let pid = libc::waitpid(-1, &raw mut status, 0);
+                if pid == c {
+                    let word = status.to_ne_bytes();
+                    libc::write(pipe[1], word.as_ptr().cast(), 4);
+                    libc::_exit(0);
+                }
+                if pid < 0 && errno() != libc::EINTR {
+                    libc::_exit(126);
+                }
+            }
+        }
+        // C.
+        libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL, 0, 0, 0);
+        libc::close(pipe[1]);
+        Ok(())
+    }
+}
+
+/// Ends A as the program ended: the same exit code, or the same signal.
+unsafe fn end_as(status: libc::c_int) -> ! {
+    // SAFETY: system calls only.
+    unsafe {
+        if libc::WIFEXITED(status) {
+            libc::_exit(libc::WEXITSTATUS(status));
+        }
+        if libc::WIFSIGNALED(status) {
+            let sig = libc::WTERMSIG(status);
+            let none = libc::rlimit {
+                rlim_cur: 0,
+                rlim_max: 0,
+            };
+            libc::setrlimit(libc::RLIMIT_CORE, &raw const none);
+            libc::signal(sig, libc::SIG_DFL);
+            let mut set: libc::sigset_t = std::mem::zeroed();
+            libc::sigemptyset(&raw mut set);
+            libc::sigaddset(&raw mut set, sig);
+            libc::sigprocmask(libc::SIG_UNBLOCK, &raw const set, std::ptr::null_mut());
+            libc::kill(libc::getpid(), sig);
+        }
+        libc::_exit(125)
+    }
+}
+
+/// In C: limits, the other user, no_new_privs, Landlock, seccomp.
+unsafe fn confine(
+    uid: Option<u32>,
+    gid: u32,
+    limits: Rlimits,
+    ruleset_fd: libc::c_int,
+    filter: Option<&[libc::sock_filter]>,
+) -> io::Result<()> {
+    let fail = || Err(io::Error::last_os_error());
+    // SAFETY (whole function): system calls only, on data prepared before the fork.
+    unsafe {
+        let set = |resource, value: u64| {
+            let l = libc::rlimit {
+                rlim_cur: value,
+                rlim_max: value,
+            };
+            libc::setrlimit(resource, &raw const l) == 0
+        };
+        if !(set(libc::RLIMIT_AS, limits.address_space)
+            && set(libc::RLIMIT_CPU, limits.cpu_seconds)
+            && set(libc::RLIMIT_FSIZE, limits.file_bytes)
+            && set(libc::RLIMIT_CORE, 0)
+            && set(libc::RLIMIT_NOFILE, limits.open_files))
+        {
+            return fail();
+        }
+        if let Some(uid) = uid
+            && (libc::setgroups(0, std::ptr::null()) != 0
+                || libc::setresgid(gid, gid, gid) != 0
+                || libc::setresuid(uid, uid, uid) != 0)
+        {
+            return fail();
+        }
+        // After the switch: a limit set before it would make the exec fail (the kernel checks
+        // the new user's count at setuid).
+        if !set(libc::RLIMIT_NPROC, limits.processes) {
+            return fail();
+        }
+        if libc::prctl(libc::PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0 {
+            return fail();
+        }
+        if ruleset_fd >= 0 && !landlock::restrict_self(ruleset_fd) {
+            return fail();
+        }
+        if let Some(filter) = filter
+            && !seccomp::install(filter)
+        {
+            return fail();
+        }
+        Ok(())
+    }
+}
+
+/// True when every directory above and including `path` can be searched by `uid`/`gid`
+/// (another user reading a file there).
+#[must_use]
+pub fn reachable_by(path: &Path, uid: u32, gid: u32) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    let mut p = Some(path);
+    while let Some(dir) = p {
+        let Ok(m) = std::fs::metadata(dir) else {
+            return false;
+        };
+        if m.is_dir() {
+            let mode = m.mode();
+            let ok = if m.uid() == uid {
+                mode & 0o100 != 0
+            } else if m.gid() == gid {
+                mode & 0o010 != 0
+            } else {
+                mode & 0o001 != 0
+            };
+            if !ok {
+                return false;
+            }
+        }
+        p = dir.parent();
+    }
+    true
+}
