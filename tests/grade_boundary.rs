@@ -471,8 +471,11 @@ fn a_hostile_homework_gets_the_score_a_fair_grader_gives() {
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("peak memory reported: {explicit}"));
     assert!((200..=256).contains(&in_use), "{explicit}");
-    // Not contained: a file written outside the working directory (README: use a container).
-    assert!(escaped.is_file());
+    // A file written outside the working directory: contained by the sandbox where another
+    // user or Landlock is active (as root, or on a kernel with Landlock), written otherwise.
+    let sandbox = r["sandbox"].as_str().unwrap_or_default();
+    let contained = sandbox.contains("user on") || sandbox.contains("landlock on");
+    assert_eq!(escaped.exists(), !contained, "{sandbox}");
 }
 
 #[test]

@@ -51,10 +51,11 @@ pub struct Submission {
 }
 
 /// Finds the code of the submission in `dir`: `dir/src/lib.rs`, `dir/lib.rs`, or the one
-/// `dir/*/src/lib.rs` (an upload of a whole crate folder).
+/// `src/lib.rs` in the folders below (an upload of a whole crate folder, up to three levels
+/// down; hidden folders and `target` are not searched).
 ///
 /// # Errors
-/// A sentence saying what was looked for.
+/// A sentence saying what was looked for, or that several crates were found.
 pub fn locate(dir: &Path) -> Result<Submission, String> {
     let found = |src: PathBuf| Submission {
         dir: dir.to_path_buf(),
@@ -66,24 +67,52 @@ pub fn locate(dir: &Path) -> Result<Submission, String> {
     if dir.join("lib.rs").is_file() {
         return Ok(found(dir.to_path_buf()));
     }
-    let mut nested: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map_err(|e| format!("cannot read {}: {e}", dir.display()))?
-        .filter_map(Result::ok)
-        .map(|e| e.path().join("src"))
-        .filter(|src| src.join("lib.rs").is_file())
-        .collect();
-    nested.sort();
-    match nested.len() {
-        1 => Ok(found(nested.remove(0))),
-        0 => Err(format!(
-            "no src/lib.rs in {} (nor lib.rs, nor one folder down)",
-            dir.display()
-        )),
-        n => Err(format!(
-            "{n} crates in {}: grade them one by one, or as a class folder",
-            dir.display()
-        )),
+    let mut level = vec![dir.to_path_buf()];
+    for _ in 0..3 {
+        let mut next = Vec::new();
+        for parent in &level {
+            let Ok(entries) = std::fs::read_dir(parent) else {
+                if parent == dir {
+                    return Err(format!("cannot read {}", dir.display()));
+                }
+                continue;
+            };
+            for entry in entries.filter_map(Result::ok) {
+                let name = entry.file_name().to_string_lossy().into_owned();
+                // symlink_metadata: links are not followed.
+                let is_dir = std::fs::symlink_metadata(entry.path()).is_ok_and(|m| m.is_dir());
+                if is_dir && !name.starts_with('.') && name != "target" && name != "src" {
+                    next.push(entry.path());
+                }
+            }
+        }
+        let mut crates: Vec<PathBuf> = next
+            .iter()
+            .map(|d| d.join("src"))
+            .filter(|src| src.join("lib.rs").is_file())
+            .collect();
+        crates.sort();
+        match crates.len() {
+            0 => {}
+            1 => return Ok(found(crates.remove(0))),
+            n => {
+                return Err(format!(
+                    "{n} crates in {}: {}; grade them one by one",
+                    dir.display(),
+                    crates
+                        .iter()
+                        .map(|c| c.display().to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+            }
+        }
+        level = next;
     }
+    Err(format!(
+        "no src/lib.rs in {} (nor lib.rs, nor up to three folders down)",
+        dir.display()
+    ))
 }
 
 /// A source tree read into memory: relative paths (with `/`) and contents, sorted.
@@ -383,6 +412,15 @@ impl Drop for Builder {
     }
 }
 
+/// A submission copied into the scratch space, not built yet.
+#[derive(Clone, Debug)]
+pub struct Staged {
+    /// Its folder in the scratch space.
+    pub dir: PathBuf,
+    /// The digest of what goes into its build.
+    id: String,
+}
+
 /// A built submission: the program and its folder in the scratch space.
 #[derive(Clone, Debug)]
 pub struct Built {
@@ -675,25 +713,20 @@ impl Builder {
         Ok(dir)
     }
 
-    /// Builds `submission` as `assignment` in job `slot`'s sandbox (module docs).
+    /// Copies `submission` into a new folder of the scratch space (the grader's; done for every
+    /// submission of a run before any student code runs) and names its build by content.
     ///
     /// # Errors
-    /// [`BuildFailure`]: the student's ([`BuildFailure::Compile`], time-out, limits) or the
-    /// grader's.
-    pub fn build(
+    /// [`BuildFailure::Compile`] when the source cannot be read or is too large (the student's),
+    /// [`BuildFailure::Grader`] when the toolchain or the scratch space fails.
+    pub fn stage(
         &self,
         submission: &Submission,
         assignment: Assignment,
-        slot: u32,
-    ) -> Result<Built, BuildFailure> {
-        let start = Instant::now();
+    ) -> Result<Staged, BuildFailure> {
         let files = read_tree(&submission.src).map_err(BuildFailure::Compile)?;
         let toolchain = self.toolchain().map_err(BuildFailure::Grader)?;
-        let api = self.api(toolchain)?;
-        let mut parts: Vec<&[u8]> = vec![
-            assignment.name().as_bytes(),
-            toolchain.version.as_bytes(),
-        ];
+        let mut parts: Vec<&[u8]> = vec![assignment.name().as_bytes(), toolchain.version.as_bytes()];
         let api_digest = self.api_digest(toolchain);
         parts.push(api_digest.as_bytes());
         for (path, contents) in &files {
@@ -723,8 +756,26 @@ impl Builder {
             assignment.name()
         );
         std::fs::write(krate.join("serve").join("main.rs"), main).map_err(grader)?;
+        Ok(Staged { dir, id })
+    }
+
+    /// Builds a staged submission in job `slot`'s sandbox (module docs).
+    ///
+    /// # Errors
+    /// [`BuildFailure`]: the student's ([`BuildFailure::Compile`], time-out, limits) or the
+    /// grader's.
+    pub fn build(&self, staged: &Staged, slot: u32) -> Result<Built, BuildFailure> {
+        let start = Instant::now();
+        let toolchain = self.toolchain().map_err(BuildFailure::Grader)?;
+        let api = self.api(toolchain)?;
+        let dir = staged.dir.clone();
+        let id = &staged.id;
+        let krate = dir.join("crate");
+        let grader = |e: std::io::Error| {
+            BuildFailure::Grader(format!("cannot write the program into {}: {e}", dir.display()))
+        };
         let exe = dir.join("program");
-        let cached = self.cache.join("programs").join(&id);
+        let cached = self.cache.join("programs").join(id);
         if cached.is_file() {
             copy_in(&cached, &exe).map_err(grader)?;
             return Ok(Built {

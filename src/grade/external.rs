@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
-use super::build::{self, BuildFailure, BuildLimits, Builder};
+use super::build::{self, BuildFailure, BuildLimits, Builder, Staged};
 use super::remote::{Limits, Place, Remote, Session};
 use super::sandbox::{self, Sandbox};
 use super::{Assignment, Options, Report, grade_cloth, grade_jelly, grade_rope};
@@ -93,7 +93,15 @@ pub fn assignment_of(dir: &Path) -> Result<Assignment, GradeError> {
     if !dir.is_dir() {
         return Err(not_a_crate("no such directory".to_string()));
     }
-    let manifest = dir.join("Cargo.toml");
+    let mut manifest = dir.join("Cargo.toml");
+    if !manifest.is_file()
+        && let Ok(found) = build::locate(dir)
+        && let Some(krate) = found.src.parent()
+        && krate.join("Cargo.toml").is_file()
+    {
+        // A crate uploaded a folder or more down.
+        manifest = krate.join("Cargo.toml");
+    }
     let text = std::fs::read_to_string(&manifest).map_err(|e| {
         not_a_crate(format!(
             "cannot read Cargo.toml ({e}); give the assignment with --assignment"
@@ -129,8 +137,9 @@ pub fn is_submission(dir: &Path) -> bool {
         || dir.join("lib.rs").is_file()
 }
 
-/// The submissions named by `paths`: each path that is a submission, and for each other
-/// directory its subdirectories that are (a class folder), sorted by name; each once.
+/// The submissions named by `paths`: each path that is a submission; for each other directory
+/// (a class folder), every folder in it, sorted by name (hidden folders and `target` left out),
+/// each one submission wherever its crate sits inside ([`build::locate`]); each once.
 #[must_use]
 pub fn expand(paths: &[PathBuf]) -> Vec<PathBuf> {
     let mut out: Vec<PathBuf> = Vec::new();
@@ -143,8 +152,13 @@ pub fn expand(paths: &[PathBuf]) -> Vec<PathBuf> {
             .map(|entries| {
                 entries
                     .filter_map(Result::ok)
+                    .filter(|e| {
+                        let name = e.file_name();
+                        let name = name.to_string_lossy();
+                        !name.starts_with('.') && name != "target"
+                    })
                     .map(|e| e.path())
-                    .filter(|p| p.is_dir() && is_submission(p))
+                    .filter(|p| p.is_dir())
                     .collect()
             })
             .unwrap_or_default();
@@ -174,13 +188,27 @@ pub fn builder(options: &ExternalOptions) -> Result<Arc<Builder>, GradeError> {
         .map_err(GradeError::Grader)
 }
 
-/// Builds and grades the submission in `dir` as `assignment` in job `slot` (module docs).
+/// Copies the submission in `dir` into the run's scratch space (before any student code runs).
+fn stage(dir: &Path, assignment: Assignment, builder: &Builder) -> Result<Staged, String> {
+    let submission = build::locate(dir).map_err(|why| format!("nothing to build: {why}"))?;
+    builder.stage(&submission, assignment).map_err(|e| match e {
+        BuildFailure::Grader(why) => format!("grader: {why}"),
+        BuildFailure::Compile(why) | BuildFailure::Limit(why) => {
+            format!("the submission could not be copied: {why}")
+        }
+        BuildFailure::TimedOut(_) => "the submission could not be copied".to_string(),
+    })
+}
+
+/// Builds and grades the submission staged from `dir` as `assignment` in job `slot` (module
+/// docs).
 ///
 /// # Errors
 /// [`GradeError::Grader`] when the grader fails (its toolchain, its folders); a submission that
 /// does not build, crashes or hangs gets a report that says so.
 pub fn grade_as(
     dir: &Path,
+    staged: Result<Staged, String>,
     assignment: Assignment,
     options: &ExternalOptions,
     builder: &Arc<Builder>,
@@ -193,12 +221,15 @@ pub fn grade_as(
         r.sandbox = Some(summary.clone());
         Ok(r)
     };
-    let submission = match build::locate(dir) {
+    let staged = match staged {
         Ok(s) => s,
-        Err(why) => return not_run(&format!("nothing to build: {why}")),
+        Err(why) => match why.strip_prefix("grader: ") {
+            Some(why) => return Err(GradeError::Grader(why.to_string())),
+            None => return not_run(&why),
+        },
     };
     progress(&format!("building {}", dir.display()));
-    let built = match builder.build(&submission, assignment, slot) {
+    let built = match builder.build(&staged, slot) {
         Ok(built) => built,
         Err(BuildFailure::Compile(errors)) => {
             return not_run(&format!("the crate did not build:\n{errors}"));
@@ -286,19 +317,33 @@ pub fn grade_all(
         }
     };
     let assignments = assignments(dirs, options.assignment);
+    // Every submission is copied before any student code runs.
+    let staged: Vec<Mutex<Option<Result<Staged, String>>>> = dirs
+        .iter()
+        .zip(&assignments)
+        .map(|(dir, a)| Mutex::new(a.as_ref().ok().map(|a| stage(dir, *a, &builder))))
+        .collect();
     let next = AtomicUsize::new(0);
     let results: Vec<Mutex<Option<Result<Report, GradeError>>>> =
         dirs.iter().map(|_| Mutex::new(None)).collect();
     let workers = jobs.clamp(1, dirs.len().max(1));
     std::thread::scope(|scope| {
         for slot in 0..workers {
-            let (next, results, builder, assignments) = (&next, &results, &builder, &assignments);
+            let (next, results, builder, assignments, staged) =
+                (&next, &results, &builder, &assignments, &staged);
             scope.spawn(move || {
                 loop {
                     let i = next.fetch_add(1, Ordering::Relaxed);
                     let Some(dir) = dirs.get(i) else { break };
                     let result = match &assignments[i] {
-                        Ok(a) => grade_as(dir, *a, options, builder, slot as u32, progress),
+                        Ok(a) => {
+                            let copy = staged[i]
+                                .lock()
+                                .ok()
+                                .and_then(|mut s| s.take())
+                                .unwrap_or_else(|| Err("grader: not staged".to_string()));
+                            grade_as(dir, copy, *a, options, builder, slot as u32, progress)
+                        }
                         Err(e) => Err(e.clone()),
                     };
                     if let Ok(mut slot) = results[i].lock() {
