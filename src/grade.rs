@@ -29,8 +29,9 @@
 //! costs the check in progress; an exit, abort, stack overflow, memory overrun or time-out of
 //! the program costs the check in progress and a new program answers the rest ([`runner`] has
 //! the scoring rules, [`remote`] the limits). What the program writes (files, stdout) cannot
-//! reach a score. What this does not contain (file-system access, the network) is in the README:
-//! grade untrusted code in a container.
+//! reach a score. Builds and programs run in a sandbox ([`sandbox`]: another user, namespaces,
+//! Landlock, seccomp, limits), and the report is written only once it is empty; the threat model,
+//! and what is left to a container, is in `docs/grading.md`.
 //!
 //! # Determinism
 //!

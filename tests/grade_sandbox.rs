@@ -18,7 +18,7 @@ const ROPE: &str = include_str!("homework/rope.rs");
 const INTEGRATORS: &str = include_str!("homework/integrators.rs");
 
 /// System calls for the attacks (x86-64 numbers).
-const SYSCALLS: &str = r#"
+const SYSCALLS: &str = r##"
 #[allow(dead_code)]
 unsafe fn sys(n: usize, a: usize, b: usize, c: usize) -> isize {
     let r: isize;
@@ -34,7 +34,7 @@ unsafe fn sys(n: usize, a: usize, b: usize, c: usize) -> isize {
 #[allow(dead_code)] const PAUSE: usize = 34;
 #[allow(dead_code)] const GETPPID: usize = 110;
 const FORGED: &str = r#"{"score": 35.0, "max_score": 35.0, "output": "forged", "tests": []}"#;
-"#;
+"##;
 
 /// The target directory shared by the tests here (the student API compiles once).
 fn target() -> PathBuf {
@@ -679,4 +679,39 @@ fn an_unwritable_target_dir_is_a_grader_error_not_a_zero() {
     assert!(stderr.contains("cannot make the build cache"), "{stderr}");
     assert!(!stdout.contains("score 0"), "{stdout}");
     assert!(!results.exists());
+}
+
+/// `run_autograder` when the grader itself fails (here: its target directory is a file): a
+/// failure result saying so, never nothing and never a file the submission wrote.
+#[test]
+fn run_autograder_writes_a_failure_result_when_the_grader_fails() {
+    let root = scratch("autograder-fails");
+    let source = root.join("source");
+    std::fs::create_dir_all(&source).expect("source");
+    let files = springlab::grade::autograder::files(springlab::grade::Assignment::Rope, Vec::new());
+    let (_, script, _) = files
+        .iter()
+        .find(|(name, _, _)| name == "run_autograder")
+        .expect("run_autograder");
+    std::fs::write(source.join("run_autograder"), script).expect("write");
+    std::os::unix::fs::symlink(env!("CARGO_BIN_EXE_springlab"), source.join("springlab"))
+        .expect("link");
+    std::fs::write(source.join("target"), "a file where the cache would be").expect("write");
+    std::fs::create_dir_all(root.join("submission")).expect("submission");
+    std::fs::write(root.join("submission/lib.rs"), ROPE).expect("lib.rs");
+    // A results.json the submission might have left: replaced.
+    std::fs::create_dir_all(root.join("results")).expect("results");
+    std::fs::write(root.join("results/results.json"), r#"{"score": 35}"#).expect("write");
+    let out = Command::new("bash")
+        .arg(source.join("run_autograder"))
+        .env("SPRINGLAB_AUTOGRADER_ROOT", &root)
+        .output()
+        .expect("run run_autograder");
+    assert!(out.status.success(), "{out:?}");
+    let results = json(&root.join("results/results.json"));
+    assert_eq!(results["score"].as_f64(), Some(0.0), "{results}");
+    let output = results["output"].as_str().unwrap_or_default();
+    assert!(output.contains("autograder itself failed"), "{output}");
+    let stderr = std::fs::read_to_string(root.join("results/grader-stderr.txt")).expect("stderr");
+    assert!(stderr.contains("grader error"), "{stderr}");
 }

@@ -4,13 +4,17 @@
 //! ```text
 //! autograder.zip
 //!   setup.sh         run once when Gradescope builds the image (as root, in
-//!                    /autograder/source): installs a Rust toolchain if there is none (rustup,
-//!                    minimal profile) and grades the untouched starter crate once, so that the
-//!                    student API is compiled before the first submission
+//!                    /autograder/source; base image Ubuntu 22.04): checks that springlab
+//!                    starts (glibc 2.35), installs a Rust toolchain if there is none (rustup,
+//!                    minimal profile, under /usr/local so the sandbox user can read it) and
+//!                    grades the untouched starter crate once: the student API is compiled
+//!                    before the first submission, and a toolchain that cannot build it stops
+//!                    the set-up with a message
 //!   run_autograder   run for every submission: `springlab grade /autograder/submission
-//!                    --assignment A --gradescope /autograder/results/results.json`
+//!                    --assignment A --gradescope /autograder/results/results.json`; when the
+//!                    grader fails (non-zero exit) it writes a failure result instead
 //!                    (SPRINGLAB_AUTOGRADER_ROOT replaces /autograder, for a local test run)
-//!   springlab        this binary (Linux; Gradescope's images are Ubuntu on x86-64)
+//!   springlab        this binary (Linux, x86-64, glibc 2.35: Ubuntu 22.04)
 //!   README.txt       what the files are
 //! ```
 //! A submission may be the crate folder, its `src/` contents, or the crate folder one level
@@ -29,42 +33,75 @@ pub const ROOT_ENV: &str = "SPRINGLAB_AUTOGRADER_ROOT";
 
 const SETUP: &str = r#"#!/usr/bin/env bash
 # Gradescope runs this once, as root, when it builds the autograder image.
-# It installs a Rust toolchain (submissions are compiled) and compiles the student API once.
+# Base image: Ubuntu 22.04 (glibc 2.35, which this springlab binary needs).
+# It installs a Rust toolchain where the sandbox user can read it (submissions are compiled by
+# rustc running as an unprivileged user), checks that this toolchain builds the student API,
+# and compiles the API once. Any failure stops the set-up with a message.
 set -euo pipefail
 cd "$(dirname "$0")"
-export PATH="$HOME/.cargo/bin:$PATH"
-if ! command -v cargo >/dev/null 2>&1; then
+fail() { echo "setup.sh: $*" >&2; exit 1; }
+chmod +x ./springlab ./run_autograder
+./springlab --version >/dev/null 2>&1 || fail "the springlab binary does not start on this image \
+($(ldd --version 2>&1 | head -n 1)); it needs glibc 2.35 or newer: choose the Ubuntu 22.04 base image"
+export RUSTUP_HOME="${RUSTUP_HOME:-/usr/local/rustup}" CARGO_HOME="${CARGO_HOME:-/usr/local/cargo}"
+export PATH="$CARGO_HOME/bin:$HOME/.cargo/bin:$PATH"
+if ! command -v rustc >/dev/null 2>&1; then
   apt-get update
   apt-get install -y --no-install-recommends ca-certificates curl build-essential
-  curl --proto '=https' --tlsv1.2 -sSf https://sh.rustup.rs | sh -s -- -y --profile minimal
+  curl --proto '=https' --tlsv1.2 -sSf https://sh.rustup.rs | sh -s -- -y --profile minimal --no-modify-path
+  chmod -R a+rX "$RUSTUP_HOME" "$CARGO_HOME"
 fi
-chmod +x ./springlab ./run_autograder
+command -v cc >/dev/null 2>&1 || fail "no C compiler (cc) to link with: apt-get install build-essential"
+./springlab grade --sandbox-report
 rm -rf /tmp/springlab-warm
 ./springlab homework new /tmp/springlab-warm --assignment {{ASSIGNMENT}} >/dev/null
-./springlab grade /tmp/springlab-warm --target-dir "$PWD/target" >/dev/null
+# A grader error (a rustc too old for edition 2024, an unreadable toolchain) exits non-zero;
+# the untouched starter must build.
+./springlab grade /tmp/springlab-warm --target-dir "$PWD/target" --json /tmp/springlab-warm.json \
+  >/tmp/springlab-warm.txt 2>&1 || { cat /tmp/springlab-warm.txt >&2; fail "the grader cannot run"; }
+if grep -q "the crate did not build" /tmp/springlab-warm.txt; then
+  cat /tmp/springlab-warm.txt >&2
+  fail "this toolchain ($(rustc --version)) cannot build the untouched starter crate"
+fi
+echo "setup.sh: ready ($(rustc --version))"
 "#;
 
 const RUN: &str = r#"#!/usr/bin/env bash
 # Gradescope runs this for every submission; it writes $ROOT/results/results.json.
-# springlab grade always writes that file (a submission that does not build, crashes or hangs
-# gets a report saying so) and exits 0 whatever the score.
+# springlab grade writes that file for every submission (one that does not build, crashes or
+# hangs gets a report saying so) and exits 0 whatever the score. When the grader itself fails
+# (non-zero exit), this script writes a result saying so instead: never nothing, never a file
+# the submission wrote.
 set -uo pipefail
 ROOT="${{{ROOT_ENV}}:-/autograder}"
-export PATH="$HOME/.cargo/bin:$PATH"
+export RUSTUP_HOME="${RUSTUP_HOME:-/usr/local/rustup}" CARGO_HOME="${CARGO_HOME:-/usr/local/cargo}"
+export PATH="$CARGO_HOME/bin:$HOME/.cargo/bin:$PATH"
 mkdir -p "$ROOT/results"
-exec "$ROOT/source/springlab" grade "$ROOT/submission" \
+RESULTS="$ROOT/results/results.json"
+rm -f "$RESULTS"
+"$ROOT/source/springlab" grade "$ROOT/submission" \
   --assignment {{ASSIGNMENT}} \
   --target-dir "$ROOT/source/target" \
-  --gradescope "$ROOT/results/results.json"
+  --gradescope "$RESULTS" 2>"$ROOT/results/grader-stderr.txt"
+STATUS=$?
+if [ "$STATUS" -ne 0 ]; then
+  TMP="$(mktemp "$ROOT/results/.failed.XXXXXX")"
+  printf '{"score": 0, "output": "The autograder itself failed (exit status %s); this is not a grade of your submission. Please tell your instructor.", "visibility": "visible", "tests": []}\n' "$STATUS" >"$TMP"
+  rm -rf "$RESULTS"
+  mv -f "$TMP" "$RESULTS"
+fi
+exit 0
 "#;
 
 const README: &str = "springlab autograder for the {{TITLE}} homework ({{ASSIGNMENT}}).
 
-Upload this zip as the autograder of a Gradescope programming assignment (Ubuntu base image).
-setup.sh installs Rust and compiles springlab's student API; run_autograder grades
-/autograder/submission (the student's crate folder, or just its src/ files) and writes
-/autograder/results/results.json. Students upload their homework crate made with
-`springlab homework new DIR --assignment {{ASSIGNMENT}}`.
+Upload this zip as the autograder of a Gradescope programming assignment. Base image: Ubuntu
+22.04 (the springlab binary needs glibc 2.35). setup.sh installs Rust under /usr/local (readable
+by the sandbox user), checks that it builds the student API and compiles it once; it fails
+with a message otherwise. run_autograder grades /autograder/submission (the student's crate
+folder, or just its src/ files) in springlab's sandbox and writes
+/autograder/results/results.json (a failure result when the grader itself fails). Students
+upload their homework crate made with `springlab homework new DIR --assignment {{ASSIGNMENT}}`.
 ";
 
 /// The files of the autograder for `assignment`: `(name, contents, Unix mode)`; `springlab` is
@@ -155,8 +192,6 @@ pub fn write(assignment: Assignment, springlab: &Path, out: &Path) -> std::io::R
     let files = files(assignment, binary);
     let bytes = zip(&files);
     // A temporary file renamed into place: a half-written zip is never left behind.
-    let tmp = out.with_extension("zip.partial");
-    std::fs::write(&tmp, &bytes)?;
-    std::fs::rename(&tmp, out)?;
+    super::write_result(out, &bytes).map_err(std::io::Error::other)?;
     Ok(bytes.len())
 }

@@ -4,9 +4,10 @@
 //! ```text
 //! Session::call(method, arguments, physics, deadline)
 //!   no program running → start one:
-//!       environment cleared, working directory a fresh empty temporary directory,
-//!       own process group, limits (setrlimit): address space 1 GiB, CPU time, file size,
-//!       no new processes or threads, no core files, 32 open files;
+//!       in the sandbox (`grade::sandbox`: another user, namespaces, Landlock, seccomp):
+//!       environment cleared, working directory a fresh empty folder of its own (the only
+//!       one it may write), own process group, limits (setrlimit): address space 1 GiB, CPU
+//!       time, file size, no new processes or threads, no core files, 32 open files;
 //!       send HELLO (version, a fresh random token) on its stdin, wait for its HELLO
 //!   send CALL; read replies until RESULT, PANIC or ERROR, answering PHYSICS requests with the
 //!   grader's own physics of the system being stepped
