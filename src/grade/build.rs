@@ -860,6 +860,7 @@ fn copy_in(from: &Path, to: &Path) -> std::io::Result<()> {
         std::fs::create_dir_all(parent)?;
     }
     let tmp = to.with_extension(format!("tmp-{}", super::remote::random_tag()));
+    let _no_fork = super::sandbox::writing_executable();
     let mut src = std::fs::File::open(from)?;
     let mut dst = std::fs::OpenOptions::new()
         .write(true)

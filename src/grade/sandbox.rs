@@ -475,6 +475,10 @@ impl Sandbox {
         unsafe {
             command.pre_exec(pre_exec);
         }
+        // No executable is open for writing in this process while a child is between fork and
+        // exec (it would inherit the descriptor and the exec of that file would fail with
+        // ETXTBSY): see [`writing_executable`]. spawn returns once the program has been exec'd.
+        let _forking = FORKS.read().unwrap_or_else(std::sync::PoisonError::into_inner);
         command.spawn()
     }
 
@@ -525,6 +529,16 @@ impl Sandbox {
     pub fn is_root(&self) -> bool {
         self.root
     }
+}
+
+static FORKS: std::sync::RwLock<()> = std::sync::RwLock::new(());
+
+/// Held while this process has an executable open for writing (copying a program): no sandbox
+/// child is forked meanwhile.
+pub(crate) fn writing_executable() -> std::sync::RwLockWriteGuard<'static, ()> {
+    FORKS
+        .write()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 /// The processes (pids) whose real user id is `uid`, from `/proc`.

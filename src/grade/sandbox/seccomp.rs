@@ -163,3 +163,36 @@ pub(crate) fn install(filter: &[sock_filter]) -> bool {
         ) == 0
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every jump lands inside the program, every path ends in a return, and the last
+    /// instruction allows (the default of a deny list).
+    #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+    #[test]
+    fn the_filter_is_well_formed() {
+        let p = filter().expect("a filter for this architecture");
+        assert!(p.len() < 4096, "BPF_MAXINSNS");
+        for (i, ins) in p.iter().enumerate() {
+            if ins.code & 0x07 == 0x05 {
+                assert!(i + 1 + usize::from(ins.jt) < p.len(), "jt of {i}");
+                assert!(i + 1 + usize::from(ins.jf) < p.len(), "jf of {i}");
+            }
+        }
+        let last = p.last().expect("instructions");
+        assert_eq!((last.code, last.k), (RET_K, libc::SECCOMP_RET_ALLOW));
+        // The architecture check comes first and kills on a mismatch.
+        assert_eq!((p[0].code, p[0].k), (LD_W_ABS, ARCH_OFFSET));
+        assert_eq!(p[2].k, libc::SECCOMP_RET_KILL_PROCESS);
+        // Each denied call is answered with EPERM right after its comparison.
+        for nr in denied() {
+            let at = p
+                .iter()
+                .position(|ins| ins.code == JEQ_K && ins.k == nr as u32)
+                .unwrap_or_else(|| panic!("system call {nr} is not in the filter"));
+            assert_eq!(p[at + 1].k, errno(libc::EPERM));
+        }
+    }
+}
