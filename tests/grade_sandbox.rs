@@ -200,10 +200,22 @@ fn grade(
 fn assert_genuine(stdout: &str, results: &serde_json::Value, report: &serde_json::Value, uid: u32) {
     assert!(stdout.contains("score 5 / 35"), "{stdout}");
     assert_eq!(results["score"].as_f64(), Some(5.0), "{results}");
-    assert_eq!(results["tests"].as_array().map(Vec::len), Some(6), "{results}");
+    assert_eq!(
+        results["tests"].as_array().map(Vec::len),
+        Some(6),
+        "{results}"
+    );
     assert_eq!(report["score"].as_f64(), Some(5.0), "{report}");
-    assert!(report["sandbox"].as_str().is_some_and(|s| s.starts_with("sandbox: ")));
-    assert_eq!(processes_of(uid), Vec::<u32>::new(), "processes of the sandbox user");
+    assert!(
+        report["sandbox"]
+            .as_str()
+            .is_some_and(|s| s.starts_with("sandbox: "))
+    );
+    assert_eq!(
+        processes_of(uid),
+        Vec::<u32>::new(),
+        "processes of the sandbox user"
+    );
 }
 
 /// Reads the grader's command line from `/proc/<parent>/cmdline` (and every other process's),
@@ -387,7 +399,11 @@ fn attack() {{
     );
     starter_with(&class, "c1-attacker", &code);
     homework(&class, "c2-correct", Some(ROPE));
-    homework(&class, "c3-correct", Some(&format!("{ROPE}\n// another student\n")));
+    homework(
+        &class,
+        "c3-correct",
+        Some(&format!("{ROPE}\n// another student\n")),
+    );
     homework(&class, "c4-starter", None);
     let uid_s = uid.to_string();
     let out = springlab(
@@ -407,12 +423,21 @@ fn attack() {{
         &[],
     );
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(out.status.success(), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let csv = std::fs::read_to_string(root.join("grades.csv")).expect("grades.csv");
     let scores: Vec<f64> = csv
         .lines()
         .skip(1)
-        .map(|l| l.split(',').nth(2).and_then(|s| s.parse().ok()).expect("score"))
+        .map(|l| {
+            l.split(',')
+                .nth(2)
+                .and_then(|s| s.parse().ok())
+                .expect("score")
+        })
         .collect();
     assert_eq!(scores, [5.0, 35.0, 35.0, 5.0], "{csv}");
     assert!(!marker.exists(), "the planted rustc-wrapper ran");
@@ -423,7 +448,10 @@ fn attack() {{
     std::fs::write(later.join("src/lib.rs"), format!("{lib}\n// later\n")).expect("write");
     let (stdout, results, report) = grade(&later, uid, &[], &[]);
     assert_genuine(&stdout, &results, &report, uid);
-    assert!(!marker.exists(), "the planted rustc-wrapper ran in a later run");
+    assert!(
+        !marker.exists(),
+        "the planted rustc-wrapper ran in a later run"
+    );
 }
 
 /// `include_str!` of files outside the crate (the system's password file, the grader's own
@@ -456,7 +484,10 @@ fn attack() {{ panic!("{{PASSWD}}{{SECRET}}{{OWN}}{{}}", option_env!("HOME").unw
     assert!(everything.contains("couldn't read"), "{everything}");
     assert!(!everything.contains("root:x:0:0"), "{everything}");
     assert!(!everything.contains("4f1c"), "{everything}");
-    assert!(!everything.contains("impl RopeHomework for Reference"), "{everything}");
+    assert!(
+        !everything.contains("impl RopeHomework for Reference"),
+        "{everything}"
+    );
     assert_eq!(results["score"].as_f64(), Some(0.0));
     assert_eq!(processes_of(uid), Vec::<u32>::new());
 }
@@ -623,9 +654,17 @@ fn a_fifo_or_link_at_the_report_path_is_refused() {
     );
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
-    assert!(stderr.contains("refusing to write a result over a FIFO"), "{stderr}");
+    assert!(
+        stderr.contains("refusing to write a result over a FIFO"),
+        "{stderr}"
+    );
     use std::os::unix::fs::FileTypeExt;
-    assert!(std::fs::symlink_metadata(&fifo).expect("fifo").file_type().is_fifo());
+    assert!(
+        std::fs::symlink_metadata(&fifo)
+            .expect("fifo")
+            .file_type()
+            .is_fifo()
+    );
     // A symbolic link to a file elsewhere: that file is left as it was.
     let elsewhere = root.join("elsewhere.txt");
     std::fs::write(&elsewhere, "mine").expect("write");

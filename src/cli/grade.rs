@@ -153,7 +153,11 @@ pub fn homework(args: &HomeworkArgs) -> anyhow::Result<()> {
 /// When an output option does not fit the submissions, a submission's assignment cannot be
 /// told, or an output file cannot be written.
 pub fn grade(args: &GradeArgs) -> anyhow::Result<()> {
-    let env_id = |key: &str| std::env::var(key).ok().and_then(|v| v.trim().parse::<u32>().ok());
+    let env_id = |key: &str| {
+        std::env::var(key)
+            .ok()
+            .and_then(|v| v.trim().parse::<u32>().ok())
+    };
     let sandbox_config = sandbox::Config {
         uid: args
             .sandbox_uid

@@ -155,7 +155,6 @@ fn read_tree(src: &Path) -> Result<Vec<(String, Vec<u8>)>, String> {
     Ok(files)
 }
 
-
 /// A 128-bit digest, as 32 hex digits, of everything that goes into a build.
 fn digest(parts: &[&[u8]]) -> String {
     let mut out = String::new();
@@ -227,7 +226,11 @@ fn compiler_errors(stderr: &str) -> String {
         }
     };
     let Some(start) = stderr.lines().position(|l| l.starts_with("error")) else {
-        return tail(stderr, 30).lines().map(cut).collect::<Vec<_>>().join("\n");
+        return tail(stderr, 30)
+            .lines()
+            .map(cut)
+            .collect::<Vec<_>>()
+            .join("\n");
     };
     stderr
         .lines()
@@ -437,7 +440,11 @@ impl Builder {
     ///
     /// # Errors
     /// A sentence for the grader: a folder that cannot be made (an unwritable `--target-dir`).
-    pub fn new(target: &Path, sandbox: Arc<Sandbox>, limits: BuildLimits) -> Result<Builder, String> {
+    pub fn new(
+        target: &Path,
+        sandbox: Arc<Sandbox>,
+        limits: BuildLimits,
+    ) -> Result<Builder, String> {
         let cache = target.join("springlab-grade");
         std::fs::create_dir_all(cache.join("programs")).map_err(|e| {
             format!(
@@ -454,10 +461,8 @@ impl Builder {
         })?;
         let _ = std::fs::remove_file(&probe);
         let tag: String = super::remote::random_tag();
-        let scratch = std::env::temp_dir().join(format!(
-            "springlab-grade-{}-{tag}",
-            std::process::id()
-        ));
+        let scratch =
+            std::env::temp_dir().join(format!("springlab-grade-{}-{tag}", std::process::id()));
         std::fs::create_dir(&scratch)
             .and_then(|()| set_mode(&scratch, 0o711))
             .map_err(|e| format!("cannot make the scratch folder {}: {e}", scratch.display()))?;
@@ -495,9 +500,7 @@ impl Builder {
     }
 
     fn owner(&self, slot: u32) -> Option<(u32, u32)> {
-        self.sandbox
-            .uid(slot)
-            .map(|u| (u, self.sandbox_gid()))
+        self.sandbox.uid(slot).map(|u| (u, self.sandbox_gid()))
     }
 
     fn sandbox_gid(&self) -> u32 {
@@ -726,7 +729,8 @@ impl Builder {
     ) -> Result<Staged, BuildFailure> {
         let files = read_tree(&submission.src).map_err(BuildFailure::Compile)?;
         let toolchain = self.toolchain().map_err(BuildFailure::Grader)?;
-        let mut parts: Vec<&[u8]> = vec![assignment.name().as_bytes(), toolchain.version.as_bytes()];
+        let mut parts: Vec<&[u8]> =
+            vec![assignment.name().as_bytes(), toolchain.version.as_bytes()];
         let api_digest = self.api_digest(toolchain);
         parts.push(api_digest.as_bytes());
         for (path, contents) in &files {
@@ -739,7 +743,10 @@ impl Builder {
         let krate = dir.join("crate");
         self.folder(&dir, None)?;
         let grader = |e: std::io::Error| {
-            BuildFailure::Grader(format!("cannot copy the submission into {}: {e}", dir.display()))
+            BuildFailure::Grader(format!(
+                "cannot copy the submission into {}: {e}",
+                dir.display()
+            ))
         };
         for (relative, contents) in &files {
             let path = krate.join("src").join(relative);
@@ -772,7 +779,10 @@ impl Builder {
         let id = &staged.id;
         let krate = dir.join("crate");
         let grader = |e: std::io::Error| {
-            BuildFailure::Grader(format!("cannot write the program into {}: {e}", dir.display()))
+            BuildFailure::Grader(format!(
+                "cannot write the program into {}: {e}",
+                dir.display()
+            ))
         };
         let exe = dir.join("program");
         let cached = self.cache.join("programs").join(id);
@@ -797,7 +807,12 @@ impl Builder {
         let read = vec![api.clone(), krate.clone()];
         let mut lib = common_args();
         lib.extend(["--crate-type", "rlib", "--crate-name", "homework"].map(OsString::from));
-        lib.extend(["--extern".into(), extern_api.clone(), "-L".into(), dependency.clone()]);
+        lib.extend([
+            "--extern".into(),
+            extern_api.clone(),
+            "-L".into(),
+            dependency.clone(),
+        ]);
         lib.push("-o".into());
         lib.push(out.join("libhomework.rlib").into_os_string());
         lib.push("src/lib.rs".into());
@@ -819,7 +834,9 @@ impl Builder {
             BuildFailure::Grader(format!("rustc reported success but left no program: {e}"))
         })?;
         if !meta.is_file() {
-            return Err(BuildFailure::Grader("the built program is not a file".into()));
+            return Err(BuildFailure::Grader(
+                "the built program is not a file".into(),
+            ));
         }
         copy_in(&built, &exe).map_err(grader)?;
         let _ = copy_in(&exe, &cached);

@@ -57,8 +57,8 @@ mod traits;
 
 use convert::*;
 use frames::read_replies;
-use process::*;
 pub(crate) use process::random_tag;
+use process::*;
 pub use traits::Remote;
 
 use super::build::Builder;
@@ -225,9 +225,13 @@ impl Session {
     }
 
     fn try_start(&mut self, deadline: Instant) -> Result<(), CallFailure> {
-        let workdir = self.place.builder.workdir(&self.place.dir, self.place.slot).map_err(|e| {
-            CallFailure::NotStarted(format!("cannot create a working directory: {e}"))
-        })?;
+        let workdir = self
+            .place
+            .builder
+            .workdir(&self.place.dir, self.place.slot)
+            .map_err(|e| {
+                CallFailure::NotStarted(format!("cannot create a working directory: {e}"))
+            })?;
         let mut child = match self.spawn(&workdir) {
             Ok(child) => child,
             Err(e) => {

@@ -217,7 +217,9 @@ fn probe(probe: impl FnOnce() -> i32) -> i32 {
 }
 
 fn errno() -> i32 {
-    io::Error::last_os_error().raw_os_error().unwrap_or(libc::EPERM)
+    io::Error::last_os_error()
+        .raw_os_error()
+        .unwrap_or(libc::EPERM)
 }
 
 impl Sandbox {
@@ -242,7 +244,13 @@ impl Sandbox {
         } else {
             let flags = NS_FLAGS | if root { 0 } else { libc::CLONE_NEWUSER };
             // SAFETY: unshare in the forked probe only.
-            match probe(|| if unsafe { libc::unshare(flags) } == 0 { 0 } else { errno() }) {
+            match probe(|| {
+                if unsafe { libc::unshare(flags) } == 0 {
+                    0
+                } else {
+                    errno()
+                }
+            }) {
                 0 => Ok(flags),
                 e => Err(os_error(
                     "unshare(pid, net, mount, ipc, uts) is refused (a container's default \
@@ -268,7 +276,11 @@ impl Sandbox {
                         if unsafe { libc::prctl(libc::PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) } != 0 {
                             return errno();
                         }
-                        if seccomp::install(&probe_filter) { 0 } else { errno() }
+                        if seccomp::install(&probe_filter) {
+                            0
+                        } else {
+                            errno()
+                        }
                     }) {
                         0 => Ok(filter),
                         e => Err(os_error("the kernel refused the filter", e)),
@@ -341,7 +353,9 @@ impl Sandbox {
             state(
                 Layer::Landlock,
                 self.landlock.as_ref().map(|abi| {
-                    let mut what = String::from("files (read: toolchain, submission, API; write: its own directory)");
+                    let mut what = String::from(
+                        "files (read: toolchain, submission, API; write: its own directory)",
+                    );
                     if *abi >= 4 {
                         what.push_str(", TCP");
                     }
@@ -478,7 +492,9 @@ impl Sandbox {
         // No executable is open for writing in this process while a child is between fork and
         // exec (it would inherit the descriptor and the exec of that file would fail with
         // ETXTBSY): see [`writing_executable`]. spawn returns once the program has been exec'd.
-        let _forking = FORKS.read().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let _forking = FORKS
+            .read()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         command.spawn()
     }
 

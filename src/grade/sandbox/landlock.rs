@@ -72,8 +72,12 @@ pub(crate) fn abi() -> Result<i32, String> {
     let e = io::Error::last_os_error();
     Err(match e.raw_os_error() {
         Some(libc::ENOSYS) => "the kernel has no Landlock (before 5.13, or not built in)".into(),
-        Some(libc::EOPNOTSUPP) => "Landlock is built in but not enabled (boot with lsm=…,landlock)".into(),
-        Some(libc::EPERM) => "the container's seccomp profile forbids Landlock's system calls".into(),
+        Some(libc::EOPNOTSUPP) => {
+            "Landlock is built in but not enabled (boot with lsm=…,landlock)".into()
+        }
+        Some(libc::EPERM) => {
+            "the container's seccomp profile forbids Landlock's system calls".into()
+        }
         _ => format!("Landlock is unavailable: {e}"),
     })
 }
@@ -142,7 +146,11 @@ pub(crate) fn ruleset(
         // SAFETY: pfd was just opened and is owned here.
         let pfd = unsafe { OwnedFd::from_raw_fd(pfd) };
         let is_dir = std::fs::metadata(path).is_ok_and(|m| m.is_dir());
-        let allowed = if is_dir { rights & all } else { rights & all & FILE_RIGHTS };
+        let allowed = if is_dir {
+            rights & all
+        } else {
+            rights & all & FILE_RIGHTS
+        };
         if !add_rule(ruleset.as_raw_fd(), pfd.as_raw_fd(), allowed) {
             return Err(io::Error::other(format!(
                 "Landlock refused a rule for {}: {}",
