@@ -43,15 +43,18 @@ fail() { echo "setup.sh: $*" >&2; exit 1; }
 chmod +x ./springlab ./run_autograder
 ./springlab --version >/dev/null 2>&1 || fail "the springlab binary does not start on this image \
 ($(ldd --version 2>&1 | head -n 1)); it needs glibc 2.35 or newer: choose the Ubuntu 22.04 base image"
-export RUSTUP_HOME="${RUSTUP_HOME:-/usr/local/rustup}" CARGO_HOME="${CARGO_HOME:-/usr/local/cargo}"
-export PATH="$CARGO_HOME/bin:$HOME/.cargo/bin:$PATH"
+export PATH="$HOME/.cargo/bin:/usr/local/cargo/bin:$PATH"
 if ! command -v rustc >/dev/null 2>&1; then
+  export RUSTUP_HOME=/usr/local/rustup CARGO_HOME=/usr/local/cargo
   apt-get update
   apt-get install -y --no-install-recommends ca-certificates curl build-essential
   curl --proto '=https' --tlsv1.2 -sSf https://sh.rustup.rs | sh -s -- -y --profile minimal --no-modify-path
   chmod -R a+rX "$RUSTUP_HOME" "$CARGO_HOME"
 fi
 command -v cc >/dev/null 2>&1 || fail "no C compiler (cc) to link with: apt-get install build-essential"
+# run_autograder uses this very compiler (no rustup proxy, no environment needed).
+SYSROOT="$(rustc --print sysroot)" || fail "rustc does not run"
+echo "export RUSTC='$SYSROOT/bin/rustc'" >springlab.env
 ./springlab grade --sandbox-report
 rm -rf /tmp/springlab-warm
 ./springlab homework new /tmp/springlab-warm --assignment {{ASSIGNMENT}} >/dev/null
@@ -74,8 +77,9 @@ const RUN: &str = r#"#!/usr/bin/env bash
 # the submission wrote.
 set -uo pipefail
 ROOT="${{{ROOT_ENV}}:-/autograder}"
-export RUSTUP_HOME="${RUSTUP_HOME:-/usr/local/rustup}" CARGO_HOME="${CARGO_HOME:-/usr/local/cargo}"
-export PATH="$CARGO_HOME/bin:$HOME/.cargo/bin:$PATH"
+export PATH="$HOME/.cargo/bin:/usr/local/cargo/bin:$PATH"
+# The compiler setup.sh checked.
+if [ -f "$ROOT/source/springlab.env" ]; then . "$ROOT/source/springlab.env"; fi
 mkdir -p "$ROOT/results"
 RESULTS="$ROOT/results/results.json"
 rm -f "$RESULTS"
@@ -96,9 +100,9 @@ exit 0
 const README: &str = "springlab autograder for the {{TITLE}} homework ({{ASSIGNMENT}}).
 
 Upload this zip as the autograder of a Gradescope programming assignment. Base image: Ubuntu
-22.04 (the springlab binary needs glibc 2.35). setup.sh installs Rust under /usr/local (readable
-by the sandbox user), checks that it builds the student API and compiles it once; it fails
-with a message otherwise. run_autograder grades /autograder/submission (the student's crate
+22.04 (the springlab binary needs glibc 2.35). setup.sh installs Rust under /usr/local when
+there is none, checks that it builds the student API and compiles it once; it fails with a
+message otherwise. run_autograder grades /autograder/submission (the student's crate
 folder, or just its src/ files) in springlab's sandbox and writes
 /autograder/results/results.json (a failure result when the grader itself fails). Students
 upload their homework crate made with `springlab homework new DIR --assignment {{ASSIGNMENT}}`.
