@@ -754,3 +754,54 @@ fn run_autograder_writes_a_failure_result_when_the_grader_fails() {
     let stderr = std::fs::read_to_string(root.join("results/grader-stderr.txt")).expect("stderr");
     assert!(stderr.contains("grader error"), "{stderr}");
 }
+
+/// `setup.sh` with a toolchain that cannot build the student API (an old rustc that does not know
+/// edition 2024): the set-up fails with a message instead of passing and giving every
+/// submission 0.
+#[test]
+fn setup_fails_loudly_when_the_toolchain_cannot_build_the_api() {
+    let root = scratch("setup-old-rustc");
+    let source = root.join("source");
+    std::fs::create_dir_all(&source).expect("source");
+    let files = springlab::grade::autograder::files(springlab::grade::Assignment::Rope, Vec::new());
+    let (_, script, _) = files
+        .iter()
+        .find(|(name, _, _)| name == "setup.sh")
+        .expect("setup.sh");
+    std::fs::write(source.join("setup.sh"), script).expect("write");
+    std::fs::write(source.join("run_autograder"), "").expect("write");
+    std::fs::copy(env!("CARGO_BIN_EXE_springlab"), source.join("springlab")).expect("copy");
+    // A rustc that reports an old version and refuses edition 2024, as rustc 1.80 does.
+    let sysroot = root.join("old-toolchain");
+    let bin = sysroot.join("bin");
+    std::fs::create_dir_all(&bin).expect("bin");
+    let rustc = bin.join("rustc");
+    std::fs::write(
+        &rustc,
+        format!(
+            "#!/bin/sh\ncase \"$*\" in\n  *sysroot*) echo {sysroot:?} ;;\n  \
+             *-vV*) printf 'rustc 1.80.0 (old)\\nhost: x86_64-unknown-linux-gnu\\n' ;;\n  \
+             *) echo \"error: invalid value for '--edition': 2024\" >&2; exit 1 ;;\nesac\n",
+            sysroot = sysroot.display().to_string()
+        ),
+    )
+    .expect("write rustc");
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&rustc, std::fs::Permissions::from_mode(0o755)).expect("chmod");
+    let out = Command::new("bash")
+        .arg(source.join("setup.sh"))
+        .current_dir(&source)
+        .env_clear()
+        .env("HOME", &root)
+        .env("PATH", format!("{}:/usr/bin:/bin", bin.display()))
+        .output()
+        .expect("run setup.sh");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "setup.sh passed: {stderr}");
+    assert!(stderr.contains("cannot build the student API"), "{stderr}");
+    assert!(stderr.contains("rustc 1.80.0"), "{stderr}");
+    assert!(
+        stderr.contains("setup.sh: the grader cannot run"),
+        "{stderr}"
+    );
+}
