@@ -33,6 +33,9 @@ pub mod stencil;
 pub use diverge::Divergence;
 pub use energy::{Dissipated, Energy, Power, dissipated_power, energy};
 pub use forces::{Model, accelerations, forces};
-pub use integrators::{Method, MethodParams, SolveStats, UnknownMethod, Workspace};
+pub use integrators::{
+    Declaration, Method, MethodParams, OscillatorLimit, SolveStats, StabilityFunction,
+    UnknownMethod, Workspace,
+};
 pub use particles::State;
 pub use springs::{Spring, SpringKind};
