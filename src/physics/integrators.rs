@@ -14,6 +14,7 @@
 //! | predictor–corrector | 2 | 1 | dt·ω ≤ 1 (undamped); on pure damping dt·λ ≤ 1, half of explicit Euler's 2 |
 //! | position Verlet | 1 | 2 (1 with dampers or drag) | dt·ω < 2 |
 //! | XPBD | 1 per substep | 1 | unconditional (dissipative) |
+//! | velocity Verlet | 2 | 2 (also with dampers) | dt·ω < 2 |
 //!
 //! **Energy accounting.** With [`Workspace::account`] set, a step also integrates the power of
 //! the dissipative forces (dampers, drag, contact forces and friction,
@@ -84,6 +85,7 @@ methods! {
     PredictorCorrector => predictor_corrector,
     Verlet => verlet,
     Xpbd => xpbd,
+    VelocityVerlet => velocity_verlet,
 }
 
 impl Method {
