@@ -25,8 +25,6 @@
 //! `E + D - E_0` shrinks with the method's order. [`Workspace::dissipated`] holds the result.
 
 pub mod declaration;
-mod implicit_constraint;
-mod implicit_lattice;
 
 use std::fmt;
 use std::str::FromStr;
@@ -303,7 +301,7 @@ pub struct Workspace {
     /// assembly (for `Simulation`'s energy guard); `None` when the step summed none.
     pub start_elastic: Option<f64>,
     /// Implicit Euler's system on a lattice (`implicit_lattice`).
-    pub(crate) lattice: implicit_lattice::Lattice,
+    pub(crate) lattice: crate::physics::fast::implicit_lattice::Lattice,
 }
 
 /// A per-particle rule on positions and velocities (m, m/s) applied at the end of every step

@@ -115,8 +115,8 @@ use crate::physics::integrators::{
 use crate::physics::particles::State;
 use crate::physics::stencil::{Kernel, Stencil};
 
-pub(crate) use super::implicit_constraint::Constraint;
-use super::implicit_lattice::{Forces, inside_spheres, usable};
+pub(crate) use crate::physics::fast::implicit_constraint::Constraint;
+use crate::physics::fast::implicit_lattice::{Forces, inside_spheres, usable};
 
 /// The method's row of the registry (`integrators.rs`).
 pub(super) const DECLARATION: Declaration = Declaration {

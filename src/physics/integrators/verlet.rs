@@ -171,7 +171,7 @@ fn step(
         if textbook {
             project_distances(rods, &mut state.x, params.iterations);
         } else {
-            // The same operations, eight rods at a time on a chain (`constraints/chain.rs`).
+            // The same operations, eight rods at a time on a chain (`fast/chain.rs`).
             project_distances_fast(rods, &mut state.x, params.iterations, chain);
         }
         if account {
