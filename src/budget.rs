@@ -54,7 +54,6 @@
 use glam::{DMat3, DVec3};
 
 use crate::physics::Spring;
-use crate::physics::constraints::Rod;
 
 mod estimates;
 mod format;
@@ -97,19 +96,6 @@ pub const WORKSPACE_PARTICLE_BYTES: f64 = (15 * size_of::<DVec3>() + size_of::<D
 /// Bytes per spring of the [`Workspace`](crate::physics::Workspace): the implicit solver's Jacobian blocks (`DMat3`) and
 /// XPBD's multipliers (`f64`).
 pub const WORKSPACE_SPRING_BYTES: f64 = (size_of::<DMat3>() + 8) as f64;
-
-/// Bytes per particle of implicit Euler's lattice solver (`physics::integrators::implicit_lattice`,
-/// when it steps): 32 `f64` arrays (inverse diagonal blocks, mass, free flags, x, v, the
-/// right-hand side and the five CG vectors, three components each) and three `DVec3` buffers
-/// (forces, the warm start's Δv, the solve's result).
-pub const IMPLICIT_PARTICLE_BYTES: f64 = (32 * 8 + 3 * size_of::<DVec3>()) as f64;
-
-/// Bytes per spring of implicit Euler's lattice solver: its block (six `f64`) and
-/// `dt² K (v_b - v_a)` (three `f64`) per spring slot.
-pub const IMPLICIT_SPRING_BYTES: f64 = (9 * 8) as f64;
-
-/// Bytes per spring of Verlet's rods (its projection list, [`Rod`]).
-pub const ROD_BYTES: f64 = size_of::<Rod>() as f64;
 
 /// Bytes per pixel while rendering: the frame being drawn and the frames queued for the encoder
 /// (4 × RGBA each), the RGB copy, and the GIF encoder's RGBA copy and palette indices.

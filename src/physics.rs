@@ -22,17 +22,21 @@ pub mod collide;
 pub mod constraints;
 pub mod diverge;
 pub mod energy;
+pub mod fast;
 pub mod forces;
 pub mod integrators;
-pub(crate) mod lanes;
 pub mod particles;
-pub mod pool;
 pub mod springs;
-pub mod stencil;
+
+pub(crate) use fast::lanes;
+pub use fast::{pool, stencil};
 
 pub use diverge::Divergence;
 pub use energy::{Dissipated, Energy, Power, dissipated_power, energy};
 pub use forces::{Model, accelerations, forces};
-pub use integrators::{Method, MethodParams, SolveStats, UnknownMethod, Workspace};
+pub use integrators::{
+    Declaration, Method, MethodParams, OscillatorLimit, SolveStats, StabilityFunction,
+    UnknownMethod, Workspace,
+};
 pub use particles::State;
 pub use springs::{Spring, SpringKind};

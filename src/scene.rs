@@ -327,28 +327,17 @@ fn check_memory(scene: &Scene, what: &str, limits: &Limits) -> Result<(), SceneE
     Ok(())
 }
 
-/// The method parameters (see [`method_param_specs`]) and the methods each acts on: a scene
-/// accepts them all, but each changes only a run with one of its methods.
-pub const METHOD_PARAMS: &[(&str, &[Method])] = &[
-    ("verlet_damping", &[Method::Verlet]),
-    ("verlet_damping_rate", &[Method::Verlet]),
-    ("iterations", &[Method::Verlet, Method::Xpbd]),
-    ("substeps", &[Method::Xpbd]),
-    ("cg_tolerance", &[Method::ImplicitEuler]),
-];
-
-/// The methods a parameter acts on when it is a method parameter ([`METHOD_PARAMS`]); `None`
-/// for a scene's own parameter.
+/// The methods a parameter acts on when it is a method parameter (the methods whose
+/// declaration lists it, see [`method_param_specs`]); `None` for a scene's own parameter. A
+/// scene accepts every method parameter, but each changes only a run with one of its methods.
 #[must_use]
-pub fn method_param(name: &str) -> Option<&'static [Method]> {
-    METHOD_PARAMS
-        .iter()
-        .find(|(n, _)| *n == name)
-        .map(|(_, methods)| *methods)
+pub fn method_param(name: &str) -> Option<Vec<Method>> {
+    let methods: Vec<Method> = Method::ALL.into_iter().filter(|m| m.reads(name)).collect();
+    (!methods.is_empty()).then_some(methods)
 }
 
 /// The parameters every scene has for its methods, with the scene's Verlet damping and
-/// projection passes as defaults (which methods each acts on: [`METHOD_PARAMS`]).
+/// projection passes as defaults (which methods each acts on: [`method_param`]).
 #[must_use]
 pub fn method_param_specs(verlet_damping: f64, iterations: i64) -> Vec<ParamSpec> {
     let d = MethodParams::default();

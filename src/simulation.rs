@@ -232,7 +232,7 @@ impl Simulation {
         }
         let mut failed_solve = None;
         for (body, work) in self.scene.bodies.iter_mut().zip(&mut self.work) {
-            let outcome = if body.method == Method::ImplicitEuler {
+            let outcome = if body.method.declaration().energy_guard {
                 let depth = if self.guard { 0 } else { MAX_HALVINGS };
                 implicit_step(body, work, self.dt, depth, f64::INFINITY, &mut self.solver)
             } else {

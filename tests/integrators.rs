@@ -42,6 +42,7 @@ fn convergence_orders_match_theory() {
         (Method::PredictorCorrector, 1.0),
         (Method::Midpoint, 2.0),
         (Method::Verlet, 2.0),
+        (Method::VelocityVerlet, 2.0),
         (Method::Rk4, 4.0),
     ];
     for (method, order) in expected {

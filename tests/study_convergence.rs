@@ -175,3 +175,50 @@ fn verlet_is_second_order_without_dampers_and_first_order_with_them() {
     ]);
     assert!(v.get("verlet_companion").is_none());
 }
+
+/// The order `study convergence` prints for `name` in its table (the line starting with the
+/// method's name; the order is the last column).
+fn printed_order(args: &[&str], name: &str) -> f64 {
+    let out = springlab(args);
+    assert!(out.status.success(), "{args:?} failed");
+    let text = String::from_utf8_lossy(&out.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.split_whitespace().next() == Some(name))
+        .unwrap_or_else(|| panic!("no line for {name}:\n{text}"));
+    line.split_whitespace()
+        .last()
+        .and_then(|w| w.parse().ok())
+        .unwrap_or_else(|| panic!("no order at the end of {line:?}"))
+}
+
+#[test]
+fn velocity_verlet_is_second_order_with_and_without_dampers() {
+    // The exact oscillator's solution is the reference: order 2 within 0.05.
+    let undamped = printed_order(
+        &[
+            "study",
+            "convergence",
+            "oscillator",
+            "--methods",
+            "velocity-verlet",
+        ],
+        "velocity-verlet",
+    );
+    assert!((undamped - 2.0).abs() <= 0.05, "undamped: {undamped}");
+    // With a damper k_d = 2 N·s/m the predicted velocity keeps it second order (position
+    // Verlet drops to first order here, see above).
+    let damped = printed_order(
+        &[
+            "study",
+            "convergence",
+            "oscillator",
+            "--set",
+            "damping=2",
+            "--methods",
+            "velocity-verlet",
+        ],
+        "velocity-verlet",
+    );
+    assert!((damped - 2.0).abs() <= 0.05, "damped: {damped}");
+}

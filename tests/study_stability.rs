@@ -635,3 +635,29 @@ fn confirm_steps_reports_dt_omega_of_the_scene() {
     );
     assert!(c.passed && c.steps == 100);
 }
+
+#[test]
+fn velocity_verlet_rope_limit_is_two_over_omega_max() {
+    // The undamped rope: the measured linear limit dt·ω within 1 % of 2 (leapfrog's
+    // recurrence), and the damped theory the same number.
+    let r = json(&[
+        "study",
+        "stability",
+        "rope",
+        "--methods",
+        "velocity-verlet",
+        "--no-confirm",
+        "--json",
+    ]);
+    let m = method(&r, "velocity-verlet");
+    assert_eq!(m["stability"], "conditional");
+    let linear = m["linear_dt_omega"].as_f64().unwrap();
+    assert!(relative(linear, 2.0) < 0.01, "linear dt·ω = {linear}");
+    let omega = r["omega_max"].as_f64().unwrap();
+    let theory = m["theory_dt"].as_f64().unwrap();
+    assert!(
+        relative(theory * omega, 2.0) < 1e-9,
+        "theory dt·ω = {}",
+        theory * omega
+    );
+}

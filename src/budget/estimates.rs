@@ -2,26 +2,16 @@
 //! stability studies, frames drawn.
 
 use super::{
-    BASE_BYTES, Estimate, IMPLICIT_PARTICLE_BYTES, IMPLICIT_SPRING_BYTES, OVERHEAD, PARTICLE_BYTES,
-    PIXEL_BYTES, ROD_BYTES, SPRING_BYTES, WORKSPACE_PARTICLE_BYTES, WORKSPACE_SPRING_BYTES, approx,
-    short,
+    BASE_BYTES, Estimate, OVERHEAD, PARTICLE_BYTES, PIXEL_BYTES, SPRING_BYTES,
+    WORKSPACE_PARTICLE_BYTES, WORKSPACE_SPRING_BYTES, approx, short,
 };
 use crate::physics::{Method, MethodParams};
 use crate::scene::Scene;
 
-/// Force evaluations (or their equivalent in work) of one step of `method` (module docs).
+/// Force evaluations (or their equivalent in work) of one step of `method` (its declaration).
 #[must_use]
 pub fn evaluations_per_step(method: Method, params: &MethodParams) -> f64 {
-    match method {
-        Method::ExplicitEuler | Method::SemiImplicitEuler => 1.0,
-        Method::Midpoint | Method::PredictorCorrector => 2.0,
-        Method::Rk4 => 4.0,
-        // One evaluation, the Jacobian blocks, and typically 10–20 CG iterations (measured:
-        // 12–17 times a semi-implicit step on the rope, the cloth and the jelly).
-        Method::ImplicitEuler => 20.0,
-        Method::Verlet => 1.0 + f64::from(params.iterations),
-        Method::Xpbd => f64::from(params.substeps.max(1)) * (1.0 + f64::from(params.iterations)),
-    }
+    (method.declaration().evaluations)(params)
 }
 
 /// Updates of one step of `scene`, every body with its own method, or with `method` when given.
@@ -42,16 +32,19 @@ pub fn updates_per_step(scene: &Scene, method: Option<Method>) -> f64 {
 /// `methods` one after another, with `copies` copies of the model and state (module docs).
 #[must_use]
 pub fn body_bytes(particles: f64, springs: f64, methods: &[Method], copies: f64) -> f64 {
-    let verlet = methods.contains(&Method::Verlet);
-    let implicit = methods.contains(&Method::ImplicitEuler);
+    // Each method's own scratch once, however often it appears in `methods`.
+    let own: f64 = Method::ALL
+        .iter()
+        .filter(|m| methods.contains(m))
+        .map(|m| {
+            let s = m.declaration().scratch;
+            particles * s.particle + springs * s.spring
+        })
+        .sum();
     copies * (particles * PARTICLE_BYTES + springs * SPRING_BYTES)
         + particles * WORKSPACE_PARTICLE_BYTES
-        + springs * (WORKSPACE_SPRING_BYTES + if verlet { ROD_BYTES } else { 0.0 })
-        + if implicit {
-            particles * IMPLICIT_PARTICLE_BYTES + springs * IMPLICIT_SPRING_BYTES
-        } else {
-            0.0
-        }
+        + springs * WORKSPACE_SPRING_BYTES
+        + own
 }
 
 /// Bytes of `scene` while being stepped, each body by its own method or by each of `methods`
@@ -205,10 +198,8 @@ pub fn omega_bound(scene: &Scene) -> f64 {
 /// The theoretical stability limit `dt·ω` of `method` on the undamped oscillator, where there
 /// is one (the study starts its search there, see `study::stability`).
 fn theory_limit(method: Method) -> Option<f64> {
-    match method {
-        Method::SemiImplicitEuler | Method::Verlet => Some(2.0),
-        Method::Rk4 => Some(8f64.sqrt()),
-        Method::PredictorCorrector => Some(1.0),
+    match method.declaration().oscillator {
+        crate::physics::OscillatorLimit::Below(limit) => Some(limit),
         _ => None,
     }
 }

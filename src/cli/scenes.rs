@@ -16,7 +16,7 @@ use anyhow::bail;
 use clap::Args;
 
 use crate::physics::Method;
-use crate::scene::{self, BUILTIN, METHOD_PARAMS, ParamSpec, SceneDef, method_param};
+use crate::scene::{self, BUILTIN, ParamSpec, SceneDef, method_param};
 
 /// Options of `springlab scenes`.
 #[derive(Debug, Args)]
@@ -64,7 +64,7 @@ fn of_method(def: &SceneDef, method: Method) -> Vec<ParamSpec> {
 fn methods_with_parameters() -> Vec<Method> {
     Method::ALL
         .into_iter()
-        .filter(|m| METHOD_PARAMS.iter().any(|(_, ms)| ms.contains(m)))
+        .filter(|m| !m.declaration().params.is_empty())
         .collect()
 }
 
@@ -152,12 +152,8 @@ pub fn list(args: &ScenesArgs) -> anyhow::Result<()> {
              method; defaults per scene with `springlab scenes SCENE --method M`:"
         )?;
         for m in methods_with_parameters() {
-            let names: Vec<&str> = METHOD_PARAMS
-                .iter()
-                .filter(|(_, ms)| ms.contains(&m))
-                .map(|(n, _)| *n)
-                .collect();
-            writeln!(out, "  {:<20} {}", m.name(), names.join(", "))?;
+            let names = m.declaration().params.join(", ");
+            writeln!(out, "  {:<20} {names}", m.name())?;
         }
         let none: Vec<&str> = Method::ALL
             .into_iter()

@@ -25,7 +25,7 @@
 //!
 //! **Fast path.** [`project_distances`] is the textbook loop. On a chain (a rope) the rods of
 //! one colour are projected eight at a time with the same operations, so with the same bits
-//! ([`project_distances_fast`], `constraints/chain.rs`, tested against the loop).
+//! ([`project_distances_fast`], `fast/chain.rs`, tested against the loop).
 //!
 //! **XPBD** (Macklin, Müller & Chentanez, "XPBD: Position-Based Simulation of Compliant
 //! Constrained Dynamics", MIG 2016, eq. 18 and 26) treats a spring of stiffness `k` as a
@@ -40,13 +40,11 @@
 //! ```
 //! where `h` is the substep (s), `n = (x_b - x_a)/L` and `λ` the accumulated Lagrange multiplier (N·s²).
 
-mod chain;
-
 use glam::DVec3;
 
 use super::forces::Model;
 use super::stencil::Kernel;
-pub use chain::{ChainScratch, project_chain};
+pub use crate::physics::fast::chain::{ChainScratch, project_chain};
 
 /// One distance constraint ready for projection: its ends, its rest length and the share of
 /// the correction each end takes, `w_a / (w_a + w_b)` and `w_b / (w_a + w_b)`.
@@ -116,7 +114,7 @@ pub fn project_distances(rods: &[Rod], x: &mut [DVec3], iterations: u32) {
 }
 
 /// [`project_distances`] with the same result bit for bit, eight rods at a time when the rods
-/// form a chain (a rope: [`project_chain`], see `constraints/chain.rs`); the textbook loop
+/// form a chain (a rope: [`project_chain`], see `fast/chain.rs`); the textbook loop
 /// otherwise. `scratch` holds the chain's arrays between calls.
 ///
 /// # Panics

@@ -14,6 +14,7 @@
 //! | predictor–corrector | 2 | 1 | dt·ω ≤ 1 (undamped); on pure damping dt·λ ≤ 1, half of explicit Euler's 2 |
 //! | position Verlet | 1 | 2 (1 with dampers or drag) | dt·ω < 2 |
 //! | XPBD | 1 per substep | 1 | unconditional (dissipative) |
+//! | velocity Verlet | 2 | 2 (also with dampers) | dt·ω < 2 |
 //!
 //! **Energy accounting.** With [`Workspace::account`] set, a step also integrates the power of
 //! the dissipative forces (dampers, drag, contact forces and friction,
@@ -23,16 +24,7 @@
 //! implicit Euler: `dt P(x_{n+1}, v_{n+1})`), so that the residual
 //! `E + D - E_0` shrinks with the method's order. [`Workspace::dissipated`] holds the result.
 
-mod explicit_euler;
-mod implicit_constraint;
-mod implicit_euler;
-mod implicit_lattice;
-mod midpoint;
-mod predictor_corrector;
-mod rk4;
-mod semi_implicit_euler;
-mod verlet;
-mod xpbd;
+pub mod declaration;
 
 use std::fmt;
 use std::str::FromStr;
@@ -47,55 +39,73 @@ use super::forces::Model;
 use super::particles::State;
 use super::stencil::{After, Base, Output, Stencil, Update};
 
+pub use declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction};
 pub use implicit_euler::{MAX_CONTACT_PASSES, SolveStats, guard_energy, guard_start_energy};
 
-/// An integration method.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Method {
-    /// Explicit (forward) Euler: `x += dt v; v += dt a(x, v)`.
-    ExplicitEuler,
-    /// Semi-implicit (symplectic) Euler: `v += dt a(x, v); x += dt v`.
-    SemiImplicitEuler,
-    /// Explicit midpoint (RK2).
-    Midpoint,
-    /// Classic fourth-order Runge–Kutta.
-    Rk4,
-    /// Backward Euler with one Newton step solved by conjugate gradients (Baraff & Witkin 1998).
-    ImplicitEuler,
-    /// Explicit-Euler predictor, one corrector evaluation: the NYCU course's "implicit Euler".
-    PredictorCorrector,
-    /// Position Verlet with a `(1 - damping)` factor and distance-constraint projection.
-    Verlet,
-    /// Extended position-based dynamics with substeps (Macklin et al. 2016, 2019).
-    Xpbd,
+/// The registry: one line per method, `Variant => file`, in teaching order. The file holds the
+/// method (formula, textbook step) and its [`Declaration`]; this line makes it a [`Method`],
+/// puts it into [`Method::ALL`] and hands [`Method::declaration`] its row.
+macro_rules! methods {
+    ($($variant:ident => $file:ident,)*) => {
+        $(mod $file;)*
+
+        /// An integration method: one file each in `integrators/`, registered in
+        /// `integrators.rs`; [`Method::declaration`] is what everything else reads.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum Method {
+            $(
+                #[doc = concat!("Declared in `src/physics/integrators/", stringify!($file), ".rs`.")]
+                $variant,
+            )*
+        }
+
+        impl Method {
+            /// Every method, in teaching order.
+            pub const ALL: [Method; [$(stringify!($variant)),*].len()] = [$(Method::$variant),*];
+
+            /// The method's row of the registry.
+            #[must_use]
+            pub fn declaration(self) -> &'static Declaration {
+                match self {
+                    $(Method::$variant => &$file::DECLARATION,)*
+                }
+            }
+        }
+    };
+}
+
+methods! {
+    ExplicitEuler => explicit_euler,
+    SemiImplicitEuler => semi_implicit_euler,
+    Midpoint => midpoint,
+    Rk4 => rk4,
+    ImplicitEuler => implicit_euler,
+    PredictorCorrector => predictor_corrector,
+    Verlet => verlet,
+    Xpbd => xpbd,
+    VelocityVerlet => velocity_verlet,
 }
 
 impl Method {
-    /// Every method, in teaching order.
-    pub const ALL: [Method; 8] = [
-        Method::ExplicitEuler,
-        Method::SemiImplicitEuler,
-        Method::Midpoint,
-        Method::Rk4,
-        Method::ImplicitEuler,
-        Method::PredictorCorrector,
-        Method::Verlet,
-        Method::Xpbd,
-    ];
+    /// The number of methods.
+    pub const COUNT: usize = Method::ALL.len();
+
+    /// The position in [`Method::ALL`].
+    #[must_use]
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// Whether the method reads the [`MethodParams`] field `param`.
+    #[must_use]
+    pub fn reads(self, param: &str) -> bool {
+        self.declaration().params.contains(&param)
+    }
 
     /// The command-line name, for example `semi-implicit-euler`.
     #[must_use]
     pub fn name(self) -> &'static str {
-        match self {
-            Method::ExplicitEuler => "explicit-euler",
-            Method::SemiImplicitEuler => "semi-implicit-euler",
-            Method::Midpoint => "midpoint",
-            Method::Rk4 => "rk4",
-            Method::ImplicitEuler => "implicit-euler",
-            Method::PredictorCorrector => "predictor-corrector",
-            Method::Verlet => "verlet",
-            Method::Xpbd => "xpbd",
-        }
+        self.declaration().name
     }
 
     /// The next method in [`Method::ALL`], wrapping around.
@@ -120,44 +130,7 @@ impl Method {
         work.resize(model.particle_count(), model.springs.len());
         work.dissipated = Dissipated::default();
         work.projected = false;
-        let evals = match self {
-            Method::ExplicitEuler => explicit_step(
-                model,
-                state,
-                dt,
-                work,
-                explicit_euler::textbook,
-                explicit_euler::step_fused,
-            ),
-            Method::SemiImplicitEuler => explicit_step(
-                model,
-                state,
-                dt,
-                work,
-                semi_implicit_euler::textbook,
-                semi_implicit_euler::step_fused,
-            ),
-            Method::Midpoint => explicit_step(
-                model,
-                state,
-                dt,
-                work,
-                midpoint::textbook,
-                midpoint::step_fused,
-            ),
-            Method::Rk4 => explicit_step(model, state, dt, work, rk4::textbook, rk4::step_fused),
-            Method::ImplicitEuler => implicit_euler::step(model, state, dt, params, work),
-            Method::PredictorCorrector => explicit_step(
-                model,
-                state,
-                dt,
-                work,
-                predictor_corrector::textbook,
-                predictor_corrector::step_fused,
-            ),
-            Method::Verlet => verlet::step(model, state, dt, params, work),
-            Method::Xpbd => xpbd::step(model, state, dt, params, work),
-        };
+        let evals = (self.declaration().step)(model, state, dt, params, work);
         work.dissipated = work.dissipated.summed();
         if let Some(projection) = &work.projection
             && !work.projected
@@ -187,10 +160,8 @@ impl Method {
         n: u64,
     ) -> u64 {
         work.resize(model.particle_count(), model.springs.len());
-        let many = match self {
-            _ if n < 2 => None,
-            Method::SemiImplicitEuler => semi_implicit_euler::steps(model, state, dt, work, n),
-            Method::Rk4 => rk4::steps(model, state, dt, work, n),
+        let many = match self.declaration().many {
+            Some(many) if n >= 2 => many(model, state, dt, work, n),
             _ => None,
         };
         if let Some(evals) = many {
@@ -330,7 +301,7 @@ pub struct Workspace {
     /// assembly (for `Simulation`'s energy guard); `None` when the step summed none.
     pub start_elastic: Option<f64>,
     /// Implicit Euler's system on a lattice (`implicit_lattice`).
-    pub(crate) lattice: implicit_lattice::Lattice,
+    pub(crate) lattice: crate::physics::fast::implicit_lattice::Lattice,
 }
 
 /// A per-particle rule on positions and velocities (m, m/s) applied at the end of every step

@@ -92,7 +92,7 @@ use super::StudyError;
 use super::linear::{self, Linearisation};
 use super::modes::{omega_max, omega_max_from};
 use super::theory::{self, Spectrum, TheoryLimit};
-use crate::physics::{Method, State, energy};
+use crate::physics::{Method, OscillatorLimit, State, energy};
 use crate::scene::{self, Scene};
 use crate::simulation::Simulation;
 
@@ -165,12 +165,10 @@ impl Stability {
 /// conditional (see [`super::theory`] for the damped, scene-specific theory).
 #[must_use]
 pub fn theory(method: Method) -> (Stability, Option<f64>) {
-    match method {
-        Method::ExplicitEuler | Method::Midpoint => (Stability::None, None),
-        Method::SemiImplicitEuler | Method::Verlet => (Stability::Conditional, Some(2.0)),
-        Method::Rk4 => (Stability::Conditional, Some(2.0 * std::f64::consts::SQRT_2)),
-        Method::PredictorCorrector => (Stability::Conditional, Some(1.0)),
-        Method::ImplicitEuler | Method::Xpbd => (Stability::Unconditional, None),
+    match method.declaration().oscillator {
+        OscillatorLimit::None => (Stability::None, None),
+        OscillatorLimit::Below(limit) => (Stability::Conditional, Some(limit)),
+        OscillatorLimit::Unconditional => (Stability::Unconditional, None),
     }
 }
 

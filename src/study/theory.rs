@@ -69,7 +69,7 @@
 use serde::Serialize;
 
 use super::modes::stiffness_blocks;
-use crate::physics::{Method, MethodParams, Model, State};
+use crate::physics::{Method, MethodParams, Model, StabilityFunction, State};
 
 /// Largest number of free coordinates (3 per free particle) solved densely.
 pub const DENSE_MAX: usize = 360;
@@ -343,58 +343,27 @@ pub fn jacobi_eigenvalues(a: &mut [f64], n: usize) -> Vec<f64> {
     values
 }
 
-/// `|R(z)|` of the Runge–Kutta type methods at `z = re + i im`.
-fn amplification(method: Method, re: f64, im: f64) -> f64 {
-    let z = (re, im);
-    let mul = |a: (f64, f64), b: (f64, f64)| (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0);
-    let add = |a: (f64, f64), b: (f64, f64)| (a.0 + b.0, a.1 + b.1);
-    let scale = |a: (f64, f64), s: f64| (a.0 * s, a.1 * s);
-    let z2 = mul(z, z);
-    let one = (1.0, 0.0);
-    let r = match method {
-        Method::ExplicitEuler => add(one, z),
-        Method::Midpoint => add(add(one, z), scale(z2, 0.5)),
-        Method::PredictorCorrector => add(add(one, z), z2),
-        Method::Rk4 => {
-            let z3 = mul(z2, z);
-            let z4 = mul(z3, z);
-            add(
-                add(add(one, z), scale(z2, 0.5)),
-                add(scale(z3, 1.0 / 6.0), scale(z4, 1.0 / 24.0)),
-            )
-        }
-        Method::ImplicitEuler => {
-            // 1/(1 - z)
-            let d = (1.0 - re, -im);
-            let m = d.0 * d.0 + d.1 * d.1;
-            (d.0 / m, -d.1 / m)
-        }
-        _ => one,
-    };
-    (r.0 * r.0 + r.1 * r.1).sqrt()
-}
-
 /// Schur–Cohn: both roots of `r² - t r + d` within the unit circle (to rounding).
 fn quadratic_stable(t: f64, d: f64) -> bool {
     const EPS: f64 = 1e-12;
     d.abs() <= 1.0 + EPS && t.abs() <= 1.0 + d + EPS
 }
 
-/// Whether `method` is stable on `mode` at `dt` (module docs).
+/// Whether `method` is stable on `mode` at `dt` (module docs), by its stability function
+/// (its declaration).
 fn stable_on(method: Method, params: &MethodParams, mode: &Mode, dt: f64) -> bool {
     let (w2, mu) = (mode.omega * mode.omega, mode.mu);
-    match method {
-        Method::SemiImplicitEuler => quadratic_stable(2.0 - dt * dt * w2 - dt * mu, 1.0 - dt * mu),
-        Method::Verlet => {
-            let h = 0.5 * params.verlet_damping_rate * dt;
-            let keep = 1.0 - params.verlet_damping;
-            let c = keep * (1.0 - h) / (1.0 + h) - dt * mu / (1.0 + h);
-            quadratic_stable(1.0 + c - dt * dt * w2 / (1.0 + h), c)
+    match (method.declaration().stability)(params) {
+        StabilityFunction::TwoStep(f) => {
+            let (t, d) = f(params, dt, w2, mu);
+            quadratic_stable(t, d)
         }
-        _ => mode
-            .roots()
-            .iter()
-            .all(|&(re, im)| amplification(method, dt * re, dt * im) <= 1.0 + 1e-12),
+        StabilityFunction::OneStep(r) => mode.roots().iter().all(|&(re, im)| {
+            let (a, b) = r((dt * re, dt * im));
+            (a * a + b * b).sqrt() <= 1.0 + 1e-12
+        }),
+        // `limit` answers before asking.
+        StabilityFunction::NotCovered(_) => true,
     }
 }
 
@@ -439,18 +408,8 @@ pub fn limit(method: Method, params: &MethodParams, spectrum: &Spectrum) -> Theo
         binding: None,
         how: why.to_string(),
     };
-    match method {
-        Method::Xpbd => {
-            return not_covered(
-                "XPBD solves springs as compliant constraints: no stability function",
-            );
-        }
-        Method::Verlet if params.iterations > 0 => {
-            return not_covered(
-                "Verlet with constraint projection: the projection is not part of the linear theory",
-            );
-        }
-        _ => {}
+    if let StabilityFunction::NotCovered(why) = (method.declaration().stability)(params) {
+        return not_covered(why);
     }
     let omega_max = spectrum.omega_max;
     let mut best: Option<(f64, &Mode)> = None;

@@ -19,7 +19,7 @@ pub const LESSON_KEYS: &[(&str, &str)] = &[
     ),
     (
         "m",
-        "choose a method: its key (e s m r i p v x), 1–8 or Enter; Tab: one body",
+        "choose a method: its letter or number (listed), or Enter; Tab: one body",
     ),
     (
         "+ / -",

@@ -127,19 +127,10 @@ pub struct Chooser {
     pub target: Option<usize>,
 }
 
-/// The key that picks each method in the chooser (beside the numbers 1–8).
+/// The key that picks each method in the chooser (beside its number), from its declaration.
 #[must_use]
 pub fn method_key(method: Method) -> char {
-    match method {
-        Method::ExplicitEuler => 'e',
-        Method::SemiImplicitEuler => 's',
-        Method::Midpoint => 'm',
-        Method::Rk4 => 'r',
-        Method::ImplicitEuler => 'i',
-        Method::PredictorCorrector => 'p',
-        Method::Verlet => 'v',
-        Method::Xpbd => 'x',
-    }
+    method.declaration().key
 }
 
 /// What the status line says about the method's stability limit at the present scene.
@@ -218,7 +209,7 @@ pub struct LessonRun {
     /// Something that the progress file keeps changed (met goals, visits, answers).
     progress_changed: bool,
     /// Which methods the study charts show (by index into [`Method::ALL`]).
-    shown: [bool; 8],
+    shown: [bool; Method::COUNT],
     /// Per body: the linearised spectrum at the step's initial state (for the status line).
     spectra: Vec<Option<crate::study::theory::Spectrum>>,
     /// The stability limit of the present methods, dampers and drag included.
@@ -269,7 +260,7 @@ impl LessonRun {
             answers: Vec::new(),
             revealed: None,
             progress_changed: false,
-            shown: [true; 8],
+            shown: [true; Method::COUNT],
             spectra: Vec::new(),
             limit: None,
         };
@@ -705,7 +696,7 @@ impl LessonRun {
 
     /// Which methods the study charts show.
     #[must_use]
-    pub fn shown_methods(&self) -> [bool; 8] {
+    pub fn shown_methods(&self) -> [bool; Method::COUNT] {
         self.shown
     }
 

@@ -14,6 +14,7 @@ use ratatui::layout::Rect;
 
 use super::Theme;
 use crate::lesson::Plot;
+use crate::physics::Method;
 use series::render_one;
 
 pub use axis::number;
@@ -28,7 +29,7 @@ pub fn render(
     history: &History,
     oscillator: Option<&Oscillator>,
     studies: &Studies,
-    shown: [bool; 8],
+    shown: [bool; Method::COUNT],
     now: f64,
     theme: Theme,
     area: Rect,
@@ -64,7 +65,7 @@ struct View<'a> {
     history: &'a History,
     oscillator: Option<&'a Oscillator>,
     studies: &'a Studies,
-    shown: [bool; 8],
+    shown: [bool; Method::COUNT],
     now: f64,
     theme: Theme,
 }

@@ -26,7 +26,8 @@
 //! 2nd ed., Springer 1993, §I.7 and §II.1; GAMES101 assignment 8 (2020), §1.2.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, one_pass_step, power_if};
+use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, one_evaluation};
+use crate::physics::integrators::{explicit_step, Workspace, one_pass_step, power_if};
 use crate::physics::particles::State;
 use crate::physics::stencil::{Base, Stencil, Update};
 
@@ -62,3 +63,23 @@ pub(super) fn step_fused(
     };
     one_pass_step(stencil, model, state, dt, work, update)
 }
+
+/// The method's row of the registry (`integrators.rs`).
+pub(super) const DECLARATION: Declaration = Declaration {
+    name: "explicit-euler",
+    label: "EE",
+    key: 'e',
+    colour: 9,
+    order: 1,
+    evaluations: one_evaluation,
+    oscillator: OscillatorLimit::None,
+    stability: |_| StabilityFunction::OneStep(|z| (1.0 + z.0, z.1)),
+    params: &[],
+    scratch: Scratch::NONE,
+    fused: true,
+    energy_guard: false,
+    step: |model, state, dt, _, work| {
+        explicit_step(model, state, dt, work, textbook, step_fused)
+    },
+    many: None,
+};

@@ -33,12 +33,19 @@
 //! `Re z < 0` and on the undamped oscillator (`z = i dt ω`): unconditionally stable, and it
 //! removes energy, the more the larger `dt·ω`.
 //!
-//! **Contacts inside the solve.** A particle that the solve would carry into a collider is not
-//! projected back afterwards: moving it out while its neighbours stay put would compress its
-//! springs and *add* their elastic energy (measured on `jelly-bowl` at dt = 0.04 s: +24 kJ at the
-//! first impact). Instead its velocity along the surface normal `N` is prescribed so that the
-//! step ends on the surface, and the solve is repeated with that constraint (Baraff & Witkin §5.3,
-//! the "filter" `S = I - N Nᵀ` on the constrained particles' rows):
+//! **Beyond the textbook step.** `textbook` below is the method as written above: assemble the
+//! system spring by spring ([`assemble`]), solve it by conjugate gradients, advance. A real scene
+//! adds three things, each behind that step and skippable on a first reading (why each is built
+//! as it is, with the measurements that decided it: `docs/implicit-euler.md`):
+//!
+//! - **Contacts inside the solve** (Baraff & Witkin §5.3): a particle the solve would carry into
+//!   a collider or a sphere gets its velocity along the surface normal `N` prescribed, so that
+//!   the step ends on the surface, and the solve is repeated with that constraint (the filter
+//!   `S = I - N Nᵀ` on its rows); projecting it out after the step would squeeze its springs and
+//!   add energy. The contact set is an active set of at most [`MAX_CONTACT_PASSES`] solves: add
+//!   the particles a solve still carries inside, release those whose constraint impulse
+//!   `J_i = (A Δv - b)_i·N_i` (N·s) pulls (`J < 0`). A dynamic sphere gets the reaction
+//!   `-J_i N_i`.
 //!
 //! ```text
 //! x̃      = x_n + dt (v_n + Δv)               where the unconstrained solve would end
@@ -46,49 +53,14 @@
 //! Δv·N    = (v_n + Δv)·N - φ̃/dt - v_n·N       prescribed: x_{n+1} lands on the surface
 //! (S A S) y = S (b - A z),   Δv = z + y       z: the prescribed parts, y ⊥ N
 //! ```
-//! where `φ̃` is in m. The contact set is found by an active-set loop of up to
-//! [`MAX_CONTACT_PASSES`] solves: a solve adds the particles it still carries inside, and
-//! releases the constrained ones whose constraint impulse `J_i = (A Δv - b)_i·N_i` is negative
-//! (a contact pushes, it never pulls: `J ≥ 0`), then solves again from its own `Δv`. The
-//! springs then feel the contact within the same implicit step, the constraint only slows the
-//! approach (it removes kinetic energy), and the collision response after the step
-//! ([`crate::physics::collide::resolve`]) finds the particle on the surface: it bounces it with
-//! the restitution and moves nothing, so no spring is squeezed by a projection. With the warm
-//! start (below) the first solve starts from the last step's contact set, re-aimed at where the
-//! warm start carries each particle, so a resting contact costs one solve, not two (a missed
-//! contact is caught by the check after the last pass).
+//! where `φ̃` is in m (against a sphere where it ends the step).
+//! - **Warm start** ([`Workspace::warm_start`], on in `Simulation`): the solve starts from the
+//!   last steps' `Δv` extrapolated, with the last step's contacts re-aimed, instead of zero.
+//! - **The lattice path** (`crate::physics::fast::implicit_lattice`, in the fast engine): the same
+//!   system with each spring block stored as four numbers, two passes per CG iteration.
 //!
-//! **Contacts with spheres** (the cloth scenes' dynamic and kinematic spheres) are constraints
-//! the same way, against the sphere where it ends the step
-//! ([`crate::physics::collide::advance_spheres`]: `c_{n+1} = c_n + dt (V_n + dt g)`, or
-//! `c_n + dt V_n` for a kinematic one), with `φ̃ = |x̃ - c_{n+1}| - r` and
-//! `N = (x̃ - c_{n+1}) / |x̃ - c_{n+1}|`. The constraint's impulse
-//! `J_i = (A Δv - b)_i·N_i` (N·s) pushes the particle; its reaction `-J_i N_i` goes to a
-//! dynamic sphere, `V ← V - Σ_i J_i N_i / M` (momentum kept; kinetic energy change counted as
-//! dissipated by the contacts). Measured on `cloth-spheres` at dt = 0.005 s, the projection
-//! after the step that this replaces added 200–2 000 J of elastic energy per step while the
-//! spheres pressed into the cloth, so `Simulation`'s energy guard re-took 277 of 600 steps as
-//! halves; with the spheres inside the solve the energy rises on none of them.
-//!
-//! **How exact the solve is.** CG stops at the relative residual `|r| ≤ tol·|b|`, by default
-//! `tol = 10⁻³` (`cg_tolerance`). The step is one Newton step of a first-order method, whose own
-//! error is far larger: on `cloth-spheres` at dt = 5 ms over 1 s, stopping at 10⁻³ instead of
-//! 10⁻¹⁰ moves no particle or sphere by more than 0.14 mm, while the method's own error (against
-//! dt/4, a lower bound) is 35 mm, 250 times more (at 10⁻² it would be 2.1 mm, a sixteenth;
-//! `tests/integrators.rs` checks that the default stays under a tenth). A tighter tolerance buys
-//! digits of a linearisation that is not the true step anyway.
-//!
-//! **Warm start.** With [`Workspace::warm_start`] (on in `Simulation`) a solve starts from a
-//! guess instead of zero: the last step's `Δv` extrapolated linearly over the two last steps
-//! (`2 Δv_{n-1} - Δv_{n-2}` at an unchanged dt), and the last step's contact set re-aimed at
-//! where that guess carries each particle. When the only things to touch are spheres, the
-//! particles the guess carries inside a sphere are constrained from the first solve too, so a
-//! contact that begins this step does not cost a second solve (on `cloth-spheres` at dt = 5 ms,
-//! 8.07 CG iterations per step instead of 8.69). With a terrain the guess's contacts are left
-//! to the solves: on `jelly-bowl` at dt = 0.1 s, where the guess lands far from where the step
-//! ends, they picked faces that added energy the guard did not take back (`tests/integrators.rs`).
-//! A cloth resting on the spheres takes one solve of about 8 iterations per step (the first
-//! version: two solves, 74 iterations in all).
+//! CG stops at `|r| ≤ tol·|b|`, `tol = 10⁻³` by default (`cg_tolerance`): the one Newton step's
+//! own error is far larger (`tests/integrators.rs` keeps the solve's share under a tenth).
 //!
 //! **Reported solve.** [`SolveStats`] holds the conjugate-gradient iterations (over all passes)
 //! and the final relative residual of the last step; a solve that stops above its tolerance, or
@@ -106,14 +78,51 @@ use crate::physics::collide::Contact;
 use crate::physics::energy::Power;
 use crate::physics::energy::{Energy, energy, energy_with_elastic};
 use crate::physics::forces::{Model, forces};
+use crate::physics::integrators::declaration::{
+    Declaration, OscillatorLimit, Scratch, StabilityFunction,
+};
 use crate::physics::integrators::{
     MethodParams, PowerScratch, Workspace, fused, power_if, stencil_power,
 };
 use crate::physics::particles::State;
 use crate::physics::stencil::{Kernel, Stencil};
 
-pub(crate) use super::implicit_constraint::Constraint;
-use super::implicit_lattice::{Forces, inside_spheres, usable};
+pub(crate) use crate::physics::fast::implicit_constraint::Constraint;
+use crate::physics::fast::implicit_lattice::{Forces, inside_spheres, usable};
+
+/// The method's row of the registry (`integrators.rs`).
+pub(super) const DECLARATION: Declaration = Declaration {
+    name: "implicit-euler",
+    label: "IE",
+    key: 'i',
+    colour: 12,
+    order: 1,
+    // One evaluation, the Jacobian blocks, and typically 10–20 CG iterations (measured: 12–17
+    // times a semi-implicit step on the rope, the cloth and the jelly).
+    evaluations: |_| 20.0,
+    oscillator: OscillatorLimit::Unconditional,
+    // R(z) = 1/(1 - z).
+    stability: |_| {
+        StabilityFunction::OneStep(|z| {
+            let (re, im) = (1.0 - z.0, -z.1);
+            let m = re * re + im * im;
+            (re / m, -im / m)
+        })
+    },
+    params: &["cg_tolerance"],
+    // The lattice solver (`implicit_lattice`, when it steps): per particle 32 `f64` arrays
+    // (inverse diagonal blocks, mass, free flags, x, v, the right-hand side and the five CG
+    // vectors, three components each) and three `DVec3` buffers (forces, the warm start's Δv,
+    // the solve's result); per spring its block (six `f64`) and `dt² K (v_b - v_a)` (three).
+    scratch: Scratch {
+        particle: (32 * 8 + 3 * size_of::<DVec3>()) as f64,
+        spring: (9 * 8) as f64,
+    },
+    fused: true,
+    energy_guard: true,
+    step,
+    many: None,
+};
 
 /// At most this many solves per step: the first without contact constraints, each further one
 /// with the particles the previous solve carried into a collider.
@@ -177,7 +186,8 @@ impl SolveStats {
     }
 }
 
-/// The method as the formulas above write it: the spring list, 3×3 blocks, textbook CG.
+/// The method as the formulas above write it: the spring list, 3×3 blocks ([`assemble`]),
+/// textbook CG (with the contacts, module docs), then `v += Δv`, `x += dt v` ([`advance`]).
 fn textbook(
     model: &Model,
     state: &mut State,
@@ -185,7 +195,6 @@ fn textbook(
     params: &MethodParams,
     work: &mut Workspace,
 ) -> u64 {
-    let dt2 = dt * dt;
     let warm = warm_start(work, dt);
     let Workspace {
         a: rhs,
@@ -205,42 +214,7 @@ fn textbook(
         ..
     } = work;
 
-    // b = dt f_n  (then + dt² ∂f/∂x v_n below).
-    forces(model, &state.x, &state.v, rhs);
-    for b in rhs.iter_mut() {
-        *b *= dt;
-    }
-    // Diagonal blocks start with M + dt c I (mass and drag).
-    for (d, &m) in diag_inv.iter_mut().zip(&model.mass) {
-        *d = DMat3::from_diagonal(DVec3::splat(m + dt * model.drag));
-    }
-    // Per spring: B_s = dt D_s + dt² K_s, the off-diagonal coupling of A; and b += dt² K_s v.
-    for (s, block) in model.springs.iter().zip(blocks.iter_mut()) {
-        let (ia, ib) = (s.a as usize, s.b as usize);
-        let d = state.x[ib] - state.x[ia];
-        let length = d.length();
-        if length == 0.0 {
-            *block = DMat3::ZERO;
-            continue;
-        }
-        let dir = d / length;
-        let nn = outer(dir, dir);
-        // K_s = k [ n nᵀ + max(0, 1 - L0/L)(I - n nᵀ) ]
-        let transverse = (1.0 - s.rest_length / length).max(0.0);
-        let k_s = s.stiffness * (nn + transverse * (DMat3::IDENTITY - nn));
-        // D_s = k_d n nᵀ
-        let d_s = s.damping * nn;
-        *block = dt * d_s + dt2 * k_s;
-        // dt² ∂f/∂x v_n: row a gets K_s (v_b - v_a), row b the opposite.
-        let kv = dt2 * (k_s * (state.v[ib] - state.v[ia]));
-        rhs[ia] += kv;
-        rhs[ib] -= kv;
-        diag_inv[ia] += *block;
-        diag_inv[ib] += *block;
-    }
-    for d in diag_inv.iter_mut() {
-        *d = d.inverse();
-    }
+    assemble(model, state, dt, rhs, blocks, diag_inv);
 
     let system = System {
         model,
@@ -298,6 +272,57 @@ fn textbook(
     // D_{n+1} = D_n + dt P(x_{n+1}, v_{n+1}): backward Euler on D' = P too, when accounting.
     dissipated.add_power(dt, power_if(*account, model, &state.x, &state.v, power_f));
     1
+}
+
+/// Baraff & Witkin's linear system (module docs), spring by spring: the right-hand side
+/// `b = dt (f_n + dt ∂f/∂x v_n)` (N·s) into `rhs`, each spring's off-diagonal block
+/// `B_s = dt D_s + dt² K_s` (kg) into `blocks`, and the inverse diagonal blocks
+/// `(M + dt c I + Σ_s B_s)⁻¹` (1/kg, the preconditioner) into `diag_inv`.
+fn assemble(
+    model: &Model,
+    state: &State,
+    dt: f64,
+    rhs: &mut [DVec3],
+    blocks: &mut [DMat3],
+    diag_inv: &mut [DMat3],
+) {
+    let dt2 = dt * dt;
+    // b = dt f_n  (then + dt² ∂f/∂x v_n below).
+    forces(model, &state.x, &state.v, rhs);
+    for b in rhs.iter_mut() {
+        *b *= dt;
+    }
+    // Diagonal blocks start with M + dt c I (mass and drag).
+    for (d, &m) in diag_inv.iter_mut().zip(&model.mass) {
+        *d = DMat3::from_diagonal(DVec3::splat(m + dt * model.drag));
+    }
+    // Per spring: B_s = dt D_s + dt² K_s, the off-diagonal coupling of A; and b += dt² K_s v.
+    for (s, block) in model.springs.iter().zip(blocks.iter_mut()) {
+        let (ia, ib) = (s.a as usize, s.b as usize);
+        let d = state.x[ib] - state.x[ia];
+        let length = d.length();
+        if length == 0.0 {
+            *block = DMat3::ZERO;
+            continue;
+        }
+        let dir = d / length;
+        let nn = outer(dir, dir);
+        // K_s = k [ n nᵀ + max(0, 1 - L0/L)(I - n nᵀ) ]
+        let transverse = (1.0 - s.rest_length / length).max(0.0);
+        let k_s = s.stiffness * (nn + transverse * (DMat3::IDENTITY - nn));
+        // D_s = k_d n nᵀ
+        let d_s = s.damping * nn;
+        *block = dt * d_s + dt2 * k_s;
+        // dt² ∂f/∂x v_n: row a gets K_s (v_b - v_a), row b the opposite.
+        let kv = dt2 * (k_s * (state.v[ib] - state.v[ia]));
+        rhs[ia] += kv;
+        rhs[ib] -= kv;
+        diag_inv[ia] += *block;
+        diag_inv[ib] += *block;
+    }
+    for d in diag_inv.iter_mut() {
+        *d = d.inverse();
+    }
 }
 
 /// The step's update from the solved velocity change, on free particles:

@@ -28,7 +28,8 @@
 //! 2nd ed., Springer 1993, §II.1 (eq. 1.7); NYCU Computer Animation HW1 (2021–2023).
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, power_if, stage_then_step};
+use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, polynomial, two_evaluations};
+use crate::physics::integrators::{explicit_step, Workspace, power_if, stage_then_step};
 use crate::physics::particles::State;
 use crate::physics::stencil::Stencil;
 
@@ -76,3 +77,23 @@ pub(super) fn step_fused(
 ) -> u64 {
     stage_then_step(stencil, model, state, dt, 0.5 * dt, work)
 }
+
+/// The method's row of the registry (`integrators.rs`).
+pub(super) const DECLARATION: Declaration = Declaration {
+    name: "midpoint",
+    label: "mid",
+    key: 'm',
+    colour: 3,
+    order: 2,
+    evaluations: two_evaluations,
+    oscillator: OscillatorLimit::None,
+    stability: |_| StabilityFunction::OneStep(|z| polynomial(&[1.0, 1.0, 0.5], z)),
+    params: &[],
+    scratch: Scratch::NONE,
+    fused: true,
+    energy_guard: false,
+    step: |model, state, dt, _, work| {
+        explicit_step(model, state, dt, work, textbook, step_fused)
+    },
+    many: None,
+};

@@ -36,7 +36,8 @@
 //! (2021–2024), `integrator.cpp`.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, power_if, stage_then_step};
+use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, polynomial, two_evaluations};
+use crate::physics::integrators::{explicit_step, Workspace, power_if, stage_then_step};
 use crate::physics::particles::State;
 use crate::physics::stencil::Stencil;
 
@@ -82,3 +83,23 @@ pub(super) fn step_fused(
 ) -> u64 {
     stage_then_step(stencil, model, state, dt, dt, work)
 }
+
+/// The method's row of the registry (`integrators.rs`).
+pub(super) const DECLARATION: Declaration = Declaration {
+    name: "predictor-corrector",
+    label: "PC",
+    key: 'p',
+    colour: 5,
+    order: 1,
+    evaluations: two_evaluations,
+    oscillator: OscillatorLimit::Below(1.0),
+    stability: |_| StabilityFunction::OneStep(|z| polynomial(&[1.0, 1.0, 1.0], z)),
+    params: &[],
+    scratch: Scratch::NONE,
+    fused: true,
+    energy_guard: false,
+    step: |model, state, dt, _, work| {
+        explicit_step(model, state, dt, work, textbook, step_fused)
+    },
+    many: None,
+};

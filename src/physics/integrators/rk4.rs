@@ -37,7 +37,8 @@
 
 use crate::physics::energy::Power;
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, after, fused_pass, power_if, team};
+use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, polynomial};
+use crate::physics::integrators::{explicit_step, Workspace, after, fused_pass, power_if, team};
 use crate::physics::particles::State;
 use crate::physics::stencil::{Base, Output, Pass, Stencil, TeamUpdate, Update};
 
@@ -267,3 +268,23 @@ pub(super) fn steps(
     state.history_valid = false;
     Some(4 * n)
 }
+
+/// The method's row of the registry (`integrators.rs`).
+pub(super) const DECLARATION: Declaration = Declaration {
+    name: "rk4",
+    label: "RK4",
+    key: 'r',
+    colour: 6,
+    order: 4,
+    evaluations: |_| 4.0,
+    oscillator: OscillatorLimit::Below(2.0 * std::f64::consts::SQRT_2),
+    stability: |_| StabilityFunction::OneStep(|z| polynomial(&[1.0, 1.0, 1.0 / 2.0, 1.0 / 6.0, 1.0 / 24.0], z)),
+    params: &[],
+    scratch: Scratch::NONE,
+    fused: true,
+    energy_guard: false,
+    step: |model, state, dt, _, work| {
+        explicit_step(model, state, dt, work, textbook, step_fused)
+    },
+    many: Some(steps),
+};

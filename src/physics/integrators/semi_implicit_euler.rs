@@ -30,7 +30,8 @@
 //! Springer 2006, §I.1.2 and §VI.3; GAMES101 assignment 8 (2020), §1.2.
 
 use crate::physics::forces::{Model, accelerations};
-use crate::physics::integrators::{Workspace, after, fused, one_pass_step, power_if, team};
+use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, one_evaluation};
+use crate::physics::integrators::{explicit_step, Workspace, after, fused, one_pass_step, power_if, team};
 use crate::physics::particles::State;
 use crate::physics::stencil::{Pass, Stencil, TeamUpdate, Update};
 
@@ -127,3 +128,23 @@ pub(super) fn steps(
     state.history_valid = false;
     Some(n)
 }
+
+/// The method's row of the registry (`integrators.rs`).
+pub(super) const DECLARATION: Declaration = Declaration {
+    name: "semi-implicit-euler",
+    label: "SIE",
+    key: 's',
+    colour: 2,
+    order: 1,
+    evaluations: one_evaluation,
+    oscillator: OscillatorLimit::Below(2.0),
+    stability: |_| StabilityFunction::TwoStep(|_, dt, w2, mu| (2.0 - dt * dt * w2 - dt * mu, 1.0 - dt * mu)),
+    params: &[],
+    scratch: Scratch::NONE,
+    fused: true,
+    energy_guard: false,
+    step: |model, state, dt, _, work| {
+        explicit_step(model, state, dt, work, textbook, step_fused)
+    },
+    many: Some(steps),
+};

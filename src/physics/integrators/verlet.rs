@@ -65,10 +65,48 @@ use glam::DVec3;
 use crate::physics::constraints::{prepare_rods, project_distances, project_distances_fast};
 use crate::physics::forces::{Model, accelerations};
 
+use crate::physics::integrators::declaration::{
+    Declaration, OscillatorLimit, Scratch, StabilityFunction,
+};
 use crate::physics::integrators::{MethodParams, Workspace, power_if};
 use crate::physics::particles::State;
 
-pub(super) fn step(
+/// The method's row of the registry (`integrators.rs`).
+pub(super) const DECLARATION: Declaration = Declaration {
+    name: "verlet",
+    label: "Vlt",
+    key: 'v',
+    colour: 15,
+    order: 2,
+    evaluations: |p| 1.0 + f64::from(p.iterations),
+    oscillator: OscillatorLimit::Below(2.0),
+    stability: |p| {
+        if p.iterations > 0 {
+            return StabilityFunction::NotCovered(
+                "Verlet with constraint projection: the projection is not part of the linear theory",
+            );
+        }
+        // x_{n+1} = (1 + c - dt²ω²/(1 + h)) x_n - c x_{n-1} (module docs).
+        StabilityFunction::TwoStep(|p, dt, w2, mu| {
+            let h = 0.5 * p.verlet_damping_rate * dt;
+            let keep = 1.0 - p.verlet_damping;
+            let c = keep * (1.0 - h) / (1.0 + h) - dt * mu / (1.0 + h);
+            (1.0 + c - dt * dt * w2 / (1.0 + h), c)
+        })
+    },
+    params: &["verlet_damping", "verlet_damping_rate", "iterations"],
+    // The springs as rods, in projection order.
+    scratch: Scratch {
+        particle: 0.0,
+        spring: size_of::<crate::physics::constraints::Rod>() as f64,
+    },
+    fused: false,
+    energy_guard: false,
+    step,
+    many: None,
+};
+
+fn step(
     model: &Model,
     state: &mut State,
     dt: f64,
@@ -133,7 +171,7 @@ pub(super) fn step(
         if textbook {
             project_distances(rods, &mut state.x, params.iterations);
         } else {
-            // The same operations, eight rods at a time on a chain (`constraints/chain.rs`).
+            // The same operations, eight rods at a time on a chain (`fast/chain.rs`).
             project_distances_fast(rods, &mut state.x, params.iterations, chain);
         }
         if account {

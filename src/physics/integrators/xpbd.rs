@@ -34,10 +34,36 @@
 
 use crate::physics::constraints::xpbd_solve;
 use crate::physics::forces::Model;
+use crate::physics::integrators::declaration::{
+    Declaration, OscillatorLimit, Scratch, StabilityFunction,
+};
 use crate::physics::integrators::{MethodParams, Workspace, power_if};
 use crate::physics::particles::State;
 
-pub(super) fn step(
+/// The method's row of the registry (`integrators.rs`).
+pub(super) const DECLARATION: Declaration = Declaration {
+    name: "xpbd",
+    label: "XPBD",
+    key: 'x',
+    colour: 7,
+    order: 1,
+    evaluations: |p| f64::from(p.substeps.max(1)) * (1.0 + f64::from(p.iterations)),
+    oscillator: OscillatorLimit::Unconditional,
+    stability: |_| {
+        StabilityFunction::NotCovered(
+            "XPBD solves springs as compliant constraints: no stability function",
+        )
+    },
+    params: &["iterations", "substeps"],
+    scratch: Scratch::NONE,
+    fused: false,
+    energy_guard: false,
+    step,
+    many: None,
+};
+
+/// One step: `substeps` substeps of the loop in the module docs.
+fn step(
     model: &Model,
     state: &mut State,
     dt: f64,

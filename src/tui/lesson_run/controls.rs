@@ -249,7 +249,9 @@ impl LessonRun {
                 None
             }
             KeyCode::Enter | KeyCode::Char(' ') => Some(Method::ALL[c.selected]),
-            KeyCode::Char(d @ '1'..='8') => Some(Method::ALL[d as usize - '1' as usize]),
+            KeyCode::Char(d) if d.is_ascii_digit() && d != '0' => {
+                Method::ALL.get(d as usize - '1' as usize).copied()
+            }
             KeyCode::Char(k) => Method::ALL.into_iter().find(|&m| method_key(m) == k),
             _ => None,
         };
@@ -330,7 +332,7 @@ impl LessonRun {
                 .scene
                 .bodies
                 .iter()
-                .filter(|b| b.method == Method::Verlet)
+                .filter(|b| b.method.reads("verlet_damping"))
                 .map(|b| b.params.verlet_damping),
         )
     }
@@ -343,7 +345,7 @@ impl LessonRun {
             .scene
             .bodies
             .iter()
-            .filter(|b| matches!(b.method, Method::Verlet | Method::Xpbd))
+            .filter(|b| b.method.reads("iterations"))
             .map(|b| b.params.iterations);
         let first = it.next()?;
         it.all(|p| p == first).then_some(first)
@@ -369,7 +371,7 @@ impl LessonRun {
             .scene
             .bodies
             .iter()
-            .any(|b| b.method == Method::Verlet);
+            .any(|b| b.method.reads("verlet_damping"));
         self.message = Some(format!(
             "Verlet damping γ = {} per step: a decay rate γ/dt = {} 1/s at this dt{}",
             plots::number(g),

@@ -87,37 +87,47 @@ impl Studies {
 
 /// Colour and short name of each method in the study charts.
 pub(super) fn method_style(method: Method) -> (Color, &'static str) {
-    match method {
-        Method::ExplicitEuler => (Color::LightRed, "EE"),
-        Method::SemiImplicitEuler => (Color::Green, "SIE"),
-        Method::Midpoint => (Color::Yellow, "mid"),
-        Method::Rk4 => (Color::Cyan, "RK4"),
-        Method::ImplicitEuler => (Color::LightBlue, "IE"),
-        Method::PredictorCorrector => (Color::Magenta, "PC"),
-        Method::Verlet => (Color::White, "Vlt"),
-        Method::Xpbd => (Color::Gray, "XPBD"),
-    }
+    let d = method.declaration();
+    (ansi(d.colour), d.label)
+}
+
+/// The terminal's named colour for an ANSI colour number (0–15; others are white).
+fn ansi(n: u8) -> Color {
+    const NAMED: [Color; 16] = [
+        Color::Black,
+        Color::Red,
+        Color::Green,
+        Color::Yellow,
+        Color::Blue,
+        Color::Magenta,
+        Color::Cyan,
+        Color::Gray,
+        Color::DarkGray,
+        Color::LightRed,
+        Color::LightGreen,
+        Color::LightYellow,
+        Color::LightBlue,
+        Color::LightMagenta,
+        Color::LightCyan,
+        Color::White,
+    ];
+    NAMED.get(usize::from(n)).copied().unwrap_or(Color::White)
 }
 
 /// One log-log series per shown method: log10 error against log10 dt (or log10 force
-/// evaluations), named with its key (1–8) and fitted order.
+/// evaluations), named with its number key and fitted order.
 pub(super) fn study_series(
     report: &ConvergenceReport,
     work: bool,
-    shown: [bool; 8],
+    shown: [bool; Method::COUNT],
 ) -> Vec<Series> {
     report
         .methods
         .iter()
-        .filter(|m| {
-            Method::ALL
-                .iter()
-                .position(|&x| x == m.method)
-                .is_some_and(|i| shown[i])
-        })
+        .filter(|m| shown[m.method.index()])
         .map(|m| {
             let (color, short) = method_style(m.method);
-            let key = Method::ALL.iter().position(|&x| x == m.method).unwrap_or(0) + 1;
+            let key = m.method.index() + 1;
             let points = m
                 .points
                 .iter()
@@ -251,7 +261,7 @@ pub(super) fn render_study(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
     };
     let mut spans = vec![Span::raw(title)];
     if series.iter().all(|s| s.guide) {
-        spans.push(Span::styled(" (none shown: 1–8)", theme.dim()));
+        spans.push(Span::styled(" (none shown: press a number)", theme.dim()));
     } else {
         spans.push(Span::styled(" · grey: slopes 1 2 4", theme.dim()));
     }
@@ -285,7 +295,7 @@ pub(super) fn render_study(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
 /// The stability table: measured limit beside the theory, one line per shown method.
 pub(super) fn render_stability(
     report: Option<&StabilityReport>,
-    shown: [bool; 8],
+    shown: [bool; Method::COUNT],
     theme: Theme,
     area: Rect,
     buf: &mut Buffer,
@@ -322,10 +332,7 @@ pub(super) fn render_stability(
         theme.dim(),
     )];
     for m in &r.methods {
-        let Some(key) = Method::ALL.iter().position(|&x| x == m.method) else {
-            continue;
-        };
-        if !shown[key] {
+        if !shown[m.method.index()] {
             continue;
         }
         let (color, _) = method_style(m.method);
@@ -348,7 +355,10 @@ pub(super) fn render_stability(
             name = name.chars().take(name_width - 1).collect::<String>() + "…";
         }
         lines.push(Line::from(vec![
-            Span::styled(format!("{} {name:<name_width$} ", key + 1), theme.fg(color)),
+            Span::styled(
+                format!("{} {name:<name_width$} ", m.method.index() + 1),
+                theme.fg(color),
+            ),
             Span::raw(format!("{measured:>w$} {theory:>w$}")),
         ]));
     }

@@ -1,5 +1,5 @@
 //! A contact constraint of implicit Euler's solve (see the module docs of
-//! [`super::implicit_euler`], "Contacts"): the textbook loop and the lattice path
+//! [`crate::physics::integrators`], implicit Euler, "Contacts"): the textbook loop and the lattice path
 //! ([`super::implicit_lattice`]) both read it, so it lives apart from either.
 
 use glam::DVec3;
@@ -8,9 +8,9 @@ use glam::DVec3;
 /// `normal`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Constraint {
-    pub(super) i: usize,
-    pub(super) normal: DVec3,
-    pub(super) dv_n: f64,
+    pub(crate) i: usize,
+    pub(crate) normal: DVec3,
+    pub(crate) dv_n: f64,
     /// The dynamic sphere it touches (index into `State::spheres`), `None` for a collider.
-    pub(super) sphere: Option<usize>,
+    pub(crate) sphere: Option<usize>,
 }

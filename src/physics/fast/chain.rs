@@ -34,7 +34,7 @@
 
 use glam::DVec3;
 
-use super::Rod;
+use crate::physics::constraints::Rod;
 #[cfg(target_arch = "x86_64")]
 use crate::physics::lanes::{Avx2, Avx512};
 use crate::physics::lanes::{LANES, Lanes, Plain, first_lanes, lanes};

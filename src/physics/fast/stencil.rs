@@ -110,12 +110,12 @@ use std::sync::Mutex;
 
 use glam::DVec3;
 
-use super::collide::{Collider, ContactParams, contact_force};
 #[cfg(target_arch = "x86_64")]
 use super::lanes::{Avx2, Avx512};
 use super::lanes::{LANES, Lanes, Plain, lanes};
 use super::pool::Pool;
-use super::springs::Spring;
+use crate::physics::collide::{Collider, ContactParams, contact_force};
+use crate::physics::springs::Spring;
 use kernels::range_portable;
 #[cfg(target_arch = "x86_64")]
 use kernels::{range_avx2, range_avx512};

@@ -39,7 +39,7 @@ fn springs() -> Vec<Spring> {
             rest_length: 1.0,
             stiffness: 100.0,
             damping: 0.1,
-            kind: super::super::springs::SpringKind::Struct,
+            kind: crate::physics::springs::SpringKind::Struct,
         })
         .collect()
 }

@@ -1,0 +1,27 @@
+//! The fast engine: everything SIMD, threaded or fused, behind one seam.
+//!
+//! The teaching files (`springs.rs`, `forces.rs`, `integrators/*.rs`, `constraints.rs`) hold the
+//! physics as the formulas write it. On a lattice they hand the same arithmetic to this module,
+//! one call per stage, and get the same numbers back (bit for bit, tested per method):
+//!
+//! - [`stencil`]: springs grouped by index offset, one fused pass per stage (force, acceleration,
+//!   every explicit method's update, contact force, dissipated power), split between threads;
+//!   its kernels (portable, AVX2, AVX-512) are chosen at run time. `stencil/small.rs` takes many
+//!   semi-implicit Euler steps of a small lattice in one call, `stencil/team.rs` runs many passes
+//!   as one pool job, `stencil/ceiling.rs` measures the machine's ceiling for `springlab bench`.
+//! - [`lanes`]: the one lane abstraction over the intrinsics (`Plain`, `Avx2`, `Avx512`).
+//! - [`pool`]: the persistent worker pool (one thread per core).
+//! - `implicit_lattice`: implicit Euler's Newton step on a lattice in structure-of-arrays form.
+//! - `implicit_constraint`: a contact constraint of implicit Euler's solve (both paths read it).
+//! - `chain`: Verlet's red-black projection of a chain, eight rods at a time.
+//!
+//! This is the only part of the crate allowed `unsafe` (the intrinsics and the pool's shared
+//! buffers); `Cargo.toml` denies it everywhere else.
+#![allow(unsafe_code)]
+
+pub(crate) mod chain;
+pub(crate) mod implicit_constraint;
+pub(crate) mod implicit_lattice;
+pub(crate) mod lanes;
+pub mod pool;
+pub mod stencil;
