@@ -21,153 +21,24 @@
 //! file's path and contents: the same code is built once and every later grade of it reuses the
 //! program.
 
-use std::collections::hash_map::DefaultHasher;
+mod rustc;
+mod source;
+mod toolchain;
+
 use std::ffi::OsString;
-use std::hash::{Hash, Hasher};
-use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
-use std::thread;
 use std::time::{Duration, Instant};
 
 use super::Assignment;
 use super::homework::API_FILES;
-use super::sandbox::{Launch, Rlimits, Sandbox, reachable_by};
-
-/// At most this many bytes of source are copied from one submission.
-const MAX_SOURCE_BYTES: u64 = 8 << 20;
-/// At most this many files.
-const MAX_SOURCE_FILES: usize = 2000;
-
-/// Where a submission's code is.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Submission {
-    /// The directory given.
-    pub dir: PathBuf,
-    /// The directory holding `lib.rs`.
-    pub src: PathBuf,
-}
-
-/// Finds the code of the submission in `dir`: `dir/src/lib.rs`, `dir/lib.rs`, or the one
-/// `src/lib.rs` in the folders below (an upload of a whole crate folder, up to three levels
-/// down; hidden folders and `target` are not searched).
-///
-/// # Errors
-/// A sentence saying what was looked for, or that several crates were found.
-pub fn locate(dir: &Path) -> Result<Submission, String> {
-    let found = |src: PathBuf| Submission {
-        dir: dir.to_path_buf(),
-        src,
-    };
-    if dir.join("src").join("lib.rs").is_file() {
-        return Ok(found(dir.join("src")));
-    }
-    if dir.join("lib.rs").is_file() {
-        return Ok(found(dir.to_path_buf()));
-    }
-    let mut level = vec![dir.to_path_buf()];
-    for _ in 0..3 {
-        let mut next = Vec::new();
-        for parent in &level {
-            let Ok(entries) = std::fs::read_dir(parent) else {
-                if parent == dir {
-                    return Err(format!("cannot read {}", dir.display()));
-                }
-                continue;
-            };
-            for entry in entries.filter_map(Result::ok) {
-                let name = entry.file_name().to_string_lossy().into_owned();
-                // symlink_metadata: links are not followed.
-                let is_dir = std::fs::symlink_metadata(entry.path()).is_ok_and(|m| m.is_dir());
-                if is_dir && !name.starts_with('.') && name != "target" && name != "src" {
-                    next.push(entry.path());
-                }
-            }
-        }
-        let mut crates: Vec<PathBuf> = next
-            .iter()
-            .map(|d| d.join("src"))
-            .filter(|src| src.join("lib.rs").is_file())
-            .collect();
-        crates.sort();
-        match crates.len() {
-            0 => {}
-            1 => return Ok(found(crates.remove(0))),
-            n => {
-                return Err(format!(
-                    "{n} crates in {}: {}; grade them one by one",
-                    dir.display(),
-                    crates
-                        .iter()
-                        .map(|c| c.display().to_string())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ));
-            }
-        }
-        level = next;
-    }
-    Err(format!(
-        "no src/lib.rs in {} (nor lib.rs, nor up to three folders down)",
-        dir.display()
-    ))
-}
-
-/// A source tree read into memory: relative paths (with `/`) and contents, sorted.
-fn read_tree(src: &Path) -> Result<Vec<(String, Vec<u8>)>, String> {
-    let mut files = Vec::new();
-    let mut total = 0u64;
-    let mut stack = vec![(src.to_path_buf(), String::new())];
-    while let Some((dir, prefix)) = stack.pop() {
-        let entries = std::fs::read_dir(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-        for entry in entries.filter_map(Result::ok) {
-            let name = entry.file_name().to_string_lossy().into_owned();
-            let relative = if prefix.is_empty() {
-                name.clone()
-            } else {
-                format!("{prefix}/{name}")
-            };
-            // symlink_metadata: a link is neither followed nor copied.
-            let Ok(meta) = std::fs::symlink_metadata(entry.path()) else {
-                continue;
-            };
-            if meta.is_dir() {
-                if name != "target" && !name.starts_with('.') {
-                    stack.push((entry.path(), relative));
-                }
-            } else if meta.is_file() {
-                total += meta.len();
-                if total > MAX_SOURCE_BYTES || files.len() >= MAX_SOURCE_FILES {
-                    return Err(format!(
-                        "{} holds more than {} MiB or {MAX_SOURCE_FILES} files",
-                        src.display(),
-                        MAX_SOURCE_BYTES >> 20
-                    ));
-                }
-                let bytes = std::fs::read(entry.path()).map_err(|e| format!("{relative}: {e}"))?;
-                files.push((relative, bytes));
-            }
-        }
-    }
-    files.sort();
-    Ok(files)
-}
-
-/// A 128-bit digest, as 32 hex digits, of everything that goes into a build.
-fn digest(parts: &[&[u8]]) -> String {
-    let mut out = String::new();
-    for salt in [0x5350_4c41_u64, 0x4247_5244_u64] {
-        let mut h = DefaultHasher::new();
-        salt.hash(&mut h);
-        for p in parts {
-            p.hash(&mut h);
-        }
-        out.push_str(&format!("{:016x}", h.finish()));
-    }
-    out
-}
+use super::sandbox::{Sandbox, reachable_by};
+use rustc::common_args;
+pub use source::{Submission, locate};
+use source::{digest, read_tree};
+pub use toolchain::Toolchain;
+use toolchain::{chown, set_mode};
 
 /// Limits of one build (both rustc runs together).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -211,180 +82,6 @@ pub enum BuildFailure {
 pub(crate) fn tail(text: &str, n: usize) -> String {
     let lines: Vec<&str> = text.lines().collect();
     lines[lines.len().saturating_sub(n)..].join("\n")
-}
-
-/// The compiler's error messages in rustc's stderr: everything from the first line starting
-/// with `error`, at most 80 lines of at most 300 characters; or the tail when there is none.
-fn compiler_errors(stderr: &str) -> String {
-    let cut = |l: &str| -> String {
-        if l.chars().count() > 300 {
-            let mut s: String = l.chars().take(300).collect();
-            s.push('…');
-            s
-        } else {
-            l.to_string()
-        }
-    };
-    let Some(start) = stderr.lines().position(|l| l.starts_with("error")) else {
-        return tail(stderr, 30)
-            .lines()
-            .map(cut)
-            .collect::<Vec<_>>()
-            .join("\n");
-    };
-    stderr
-        .lines()
-        .skip(start)
-        .take(80)
-        .map(cut)
-        .collect::<Vec<_>>()
-        .join("\n")
-}
-
-/// The compiler: its sysroot as the sandbox sees it, and its version.
-#[derive(Clone, Debug)]
-pub struct Toolchain {
-    /// The sysroot the sandbox reads (the real one, or hard links to it in the scratch folder).
-    pub sysroot: PathBuf,
-    /// `rustc -vV`.
-    pub version: String,
-}
-
-/// The grader's own environment for running its `rustc` (a rustup proxy needs these).
-fn toolchain_env(command: &mut Command) {
-    command.env_clear();
-    for key in [
-        "PATH",
-        "HOME",
-        "RUSTUP_HOME",
-        "RUSTUP_TOOLCHAIN",
-        "CARGO_HOME",
-        "RUSTC",
-    ] {
-        if let Some(v) = std::env::var_os(key) {
-            command.env(key, v);
-        }
-    }
-}
-
-/// Runs the grader's rustc with `args` (from `/`, so no folder's rust-toolchain file applies).
-fn ask_rustc(rustc: &Path, args: &[&str]) -> Result<String, String> {
-    let mut command = Command::new(rustc);
-    toolchain_env(&mut command);
-    let out = command
-        .args(args)
-        .current_dir("/")
-        .stdin(Stdio::null())
-        .output()
-        .map_err(|e| format!("cannot run {}: {e}", rustc.display()))?;
-    if !out.status.success() {
-        return Err(format!(
-            "`{} {}` failed: {}",
-            rustc.display(),
-            args.join(" "),
-            tail(&String::from_utf8_lossy(&out.stderr), 5)
-        ));
-    }
-    Ok(String::from_utf8_lossy(&out.stdout).trim().to_string())
-}
-
-/// Hard links (or, for symbolic links, copies of the link) of `from` at `to`, recursively.
-fn link_tree(from: &Path, to: &Path) -> std::io::Result<()> {
-    let meta = std::fs::symlink_metadata(from)?;
-    if meta.file_type().is_symlink() {
-        let target = std::fs::read_link(from)?;
-        let _ = std::fs::remove_file(to);
-        std::os::unix::fs::symlink(target, to)
-    } else if meta.is_dir() {
-        std::fs::create_dir_all(to)?;
-        set_mode(to, 0o755)?;
-        for entry in std::fs::read_dir(from)? {
-            let entry = entry?;
-            link_tree(&entry.path(), &to.join(entry.file_name()))?;
-        }
-        Ok(())
-    } else {
-        let _ = std::fs::remove_file(to);
-        std::fs::hard_link(from, to)
-    }
-}
-
-fn set_mode(path: &Path, mode: u32) -> std::io::Result<()> {
-    use std::os::unix::fs::PermissionsExt;
-    std::fs::set_permissions(path, std::fs::Permissions::from_mode(mode))
-}
-
-fn chown(path: &Path, owner: Option<(u32, u32)>) -> std::io::Result<()> {
-    match owner {
-        Some((uid, gid)) => std::os::unix::fs::chown(path, Some(uid), Some(gid)),
-        None => Ok(()),
-    }
-}
-
-impl Toolchain {
-    /// The grader's rustc (`$RUSTC`, else `rustc` on the PATH) and its sysroot; when the sandbox
-    /// user `owner` cannot reach the sysroot (rustup under a closed `/root`), its compiler
-    /// parts hard-linked into `scratch/toolchain`.
-    ///
-    /// # Errors
-    /// A sentence for the grader: no rustc, or a sysroot the sandbox can neither reach nor link.
-    pub fn find(scratch: &Path, owner: Option<(u32, u32)>) -> Result<Toolchain, String> {
-        let rustc = std::env::var_os("RUSTC")
-            .filter(|v| !v.is_empty())
-            .map_or_else(|| PathBuf::from("rustc"), PathBuf::from);
-        let sysroot = PathBuf::from(ask_rustc(&rustc, &["--print", "sysroot"])?);
-        let real = sysroot.join("bin").join("rustc");
-        let version = ask_rustc(&real, &["-vV"])?;
-        let reachable = owner.is_none_or(|(u, g)| reachable_by(&real, u, g));
-        if reachable {
-            return Ok(Toolchain { sysroot, version });
-        }
-        let host = version
-            .lines()
-            .find_map(|l| l.strip_prefix("host: "))
-            .ok_or_else(|| format!("`rustc -vV` names no host: {version}"))?
-            .to_string();
-        let mirror = scratch.join("toolchain");
-        let link = || -> std::io::Result<()> {
-            std::fs::create_dir_all(mirror.join("bin"))?;
-            set_mode(&mirror, 0o755)?;
-            set_mode(&mirror.join("bin"), 0o755)?;
-            link_tree(&real, &mirror.join("bin").join("rustc"))?;
-            let lib = mirror.join("lib");
-            std::fs::create_dir_all(lib.join("rustlib"))?;
-            set_mode(&lib, 0o755)?;
-            set_mode(&lib.join("rustlib"), 0o755)?;
-            for entry in std::fs::read_dir(sysroot.join("lib"))? {
-                let entry = entry?;
-                if entry.file_type()?.is_dir() {
-                    continue;
-                }
-                link_tree(&entry.path(), &lib.join(entry.file_name()))?;
-            }
-            link_tree(
-                &sysroot.join("lib").join("rustlib").join(&host),
-                &lib.join("rustlib").join(&host),
-            )
-        };
-        link().map_err(|e| {
-            format!(
-                "the toolchain at {} cannot be read by the sandbox user (a folder above it is \
-                 closed) and cannot be linked into {}: {e}; install Rust where other users can \
-                 read it (for example RUSTUP_HOME=/usr/local/rustup CARGO_HOME=/usr/local/cargo), \
-                 or run with --sandbox-uid 0",
-                sysroot.display(),
-                mirror.display()
-            )
-        })?;
-        Ok(Toolchain {
-            sysroot: mirror,
-            version,
-        })
-    }
-
-    fn rustc(&self) -> PathBuf {
-        self.sysroot.join("bin").join("rustc")
-    }
 }
 
 /// The grader's folders for one run, and the sandbox its builds run in (module docs).
@@ -553,106 +250,6 @@ impl Builder {
         chown(&work, self.owner(slot))?;
         set_mode(&work, 0o700)?;
         Ok(work)
-    }
-
-    /// Runs rustc in the sandbox with `args`; its stderr (bounded) on failure.
-    #[allow(clippy::too_many_arguments)]
-    fn rustc(
-        &self,
-        toolchain: &Toolchain,
-        args: Vec<OsString>,
-        cwd: &Path,
-        read: Vec<PathBuf>,
-        out: &Path,
-        slot: u32,
-        deadline: Instant,
-    ) -> Result<(), BuildFailure> {
-        let mut env: Vec<(OsString, OsString)> = vec![
-            ("PATH".into(), "/usr/bin:/bin".into()),
-            ("TMPDIR".into(), out.as_os_str().to_owned()),
-            ("HOME".into(), out.as_os_str().to_owned()),
-        ];
-        env.push(("LC_ALL".into(), "C".into()));
-        let mut read = read;
-        read.push(toolchain.sysroot.clone());
-        let launch = Launch {
-            program: toolchain.rustc(),
-            args,
-            env,
-            cwd: cwd.to_path_buf(),
-            read,
-            write: vec![out.to_path_buf()],
-            limits: Rlimits {
-                address_space: self.limits.memory_bytes,
-                cpu_seconds: self.limits.cpu_seconds,
-                file_bytes: 256 << 20,
-                open_files: 1024,
-                processes: 256,
-            },
-            slot,
-        };
-        let mut child = self
-            .sandbox
-            .spawn(&launch, Stdio::null(), Stdio::null(), Stdio::piped())
-            .map_err(|e| BuildFailure::Grader(format!("cannot start rustc in the sandbox: {e}")))?;
-        let cap = self.limits.output_bytes;
-        let err = child.stderr.take();
-        let reader = thread::spawn(move || {
-            let mut kept = Vec::new();
-            if let Some(mut p) = err {
-                let mut chunk = [0u8; 8192];
-                while let Ok(n) = p.read(&mut chunk) {
-                    if n == 0 {
-                        break;
-                    }
-                    let room = cap.saturating_sub(kept.len());
-                    kept.extend_from_slice(&chunk[..n.min(room)]);
-                }
-            }
-            String::from_utf8_lossy(&kept).into_owned()
-        });
-        let status = loop {
-            match child.try_wait() {
-                Ok(Some(status)) => break status,
-                Ok(None) if Instant::now() > deadline => {
-                    kill_group(&mut child);
-                    let _ = reader.join();
-                    self.sandbox.sweep(slot);
-                    return Err(BuildFailure::TimedOut(self.limits.wall));
-                }
-                Ok(None) => thread::sleep(Duration::from_millis(10)),
-                Err(e) => return Err(BuildFailure::Grader(e.to_string())),
-            }
-        };
-        kill_group(&mut child);
-        let stderr = reader.join().unwrap_or_default();
-        self.sandbox.sweep(slot);
-        if status.success() {
-            return Ok(());
-        }
-        use std::os::unix::process::ExitStatusExt;
-        if let Some(memory) = stderr
-            .lines()
-            .find(|l| l.contains("memory allocation of") || l.contains("out of memory"))
-        {
-            return Err(BuildFailure::Limit(format!(
-                "the compiler ran out of memory (\"{}\"; a build may use {} MiB)",
-                memory.trim(),
-                self.limits.memory_bytes >> 20
-            )));
-        }
-        match status.signal() {
-            Some(24 | 9) if !stderr.lines().any(|l| l.starts_with("error")) => {
-                Err(BuildFailure::Limit(format!(
-                    "the compiler used up its CPU time ({} s)",
-                    self.limits.cpu_seconds
-                )))
-            }
-            _ if stderr.trim().is_empty() => Err(BuildFailure::Compile(format!(
-                "rustc ended ({status}) without a message"
-            ))),
-            _ => Err(BuildFailure::Compile(compiler_errors(&stderr))),
-        }
     }
 
     /// The compiled API in the scratch space (compiled in the sandbox once per API and rustc,
@@ -849,26 +446,6 @@ impl Builder {
     }
 }
 
-/// Arguments of every rustc run: the release profile of the old cargo build.
-fn common_args() -> Vec<OsString> {
-    [
-        "--edition",
-        "2024",
-        "-C",
-        "opt-level=3",
-        "-C",
-        "debuginfo=0",
-        "-C",
-        "panic=unwind",
-        "--error-format",
-        "human",
-        "--color",
-        "never",
-    ]
-    .map(OsString::from)
-    .to_vec()
-}
-
 /// Copies `from` to `to` (the grader's, 0755) through a temporary file beside it, created
 /// exclusively and renamed: a reader sees the old file or the new one, whole.
 fn copy_in(from: &Path, to: &Path) -> std::io::Result<()> {
@@ -890,18 +467,6 @@ fn copy_in(from: &Path, to: &Path) -> std::io::Result<()> {
     std::fs::rename(&tmp, to).inspect_err(|_| {
         let _ = std::fs::remove_file(&tmp);
     })
-}
-
-/// Kills the sandbox's process group (A and whatever kept its group) and reaps A.
-fn kill_group(child: &mut std::process::Child) {
-    if let Ok(pid) = i32::try_from(child.id()) {
-        let _ = nix::sys::signal::killpg(
-            nix::unistd::Pid::from_raw(pid),
-            nix::sys::signal::Signal::SIGKILL,
-        );
-    }
-    let _ = child.kill();
-    let _ = child.wait();
 }
 
 /// The default target directory of `springlab grade`: `$CARGO_TARGET_DIR`, else

@@ -20,7 +20,11 @@
 //! before the fork (no allocation, no lock): the Landlock ruleset and the seccomp program are
 //! built in the grader.
 
+#![allow(unsafe_code)]
+
+mod child;
 mod landlock;
+mod report;
 mod seccomp;
 
 use std::ffi::OsString;
@@ -31,6 +35,8 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use nix::libc;
+
+use child::{confine, enter_namespaces};
 
 /// The sandbox user when none is given: `nobody`.
 pub const DEFAULT_UID: u32 = 65534;
@@ -243,8 +249,8 @@ impl Sandbox {
             Err(off_reason(Layer::Namespaces))
         } else {
             let flags = NS_FLAGS | if root { 0 } else { libc::CLONE_NEWUSER };
-            // SAFETY: unshare in the forked probe only.
             match probe(|| {
+                // SAFETY: unshare in the forked probe only.
                 if unsafe { libc::unshare(flags) } == 0 {
                     0
                 } else {
@@ -308,126 +314,6 @@ impl Sandbox {
     #[must_use]
     pub fn has_pid_namespace(&self) -> bool {
         self.namespaces.is_ok()
-    }
-
-    /// Each layer: active or missing, and why.
-    #[must_use]
-    pub fn layers(&self) -> Vec<LayerState> {
-        let state = |layer, r: Result<String, &String>| match r {
-            Ok(detail) => LayerState {
-                layer,
-                active: true,
-                detail,
-            },
-            Err(why) => LayerState {
-                layer,
-                active: false,
-                detail: why.clone(),
-            },
-        };
-        vec![
-            state(
-                Layer::User,
-                self.user.as_ref().map(|()| {
-                    format!(
-                        "uid {} gid {} (job k of --jobs: uid {} + k), no supplementary groups, \
-                         no_new_privs",
-                        self.config.uid, self.config.gid, self.config.uid
-                    )
-                }),
-            ),
-            state(
-                Layer::Namespaces,
-                self.namespaces.as_ref().map(|f| {
-                    format!(
-                        "pid, net, mount, ipc, uts{}: nothing outlives the program, no network, \
-                         /proc shows the sandbox only",
-                        if f & libc::CLONE_NEWUSER != 0 {
-                            ", user"
-                        } else {
-                            ""
-                        }
-                    )
-                }),
-            ),
-            state(
-                Layer::Landlock,
-                self.landlock.as_ref().map(|abi| {
-                    let mut what = String::from(
-                        "files (read: toolchain, submission, API; write: its own directory)",
-                    );
-                    if *abi >= 4 {
-                        what.push_str(", TCP");
-                    }
-                    if *abi >= 6 {
-                        what.push_str(", signals and abstract sockets outside");
-                    }
-                    format!("ABI {abi}: {what}")
-                }),
-            ),
-            state(
-                Layer::Seccomp,
-                self.seccomp.as_ref().map(|_| {
-                    "no sockets but AF_UNIX, no ptrace, process_vm_*, io_uring, namespaces, \
-                     mounts, bpf, keyrings"
-                        .to_string()
-                }),
-            ),
-            LayerState {
-                layer: Layer::Limits,
-                active: true,
-                detail: format!(
-                    "CPU, address space, file size, open files, processes{}, no core files; \
-                     wall clock by the grader",
-                    if self.user.is_ok() {
-                        ""
-                    } else {
-                        " (not binding on root)"
-                    }
-                ),
-            },
-        ]
-    }
-
-    /// One line: `sandbox: user ✓, namespaces ✓, landlock ✓ (ABI 7), seccomp ✓, limits ✓`,
-    /// with `✗` for a missing layer.
-    #[must_use]
-    pub fn summary(&self) -> String {
-        let parts: Vec<String> = self
-            .layers()
-            .iter()
-            .map(|l| {
-                let mark = if l.active { "on" } else { "off" };
-                match (l.layer, &self.landlock) {
-                    (Layer::Landlock, Ok(abi)) => format!("landlock on (ABI {abi})"),
-                    (Layer::User, _) if l.active => format!("user on (uid {})", self.config.uid),
-                    _ => format!("{} {mark}", l.layer.name()),
-                }
-            })
-            .collect();
-        format!("sandbox: {}", parts.join(", "))
-    }
-
-    /// The full report: one line per layer.
-    #[must_use]
-    pub fn report(&self) -> String {
-        let mut out = String::new();
-        for l in self.layers() {
-            out.push_str(&format!(
-                "{:<11} {:<7} {}\n",
-                l.layer.name(),
-                if l.active { "active" } else { "missing" },
-                l.detail
-            ));
-        }
-        if self.namespaces.is_err() && self.user.is_ok() {
-            out.push_str(&format!(
-                "cleanup     active  every process of the sandbox user is killed after each build \
-                 and program (uid {} must be used by nothing else)\n",
-                self.config.uid
-            ));
-        }
-        out
     }
 
     /// Starts `launch` in the sandbox with the given standard streams.
@@ -577,206 +463,6 @@ pub fn processes_of(uid: u32) -> Vec<u32> {
                 == Some(uid)
         })
         .collect()
-}
-
-/// Writes `data` to the file `path` (both NUL-terminated where needed); system calls only.
-unsafe fn write_file(path: &[u8], data: &[u8]) -> bool {
-    // SAFETY: path is NUL-terminated by the caller.
-    let fd = unsafe { libc::open(path.as_ptr().cast(), libc::O_WRONLY | libc::O_CLOEXEC) };
-    if fd < 0 {
-        return false;
-    }
-    // SAFETY: a valid buffer and descriptor.
-    let n = unsafe { libc::write(fd, data.as_ptr().cast(), data.len()) };
-    // SAFETY: closes the descriptor just opened.
-    unsafe { libc::close(fd) };
-    n == data.len() as isize
-}
-
-/// Closes every descriptor but `keep`.
-unsafe fn close_all_but(keep: libc::c_int) {
-    // SAFETY: close_range on ranges of this process's descriptors.
-    unsafe {
-        if keep > 0 {
-            libc::syscall(libc::SYS_close_range, 0u32, (keep - 1) as u32, 0u32);
-        }
-        libc::syscall(libc::SYS_close_range, (keep + 1) as u32, u32::MAX, 0u32);
-    }
-}
-
-/// In A (module docs): new namespaces, then B and C; returns only in C.
-unsafe fn enter_namespaces(
-    ns: libc::c_int,
-    userns: bool,
-    uid_map: &str,
-    gid_map: &str,
-    proc_rule: bool,
-    ruleset_fd: libc::c_int,
-) -> io::Result<()> {
-    // SAFETY (whole function): system calls only, on data prepared before the fork.
-    unsafe {
-        if libc::unshare(ns) != 0 {
-            return Err(io::Error::last_os_error());
-        }
-        if userns {
-            let _ = write_file(b"/proc/self/setgroups\0", b"deny");
-            if !write_file(b"/proc/self/uid_map\0", uid_map.as_bytes())
-                || !write_file(b"/proc/self/gid_map\0", gid_map.as_bytes())
-            {
-                return Err(io::Error::last_os_error());
-            }
-        }
-        let mut pipe = [0; 2];
-        if libc::pipe2(pipe.as_mut_ptr(), libc::O_CLOEXEC) != 0 {
-            return Err(io::Error::last_os_error());
-        }
-        let b = libc::fork();
-        if b < 0 {
-            return Err(io::Error::last_os_error());
-        }
-        if b > 0 {
-            // A: wait for B, then end as the program ended.
-            close_all_but(pipe[0]);
-            let mut status = 0;
-            while libc::waitpid(b, &raw mut status, 0) < 0 && errno() == libc::EINTR {}
-            let mut word = [0u8; 4];
-            if libc::read(pipe[0], word.as_mut_ptr().cast(), 4) != 4 {
-                libc::_exit(126);
-            }
-            end_as(i32::from_ne_bytes(word));
-        }
-        // B: pid 1 of the namespace; dies with A. (Its parent is outside the namespace, so
-        // getppid() is 0 here and cannot tell whether A is still alive; A closing its end of
-        // the pipe is not needed either: A only ends after B.)
-        libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL, 0, 0, 0);
-        libc::close(pipe[0]);
-        if proc_rule
-            && libc::mount(
-                std::ptr::null(),
-                c"/".as_ptr(),
-                std::ptr::null(),
-                libc::MS_REC | libc::MS_PRIVATE,
-                std::ptr::null(),
-            ) == 0
-            && libc::mount(
-                c"proc".as_ptr(),
-                c"/proc".as_ptr(),
-                c"proc".as_ptr(),
-                libc::MS_NOSUID | libc::MS_NODEV | libc::MS_NOEXEC,
-                c"hidepid=invisible".as_ptr().cast(),
-            ) == 0
-            && ruleset_fd >= 0
-        {
-            let pfd = libc::open(c"/proc".as_ptr(), libc::O_PATH | libc::O_CLOEXEC);
-            if pfd >= 0 {
-                landlock::add_rule(ruleset_fd, pfd, landlock::READ_FILE | landlock::READ_DIR);
-                libc::close(pfd);
-            }
-        }
-        let c = libc::fork();
-        if c < 0 {
-            libc::_exit(126);
-        }
-        if c > 0 {
-            // B: reap everything; when C ends, report its status and exit (the kernel then
-            // kills whatever is left in the namespace).
-            close_all_but(pipe[1]);
-            loop {
-                let mut status = 0;
-                let pid = libc::waitpid(-1, &raw mut status, 0);
-                if pid == c {
-                    let word = status.to_ne_bytes();
-                    libc::write(pipe[1], word.as_ptr().cast(), 4);
-                    libc::_exit(0);
-                }
-                if pid < 0 && errno() != libc::EINTR {
-                    libc::_exit(126);
-                }
-            }
-        }
-        // C.
-        libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL, 0, 0, 0);
-        libc::close(pipe[1]);
-        Ok(())
-    }
-}
-
-/// Ends A as the program ended: the same exit code, or the same signal.
-unsafe fn end_as(status: libc::c_int) -> ! {
-    // SAFETY: system calls only.
-    unsafe {
-        if libc::WIFEXITED(status) {
-            libc::_exit(libc::WEXITSTATUS(status));
-        }
-        if libc::WIFSIGNALED(status) {
-            let sig = libc::WTERMSIG(status);
-            let none = libc::rlimit {
-                rlim_cur: 0,
-                rlim_max: 0,
-            };
-            libc::setrlimit(libc::RLIMIT_CORE, &raw const none);
-            libc::signal(sig, libc::SIG_DFL);
-            let mut set: libc::sigset_t = std::mem::zeroed();
-            libc::sigemptyset(&raw mut set);
-            libc::sigaddset(&raw mut set, sig);
-            libc::sigprocmask(libc::SIG_UNBLOCK, &raw const set, std::ptr::null_mut());
-            libc::kill(libc::getpid(), sig);
-        }
-        libc::_exit(125)
-    }
-}
-
-/// In C: limits, the other user, no_new_privs, Landlock, seccomp.
-unsafe fn confine(
-    uid: Option<u32>,
-    gid: u32,
-    limits: Rlimits,
-    ruleset_fd: libc::c_int,
-    filter: Option<&[libc::sock_filter]>,
-) -> io::Result<()> {
-    let fail = || Err(io::Error::last_os_error());
-    // SAFETY (whole function): system calls only, on data prepared before the fork.
-    unsafe {
-        let set = |resource, value: u64| {
-            let l = libc::rlimit {
-                rlim_cur: value,
-                rlim_max: value,
-            };
-            libc::setrlimit(resource, &raw const l) == 0
-        };
-        if !(set(libc::RLIMIT_AS, limits.address_space)
-            && set(libc::RLIMIT_CPU, limits.cpu_seconds)
-            && set(libc::RLIMIT_FSIZE, limits.file_bytes)
-            && set(libc::RLIMIT_CORE, 0)
-            && set(libc::RLIMIT_NOFILE, limits.open_files))
-        {
-            return fail();
-        }
-        if let Some(uid) = uid
-            && (libc::setgroups(0, std::ptr::null()) != 0
-                || libc::setresgid(gid, gid, gid) != 0
-                || libc::setresuid(uid, uid, uid) != 0)
-        {
-            return fail();
-        }
-        // After the switch: a limit set before it would make the exec fail (the kernel checks
-        // the new user's count at setuid).
-        if !set(libc::RLIMIT_NPROC, limits.processes) {
-            return fail();
-        }
-        if libc::prctl(libc::PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0 {
-            return fail();
-        }
-        if ruleset_fd >= 0 && !landlock::restrict_self(ruleset_fd) {
-            return fail();
-        }
-        if let Some(filter) = filter
-            && !seccomp::install(filter)
-        {
-            return fail();
-        }
-        Ok(())
-    }
 }
 
 /// True when every directory above and including `path` can be searched by `uid`/`gid`

@@ -2,6 +2,8 @@
 //! what its end means in words for the report. (The working directory, the limits and the other
 //! layers come from [`crate::grade::sandbox`].)
 
+#![allow(unsafe_code)]
+
 use std::io::Read;
 use std::process::{Child, ChildStderr, ExitStatus};
 use std::sync::Mutex;

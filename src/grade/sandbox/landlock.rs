@@ -14,6 +14,8 @@
 //! Reference: the kernel's `Documentation/userspace-api/landlock.rst` and
 //! `include/uapi/linux/landlock.h` (the constants below).
 
+#![allow(unsafe_code)]
+
 use std::ffi::CString;
 use std::io;
 use std::os::fd::{AsRawFd, FromRawFd, OwnedFd};

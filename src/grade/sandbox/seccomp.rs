@@ -16,6 +16,8 @@
 //! Reference: the kernel's `Documentation/userspace-api/seccomp_filter.rst`; the filter layout
 //! of `struct seccomp_data` (nr at 0, arch at 4, args from 16).
 
+#![allow(unsafe_code)]
+
 use nix::libc::{self, sock_filter};
 
 const LD_W_ABS: u16 = 0x20;
