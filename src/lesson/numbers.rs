@@ -164,13 +164,59 @@ pub fn check(text: &str) -> Vec<(usize, String)> {
         }
         match parse(inner) {
             Ok(p) => {
-                if let Some((name, sets)) = &p.scene
-                    && let Err(e) = scene::load(name, sets)
-                {
-                    errors.push((offset, format!("{{{{{inner}}}}}: {e}")));
+                if let Some((name, sets)) = &p.scene {
+                    // Another scene: it must load and obey a lesson step's budget.
+                    match scene::load(name, sets) {
+                        Err(e) => errors.push((offset, format!("{{{{{inner}}}}}: {e}"))),
+                        Ok(s) => {
+                            if let Err(m) =
+                                super::check_budget(&s, s.dt, 0.0, &format!("scene `{name}`"))
+                            {
+                                errors.push((offset, format!("{{{{{inner}}}}}: {m}")));
+                            }
+                        }
+                    }
                 }
             }
             Err(m) => errors.push((offset, m)),
+        }
+    }
+    errors
+}
+
+/// Checks every `{{param:KEY}}` of `text`: its scene (`@SCENE`, else the step's `scene`) must be
+/// a built-in scene with a parameter `KEY` (a scene file's values are not looked up). Returns
+/// `(byte offset, message)` for each bad one.
+#[must_use]
+pub fn check_params(text: &str, scene: &str) -> Vec<(usize, String)> {
+    let mut errors = Vec::new();
+    for (offset, inner) in find(text) {
+        let Ok(p) = parse(inner) else { continue };
+        if p.kind != "param" {
+            continue;
+        }
+        let name = p.scene.as_ref().map_or(scene, |(n, _)| n.as_str());
+        let key = p.arg.as_deref().unwrap_or("");
+        let Some(def) = scene::builtin(name) else {
+            errors.push((
+                offset,
+                format!(
+                    "{{{{{inner}}}}}: `param` reads a built-in scene's parameters; `{name}` is \
+                     not a built-in scene"
+                ),
+            ));
+            continue;
+        };
+        let params = def.default_params();
+        if !params.iter().any(|(k, _)| k == key) {
+            let known: Vec<&str> = params.iter().map(|(k, _)| k).collect();
+            errors.push((
+                offset,
+                format!(
+                    "{{{{{inner}}}}}: scene `{name}` has no parameter `{key}`; its parameters: {}",
+                    known.join(", ")
+                ),
+            ));
         }
     }
     errors

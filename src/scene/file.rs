@@ -241,12 +241,12 @@ pub fn from_str_with(
     };
     // Bounded before the TOML reader builds its tree (see `bounds`); `--force` lifts the
     // value count with the file size, never the nesting.
-    let max_values = if limits.file_bytes <= Limits::DEFAULT.file_bytes {
-        bounds::MAX_VALUES
+    let max_bytes = if limits.file_bytes <= Limits::DEFAULT.file_bytes {
+        bounds::MAX_TREE_BYTES
     } else {
         usize::MAX
     };
-    bounds::check_with(text, max_values, bounds::MAX_DEPTH)
+    bounds::check_with(text, max_bytes, bounds::MAX_DEPTH)
         .map_err(|e| source.error(e.offset..e.offset, e.message))?;
     let file: FileSpec = toml::from_str(text).map_err(|e| source.toml_error(&e))?;
     let file_name = path
