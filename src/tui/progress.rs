@@ -89,7 +89,15 @@ impl Progress {
             notice: None,
         };
         let found = match std::fs::metadata(path) {
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return progress,
+            // Nothing there yet (a missing directory included): the first save makes it.
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory
+                ) =>
+            {
+                return progress;
+            }
             Err(e) => Err(e.to_string()),
             Ok(m) if !m.is_file() => {
                 progress.path = None;
