@@ -62,7 +62,8 @@ fn placeholder() -> impl Strategy<Value = Placeholder> {
             .prop_filter("not a known name", |n| !KINDS.contains(&n.as_str()))
             .prop_map(Placeholder::UnknownName),
         "[a-z_]{1,12}"
-            .prop_filter("not a rope parameter", |n| !ROPE_PARAMS.contains(&n.as_str()))
+            .prop_filter("not a rope parameter", |n| !ROPE_PARAMS
+                .contains(&n.as_str()))
             .prop_map(Placeholder::UnknownParam),
     ]
 }

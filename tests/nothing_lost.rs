@@ -95,14 +95,7 @@ fn a_csv_to_a_null_device_leaves_the_device_a_device() {
     let out = run_in(
         dir.path(),
         &[
-            "render",
-            "rope",
-            "--frames",
-            "2",
-            "--size",
-            "32x24",
-            "--gif",
-            "null",
+            "render", "rope", "--frames", "2", "--size", "32x24", "--gif", "null",
         ],
     );
     assert!(out.status.success(), "{}", stderr(&out));
@@ -192,7 +185,11 @@ fn a_link_to_a_file_is_followed_and_a_dangling_link_refused() {
             .file_type()
             .is_symlink()
     );
-    assert!(fs::read_to_string(&real).expect("real").starts_with("step,time"));
+    assert!(
+        fs::read_to_string(&real)
+            .expect("real")
+            .starts_with("step,time")
+    );
 
     std::os::unix::fs::symlink("nowhere.csv", dir.path().join("dangling.csv")).expect("link");
     let out = run_in(dir.path(), &["run", "rope", "--csv", "dangling.csv"]);
@@ -309,14 +306,23 @@ fn a_render_stopped_by_each_signal_leaves_nothing() {
     ] {
         let dir = tempfile::tempdir().expect("temp dir");
         let out = killed_render(dir.path(), signal);
-        assert_eq!(out.status.code(), Some(status), "{signal}: {}", stderr(&out));
+        assert_eq!(
+            out.status.code(),
+            Some(status),
+            "{signal}: {}",
+            stderr(&out)
+        );
         assert!(
             stderr(&out).ends_with(&format!("{cause}; unfinished outputs were removed\n")),
             "{signal}: {}",
             stderr(&out)
         );
         // The frames' folder was made by the render: it goes too.
-        assert!(names(dir.path()).is_empty(), "{signal}: {:?}", names(dir.path()));
+        assert!(
+            names(dir.path()).is_empty(),
+            "{signal}: {:?}",
+            names(dir.path())
+        );
     }
 }
 
@@ -526,12 +532,14 @@ fn lessons_over_the_budget_or_with_unknown_parameters_are_refused() {
     .expect("write");
     fs::write(
         dir.path().join("02-param.md"),
-        header(2, "param") + "+++ step\ntitle = \"P\"\nscene = \"rope\"\n+++\n{{param:nonexistent}}\n",
+        header(2, "param")
+            + "+++ step\ntitle = \"P\"\nscene = \"rope\"\n+++\n{{param:nonexistent}}\n",
     )
     .expect("write");
     let bom = format!(
         "\u{feff}{}",
-        (header(3, "bom") + "+++ step\ntitle = \"B\"\nscene = \"rope\"\n+++\n{{param:stiffness}}\n")
+        (header(3, "bom")
+            + "+++ step\ntitle = \"B\"\nscene = \"rope\"\n+++\n{{param:stiffness}}\n")
             .replace('\n', "\r\n")
     );
     fs::write(dir.path().join("03-bom.md"), bom).expect("write");

@@ -56,7 +56,10 @@ fn restored_after(signal: Signal) {
     };
     let pty = openpty(Some(&size), None).expect("openpty");
     let before = tcgetattr(&pty.slave).expect("tcgetattr");
-    assert!(canonical_with_echo(before.local_flags), "a fresh pty is canonical");
+    assert!(
+        canonical_with_echo(before.local_flags),
+        "a fresh pty is canonical"
+    );
     let data = tempfile::tempdir().expect("temp dir");
     let slave = || Stdio::from(pty.slave.try_clone().expect("dup"));
     let mut command = Command::new(env!("CARGO_BIN_EXE_springlab"));
