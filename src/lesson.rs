@@ -68,8 +68,9 @@
 //! A step runs in the terminal in real time, so its scene must be small enough for that: its
 //! particle and spring updates per simulated second (at its method and dt, see
 //! [`crate::budget::updates_per_step`]) at most [`REAL_TIME_UPDATES`], and a run of its longest
-//! goal or prediction (at least [`HORIZON`] seconds) within the limits of `springlab run`. The
-//! scenes of `{{…@SCENE}}` placeholders obey the same limits. A step over them is refused with
+//! goal or prediction (at least [`HORIZON`] seconds) within the limits of `springlab run`; and
+//! when its text has placeholders computed from ω_max, their power iteration's worst case at
+//! most [`PLACEHOLDER_UPDATES`]. The scenes of `{{…@SCENE}}` placeholders obey the same limits. A step over them is refused with
 //! the error shown in the menu, like a malformed lesson.
 
 use std::fmt;
@@ -117,6 +118,34 @@ pub fn check_budget(scene: &Scene, dt: f64, horizon: f64, what: &str) -> Result<
             scene.spring_count(),
             budget::short(dt),
             budget::approx(REAL_TIME_UPDATES)
+        ));
+    }
+    Ok(())
+}
+
+/// The most particle and spring updates the placeholders that need ω_max (`{{omega_max}}`,
+/// `{{limit_dt:…}}`, …) may cost when a step opens, at the power iteration's worst case
+/// ([`crate::study::modes::MAX_ITERATIONS`] passes): ten seconds at [`budget::RATE`] (it
+/// usually converges in far fewer). The jelly of lesson 5 is priced 2.8e8.
+pub const PLACEHOLDER_UPDATES: f64 = 10.0 * budget::RATE;
+
+/// Checks the worst-case cost of ω_max on `scene` against [`PLACEHOLDER_UPDATES`]; `what`
+/// names it in the message.
+///
+/// # Errors
+/// The message when it is over.
+pub fn check_omega_cost(scene: &Scene, what: &str) -> Result<(), String> {
+    let cost = f64::from(crate::study::modes::MAX_ITERATIONS)
+        * (scene.particle_count() as f64 + scene.spring_count() as f64);
+    if cost > PLACEHOLDER_UPDATES {
+        return Err(format!(
+            "{what}: its ω_max placeholders may need about {} particle and spring updates when \
+             the step opens (power iteration, {} particles, {} springs); at most {}: use a \
+             smaller scene",
+            budget::approx(cost),
+            scene.particle_count(),
+            scene.spring_count(),
+            budget::approx(PLACEHOLDER_UPDATES)
         ));
     }
     Ok(())
@@ -652,6 +681,10 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
             &format!("step \"{}\"", step.title),
         )
         .map_err(|m| err(*start, None, m))?;
+        if numbers::needs_omega(body) {
+            check_omega_cost(&scene, &format!("step \"{}\"", step.title))
+                .map_err(|m| err(*start, None, m))?;
+        }
         // `{{param:KEY}}`: a parameter of its scene.
         if let Some((offset, message)) = numbers::check_params(body, &step.scene).into_iter().next()
         {

@@ -536,6 +536,13 @@ fn lessons_over_the_budget_or_with_unknown_parameters_are_refused() {
             + "+++ step\ntitle = \"P\"\nscene = \"rope\"\n+++\n{{param:nonexistent}}\n",
     )
     .expect("write");
+    fs::write(
+        dir.path().join("04-omega.md"),
+        header(4, "omega")
+            + "+++ step\ntitle = \"Long\"\nscene = \"rope\"\nparams = { nodes = 300000 }\n+++\n\
+               {{omega_max}}\n",
+    )
+    .expect("write");
     let bom = format!(
         "\u{feff}{}",
         (header(3, "bom")
@@ -562,8 +569,15 @@ fn lessons_over_the_budget_or_with_unknown_parameters_are_refused() {
         ),
         "{listing}"
     );
+    assert!(
+        listing.contains(
+            "./04-omega.md:8: step \"Long\": its ω_max placeholders may need about 1.2e10 \
+             particle and spring updates when the step opens"
+        ),
+        "{listing}"
+    );
     assert_eq!(
         stderr(&out),
-        "springlab: 2 lesson file(s) failed to load (marked with ! above)\n"
+        "springlab: 3 lesson file(s) failed to load (marked with ! above)\n"
     );
 }

@@ -169,9 +169,12 @@ pub fn check(text: &str) -> Vec<(usize, String)> {
                     match scene::load(name, sets) {
                         Err(e) => errors.push((offset, format!("{{{{{inner}}}}}: {e}"))),
                         Ok(s) => {
-                            if let Err(m) =
-                                super::check_budget(&s, s.dt, 0.0, &format!("scene `{name}`"))
-                            {
+                            let what = format!("scene `{name}`");
+                            let mut checked = super::check_budget(&s, s.dt, 0.0, &what);
+                            if checked.is_ok() && NEEDS_OMEGA.contains(&p.kind.as_str()) {
+                                checked = super::check_omega_cost(&s, &what);
+                            }
+                            if let Err(m) = checked {
                                 errors.push((offset, format!("{{{{{inner}}}}}: {m}")));
                             }
                         }
@@ -182,6 +185,24 @@ pub fn check(text: &str) -> Vec<(usize, String)> {
         }
     }
     errors
+}
+
+/// Placeholder kinds computed from ω_max, whose power iteration
+/// ([`crate::study::modes`]) may take up to its `MAX_ITERATIONS` passes over the springs.
+const NEEDS_OMEGA: &[&str] = &[
+    "omega_max",
+    "limit_dt",
+    "limit_dt_omega",
+    "lambda",
+    "stable_dt_omega",
+];
+
+/// True when a placeholder of `text` on the step's own scene (no `@SCENE`) needs ω_max.
+#[must_use]
+pub fn needs_omega(text: &str) -> bool {
+    find(text).into_iter().any(|(_, inner)| {
+        parse(inner).is_ok_and(|p| p.scene.is_none() && NEEDS_OMEGA.contains(&p.kind.as_str()))
+    })
 }
 
 /// Checks every `{{param:KEY}}` of `text`: its scene (`@SCENE`, else the step's `scene`) must be
