@@ -124,7 +124,7 @@ pub fn main() -> ExitCode {
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) if e.chain().any(|c| c.is::<Interrupted>()) => {
             eprintln!("springlab: {e}");
-            ExitCode::from(130)
+            ExitCode::from(crate::budget::interrupt::exit_status())
         }
         Err(e) => {
             eprintln!("springlab: {}", message(&e));

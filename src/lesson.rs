@@ -58,7 +58,20 @@
 //! Numbers in the text can be computed when the step opens: `{{omega_max}}`,
 //! `{{limit_dt:rk4}}`, `{{order:verlet@oscillator damping=2}}` (see [`numbers`]).
 //!
-//! Every error names the file and the line (and the column where TOML gives one).
+//! Every error names the file and the line (and the column where TOML gives one), in one line
+//! that quotes at most a short excerpt of a value. A file may start with a UTF-8 byte order mark
+//! and use CRLF line ends. Each front-matter block is bounded before it is parsed, as scene
+//! files are ([`crate::scene::file::bounds`]).
+//!
+//! # Budget
+//!
+//! A step runs in the terminal in real time, so its scene must be small enough for that: its
+//! particle and spring updates per simulated second (at its method and dt, see
+//! [`crate::budget::updates_per_step`]) at most [`REAL_TIME_UPDATES`], and a run of its longest
+//! goal or prediction (at least [`HORIZON`] seconds) within the limits of `springlab run`; and
+//! when its text has placeholders computed from ω_max, their power iteration's worst case at
+//! most [`PLACEHOLDER_UPDATES`]. The scenes of `{{…@SCENE}}` placeholders obey the same limits. A step over them is refused with
+//! the error shown in the menu, like a malformed lesson.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -70,9 +83,73 @@ pub mod numbers;
 
 pub use keys::{Key, Keys, Stroke};
 
-use crate::budget::Limits;
+use crate::budget::{self, Limits};
 use crate::physics::Method;
 use crate::scene::{self, Scene, SceneError};
+
+/// The most particle and spring updates per simulated second a lesson step's scene may need
+/// (module docs): half the rate [`budget::RATE`] the budget assumes of one thread, so that
+/// stepping in real time leaves half of each frame to drawing. The largest built-in step (the
+/// cloth over a sphere, 625 particles and 3 502 springs at dt = 1e-4 s) needs 4.1e7.
+pub const REAL_TIME_UPDATES: f64 = 0.5 * budget::RATE;
+
+/// The shortest simulated time (s) a step's run is budgeted for (a student lets it run).
+pub const HORIZON: f64 = 60.0;
+
+/// Checks a lesson step's `scene` stepped at `dt` (s) for `horizon` seconds against the budget
+/// (module docs); `what` names it in the message.
+///
+/// # Errors
+/// The message of the first limit exceeded.
+pub fn check_budget(scene: &Scene, dt: f64, horizon: f64, what: &str) -> Result<(), String> {
+    let horizon = horizon.max(HORIZON);
+    let steps = budget::steps_for(horizon, dt);
+    budget::run(what.to_string(), scene, dt, steps)
+        .check(&Limits::DEFAULT)
+        .map_err(|e| e.to_string())?;
+    let rate = budget::updates_per_step(scene, None) / dt;
+    if rate > REAL_TIME_UPDATES {
+        return Err(format!(
+            "{what} needs about {} particle and spring updates per simulated second ({} \
+             particles, {} springs at dt = {} s); a lesson runs in real time and may need at \
+             most {}: use fewer nodes or a larger dt",
+            budget::approx(rate),
+            scene.particle_count(),
+            scene.spring_count(),
+            budget::short(dt),
+            budget::approx(REAL_TIME_UPDATES)
+        ));
+    }
+    Ok(())
+}
+
+/// The most particle and spring updates the placeholders that need ω_max (`{{omega_max}}`,
+/// `{{limit_dt:…}}`, …) may cost when a step opens, at the power iteration's worst case
+/// ([`crate::study::modes::MAX_ITERATIONS`] passes): ten seconds at [`budget::RATE`] (it
+/// usually converges in far fewer). The jelly of lesson 5 is priced 2.8e8.
+pub const PLACEHOLDER_UPDATES: f64 = 10.0 * budget::RATE;
+
+/// Checks the worst-case cost of ω_max on `scene` against [`PLACEHOLDER_UPDATES`]; `what`
+/// names it in the message.
+///
+/// # Errors
+/// The message when it is over.
+pub fn check_omega_cost(scene: &Scene, what: &str) -> Result<(), String> {
+    let cost = f64::from(crate::study::modes::MAX_ITERATIONS)
+        * (scene.particle_count() as f64 + scene.spring_count() as f64);
+    if cost > PLACEHOLDER_UPDATES {
+        return Err(format!(
+            "{what}: its ω_max placeholders may need about {} particle and spring updates when \
+             the step opens (power iteration, {} particles, {} springs); at most {}: use a \
+             smaller scene",
+            budget::approx(cost),
+            scene.particle_count(),
+            scene.spring_count(),
+            budget::approx(PLACEHOLDER_UPDATES)
+        ));
+    }
+    Ok(())
+}
 
 /// The lessons shipped with springlab, embedded at compile time: `(file name, text)`.
 pub const BUILTIN: &[(&str, &str)] = &[
@@ -405,8 +482,10 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
         file: file.to_string(),
         line,
         column,
-        message,
+        message: scene::file::excerpt(&message, scene::file::MAX_MESSAGE),
     };
+    // A byte order mark is no content (scene files accept it too).
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let lines: Vec<&str> = text.lines().collect();
     // Blocks: (kind "lesson" | "step", first front-matter line index, toml text, body text).
     let mut blocks: Vec<(bool, usize, String, String)> = Vec::new();
@@ -466,6 +545,13 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
             .map_or((start + 1, 1), |s| position(start, toml_text, s.start));
         err(line, Some(column), e.message().trim().to_string())
     };
+    // Bounded before the TOML reader builds its tree.
+    for (_, start, toml_text, _) in &blocks {
+        if let Err(e) = scene::file::bounds::check(toml_text) {
+            let (line, column) = position(*start, toml_text, e.offset);
+            return Err(err(line, Some(column), e.message));
+        }
+    }
 
     let Some((false, hstart, htext, _)) = blocks.first() else {
         return Err(err(
@@ -585,8 +671,26 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
             base_dir: base_dir.map(Path::to_path_buf),
         };
         // Validate now, so a broken lesson shows its error in the menu, not mid-lesson.
-        step.build_scene()
+        let scene = step
+            .build_scene()
             .map_err(|e| err(*start, None, format!("step \"{}\": {e}", step.title)))?;
+        check_budget(
+            &scene,
+            scene.dt,
+            step.horizon(),
+            &format!("step \"{}\"", step.title),
+        )
+        .map_err(|m| err(*start, None, m))?;
+        if numbers::needs_omega(body) {
+            check_omega_cost(&scene, &format!("step \"{}\"", step.title))
+                .map_err(|m| err(*start, None, m))?;
+        }
+        // `{{param:KEY}}`: a parameter of its scene.
+        if let Some((offset, message)) = numbers::check_params(body, &step.scene).into_iter().next()
+        {
+            let line = body_line(&lines, *start, offset);
+            return Err(err(line, None, message));
+        }
         steps.push(step);
     }
     if steps.is_empty() {
@@ -734,6 +838,19 @@ fn prediction(p: PredictToml) -> Result<Prediction, String> {
 }
 
 impl Step {
+    /// The longest simulated time (s) its goal or a prediction's option is decided at (0 when
+    /// it has neither).
+    #[must_use]
+    pub fn horizon(&self) -> f64 {
+        let goal = self.goal.as_ref().map_or(0.0, |g| g.time + SETTLE_HOLD);
+        let predict = self.predict.as_ref().map_or(0.0, |p| {
+            p.options
+                .iter()
+                .fold(0.0f64, |a, o| a.max(o.claim.time + SETTLE_HOLD))
+        });
+        goal.max(predict)
+    }
+
     /// The keys that reach the step's goal (see the module docs), if it has a goal.
     #[must_use]
     pub fn goal_keys(&self) -> Option<&Keys> {

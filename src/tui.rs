@@ -196,6 +196,10 @@ impl App {
     /// Keeps the student's progress in `progress` (a file, or memory only).
     #[must_use]
     pub fn with_progress(mut self, progress: Progress) -> App {
+        // Said once: a progress file kept aside or not a file (`Progress::load`).
+        if let Some(n) = progress.notice() {
+            self.menu_message = Some(n.to_string());
+        }
         self.progress = progress;
         self
     }

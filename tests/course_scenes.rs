@@ -330,7 +330,7 @@ fn bad_settings_give_their_messages() {
         (
             "cube-tilted",
             "friction=-1",
-            "`friction` = -1 is out of range: allowed >= 0",
+            "`friction` = -1 is out of range: allowed 0 ..= 10",
         ),
         (
             "cube-sphere",

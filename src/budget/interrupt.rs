@@ -1,14 +1,51 @@
-//! Ctrl-C: a flag that the long loops check, so that they stop between steps and remove what
-//! they had not finished writing.
+//! Ctrl-C and the terminating signals (SIGTERM, SIGHUP, SIGQUIT): a flag that the long loops
+//! check, so that they stop between steps and remove what they had not finished writing.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+/// The terminating signal that set [`INTERRUPTED`], 0 for Ctrl-C.
+static SIGNAL: AtomicI32 = AtomicI32::new(0);
 
-/// The run was stopped by Ctrl-C.
+/// The run was stopped by Ctrl-C or a terminating signal.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("interrupted (Ctrl-C); unfinished outputs were removed")]
+#[error("{}; unfinished outputs were removed", cause())]
 pub struct Interrupted;
+
+/// What stopped the run, in words.
+fn cause() -> String {
+    match SIGNAL.load(Ordering::SeqCst) {
+        0 => "interrupted (Ctrl-C)".to_string(),
+        sig => format!("stopped by {}", signal_name(sig)),
+    }
+}
+
+#[cfg(unix)]
+fn signal_name(sig: i32) -> String {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGQUIT, SIGTERM};
+    match sig {
+        SIGTERM => "SIGTERM".into(),
+        SIGHUP => "SIGHUP".into(),
+        SIGQUIT => "SIGQUIT".into(),
+        SIGINT => "SIGINT".into(),
+        other => format!("signal {other}"),
+    }
+}
+
+#[cfg(not(unix))]
+fn signal_name(sig: i32) -> String {
+    format!("signal {sig}")
+}
+
+/// The exit status after [`Interrupted`]: 130 for Ctrl-C, else 128 + the signal's number (143
+/// for SIGTERM), as a shell reports a process the signal ended.
+#[must_use]
+pub fn exit_status() -> u8 {
+    match SIGNAL.load(Ordering::SeqCst) {
+        0 => 130,
+        sig => u8::try_from(128 + sig).unwrap_or(1),
+    }
+}
 
 /// What Ctrl-C does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -21,7 +58,9 @@ pub enum Mode {
     Exit,
 }
 
-/// Installs the handler (once; later calls do nothing).
+/// Installs the handlers (once; later calls do nothing). In [`Mode::Flag`], SIGTERM, SIGHUP and
+/// SIGQUIT set the flag as Ctrl-C does (a second one exits at once); in [`Mode::Exit`] they keep
+/// their default action.
 pub fn install(mode: Mode) {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
@@ -36,6 +75,23 @@ pub fn install(mode: Mode) {
                 std::process::exit(130);
             }
         });
+        #[cfg(unix)]
+        if mode == Mode::Flag {
+            use signal_hook::consts::{SIGHUP, SIGQUIT, SIGTERM};
+            for sig in [SIGTERM, SIGHUP, SIGQUIT] {
+                // SAFETY: the action only reads and writes atomics and calls `_exit`, which are
+                // async-signal-safe.
+                let _ = unsafe {
+                    signal_hook::low_level::register(sig, move || {
+                        if INTERRUPTED.load(Ordering::SeqCst) {
+                            signal_hook::low_level::exit(128 + sig);
+                        }
+                        SIGNAL.store(sig, Ordering::SeqCst);
+                        INTERRUPTED.store(true, Ordering::SeqCst);
+                    })
+                };
+            }
+        }
     });
 }
 

@@ -15,8 +15,18 @@ use crate::tui;
 pub fn load(dir: Option<&Path>) -> anyhow::Result<Vec<Result<Lesson, LessonError>>> {
     match dir {
         None => Ok(lesson::builtin()),
-        Some(dir) => lesson::load_dir(dir)
-            .with_context(|| format!("--lessons {}: cannot read the directory", dir.display())),
+        Some(dir) => {
+            let lessons = lesson::load_dir(dir).with_context(|| {
+                format!("--lessons {}: cannot read the directory", dir.display())
+            })?;
+            if lessons.is_empty() {
+                bail!(
+                    "--lessons {}: no lesson files (*.md) in the directory",
+                    dir.display()
+                );
+            }
+            Ok(lessons)
+        }
     }
 }
 

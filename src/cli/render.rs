@@ -16,6 +16,7 @@
 //! The run is `--frames N` frames `--every K` steps apart, or `--time T` seconds (then
 //! `N = steps / K + 1`), or the scene's duration when only a chart is asked for.
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
 
 use anyhow::{Context, bail};
@@ -67,13 +68,18 @@ pub struct RenderArgs {
     /// Directory for frame_00000.png, … (default frames/ when nothing else is written).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Write an animated GIF.
+    /// Remove the frames of an earlier, longer render that this one leaves in the directory
+    /// (without it they are left and named on standard error).
+    #[arg(long)]
+    pub clean_frames: bool,
+    /// Write an animated GIF (`-`: standard output, when it is not a terminal).
     #[arg(long, value_name = "FILE")]
     pub gif: Option<PathBuf>,
-    /// Write an animated PNG (APNG).
+    /// Write an animated PNG (APNG; `-`: standard output, when it is not a terminal).
     #[arg(long, value_name = "FILE")]
     pub apng: Option<PathBuf>,
-    /// Write a chart of the energies against time (PNG).
+    /// Write a chart of the energies against time (PNG; `-`: standard output, when it is not a
+    /// terminal).
     #[arg(long, value_name = "FILE")]
     pub energy_chart: Option<PathBuf>,
     /// Playback rate of the GIF and APNG, frames per second.
@@ -177,6 +183,9 @@ struct Plan {
     steps: u64,
     outputs: Outputs,
     chart: Option<PathBuf>,
+    /// The frames' directory when this render created it: removed again (when still empty)
+    /// if the render stops early.
+    created_dir: Option<PathBuf>,
 }
 
 /// `springlab render`.
@@ -199,24 +208,44 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             short(args.fps)
         );
     }
+    // Checked with either colouring: a bad value is refused, not ignored.
+    if !(args.max_strain.is_finite() && args.max_strain > 0.0) {
+        bail!(
+            "--max-strain {}: expected a strain > 0 (0.1 = 10 %)",
+            short(args.max_strain)
+        );
+    }
     let colouring = match args.colour {
         ColourBy::Kind => Colouring::ByKind,
-        ColourBy::Strain => {
-            if !(args.max_strain.is_finite() && args.max_strain > 0.0) {
-                bail!(
-                    "--max-strain {}: expected a strain > 0 (0.1 = 10 %)",
-                    short(args.max_strain)
-                );
-            }
-            Colouring::ByStrain {
-                max_strain: args.max_strain,
-            }
-        }
+        ColourBy::Strain => Colouring::ByStrain {
+            max_strain: args.max_strain,
+        },
     };
     let (scene, dt, estimate) = prepare(args, &limits)?;
     estimate.enforce(&limits)?;
     let plan = plan(args, dt, scene.duration)?;
+    let result = render(args, scene, dt, &plan, colouring, toggles, width, height);
+    if result.is_err()
+        && let Some(dir) = &plan.created_dir
+    {
+        // Only an empty directory is removed: nothing of anyone else's.
+        let _ = std::fs::remove_dir(dir);
+    }
+    result
+}
 
+/// The render itself, once every input is checked.
+#[allow(clippy::too_many_arguments)]
+fn render(
+    args: &RenderArgs,
+    scene: crate::scene::Scene,
+    dt: f64,
+    plan: &Plan,
+    colouring: Colouring,
+    toggles: KindToggles,
+    width: u32,
+    height: u32,
+) -> anyhow::Result<()> {
     let style = Style {
         springs: toggles,
         colouring,
@@ -249,12 +278,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let any_frames = plan.outputs.frames_dir.is_some()
         || plan.outputs.gif.is_some()
         || plan.outputs.apng.is_some();
+    // Before any output exists: a signal from here on stops the loop, which removes them.
+    interrupt::install(interrupt::Mode::Flag);
     let mut encoder = if any_frames {
         Some(FrameEncoder::start(plan.outputs.clone(), width, height)?)
     } else {
         None
     };
-    interrupt::install(interrupt::Mode::Flag);
     let mut progress = Progress::new(
         if any_frames { plan.frames } else { plan.steps },
         &format!("render {}", args.scene),
@@ -306,13 +336,16 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         None => 0,
     };
     debug_assert_eq!(u64::from(written), drawn);
+    if let Some(dir) = &plan.outputs.frames_dir {
+        stale(dir, written, args.clean_frames)?;
+    }
 
     if let Some(path) = &plan.chart {
         let chart = energy_chart(&sim, &energies);
         chart::save_png(&chart, path, width.max(480), height.max(320))
             .with_context(|| format!("cannot write the energy chart {}", path.display()))?;
     }
-    report(&sim, &plan, written, width, height)
+    report(&sim, plan, written, width, height)
 }
 
 /// The scene and time step (s) of `springlab render`, and its budget estimate (not yet
@@ -412,13 +445,41 @@ fn plan(args: &RenderArgs, dt: f64, duration: f64) -> anyhow::Result<Plan> {
         .filter(|&f| f <= 1_000_000)
         .with_context(|| format!("{frames} frames: at most 1000000 frames are allowed"))?;
     // Fail before the simulation when any output cannot be written.
-    for file in [&args.gif, &args.apng, &args.energy_chart]
-        .into_iter()
-        .flatten()
-    {
+    let files: Vec<(&str, &PathBuf)> = [
+        ("--gif", &args.gif),
+        ("--apng", &args.apng),
+        ("--energy-chart", &args.energy_chart),
+    ]
+    .into_iter()
+    .filter_map(|(flag, path)| Some((flag, path.as_ref()?)))
+    .collect();
+    for (i, (flag, file)) in files.iter().enumerate() {
         output::check_file(file)?;
+        if output::is_stdout(file) && std::io::stdout().is_terminal() {
+            bail!(
+                "{flag} {}: standard output is a terminal; give a file, or pipe the image to a \
+                 program",
+                file.display()
+            );
+        }
+        if let Some((other, _)) = files[..i]
+            .iter()
+            .find(|(_, earlier)| output::same_target(earlier, file))
+        {
+            bail!(
+                "{other} and {flag} both write {}; give each output its own file",
+                file.display()
+            );
+        }
     }
+    let mut created_dir = None;
     if let Some(dir) = &frames_dir {
+        if dir.as_os_str() == output::STDOUT {
+            bail!("--out -: frames go to a directory, not to standard output");
+        }
+        if !dir.exists() {
+            created_dir = Some(dir.clone());
+        }
         output::check_dir(dir)?;
     }
     Ok(Plan {
@@ -433,6 +494,7 @@ fn plan(args: &RenderArgs, dt: f64, duration: f64) -> anyhow::Result<Plan> {
             expected_frames,
         },
         chart: args.energy_chart.clone(),
+        created_dir,
     })
 }
 
@@ -506,6 +568,43 @@ pub fn energy_chart(sim: &Simulation, samples: &[EnergySample]) -> Chart {
     }))
 }
 
+/// Names (or with `--clean-frames` removes) the frames of an earlier, longer render that this
+/// render of `written` frames left in `dir`: never mixed in silently.
+fn stale(dir: &std::path::Path, written: u32, clean: bool) -> anyhow::Result<()> {
+    let stale = crate::render::export::stale_frames(dir, written);
+    let (Some(first), Some(last)) = (stale.first(), stale.last()) else {
+        return Ok(());
+    };
+    let name = |p: &std::path::Path| {
+        p.file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+    };
+    let range = if stale.len() == 1 {
+        name(first)
+    } else {
+        format!("{} … {}", name(first), name(last))
+    };
+    if clean {
+        for path in &stale {
+            std::fs::remove_file(path)
+                .with_context(|| format!("cannot remove {}", path.display()))?;
+        }
+        eprintln!(
+            "springlab: removed {} frames of an earlier render from {} ({range})",
+            stale.len(),
+            dir.display()
+        );
+    } else {
+        eprintln!(
+            "springlab: {} also holds {} frames of an earlier render ({range}), left in place; \
+             --clean-frames removes them",
+            dir.display(),
+            stale.len()
+        );
+    }
+    Ok(())
+}
+
 /// One line per output, and the divergence if any.
 fn report(
     sim: &Simulation,
@@ -515,7 +614,16 @@ fn report(
     height: u32,
 ) -> anyhow::Result<()> {
     use std::io::Write;
-    let mut out = std::io::stdout().lock();
+    // An image on standard output: the report goes to standard error.
+    let on_stdout = [&plan.outputs.gif, &plan.outputs.apng, &plan.chart]
+        .into_iter()
+        .flatten()
+        .any(|p| output::is_stdout(p));
+    let mut out: Box<dyn Write> = if on_stdout {
+        Box::new(std::io::stderr().lock())
+    } else {
+        Box::new(std::io::stdout().lock())
+    };
     if let Some(dir) = &plan.outputs.frames_dir {
         writeln!(
             out,

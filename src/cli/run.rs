@@ -37,7 +37,8 @@ pub struct RunArgs {
     /// Print the result as one JSON object.
     #[arg(long)]
     pub json: bool,
-    /// Write a time series of energies and positions to this CSV file.
+    /// Write a time series of energies and positions to this CSV file (`-`: standard output,
+    /// the summary then goes to standard error).
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
     /// Write a CSV row every this many steps.
@@ -170,8 +171,17 @@ pub fn prepare(args: &RunArgs, limits: &Limits) -> anyhow::Result<(Scene, f64, f
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let limits = Limits::forced(args.force);
     let (scene, dt, steps, estimate) = prepare(args, &limits)?;
+    // `--csv -` (or `/dev/stdout`) puts the CSV on standard output; the summary then goes to
+    // standard error, and `--json` has no place left.
+    let csv_on_stdout = args.csv.as_deref().is_some_and(output::is_stdout);
     if let Some(path) = &args.csv {
         output::check_file(path)?;
+        if csv_on_stdout && args.json {
+            bail!(
+                "--csv {} and --json both write to standard output; write the CSV to a file",
+                path.display()
+            );
+        }
     }
     estimate.enforce(&limits)?;
     // Within the budget, the step count fits in u64.
@@ -224,12 +234,14 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             .with_context(|| format!("cannot write CSV file {}", path.display()))?;
     }
     let report = sim.report(wall);
-    let mut out = std::io::stdout().lock();
     if args.json {
+        let mut out = std::io::stdout().lock();
         serde_json::to_writer(&mut out, &report).map_err(std::io::Error::from)?;
         writeln!(out)?;
+    } else if csv_on_stdout {
+        print_summary(&mut std::io::stderr().lock(), &report)?;
     } else {
-        print_summary(&mut out, &report)?;
+        print_summary(&mut std::io::stdout().lock(), &report)?;
     }
     Ok(())
 }

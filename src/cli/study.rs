@@ -652,6 +652,9 @@ pub fn prepare_convergence(
         levels: args.levels.unwrap_or(if work_precision { 6 } else { 4 }),
         repeats: args.repeats.unwrap_or(if work_precision { 3 } else { 1 }),
     };
+    if options.repeats == 0 {
+        bail!("--repeats 0: expected at least 1 timed repeat per point");
+    }
     let name = if work_precision {
         "work-precision"
     } else {

@@ -164,13 +164,80 @@ pub fn check(text: &str) -> Vec<(usize, String)> {
         }
         match parse(inner) {
             Ok(p) => {
-                if let Some((name, sets)) = &p.scene
-                    && let Err(e) = scene::load(name, sets)
-                {
-                    errors.push((offset, format!("{{{{{inner}}}}}: {e}")));
+                if let Some((name, sets)) = &p.scene {
+                    // Another scene: it must load and obey a lesson step's budget.
+                    match scene::load(name, sets) {
+                        Err(e) => errors.push((offset, format!("{{{{{inner}}}}}: {e}"))),
+                        Ok(s) => {
+                            let what = format!("scene `{name}`");
+                            let mut checked = super::check_budget(&s, s.dt, 0.0, &what);
+                            if checked.is_ok() && NEEDS_OMEGA.contains(&p.kind.as_str()) {
+                                checked = super::check_omega_cost(&s, &what);
+                            }
+                            if let Err(m) = checked {
+                                errors.push((offset, format!("{{{{{inner}}}}}: {m}")));
+                            }
+                        }
+                    }
                 }
             }
             Err(m) => errors.push((offset, m)),
+        }
+    }
+    errors
+}
+
+/// Placeholder kinds computed from ω_max, whose power iteration
+/// ([`crate::study::modes`]) may take up to its `MAX_ITERATIONS` passes over the springs.
+const NEEDS_OMEGA: &[&str] = &[
+    "omega_max",
+    "limit_dt",
+    "limit_dt_omega",
+    "lambda",
+    "stable_dt_omega",
+];
+
+/// True when a placeholder of `text` on the step's own scene (no `@SCENE`) needs ω_max.
+#[must_use]
+pub fn needs_omega(text: &str) -> bool {
+    find(text).into_iter().any(|(_, inner)| {
+        parse(inner).is_ok_and(|p| p.scene.is_none() && NEEDS_OMEGA.contains(&p.kind.as_str()))
+    })
+}
+
+/// Checks every `{{param:KEY}}` of `text`: its scene (`@SCENE`, else the step's `scene`) must be
+/// a built-in scene with a parameter `KEY` (a scene file's values are not looked up). Returns
+/// `(byte offset, message)` for each bad one.
+#[must_use]
+pub fn check_params(text: &str, scene: &str) -> Vec<(usize, String)> {
+    let mut errors = Vec::new();
+    for (offset, inner) in find(text) {
+        let Ok(p) = parse(inner) else { continue };
+        if p.kind != "param" {
+            continue;
+        }
+        let name = p.scene.as_ref().map_or(scene, |(n, _)| n.as_str());
+        let key = p.arg.as_deref().unwrap_or("");
+        let Some(def) = scene::builtin(name) else {
+            errors.push((
+                offset,
+                format!(
+                    "{{{{{inner}}}}}: `param` reads a built-in scene's parameters; `{name}` is \
+                     not a built-in scene"
+                ),
+            ));
+            continue;
+        };
+        let params = def.default_params();
+        if !params.iter().any(|(k, _)| k == key) {
+            let known: Vec<&str> = params.iter().map(|(k, _)| k).collect();
+            errors.push((
+                offset,
+                format!(
+                    "{{{{{inner}}}}}: scene `{name}` has no parameter `{key}`; its parameters: {}",
+                    known.join(", ")
+                ),
+            ));
         }
     }
     errors

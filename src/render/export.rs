@@ -14,10 +14,14 @@
 //!   names the frame count before any frame is written; when fewer frames arrive (the run
 //!   diverged) the count is corrected in the finished file and its checksum recomputed.
 //!
-//! Every file is complete or absent ([`crate::output`]): each PNG frame, the GIF and the APNG
-//! are written to a temporary file beside the target and renamed when finished; the animations
-//! only by [`FrameEncoder::finish`]. [`FrameEncoder::abort`] (Ctrl-C) and an error remove the
-//! temporary files and the frames of this run.
+//! Every file is complete or absent ([`crate::output`]): the GIF and the APNG are written to
+//! temporary files and put at their targets by [`FrameEncoder::finish`]; the PNG frames are
+//! staged in a hidden folder `.springlab-frames.XXXXXX` inside the frames' directory and moved
+//! into it, frame by frame, only by [`FrameEncoder::finish`], so a run stopped early leaves no
+//! partial frame set mixed with the directory's files (after a `kill -9`, at most the hidden
+//! folder). [`FrameEncoder::abort`] (Ctrl-C, a terminating signal) and an error remove the
+//! temporary files and the staged frames. [`stale_frames`] names the frames of an earlier
+//! render that a shorter one would leave beside its own.
 //!
 //! All pixmaps drawn by this crate are opaque, so their premultiplied colours are the plain
 //! colours; a translucent pixel is un-premultiplied (`c · 255 / α`) before encoding.
@@ -68,7 +72,9 @@ pub fn frame_path(dir: &Path, index: u32) -> PathBuf {
 pub struct FrameEncoder {
     sender: Option<SyncSender<Pixmap>>,
     handle: Option<JoinHandle<Encoded>>,
-    frames_dir: Option<PathBuf>,
+    /// The frames' directory and the hidden folder inside it where the frames are staged
+    /// (removed with everything in it when dropped).
+    frames: Option<(PathBuf, tempfile::TempDir)>,
 }
 
 /// What the encoder thread hands back: the frames written, the animations not yet renamed into
@@ -86,10 +92,24 @@ impl FrameEncoder {
     /// # Errors
     /// [`RenderError::Io`] when the directory or a file cannot be created (for example the
     /// directory's path is a file), [`RenderError::Encode`] when a GIF cannot have that size.
-    pub fn start(outputs: Outputs, width: u32, height: u32) -> Result<FrameEncoder, RenderError> {
-        if let Some(dir) = &outputs.frames_dir {
-            create_dir(dir)?;
-        }
+    pub fn start(
+        mut outputs: Outputs,
+        width: u32,
+        height: u32,
+    ) -> Result<FrameEncoder, RenderError> {
+        let frames = match outputs.frames_dir.take() {
+            Some(dir) => {
+                create_dir(&dir)?;
+                let staging = tempfile::Builder::new()
+                    .prefix(".springlab-frames.")
+                    .tempdir_in(&dir)
+                    .map_err(|e| io_error(&dir, e))?;
+                // The encoder writes into the hidden folder.
+                outputs.frames_dir = Some(staging.path().to_path_buf());
+                Some((dir, staging))
+            }
+            None => None,
+        };
         let gif = match &outputs.gif {
             Some(path) => Some(gif_encoder(path, width, height, outputs.fps)?),
             None => None,
@@ -98,7 +118,6 @@ impl FrameEncoder {
             Some(path) => Some(BufWriter::new(create(path)?)),
             None => None,
         };
-        let frames_dir = outputs.frames_dir.clone();
         let (sender, receiver) = sync_channel::<Pixmap>(QUEUE);
         let handle = std::thread::Builder::new()
             .name("springlab-encoder".into())
@@ -110,7 +129,7 @@ impl FrameEncoder {
         Ok(FrameEncoder {
             sender: Some(sender),
             handle: Some(handle),
-            frames_dir,
+            frames,
         })
     }
 
@@ -128,7 +147,7 @@ impl FrameEncoder {
             // The encoder hung up: it failed; its error says why.
             self.sender = None;
             let error = self.join().and_then(|e| e.error);
-            self.remove_frames_written();
+            self.frames = None;
             return Err(error.unwrap_or_else(|| RenderError::Encode {
                 path: "frames".into(),
                 message: "the encoder stopped early".into(),
@@ -137,10 +156,12 @@ impl FrameEncoder {
         Ok(())
     }
 
-    /// Waits until every queued frame is written, then renames the GIF and the APNG into place.
+    /// Waits until every queued frame is written, then puts the GIF and the APNG at their
+    /// targets and moves the staged frames into the frames' directory.
     ///
     /// # Errors
-    /// The first error of the encoder (the outputs are then removed).
+    /// The first error of the encoder (the outputs are then removed), or a frame that cannot
+    /// be moved in (a `frame_NNNNN.png` there that is not a regular file is never replaced).
     pub fn finish(mut self) -> Result<Written, RenderError> {
         self.sender = None;
         let encoded = self.join().ok_or_else(|| RenderError::Encode {
@@ -148,40 +169,42 @@ impl FrameEncoder {
             message: "the encoder thread panicked".into(),
         })?;
         if let Some(e) = encoded.error {
-            self.remove_frames_written();
+            self.frames = None;
             return Err(e);
         }
         for file in encoded.pending {
             let path = file.path().to_path_buf();
             file.commit().map_err(|e| io_error(&path, e))?;
         }
-        self.frames_dir = None;
+        if let Some((dir, staging)) = self.frames.take() {
+            for index in 0..encoded.frames {
+                let to = frame_path(&dir, index);
+                if let Ok(m) = fs::symlink_metadata(&to)
+                    && !m.is_file()
+                {
+                    return Err(io_error(
+                        &to,
+                        std::io::Error::other("it is not a regular file; it was not replaced"),
+                    ));
+                }
+                fs::rename(frame_path(staging.path(), index), &to).map_err(|e| io_error(&to, e))?;
+            }
+        }
         Ok(Written {
             frames: encoded.frames,
         })
     }
 
     /// Stops encoding and removes every output of this run: the animations' temporary files
-    /// and the PNG frames already written (Ctrl-C, or an error elsewhere).
+    /// and the staged PNG frames (Ctrl-C, a terminating signal, or an error elsewhere).
     pub fn abort(mut self) {
         self.sender = None;
         drop(self.join());
-        self.remove_frames_written();
+        self.frames = None;
     }
 
     fn join(&mut self) -> Option<Encoded> {
         self.handle.take().and_then(|h| h.join().ok())
-    }
-
-    /// Removes `frame_00000.png` … up to the first missing one (frames are written in order).
-    fn remove_frames_written(&mut self) {
-        if let Some(dir) = self.frames_dir.take() {
-            for index in 0.. {
-                if fs::remove_file(frame_path(&dir, index)).is_err() {
-                    break;
-                }
-            }
-        }
     }
 }
 
@@ -190,8 +213,32 @@ impl Drop for FrameEncoder {
     fn drop(&mut self) {
         self.sender = None;
         drop(self.join());
-        self.remove_frames_written();
+        self.frames = None;
     }
+}
+
+/// The frames `frame_NNNNN.png` in `dir` numbered `written` or more, in order: what an earlier,
+/// longer render left that a render of `written` frames does not replace.
+#[must_use]
+pub fn stale_frames(dir: &Path, written: u32) -> Vec<PathBuf> {
+    let Ok(entries) = fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    let mut stale: Vec<(u64, PathBuf)> = entries
+        .filter_map(Result::ok)
+        .filter_map(|e| {
+            let name = e.file_name();
+            let digits = name
+                .to_str()?
+                .strip_prefix("frame_")?
+                .strip_suffix(".png")?;
+            let index = (digits.len() >= 5 && digits.bytes().all(|b| b.is_ascii_digit()))
+                .then(|| digits.parse::<u64>().ok())??;
+            (index >= u64::from(written)).then(|| (index, e.path()))
+        })
+        .collect();
+    stale.sort();
+    stale.into_iter().map(|(_, p)| p).collect()
 }
 
 type GifEncoder = (PathBuf, gif::Encoder<BufWriter<AtomicFile>>, u16);

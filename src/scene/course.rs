@@ -267,7 +267,9 @@ fn lattice_specs(offset: DVec3, friction: f64) -> Vec<ParamSpec> {
             "friction",
             "",
             friction,
-            Range::AtLeast(0.0),
+            // Real coefficients are below about 2; past 10 the friction impulse of a contact
+            // only overflows (1e308 ended in NaN).
+            Range::Between(0.0, 10.0),
             "Coulomb friction coefficient k_f of the terrain",
         ),
     ]);

@@ -109,6 +109,7 @@ use crate::budget::{Limits, short};
 use crate::physics::Method;
 use crate::physics::integrators::method_names;
 
+pub mod bounds;
 mod explicit;
 use explicit::load_explicit;
 
@@ -163,6 +164,15 @@ pub fn read_bounded(path: &Path, max: u64) -> Result<String, SceneError> {
         path: path.display().to_string(),
         source,
     };
+    // A FIFO, a device or a directory is refused before it is opened (opening a FIFO would
+    // wait for a writer, reading a device might never end).
+    let kind = std::fs::metadata(path).map_err(io)?;
+    if !kind.is_file() {
+        return Err(io(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("not a regular file ({})", file_kind(&kind.file_type())),
+        )));
+    }
     let file = std::fs::File::open(path).map_err(io)?;
     let mut bytes = Vec::new();
     file.take(max.saturating_add(1))
@@ -182,6 +192,28 @@ pub fn read_bounded(path: &Path, max: u64) -> Result<String, SceneError> {
             e.utf8_error(),
         ))
     })
+}
+
+/// What a path that is not a regular file is, in words.
+fn file_kind(kind: &std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if kind.is_fifo() {
+            return "a FIFO";
+        }
+        if kind.is_char_device() || kind.is_block_device() {
+            return "a device";
+        }
+        if kind.is_socket() {
+            return "a socket";
+        }
+    }
+    if kind.is_dir() {
+        "a directory"
+    } else {
+        "not a file"
+    }
 }
 
 /// Builds a scene from TOML `text` as if it had been read from `path` (which names the scene and
@@ -207,6 +239,15 @@ pub fn from_str_with(
         path: path.display().to_string(),
         text,
     };
+    // Bounded before the TOML reader builds its tree (see `bounds`); `--force` lifts the
+    // value count with the file size, never the nesting.
+    let max_bytes = if limits.file_bytes <= Limits::DEFAULT.file_bytes {
+        bounds::MAX_TREE_BYTES
+    } else {
+        usize::MAX
+    };
+    bounds::check_with(text, max_bytes, bounds::MAX_DEPTH)
+        .map_err(|e| source.error(e.offset..e.offset, e.message))?;
     let file: FileSpec = toml::from_str(text).map_err(|e| source.toml_error(&e))?;
     let file_name = path
         .file_name()
@@ -254,16 +295,50 @@ struct FileSpec {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct WorldSpec {
-    gravity: Option<Spanned<[f64; 3]>>,
+    gravity: Option<Spanned<Vec3>>,
     drag: Option<Spanned<f64>>,
+}
+
+/// A vector `[x, y, z]` of exactly three numbers: a longer or shorter array is refused (serde's
+/// `[f64; 3]` reads the first three elements of a longer one and ignores the rest).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Vec3(pub [f64; 3]);
+
+impl<'de> Deserialize<'de> for Vec3 {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Vec3, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = Vec3;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a vector [x, y, z] of 3 numbers")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Vec3, A::Error> {
+                let mut v = [0.0; 3];
+                for (i, x) in v.iter_mut().enumerate() {
+                    *x = seq
+                        .next_element()?
+                        .ok_or_else(|| serde::de::Error::invalid_length(i, &self))?;
+                }
+                let mut n = 3;
+                while seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                    n += 1;
+                }
+                if n > 3 {
+                    return Err(serde::de::Error::invalid_length(n, &self));
+                }
+                Ok(Vec3(v))
+            }
+        }
+        d.deserialize_seq(Visitor)
+    }
 }
 
 /// One `[[particles]]` entry.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ParticleSpec {
-    position: Spanned<[f64; 3]>,
-    velocity: Option<Spanned<[f64; 3]>>,
+    position: Spanned<Vec3>,
+    velocity: Option<Spanned<Vec3>>,
     mass: Spanned<f64>,
     pinned: Option<bool>,
 }
@@ -284,8 +359,8 @@ struct SpringSpec {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RopeBlock {
-    start: Option<Spanned<[f64; 3]>>,
-    end: Option<Spanned<[f64; 3]>>,
+    start: Option<Spanned<Vec3>>,
+    end: Option<Spanned<Vec3>>,
     nodes: Option<Spanned<i64>>,
     mass: Option<Spanned<f64>>,
     stiffness: Option<Spanned<f64>>,
@@ -340,14 +415,15 @@ struct Source<'a> {
 }
 
 impl Source<'_> {
-    /// A [`SceneError::File`] at the start of `span`.
+    /// A [`SceneError::File`] at the start of `span`; a message that quotes a long value is
+    /// cut to an excerpt ([`excerpt`]).
     fn error(&self, span: Span<usize>, message: impl Into<String>) -> SceneError {
         let (line, column) = line_column(self.text, span.start);
         SceneError::File {
             path: self.path.clone(),
             line,
             column,
-            message: message.into(),
+            message: excerpt(&message.into(), MAX_MESSAGE),
         }
     }
 
@@ -380,8 +456,8 @@ impl Source<'_> {
     }
 
     /// Checks that all three components of a vector are finite.
-    fn vector(&self, key: &str, unit: &str, v: &Spanned<[f64; 3]>) -> Result<DVec3, SceneError> {
-        let d = DVec3::from_array(*v.get_ref());
+    fn vector(&self, key: &str, unit: &str, v: &Spanned<Vec3>) -> Result<DVec3, SceneError> {
+        let d = DVec3::from_array(v.get_ref().0);
         if d.is_finite() && d.abs().max_element() <= MAX_COMPONENT {
             Ok(d)
         } else {
@@ -397,6 +473,18 @@ impl Source<'_> {
                 ),
             ))
         }
+    }
+}
+
+/// The most characters of a message about a file (a value it quotes is cut short).
+pub const MAX_MESSAGE: usize = 200;
+
+/// `text`, or its first `max` characters and `…` when it is longer.
+#[must_use]
+pub fn excerpt(text: &str, max: usize) -> String {
+    match text.char_indices().nth(max) {
+        Some((at, _)) => format!("{}…", &text[..at]),
+        None => text.to_string(),
     }
 }
 

@@ -1,5 +1,10 @@
 //! The terminal around the app: opening it on the menu or a lesson, raw mode and the
-//! alternate screen, restored on return, on error and on panic.
+//! alternate screen, restored on return, on error, on panic and on every terminating signal
+//! (SIGTERM, SIGHUP, SIGINT sent with `kill`, SIGQUIT): the signal's handler writes the escape
+//! sequences that leave the app's modes and puts back the terminal settings saved before raw
+//! mode, with async-signal-safe calls only, then lets the signal end the process as it would
+//! have (so the shell still sees "terminated by SIGTERM"). The student's progress needs no
+//! saving there: it is saved whenever it changes.
 
 use std::io::{IsTerminal, stdout};
 
@@ -39,6 +44,7 @@ pub fn run(
         );
     }
     let theme = Theme::from_env();
+    let notice = options.progress.notice().map(str::to_string);
     let mut terminal = init_terminal().context("cannot set up the terminal")?;
     // Ask the terminal before anything else reads its input (raw mode is on).
     let graphics = Graphics::detect();
@@ -59,6 +65,12 @@ pub fn run(
     {
         restore_terminal();
         bail!(e);
+    }
+    // Said once: a progress file that was kept aside or is not a file (see `Progress::load`).
+    if let Some(n) = notice
+        && let Some(run) = app.lesson_mut()
+    {
+        run.set_message(n);
     }
     if view == Some(ViewMode::Raster)
         && graphics.protocol.is_none()
@@ -83,7 +95,11 @@ pub fn run(
 /// # Errors
 /// The terminal cannot be set up.
 pub fn init_terminal() -> std::io::Result<DefaultTerminal> {
+    #[cfg(unix)]
+    signals::install();
     let terminal = ratatui::try_init()?;
+    #[cfg(unix)]
+    signals::arm(true);
     // ratatui's hook (installed by `try_init`) leaves raw mode and the alternate screen; ours
     // runs first and empties the screen and turns the mouse off.
     let hook = std::panic::take_hook();
@@ -101,8 +117,74 @@ pub fn init_terminal() -> std::io::Result<DefaultTerminal> {
 /// (lines wider than the shell's old width wrap into its history and come back above the prompt);
 /// an empty screen leaves nothing.
 pub fn restore_terminal() {
+    #[cfg(unix)]
+    signals::arm(false);
     leave_clean();
     ratatui::restore();
+}
+
+/// The terminating signals' handlers (module docs).
+#[cfg(unix)]
+mod signals {
+    use std::sync::OnceLock;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    use rustix::termios::{OptionalActions, Termios, tcgetattr, tcsetattr};
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGQUIT, SIGTERM};
+
+    /// The terminal's settings before raw mode.
+    static SAVED: OnceLock<Termios> = OnceLock::new();
+    /// True while the app has the terminal (between set-up and restore).
+    static ARMED: AtomicBool = AtomicBool::new(false);
+
+    /// What [`super::restore_terminal`] sends: the mouse modes off (SGR, urxvt, any-event,
+    /// button-event, normal tracking), the screen emptied, the cursor home, the alternate screen
+    /// left, the cursor shown.
+    const LEAVE: &[u8] = b"\x1b[?1006l\x1b[?1015l\x1b[?1003l\x1b[?1002l\x1b[?1000l\
+        \x1b[2J\x1b[1;1H\x1b[?1049l\x1b[?25h";
+
+    /// Saves the terminal's settings (before raw mode) and installs the handlers, once.
+    pub(super) fn install() {
+        static ONCE: std::sync::Once = std::sync::Once::new();
+        ONCE.call_once(|| {
+            if let Ok(t) = tcgetattr(rustix::stdio::stdin()) {
+                let _ = SAVED.set(t);
+            }
+            for sig in [SIGTERM, SIGHUP, SIGINT, SIGQUIT] {
+                // SAFETY: the action calls only async-signal-safe functions: atomic loads,
+                // write(2), tcsetattr (an ioctl), and signal-hook's default-action emulation
+                // (sigaction, sigprocmask, raise).
+                let _ = unsafe {
+                    signal_hook::low_level::register(sig, move || {
+                        if ARMED.swap(false, Ordering::SeqCst) {
+                            leave();
+                        }
+                        let _ = signal_hook::low_level::emulate_default_handler(sig);
+                    })
+                };
+            }
+        });
+    }
+
+    /// Whether a signal must restore the terminal.
+    pub(super) fn arm(on: bool) {
+        ARMED.store(on, Ordering::SeqCst);
+    }
+
+    /// Restores the terminal from a signal handler.
+    fn leave() {
+        let out = rustix::stdio::stdout();
+        let mut rest = LEAVE;
+        while !rest.is_empty() {
+            match rustix::io::write(out, rest) {
+                Ok(0) | Err(_) => break,
+                Ok(n) => rest = &rest[n..],
+            }
+        }
+        if let Some(t) = SAVED.get() {
+            let _ = tcsetattr(rustix::stdio::stdin(), OptionalActions::Now, t);
+        }
+    }
 }
 
 fn leave_clean() {

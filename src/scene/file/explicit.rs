@@ -8,7 +8,7 @@ use toml::Spanned;
 
 use super::{
     DEFAULT_DT, DEFAULT_GRAVITY, DEFAULT_METHOD, DEFAULT_TIME, FileSpec, MAX_PARTICLES,
-    MAX_ROPE_NODES, ParticleSpec, RopeBlock, RunSpec, Source, SpringSpec, run_settings,
+    MAX_ROPE_NODES, ParticleSpec, RopeBlock, RunSpec, Source, SpringSpec, Vec3, run_settings,
 };
 use crate::budget::{BASE_BYTES, Estimate, Limits, PARSE_BYTES, body_bytes};
 use crate::physics::{Method, MethodParams, Spring, SpringKind};
@@ -323,7 +323,7 @@ fn run(source: &Source<'_>, file: &FileSpec, file_name: &str) -> Result<Run, Sce
 fn rope_spec(source: &Source<'_>, block: &Spanned<RopeBlock>) -> Result<RopeSpec, SceneError> {
     let defaults = Params::new("rope", crate::scene::rope::rope_params());
     let r = block.get_ref();
-    let vector = |key: &str, v: &Option<Spanned<[f64; 3]>>| match v {
+    let vector = |key: &str, v: &Option<Spanned<Vec3>>| match v {
         Some(v) => source.vector(key, "m", v),
         None => Ok(defaults.vector(key)),
     };
