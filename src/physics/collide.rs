@@ -123,8 +123,9 @@
 //! v_a  -= (w_a/w)(u' - u),   v_b += (w_b/w)(u' - u),   w = w_a + w_b
 //! ```
 //! where `Δx_a`, `Δx_b` (m) are the separation's moves and `E_s,b` the elastic energy (J) of
-//! body `b`'s springs (none for a sphere). In the frame of the centre of mass (of the driven
-//! sphere, when one side is kinematic) no pair response adds energy. The course reference
+//! body `b`'s springs (none for a sphere). In the frame of the centre of mass no pair response
+//! adds energy; a driven (kinematic) sphere does work on what it pushes, so against one the
+//! whole separation is done without a budget (counted as negative removal in the ledger). The course reference
 //! pushes the bodies apart by only 0.15 of the penetration; here the whole penetration is
 //! removed at once when the budget allows.
 //!
@@ -190,7 +191,8 @@ impl World<'_> {
     /// end where `x` has it: the part of `E_elastic` that moving `i` alone changes.
     #[must_use]
     pub fn elastic_at(&self, x: &[DVec3], i: usize, at: DVec3) -> f64 {
-        let (Some(&start), Some(&end)) = (self.incident_start.get(i), self.incident_start.get(i + 1))
+        let (Some(&start), Some(&end)) =
+            (self.incident_start.get(i), self.incident_start.get(i + 1))
         else {
             return 0.0;
         };

@@ -485,7 +485,9 @@ pub fn convergence(
         .flatten();
     let mut methods = Vec::new();
     for &method in &options.methods {
-        let own = verlet_reference.as_ref().filter(|_| method == Method::Verlet);
+        let own = verlet_reference
+            .as_ref()
+            .filter(|_| method == Method::Verlet);
         let (reference_x, reference_error) = match own {
             Some((_, Some((x, e)))) => (x, *e),
             _ => (&reference_x, reference_error),

@@ -287,7 +287,13 @@ fn impulse_pair(
     let p = reach - distance;
     let (dx_a, dx_b) = (-(a.w / w * p) * d, (b.w / w * p) * d);
     // m_a Δx_a + m_b Δx_b (kg·m): zero unless one side is immovable (w = 0).
-    let weight = |side_w: f64, dx: DVec3| if side_w > 0.0 { dx / side_w } else { DVec3::ZERO };
+    let weight = |side_w: f64, dx: DVec3| {
+        if side_w > 0.0 {
+            dx / side_w
+        } else {
+            DVec3::ZERO
+        }
+    };
     let moved = weight(a.w, dx_a) + weight(b.w, dx_b);
     let (xa0, xb0) = (*a.x, *b.x);
     let e0 = elastic(xb0);
@@ -296,7 +302,12 @@ fn impulse_pair(
     // Paid from the kinetic energy of the relative motion, ½ μ |u|² with μ = 1/w, u = v_b - v_a.
     let u = *b.v - *a.v;
     let budget = 0.5 * u.length_squared() / w;
-    let (alpha, du) = affordable(rise, budget);
+    // A driven (kinematic) sphere, `w_a = 0`, does work on what it pushes: no budget.
+    let (alpha, du) = if a.w == 0.0 {
+        (1.0, 0.0)
+    } else {
+        affordable(rise, budget)
+    };
     *a.x = xa0 + alpha * dx_a;
     *b.x = xb0 + alpha * dx_b;
     if du > 0.0 && budget > 0.0 {

@@ -36,7 +36,8 @@
 //! **Contacts inside the solve.** A particle that the solve would carry into a collider is not
 //! projected back afterwards: moving it out while its neighbours stay put would compress its
 //! springs and *add* their elastic energy (measured on `jelly-bowl` at dt = 0.04 s: +24 kJ at the
-//! first impact). Instead its velocity along the surface normal `N` is prescribed so that the
+//! first impact, before the projection had an energy budget; with the budget it would stay
+//! inside instead). Instead its velocity along the surface normal `N` is prescribed so that the
 //! step ends on the surface, and the solve is repeated with that constraint (Baraff & Witkin §5.3,
 //! the "filter" `S = I - N Nᵀ` on the constrained particles' rows):
 //!
