@@ -587,14 +587,7 @@ fn without_colliders_or_spheres_the_hook_changes_nothing() {
 }
 
 /// A 3×3×3 spring cube (course K = 2000, D = 60) dropped on every course terrain: under every
-/// method nothing diverges and no particle ends a step more than 1 cm inside a collider. A
-/// particle is left inside only by the part of the projection its kinetic energy cannot pay
-/// for, the springs it would squeeze included (`collide` module docs, "energy budget"): a
-/// resting particle that the step let fall from rest (`a dt²`, which gains half the energy the
-/// climb back costs) sinks a little. Measured over these 2 s (printed): nothing on the tilted
-/// plane; on the plane 0 for explicit, semi-implicit Euler, midpoint and RK4, 0.16 mm for
-/// Verlet, 3.5 mm for XPBD (no contact force), 5.2 mm for the predictor–corrector; 0.1 mm for
-/// semi-implicit Euler balanced on the sphere.
+/// method no particle ever ends a step inside a collider, and nothing diverges.
 #[test]
 fn spring_cube_lands_on_every_terrain_under_every_method() {
     use springlab::SpringKind;
@@ -643,7 +636,6 @@ fn spring_cube_lands_on_every_terrain_under_every_method() {
             let (model, mut state) = b.build(G, 0.0);
             let model = model.with_colliders(colliders.clone(), ContactParams::default());
             let mut work = Workspace::new();
-            let mut deepest = 0.0f64;
             for s in 0..2000 {
                 step(method, &model, &mut state, 1e-3, &mut work);
                 assert!(
@@ -653,12 +645,10 @@ fn spring_cube_lands_on_every_terrain_under_every_method() {
                 for x in &state.x {
                     for c in &colliders {
                         let phi = c.contact(*x).map_or(0.0, |c| c.phi);
-                        assert!(phi >= -1e-2, "{method}: {phi} m inside {c:?} at {x}");
-                        deepest = deepest.max(-phi);
+                        assert!(phi >= -1e-12, "{method}: inside {c:?} at {x}");
                     }
                 }
             }
-            println!("{method} on {colliders:?}: deepest {deepest:e} m");
         }
     }
 }
@@ -707,133 +697,6 @@ fn the_energy_change_of_a_response_is_the_difference_of_the_energies() {
         assert!(
             checked > 5,
             "{name}: only {checked} responses changed the energy"
-        );
-    }
-}
-
-/// A built-in scene with `sets`, run by `method` at `dt` for `time` seconds with the energy
-/// ledger on; `each` sees the simulation after every step. Returns it at the end.
-fn ledger_run(
-    name: &str,
-    sets: &[&str],
-    method: Method,
-    dt: f64,
-    time: f64,
-    mut each: impl FnMut(&Simulation),
-) -> Simulation {
-    let sets: Vec<String> = sets.iter().map(|s| (*s).to_string()).collect();
-    let mut scene = springlab::scene::load(name, &sets).expect("a built-in scene");
-    scene.set_method(method);
-    let mut sim = Simulation::new(scene);
-    sim.set_dt(dt);
-    sim.run((time / dt).round() as u64, |s| each(s));
-    sim
-}
-
-/// The ledger's `contacts` term (what the collision responses and implicit Euler's contact
-/// constraints took out, J) is never below `-1e-6 E_0` after any step: a contact never adds
-/// energy, the springs a projection squeezes included (`collide` module docs, "energy
-/// budget"). The built-in contact scenes as the course runs them (default parameters and dt),
-/// every explicit method, through the first impact and its rebound; implicit Euler at
-/// dt = 0.04 s, except on `cloth-spheres`, where it still gives -1.9 kJ of 4.9 kJ: its contact
-/// constraints aim at where a sphere would be without the cloth's reaction, and the reaction
-/// then slows the sphere, so the cloth ends the step moving away from it (not fixed yet).
-/// (Before the budget, semi-implicit Euler's `cube-plane` ended at -4.2 kJ of 108 kJ,
-/// `jelly-bowl` at -8.5 kJ, and implicit Euler's `jelly-bowl` at -21 kJ.) The
-/// predictor–corrector diverges at the course dt on three of them (its limit is half of
-/// explicit Euler's; `docs/stability.md`): a diverged run has no ledger, so it is skipped, and
-/// exactly those three are expected.
-#[test]
-fn the_contacts_of_every_course_scene_never_add_energy() {
-    let explicit = [
-        Method::ExplicitEuler,
-        Method::SemiImplicitEuler,
-        Method::Midpoint,
-        Method::Rk4,
-        Method::PredictorCorrector,
-        Method::Verlet,
-        Method::Xpbd,
-    ];
-    // Long enough for the first impact and the rebound (the cubes land at 1.3 to 1.5 s; the
-    // spheres touch the cloth from the first steps).
-    let scenes = [
-        ("cube-plane", 1.8),
-        ("jelly-bowl", 1.9),
-        ("cube-bowl", 1.7),
-        ("cube-tilted", 1.8),
-        ("cloth-spheres", 0.2),
-    ];
-    let mut diverged = Vec::new();
-    for (name, time) in scenes {
-        let course_dt = springlab::scene::load(name, &[]).unwrap().dt;
-        let implicit = (name != "cloth-spheres").then_some((Method::ImplicitEuler, 0.04));
-        let runs = explicit.iter().map(|&m| (m, course_dt)).chain(implicit);
-        for (method, dt) in runs {
-            let mut worst = 0.0f64;
-            let sim = ledger_run(name, &[], method, dt, time, |s| {
-                if s.diverged.is_none() {
-                    worst = worst.min(s.dissipated().contacts / s.energy_initial());
-                }
-            });
-            if sim.diverged.is_some() {
-                diverged.push(format!("{name} {method}"));
-                continue;
-            }
-            assert!(
-                worst >= -1e-6,
-                "{name} {method} dt {dt}: contacts reached {worst:e} E0"
-            );
-        }
-    }
-    assert_eq!(
-        diverged,
-        [
-            "cube-plane predictor-corrector",
-            "jelly-bowl predictor-corrector",
-            "cube-tilted predictor-corrector"
-        ]
-    );
-}
-
-/// The issue's case: `cube-plane` with `restitution=1 friction=0`, 2.5 s at dt = 1e-3, 5e-4 and
-/// 2.5e-4 s (semi-implicit Euler, the course's method). Before the energy budget the responses
-/// added 8 165, 3 674 and 391 J (7.6 %, 3.4 % and 0.4 % of E_0); now `contacts ≥ -1e-6 E_0`
-/// after every step. With `damping=0` as well, the total energy never exceeds `E_0` plus the
-/// method's own residual: `E(t) ≤ E_0 + r(t)` at every step, where `r = E + D - E_0` is what
-/// the steps themselves made (the ledger `D` holds what the responses changed, so `r` is free of
-/// them; on `main` before the budget `D` was -1 019 J at the end, and `E` exceeded `E_0 + r`).
-#[test]
-fn an_elastic_bounce_of_the_course_cube_creates_no_energy_at_any_dt() {
-    for dt in [1e-3, 5e-4, 2.5e-4] {
-        let mut worst = 0.0f64;
-        let sets = ["restitution=1", "friction=0"];
-        let sim = ledger_run(
-            "cube-plane",
-            &sets,
-            Method::SemiImplicitEuler,
-            dt,
-            2.5,
-            |s| {
-                worst = worst.min(s.dissipated().contacts / s.energy_initial());
-            },
-        );
-        assert!(sim.diverged.is_none());
-        assert!(worst >= -1e-6, "dt {dt}: contacts reached {worst:e} E0");
-    }
-    for method in [Method::SemiImplicitEuler, Method::Rk4] {
-        let sets = ["damping=0", "restitution=1", "friction=0"];
-        let mut worst = f64::NEG_INFINITY;
-        let mut impacts = 0;
-        ledger_run("cube-plane", &sets, method, 1e-3, 2.5, |s| {
-            let e0 = s.energy_initial();
-            worst = worst.max(s.energy().total - (e0 + s.energy_residual()));
-            impacts += usize::from(s.energy().elastic > 1e-3 * e0);
-        });
-        // The cube did land (its springs were squeezed), and the contacts never raised E.
-        assert!(impacts > 100, "{method}: the cube never landed");
-        assert!(
-            worst <= 1e-6 * 107_800.0,
-            "{method}: E exceeded E0 + own residual by {worst} J"
         );
     }
 }

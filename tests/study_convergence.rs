@@ -196,7 +196,9 @@ fn verlet_own_damping_is_in_its_reference() {
     let verlet = &v["methods"][0];
     let order = verlet["order"].as_f64().expect("an order");
     assert!((order - 2.0).abs() <= 0.05, "order {order}");
-    let own = verlet["reference"].as_str().expect("Verlet's own reference");
+    let own = verlet["reference"]
+        .as_str()
+        .expect("Verlet's own reference");
     assert!(own.starts_with("exact, verlet_damping_rate 0.2"), "{own}");
     // The text output prints the order and Verlet's reference.
     let out = springlab(&[
@@ -210,7 +212,10 @@ fn verlet_own_damping_is_in_its_reference() {
     ]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains(&format!("order {order:.3}")), "{text}");
-    assert!(text.contains("reference: exact, verlet_damping_rate 0.2"), "{text}");
+    assert!(
+        text.contains("reference: exact, verlet_damping_rate 0.2"),
+        "{text}"
+    );
     // Other methods do not feel Verlet's rate: RK4 keeps the report's reference and order 4.
     let v = json(&[
         "study",
@@ -239,7 +244,10 @@ fn verlet_own_damping_is_in_its_reference() {
     let verlet = &v["methods"][0];
     assert!(verlet["order"].is_null(), "{verlet}");
     assert!(
-        verlet["reference"].as_str().unwrap().starts_with("none: verlet_damping"),
+        verlet["reference"]
+            .as_str()
+            .unwrap()
+            .starts_with("none: verlet_damping"),
         "{verlet}"
     );
     assert!(

@@ -39,50 +39,33 @@
 //!
 //! **Velocity response and projection** after every step ([`resolve`]). For each particle in
 //! contact, inside the collider (`φ < 0`) it is first moved onto the surface; then, if it moves
-//! into the surface, the normal velocity is reflected with restitution `k_r` (0.8 in the course).
-//! Moving a particle changes more than its height: the springs attached to it stretch or
-//! squeeze while its neighbours stay where they are. So the projection is paid for, like a
-//! climb, out of the particle's own kinetic energy (an *energy budget*, the velocity-level energy
-//! clamp of Su, Sheth & Fedkiw 2013):
+//! into the surface, the normal velocity is reflected with restitution `k_r` (0.8 in the course):
 //!
 //! ```text
-//! u(p)  = -g·p + E_s,i(p)/m            potential energy per kg of the particle at p (J/kg)
-//! Δx    = -φ N                         onto the surface, when φ < 0
-//! Δu(α) = u(x + α Δx) - u(x)           what moving the part α of the way costs (J/kg)
-//! α     = 1  if Δu(1) ≤ ½ (v_N² + |v_T|²),  else the largest α with Δu(α) ≤ ½ (v_N² + |v_T|²)
-//! x'    = x + α Δx
+//! Δx   = -φ N                          onto the surface, when φ < 0
+//! Δu   = -g·Δx                         potential energy per kg that Δx adds (J/kg)
 //! v_N  = v·N,  v_T = v - v_N N
-//! s    = √(v_N² - 2 Δu(α))              normal speed the particle had AT the surface (m/s)
+//! s    = √(v_N² - 2 Δu)                normal speed the particle had AT the surface (m/s)
 //! v_N' = k_r s   if approaching and s > v_rest      (course: v' = -k_r v_N + v_T)
 //! v_N' = 0       if approaching and s ≤ v_rest      resting contact, no bounce
 //! v_N' = s       if already moving away
 //! v_T' = max(0, 1 - k_f (v_N' - v_N) / |v_T|) v_T   friction of the impact
 //! v'   = v_T' + v_N' N
 //! ```
-//! where `g` is gravity (m/s²), `m` the particle's mass (kg), `E_s,i(p)` the elastic energy (J)
-//! of the springs at particle `i` with `i` at `p` and every other end held, `α` (dimensionless)
-//! the part of the projection done (found by bisection, at most `2⁻¹²` of `φ` short). Without
-//! penetration `Δu = 0` and `s = |v_N|`: this is the course's `v' = -k_r v_N + v_T`. With
-//! penetration, the integrator has let the particle fall `|φ|` below the surface and gain the
-//! kinetic energy of that fall; moving it back without taking that energy away would make every
-//! bounce *add* `m Δu` joules: the height regained and, on a jelly cube, the squeeze of the
-//! springs above the particle. Using the speed at the surface instead,
-//! the energy after the response is
+//! where `g` is gravity (m/s²). Without penetration `Δu = 0` and `s = |v_N|`: this is the course's
+//! `v' = -k_r v_N + v_T`. With penetration, the integrator has let the particle fall `|φ|` below
+//! the surface and gain the kinetic energy of that fall; moving it back up without taking that
+//! energy away would make every bounce *add* `m |g·N| |φ|` joules. Using the speed at the surface
+//! instead, the energy after the response is
 //!
 //! ```text
-//! E' = E - (1 - k_r²) (½ m v_N² - m Δu)  ≤  E     for k_r ≤ 1, approaching, s > v_rest
+//! E' = E - (1 - k_r²) (½ m v_N² - m Δu)  ≤  E     for k_r ≤ 1
 //! // derivation: E' = ½ m (k_r² s² + |v_T|²) + U + m Δu,  s² = v_N² - 2 Δu,
-//! //             E  = ½ m (v_N² + |v_T|²) + U;  subtract. (U: every other term of E, which
-//! //             the move of particle i alone does not change.)
+//! //             E  = ½ m (v_N² + |v_T|²) + U;  subtract.
 //! ```
-//! If `v_N² < 2 Δu` (the particle is deeper than its speed explains: springs or a positional
-//! solver pushed it in) the missing energy is taken from `v_T`; when that is not enough either,
-//! the particle is moved only the part `α` of the way that its kinetic energy pays for (all of it
-//! then goes into the climb: `v' = 0`) and the contact force holds it where it is; the next steps
-//! finish the projection as the neighbours move. Particles are answered one after another, each
-//! against where the earlier ones already are, so the sum of their `ΔE` is the change of the
-//! whole system's energy, and each is ≤ 0: **a response never adds energy**. (`tests/collide.rs`
-//! checks it on every built-in contact scene with the energy ledger.) The impact friction is the
+//! If `v_N² < 2 Δu` (the particle is deeper than its speed explains: it was placed there, or
+//! springs or a positional solver pushed it in) the missing energy is taken from `v_T`; only when
+//! that is not enough either does the projection add energy. The impact friction is the
 //! velocity-level Coulomb rule of Bridson, Fedkiw & Anderson (2002): the tangential velocity loses
 //! at most `k_f` times the normal velocity change, and never reverses. The resting threshold is
 //! Baraff's (1997): an approach slower than `v_rest` is resting contact, not a collision; without
@@ -111,23 +94,8 @@
 //! restitution (sphere–particle 0, sphere–sphere 0.8 in the course). The impulse conserves
 //! momentum (`m_a Δv_a + m_b Δv_b = -J d̂ + J d̂ = 0`) and loses `½ μ (1 - e²) v_rel²` of kinetic
 //! energy with `μ = 1/(w_a + w_b)`; the separation keeps the centre of mass where it was
-//! (`m_a Δx_a + m_b Δx_b = 0`), so the gravitational energy too, but it stretches or squeezes
-//! the springs of a pushed particle. That is paid, as above, from the kinetic energy of the
-//! relative motion, which is the part a momentum-keeping change can take:
-//!
-//! ```text
-//! ΔU(α) = -g·(m_a Δx_a + m_b Δx_b) α + E_s,b(x_b + α Δx_b) - E_s,b(x_b)     (J)
-//! K_rel = ½ μ |u|²,  u = v_b - v_a                                         (J)
-//! α     = 1 if ΔU(1) ≤ K_rel, else the largest α with ΔU(α) ≤ K_rel
-//! u'    = u √(1 - ΔU(α)/K_rel)  when ΔU(α) > 0
-//! v_a  -= (w_a/w)(u' - u),   v_b += (w_b/w)(u' - u),   w = w_a + w_b
-//! ```
-//! where `Δx_a`, `Δx_b` (m) are the separation's moves and `E_s,b` the elastic energy (J) of
-//! body `b`'s springs (none for a sphere). In the frame of the centre of mass no pair response
-//! adds energy; a driven (kinematic) sphere does work on what it pushes, so against one the
-//! whole separation is done without a budget (counted as negative removal in the ledger). The course reference
-//! pushes the bodies apart by only 0.15 of the penetration; here the whole penetration is
-//! removed at once when the budget allows.
+//! (`m_a Δx_a + m_b Δx_b = 0`), so the gravitational energy too. The course reference pushes the
+//! bodies apart by only 0.15 of the penetration; here the whole penetration is removed at once.
 //!
 //! References: NYCU Computer Animation HW1 (2021–2024), `docs/course.md` §2–3; D. Baraff, "An
 //! Introduction to Physically Based Modeling: Rigid Body Simulation II — Nonpenetration
@@ -135,14 +103,9 @@
 //! threshold); R. Bridson, R. Fedkiw, J. Anderson, "Robust Treatment of Collisions, Contact and
 //! Friction for Cloth Animation", SIGGRAPH 2002 (friction of impulses, positional projection);
 //! D. Karnopp, "Computer Simulation of Stick-Slip Friction in Mechanical Dynamic Systems",
-//! J. Dynamic Systems, Measurement, and Control 107 (1985) (the stick band); J. Su, R. Sheth,
-//! R. Fedkiw, "Energy Conservation for the Simulation of Deformable Bodies", IEEE Transactions on
-//! Visualization and Computer Graphics 19(2), 2013 (a position change paid for by the kinetic
-//! energy, so that a correction never raises the total).
+//! J. Dynamic Systems, Measurement, and Control 107 (1985) (the stick band).
 
 use glam::DVec3;
-
-use super::springs::Spring;
 
 mod spheres;
 
@@ -165,13 +128,6 @@ pub struct World<'a> {
     /// Inverse mass of each particle (1/kg); zero for a pinned particle. Its length is the
     /// particle count.
     pub inv_mass: &'a [f64],
-    /// The springs, whose elastic energy a projection changes (module docs, "energy budget").
-    pub springs: &'a [Spring],
-    /// The indices of the springs at particle `i` are
-    /// `incident[incident_start[i]..incident_start[i + 1]]` (empty slices: no springs).
-    pub incident: &'a [u32],
-    /// Where each particle's list starts in `incident` (particle count + 1 entries, or empty).
-    pub incident_start: &'a [u32],
 }
 
 impl<'a> From<&World<'a>> for World<'a> {
@@ -185,25 +141,6 @@ impl World<'_> {
     #[must_use]
     pub fn particle_count(&self) -> usize {
         self.inv_mass.len()
-    }
-
-    /// Elastic energy (J) of the springs at particle `i` with `i` at `at` (m) and every other
-    /// end where `x` has it: the part of `E_elastic` that moving `i` alone changes.
-    #[must_use]
-    pub fn elastic_at(&self, x: &[DVec3], i: usize, at: DVec3) -> f64 {
-        let (Some(&start), Some(&end)) =
-            (self.incident_start.get(i), self.incident_start.get(i + 1))
-        else {
-            return 0.0;
-        };
-        self.incident[start as usize..end as usize]
-            .iter()
-            .map(|&k| {
-                let s = &self.springs[k as usize];
-                let other = if s.a as usize == i { s.b } else { s.a } as usize;
-                s.energy_between(at, x[other])
-            })
-            .sum()
     }
 }
 
@@ -810,29 +747,30 @@ pub fn resolve_logged<'a, 'b>(
         return;
     }
     let params = &model.contact;
-    let gravity = model.gravity;
     for i in 0..state.x.len().min(model.particle_count()) {
-        let w = model.inv_mass[i];
-        if w == 0.0 {
+        if model.inv_mass[i] == 0.0 {
             continue;
         }
         let (x_old, v_old) = (state.x[i], state.v[i]);
-        let (mut x, mut v) = (x_old, v_old);
-        let touched = {
-            // u(p) = -g·p + E_springs(p)/m (J/kg): particle i's potential energy per kg with its
-            // neighbours where they are (module docs, "energy budget").
-            let others: &[DVec3] = state.x;
-            let potential = |p: DVec3| -gravity.dot(p) + w * model.elastic_at(others, i, p);
-            let mut touched = false;
-            for collider in model.colliders {
-                touched |= respond(collider, 0.0, params, &potential, &mut x, &mut v);
-            }
-            touched
-        };
+        let mut touched = false;
+        for collider in model.colliders {
+            touched |= respond(
+                collider,
+                0.0,
+                params,
+                model.gravity,
+                &mut state.x[i],
+                &mut state.v[i],
+            );
+        }
         if touched {
-            state.x[i] = x;
-            state.v[i] = v;
-            keep_verlet_history(state.history_valid, &mut state.x_prev[i], x, v, dt);
+            keep_verlet_history(
+                state.history_valid,
+                &mut state.x_prev[i],
+                state.x[i],
+                state.v[i],
+                dt,
+            );
             if let Some(log) = log.as_deref_mut() {
                 log.record(i, x_old, v_old);
             }
@@ -903,40 +841,14 @@ pub fn spheres_energy(gravity: DVec3, spheres: &[DynamicSphere]) -> f64 {
         .sum()
 }
 
-/// Halvings of the search for the largest affordable part of a projection ([`affordable`]):
-/// what is left inside is at most `2⁻¹²` of the depth.
-const BISECTIONS: u32 = 12;
-
-/// The largest `α ∈ [0, 1]` (found by bisection, `α = 1` when it is affordable at once) with
-/// `rise(α) ≤ budget`, and that `rise(α)`: how much of a projection the kinetic energy `budget`
-/// can pay for (module docs, "energy budget"). `rise(0)` must be 0.
-fn affordable(rise: impl Fn(f64) -> f64, budget: f64) -> (f64, f64) {
-    let full = rise(1.0);
-    if full <= budget {
-        return (1.0, full);
-    }
-    let (mut lo, mut hi, mut rise_lo) = (0.0, 1.0, 0.0);
-    for _ in 0..BISECTIONS {
-        let mid = 0.5 * (lo + hi);
-        let r = rise(mid);
-        if r <= budget {
-            (lo, rise_lo) = (mid, r);
-        } else {
-            hi = mid;
-        }
-    }
-    (lo, rise_lo)
-}
-
 /// The response of one point (a particle, or a sphere's centre with `offset` its radius, m) to
-/// one collider: projection within the energy budget, climb, bounce, impact friction (module
-/// docs). `potential(p)` is the point's potential energy per kg at `p` (J/kg; gravity and, for
-/// a particle, its springs with the neighbours held). Returns whether anything changed.
+/// one collider: projection, climb, bounce, impact friction (module docs). Returns whether
+/// anything changed.
 fn respond(
     collider: &Collider,
     offset: f64,
     params: &ContactParams,
-    potential: &dyn Fn(DVec3) -> f64,
+    gravity: DVec3,
     x: &mut DVec3,
     v: &mut DVec3,
 ) -> bool {
@@ -953,21 +865,16 @@ fn respond(
         return false;
     }
     let mut v_t = *v - v_n * normal;
-    // Squared normal speed at the surface: s² = v_N² - 2 Δu, with Δu = u(x + α Δx) - u(x),
-    // Δx = -φ N, and α = 1 unless the kinetic energy ½(v_N² + |v_T|²) cannot pay for all of it.
+    // Squared normal speed at the surface: s² = v_N² - 2 Δu, with Δu = -g·Δx and Δx = -φ N.
     let mut s2 = v_n * v_n;
     if phi < 0.0 {
-        let full = -phi * normal;
-        let start = *x;
-        let u0 = potential(start);
-        let budget = 0.5 * (v_n * v_n + v_t.length_squared());
-        let (alpha, du) = affordable(|a| potential(start + a * full) - u0, budget);
-        *x = start + alpha * full;
-        s2 -= 2.0 * du;
+        let dx = -phi * normal;
+        *x += dx;
+        s2 += 2.0 * gravity.dot(dx);
     }
     if s2 < 0.0 {
-        // The climb costs more than the normal motion has: take the rest (J/kg) from the
-        // tangential kinetic energy, ½|v_T|² → max(0, ½|v_T|² - ½|s²|).
+        // Deeper than its speed explains: take the missing ½|s²| (J/kg) from the tangential
+        // kinetic energy, ½|v_T|² → max(0, ½|v_T|² - ½|s²|).
         let t2 = v_t.length_squared();
         v_t *= if t2 > 0.0 {
             ((t2 + s2).max(0.0) / t2).sqrt()

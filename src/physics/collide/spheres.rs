@@ -131,21 +131,16 @@ pub fn collide_spheres_logged<'a, 'b>(
                 },
                 reach,
                 params.sphere_sphere_restitution,
-                model.gravity,
-                &|_| 0.0,
             );
         }
     }
-    let gravity = model.gravity;
-    // A sphere's potential energy per kg (J/kg).
-    let potential = |p: DVec3| -gravity.dot(p);
     for s in spheres.iter_mut().filter(|s| !s.kinematic) {
         for collider in model.colliders {
             respond(
                 collider,
                 s.radius,
                 params,
-                &potential,
+                model.gravity,
                 &mut s.center,
                 &mut s.velocity,
             );
@@ -172,29 +167,20 @@ pub fn collide_spheres_logged<'a, 'b>(
                         continue;
                     }
                     let (x_old, v_old) = (x[i], v[i]);
-                    let (mut xi, mut vi) = (x_old, v_old);
-                    let touched = {
-                        // The elastic energy of particle i's springs with i at p (J).
-                        let others: &[DVec3] = x;
-                        let elastic = |p: DVec3| model.elastic_at(others, i, p);
-                        impulse_pair(
-                            Side {
-                                x: &mut s.center,
-                                v: &mut s.velocity,
-                                w: ws,
-                            },
-                            Side {
-                                x: &mut xi,
-                                v: &mut vi,
-                                w: model.inv_mass[i],
-                            },
-                            s.radius,
-                            params.sphere_particle_restitution,
-                            gravity,
-                            &elastic,
-                        )
-                    };
-                    (x[i], v[i]) = (xi, vi);
+                    let touched = impulse_pair(
+                        Side {
+                            x: &mut s.center,
+                            v: &mut s.velocity,
+                            w: ws,
+                        },
+                        Side {
+                            x: &mut x[i],
+                            v: &mut v[i],
+                            w: model.inv_mass[i],
+                        },
+                        s.radius,
+                        params.sphere_particle_restitution,
+                    );
                     if touched {
                         bounds.include(x[i]);
                         keep_verlet_history(history_valid, &mut x_prev[i], x[i], v[i], dt);
@@ -258,17 +244,8 @@ struct Side<'a> {
 }
 
 /// Impulse and separation of two bodies whose centres should stay `reach` (m) apart, with
-/// restitution `e`, then the energy budget of the separation (module docs): `gravity` (m/s²),
-/// `elastic(p)` the elastic energy (J) of body `b`'s springs with `b` at `p`. Returns whether
-/// they touched.
-fn impulse_pair(
-    a: Side<'_>,
-    b: Side<'_>,
-    reach: f64,
-    e: f64,
-    gravity: DVec3,
-    elastic: &dyn Fn(DVec3) -> f64,
-) -> bool {
+/// restitution `e` (module docs). Returns whether they touched.
+fn impulse_pair(a: Side<'_>, b: Side<'_>, reach: f64, e: f64) -> bool {
     let w = a.w + b.w;
     let (distance, d) = distance_and_direction(*b.x - *a.x);
     if distance >= reach || w == 0.0 {
@@ -282,39 +259,9 @@ fn impulse_pair(
         *a.v -= (a.w * j) * d;
         *b.v += (b.w * j) * d;
     }
-    // Separate by the penetration p, shared in proportion to the inverse masses:
-    // Δx_a = -(w_a/w) p d̂, Δx_b = (w_b/w) p d̂.
+    // Separate by the penetration p, shared in proportion to the inverse masses.
     let p = reach - distance;
-    let (dx_a, dx_b) = (-(a.w / w * p) * d, (b.w / w * p) * d);
-    // m_a Δx_a + m_b Δx_b (kg·m): zero unless one side is immovable (w = 0).
-    let weight = |side_w: f64, dx: DVec3| {
-        if side_w > 0.0 {
-            dx / side_w
-        } else {
-            DVec3::ZERO
-        }
-    };
-    let moved = weight(a.w, dx_a) + weight(b.w, dx_b);
-    let (xa0, xb0) = (*a.x, *b.x);
-    let e0 = elastic(xb0);
-    // ΔU(α) = -g·(m_a Δx_a + m_b Δx_b) α + E_springs(x_b + α Δx_b) - E_springs(x_b)   (J)
-    let rise = |alpha: f64| -alpha * gravity.dot(moved) + elastic(xb0 + alpha * dx_b) - e0;
-    // Paid from the kinetic energy of the relative motion, ½ μ |u|² with μ = 1/w, u = v_b - v_a.
-    let u = *b.v - *a.v;
-    let budget = 0.5 * u.length_squared() / w;
-    // A driven (kinematic) sphere, `w_a = 0`, does work on what it pushes: no budget.
-    let (alpha, du) = if a.w == 0.0 {
-        (1.0, 0.0)
-    } else {
-        affordable(rise, budget)
-    };
-    *a.x = xa0 + alpha * dx_a;
-    *b.x = xb0 + alpha * dx_b;
-    if du > 0.0 && budget > 0.0 {
-        // u' = u √(1 - ΔU/K_rel): momentum kept, ½ μ |u'|² = ½ μ |u|² - ΔU.
-        let u_new = u * (1.0 - du / budget).max(0.0).sqrt();
-        *a.v -= (a.w / w) * (u_new - u);
-        *b.v += (b.w / w) * (u_new - u);
-    }
+    *a.x -= (a.w / w * p) * d;
+    *b.x += (b.w / w * p) * d;
     true
 }

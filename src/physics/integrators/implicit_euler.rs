@@ -36,27 +36,20 @@
 //! **Contacts inside the solve.** A particle that the solve would carry into a collider is not
 //! projected back afterwards: moving it out while its neighbours stay put would compress its
 //! springs and *add* their elastic energy (measured on `jelly-bowl` at dt = 0.04 s: +24 kJ at the
-//! first impact, before the projection had an energy budget; with the budget it would stay
-//! inside instead). Instead its velocity along the surface normal `N` is prescribed so that the
+//! first impact). Instead its velocity along the surface normal `N` is prescribed so that the
 //! step ends on the surface, and the solve is repeated with that constraint (Baraff & Witkin §5.3,
 //! the "filter" `S = I - N Nᵀ` on the constrained particles' rows):
 //!
 //! ```text
 //! x̃      = x_n + dt (v_n + Δv)               where the unconstrained solve would end
 //! φ̃, N   = signed distance and normal at x̃   (φ̃ < 0: inside)
-//! Δv·N    = min((v_n + Δv)·N - φ̃/dt, V_s·N) - v_n·N
-//!                                             prescribed: x_{n+1} lands on the surface
+//! Δv·N    = (v_n + Δv)·N - φ̃/dt - v_n·N       prescribed: x_{n+1} lands on the surface
 //! (S A S) y = S (b - A z),   Δv = z + y       z: the prescribed parts, y ⊥ N
 //! ```
-//! where `φ̃` is in m and `V_s` (m/s) is the velocity the touched sphere ends the step with (0
-//! for a collider): the contact stops an approach but never throws a particle that starts the
-//! step inside faster away than the surface moves, since that impulse would do positive work
-//! (energy the contact adds); the response after the step moves such a particle out within its
-//! energy budget ([`crate::physics::collide`]). The contact set is found by an active-set loop of up to
+//! where `φ̃` is in m. The contact set is found by an active-set loop of up to
 //! [`MAX_CONTACT_PASSES`] solves: a solve adds the particles it still carries inside, and
 //! releases the constrained ones whose constraint impulse `J_i = (A Δv - b)_i·N_i` is negative
-//! (a contact pushes, it never pulls: `J ≥ 0`), then solves again from its own `Δv`; after the
-//! last of those passes further solves only release, until no constraint pulls. The
+//! (a contact pushes, it never pulls: `J ≥ 0`), then solves again from its own `Δv`. The
 //! springs then feel the contact within the same implicit step, the constraint only slows the
 //! approach (it removes kinetic energy), and the collision response after the step
 //! ([`crate::physics::collide::resolve`]) finds the particle on the surface: it bounces it with
@@ -71,8 +64,8 @@
 //! `c_n + dt V_n` for a kinematic one), with `φ̃ = |x̃ - c_{n+1}| - r` and
 //! `N = (x̃ - c_{n+1}) / |x̃ - c_{n+1}|`. The constraint's impulse
 //! `J_i = (A Δv - b)_i·N_i` (N·s) pushes the particle; its reaction `-J_i N_i` goes to a
-//! dynamic sphere, `V ← V - Σ_i J_i N_i / M` (momentum kept; the pair's power at the end of the
-//! step, `-J (v - V)·N`, counted as dissipated by the contacts, [`contact_impulses`]). Measured on `cloth-spheres` at dt = 0.005 s, the projection
+//! dynamic sphere, `V ← V - Σ_i J_i N_i / M` (momentum kept; kinetic energy change counted as
+//! dissipated by the contacts). Measured on `cloth-spheres` at dt = 0.005 s, the projection
 //! after the step that this replaces added 200–2 000 J of elastic energy per step while the
 //! spheres pressed into the cloth, so `Simulation`'s energy guard re-took 277 of 600 steps as
 //! halves; with the spheres inside the solve the energy rises on none of them.
@@ -122,10 +115,8 @@ use crate::physics::stencil::{Kernel, Stencil};
 pub(crate) use super::implicit_constraint::Constraint;
 use super::implicit_lattice::{Forces, inside_spheres, usable};
 
-/// At most this many solves per step that add contacts: the first without contact constraints,
-/// each further one with the particles the previous solve carried into a collider. After them,
-/// solves only release the constraints that pull (one more solve each time any did), so that
-/// the step ends with none: a pulling constraint's impulse would add energy.
+/// At most this many solves per step: the first without contact constraints, each further one
+/// with the particles the previous solve carried into a collider.
 pub const MAX_CONTACT_PASSES: u32 = 4;
 
 /// How the last linear solve went.
@@ -274,23 +265,16 @@ fn textbook(
             warm || stats.passes > 0,
         );
         stats.record(iterations, residual, converged);
-        if !converged || !contacts {
+        if !converged || !contacts || stats.passes >= MAX_CONTACT_PASSES {
             break;
         }
         // Release the constraints that pull; prescribe the particles this solve carries into
-        // a collider (after the last pass only release, so that no constraint that pulls is
-        // left: its impulse would add energy).
+        // a collider.
         let [dv, _, _, ap] = &mut *cg;
         let released = !constraints.is_empty() && {
             system.apply(dv, ap);
             release_pulling(constraints, |i| ap[i] - system.rhs[i])
         };
-        if stats.passes >= MAX_CONTACT_PASSES {
-            if released {
-                continue;
-            }
-            break;
-        }
         if !(add_contacts(model, state, dt, dv, constraints, inside) || released) {
             break;
         }
@@ -302,9 +286,7 @@ fn textbook(
         // particles; minus that is what the contacts inside the solve removed (J).
         let [dv, _, _, ap] = &mut *cg;
         system.apply(dv, ap);
-        let removed = contact_impulses(state, dt * model.gravity, constraints, dv, |i| {
-            ap[i] - system.rhs[i]
-        });
+        let removed = contact_impulses(state, constraints, dv, |i| ap[i] - system.rhs[i]);
         if *account {
             dissipated.contacts += removed;
         }
@@ -480,17 +462,10 @@ fn step_lattice(
         );
         lattice.copy_dv(dv);
         stats.record(iterations, residual, converged);
-        if !converged || !contacts {
+        if !converged || !contacts || stats.passes >= MAX_CONTACT_PASSES {
             break;
         }
-        // After the last pass only release (as in the textbook step).
         let released = release_pulling(constraints, |i| lattice.row_residual(i));
-        if stats.passes >= MAX_CONTACT_PASSES {
-            if released {
-                continue;
-            }
-            break;
-        }
         if !(add_contacts(model, state, dt, dv, constraints, inside) || released) {
             break;
         }
@@ -501,7 +476,7 @@ fn step_lattice(
         // The constraint impulses (A Δv - b)·N and the spheres' reactions, as in the textbook
         // step.
         let impulse = |i| lattice.row_residual(i);
-        let removed = contact_impulses(state, dt * model.gravity, constraints, dv, impulse);
+        let removed = contact_impulses(state, constraints, dv, impulse);
         if *account {
             dissipated.contacts += removed;
         }
@@ -586,7 +561,8 @@ fn add_contacts(
         else {
             continue;
         };
-        let target = landing_speed(model, state, dt, v, contact, sphere);
+        // (v_n + Δv)·N - φ̃/dt is the normal velocity that ends on the surface.
+        let target = v.dot(contact.normal) - contact.phi / dt;
         let constraint = Constraint {
             i,
             normal: contact.normal,
@@ -641,40 +617,11 @@ fn carry_over(
         *c = Constraint {
             i: c.i,
             normal: contact.normal,
-            dv_n: landing_speed(model, state, dt, v, contact, sphere)
-                - state.v[c.i].dot(contact.normal),
+            dv_n: v.dot(contact.normal) - contact.phi / dt - state.v[c.i].dot(contact.normal),
             sphere,
         };
         true
     });
-}
-
-/// The normal velocity (m/s) a constraint prescribes to a particle whose unconstrained solve
-/// ends with velocity `v` (m/s) at `contact` (module docs): the one that lands it on the surface,
-/// `(v_n + Δv)·N - φ̃/dt`, but never faster away than the surface itself moves along `N` (0 for a
-/// collider, `V_s·N` at the end of the step for sphere `s`). A contact only stops an approach;
-/// it never throws a particle that starts the step inside out of the surface, because the
-/// impulse's work `J (v_{n+1}·N - V_s·N)` would then be positive: energy the contact adds. Such a
-/// particle stays where the solve leaves it, and the collision response after the step moves
-/// it out within its energy budget ([`crate::physics::collide`]).
-fn landing_speed(
-    model: &Model,
-    state: &State,
-    dt: f64,
-    v: DVec3,
-    contact: Contact,
-    sphere: Option<usize>,
-) -> f64 {
-    let surface = sphere.map_or(0.0, |k| {
-        let s = &state.spheres[k];
-        let end = if s.kinematic {
-            s.velocity
-        } else {
-            s.velocity + dt * model.gravity
-        };
-        end.dot(contact.normal)
-    });
-    (v.dot(contact.normal) - contact.phi / dt).min(surface)
 }
 
 /// Removes the constraints whose impulse `J_i = (A Δv - b)_i·N_i` (N·s; `impulse(i)` is
@@ -754,44 +701,39 @@ fn has_contacts(model: &Model, state: &State) -> bool {
 ///
 /// ```text
 /// V_s ← V_s - Σ_{i on s} J_i N_i / M_s
-/// removed = -Σ_i J_i (v_{n+1,i} - U_i)·N_i
+/// removed = -Σ_i J_i (v_n + Δv)_i·N_i  -  Σ_s ½ M_s (|V_s'|² - |V_s|²)
 /// ```
-/// where `V_s` (m/s) and `M_s` (kg) are the sphere's velocity and mass, `v_{n+1,i}` (m/s) the
-/// particle's velocity at the end of the step, and `U_i` (m/s) the velocity of the surface it
-/// touches at the end of the step: 0 for a collider and a driven (kinematic) sphere (whose
-/// work on the cloth then counts as negative removal), `V_s' + dt g` for a dynamic sphere
-/// after every reaction (`dt g`: the gravity step [`crate::physics::collide::advance_spheres`]
-/// adds). This is the contact pair's power `-J (v_rel·N)` at the end of the step times `dt`,
-/// the backward-Euler quadrature the dampers get too; a constraint never leaves the particle
-/// separating from a collider (`v_{n+1}·N ≤ 0`, [`landing_speed`]), so against a collider each
-/// term is ≥ 0. Returns `removed` (J): the energy the contacts inside the solve took out.
+/// where `V_s` (m/s) and `M_s` (kg) are the sphere's velocity and mass. Returns `removed` (J):
+/// the energy the contacts inside the solve took out (the work of the impulses on the
+/// particles and the spheres' change of kinetic energy, negated).
 fn contact_impulses(
     state: &mut State,
-    gravity_dt: DVec3,
     constraints: &[Constraint],
     dv: &[DVec3],
     impulse: impl Fn(usize) -> DVec3,
 ) -> f64 {
-    // The reactions on the dynamic spheres first, so that U_i is the sphere's final velocity.
+    let before: f64 = state.spheres.iter().map(sphere_kinetic).sum();
+    let mut removed = 0.0;
     for c in constraints {
         let j = impulse(c.i).dot(c.normal);
+        removed -= j * (state.v[c.i] + dv[c.i]).dot(c.normal);
         if let Some(s) = c.sphere.map(|k| &mut state.spheres[k])
             && !s.kinematic
         {
             s.velocity -= (j / s.mass) * c.normal;
         }
     }
-    let mut removed = 0.0;
-    for c in constraints {
-        let j = impulse(c.i).dot(c.normal);
-        let surface = c
-            .sphere
-            .map(|k| &state.spheres[k])
-            .filter(|s| !s.kinematic)
-            .map_or(DVec3::ZERO, |s| s.velocity + gravity_dt);
-        removed -= j * (state.v[c.i] + dv[c.i] - surface).dot(c.normal);
+    let after: f64 = state.spheres.iter().map(sphere_kinetic).sum();
+    removed - (after - before)
+}
+
+/// A dynamic sphere's kinetic energy (J); a kinematic one's is not counted.
+fn sphere_kinetic(s: &crate::physics::collide::DynamicSphere) -> f64 {
+    if s.kinematic {
+        0.0
+    } else {
+        0.5 * s.mass * s.velocity.length_squared()
     }
-    removed
 }
 
 /// The assembled system `A Δv = b` of one step.
