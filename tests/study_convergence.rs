@@ -222,3 +222,86 @@ fn velocity_verlet_is_second_order_with_and_without_dampers() {
     );
     assert!((damped - 2.0).abs() <= 0.05, "damped: {damped}");
 }
+
+/// Verlet's own damping is part of its reference (`study::convergence` module docs, "Verlet's
+/// own damping"). The rate r = 0.2 1/s is the drag m r = 0.2 N·s/m; against the exact damped
+/// oscillator Verlet, which applies it centred, is second order (before, the undamped reference
+/// made it look like order 0.003). A γ per step is a drag γ/dt that grows as dt shrinks, so the
+/// runs converge to no solution: no order, and the reason (before: order -0.84).
+#[test]
+fn verlet_own_damping_is_in_its_reference() {
+    let v = json(&[
+        "study",
+        "convergence",
+        "oscillator",
+        "--methods",
+        "verlet",
+        "--set",
+        "verlet_damping_rate=0.2",
+        "--json",
+    ]);
+    let verlet = &v["methods"][0];
+    let order = verlet["order"].as_f64().expect("an order");
+    assert!((order - 2.0).abs() <= 0.05, "order {order}");
+    let own = verlet["reference"]
+        .as_str()
+        .expect("Verlet's own reference");
+    assert!(own.starts_with("exact, verlet_damping_rate 0.2"), "{own}");
+    // The text output prints the order and Verlet's reference.
+    let out = springlab(&[
+        "study",
+        "convergence",
+        "oscillator",
+        "--methods",
+        "verlet",
+        "--set",
+        "verlet_damping_rate=0.2",
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains(&format!("order {order:.3}")), "{text}");
+    assert!(
+        text.contains("reference: exact, verlet_damping_rate 0.2"),
+        "{text}"
+    );
+    // Other methods do not feel Verlet's rate: RK4 keeps the report's reference and order 4.
+    let v = json(&[
+        "study",
+        "convergence",
+        "oscillator",
+        "--methods",
+        "rk4",
+        "--set",
+        "verlet_damping_rate=0.2",
+        "--json",
+    ]);
+    assert!(v["methods"][0].get("reference").is_none());
+    let rk4 = v["methods"][0]["order"].as_f64().unwrap();
+    assert!((rk4 - 4.0).abs() <= 0.15, "rk4 {rk4}");
+    // γ per step: no order, and why.
+    let v = json(&[
+        "study",
+        "convergence",
+        "oscillator",
+        "--methods",
+        "verlet",
+        "--set",
+        "verlet_damping=0.001",
+        "--json",
+    ]);
+    let verlet = &v["methods"][0];
+    assert!(verlet["order"].is_null(), "{verlet}");
+    assert!(
+        verlet["reference"]
+            .as_str()
+            .unwrap()
+            .starts_with("none: verlet_damping"),
+        "{verlet}"
+    );
+    assert!(
+        verlet["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|p| p["fitted"] == false)
+    );
+}

@@ -778,6 +778,9 @@ pub fn print_convergence(
             .order
             .map_or_else(|| "—".to_string(), |p| format!("{p:.3}"));
         writeln!(out, "{:<21} order {order}", m.method.name())?;
+        if let Some(own) = &m.reference {
+            writeln!(out, "    reference: {own}")?;
+        }
         writeln!(
             out,
             "    {:>12} {:>12} {:>12} {:>12}",

@@ -45,6 +45,22 @@
 //! Verlet's own damping rate (`verlet_damping_rate`) is applied with the centred velocity and
 //! keeps it second order; GAMES101's per-step factor `γ` does not.
 //!
+//! **Verlet's own damping** (when a user sets it back on with `--set`) is a force the other
+//! methods do not feel, so Verlet gets a reference of its own in which every method would feel
+//! it. The rate `r` (1/s) is the drag `-m r v` on each particle of mass `m`:
+//!
+//! ```text
+//! c' = c + m r                  the drag of the reference (N·s/m), one m for every free particle
+//! m u'' = -k u - (k_d + c') u'  the oscillator's reference, exactly (along the spring, the
+//!                               damper and the drag are one force)
+//! ```
+//! where `c` is the scene's drag (N·s/m), `k`, `k_d` the spring's stiffness (N/m) and damper
+//! (N·s/m); other scenes get the RK4 reference with `c'`. With it Verlet measures order 2 on
+//! the oscillator (`tests/study_convergence.rs`). The factor `γ` per step has no such reference:
+//! its rate `γ/dt` grows without bound as `dt` shrinks (at a fixed `γ`, each halving of `dt`
+//! doubles the drag), so the runs converge to no solution; the row is reported with the errors
+//! against the undamped reference, no order, and the reason.
+//!
 //! Reference: E. Hairer, S. P. Nørsett, G. Wanner, *Solving Ordinary Differential Equations I*,
 //! 2nd ed., Springer 1993, §II.4 (order and error estimation, Richardson extrapolation) and
 //! §II.10 (work-precision diagrams).
@@ -114,6 +130,10 @@ pub struct MethodConvergence {
     pub order: Option<f64>,
     /// One point per dt, largest dt first.
     pub points: Vec<Point>,
+    /// The method's own reference when it is not the report's (module docs, "Verlet's own
+    /// damping"): Verlet with `verlet_damping_rate`, or why there is none (`verlet_damping`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reference: Option<String>,
 }
 
 /// The result of [`convergence`].
@@ -188,10 +208,13 @@ fn exact_solution(scene: &Scene, t: f64) -> Option<Vec<DVec3>> {
         return None;
     };
     let (model, state) = (&body.model, &body.state);
-    if !model.colliders.is_empty() || !state.spheres.is_empty() || model.drag != 0.0 {
+    if !model.colliders.is_empty() || !state.spheres.is_empty() {
         return None;
     }
     if model.springs().is_empty() {
+        if model.drag != 0.0 {
+            return None;
+        }
         // Free fall: x(t) = x0 + v0 t + ½ g t² for free particles; pinned ones stay.
         return Some(
             state
@@ -210,7 +233,9 @@ fn exact_solution(scene: &Scene, t: f64) -> Option<Vec<DVec3>> {
         );
     }
     // The oscillator: one spring from a pinned particle at the origin to a free one on the x axis,
-    // no gravity, no damping: x_1(t) = L0 + A cos(ω t).
+    // no gravity: x_1(t) = L0 + u(t), the damped motion with the damper and the drag together
+    // (along the axis, with the other end at rest, the damper k_d and the drag c are one force
+    // -(k_d + c) u').
     let [s] = model.springs() else {
         return None;
     };
@@ -228,7 +253,7 @@ fn exact_solution(scene: &Scene, t: f64) -> Option<Vec<DVec3>> {
     }
     let u = damped_oscillator(
         s.stiffness,
-        s.damping,
+        s.damping + model.drag,
         model.mass[1],
         state.x[1].x - s.rest_length,
         0.0,
@@ -278,6 +303,71 @@ pub fn damped_oscillator(
         let (r1, r2) = (-gamma + root, -gamma - root);
         ((u0 * r2 - v0) * (r1 * tau).exp() + (v0 - u0 * r1) * (r2 * tau).exp()) / (r2 - r1)
     }
+}
+
+/// Verlet's own reference (module docs, "Verlet's own damping"), when the scene gives Verlet a
+/// damping of its own: a description, and the reference positions at `t_end` with their
+/// estimated error (m), or `None` for the positions when no dt-independent reference exists
+/// (`verlet_damping` γ per step, or a rate on a scene whose free masses differ).
+#[allow(clippy::type_complexity)]
+fn verlet_own_reference(
+    scene: &Scene,
+    t_end: f64,
+    dt_min: f64,
+    steps_for: &dyn Fn(f64) -> u64,
+) -> Option<(String, Option<(Vec<DVec3>, f64)>)> {
+    let [body] = scene.bodies.as_slice() else {
+        return None;
+    };
+    let (gamma, rate) = (body.params.verlet_damping, body.params.verlet_damping_rate);
+    if gamma != 0.0 {
+        return Some((
+            format!(
+                "none: verlet_damping γ = {gamma} per step is a drag of rate γ/dt, which grows \
+                 without bound as dt shrinks, so Verlet converges to no solution (not fitted); \
+                 use verlet_damping_rate"
+            ),
+            None,
+        ));
+    }
+    if rate == 0.0 {
+        return None;
+    }
+    // The rate r is the drag -m r v on every free particle: the model's drag c = m r when the
+    // free masses are one m.
+    let model = &body.model;
+    let mut free = model
+        .mass
+        .iter()
+        .zip(&model.inv_mass)
+        .filter(|&(_, &w)| w != 0.0)
+        .map(|(&m, _)| m);
+    let m = free.next()?;
+    if free.any(|other| other != m) {
+        return Some((
+            format!(
+                "none: verlet_damping_rate {rate} 1/s is a drag m r that differs between \
+                 particles of different mass (not fitted)"
+            ),
+            None,
+        ));
+    }
+    let mut twin = scene.clone();
+    let drag = twin.bodies[0].model.drag + m * rate;
+    twin.bodies[0].model.drag = drag;
+    let with = format!("verlet_damping_rate {rate} 1/s as drag {drag} N·s/m");
+    if let Some(x) = exact_solution(&twin, t_end) {
+        return Some((format!("exact, {with}"), Some((x, 0.0))));
+    }
+    let dt_ref = dt_min / 16.0;
+    let (fine, _, d1, _) = run(&twin, Method::Rk4, dt_ref, steps_for(dt_ref));
+    let (coarse, _, d2, _) = run(&twin, Method::Rk4, 2.0 * dt_ref, steps_for(2.0 * dt_ref));
+    let estimate = if d1 || d2 {
+        f64::INFINITY
+    } else {
+        max_distance(&fine, &coarse) / 15.0
+    };
+    Some((format!("rk4 dt={dt_ref:e}, {with}"), Some((fine, estimate))))
 }
 
 /// Positions after running `scene` with `method` at `dt` for `steps` steps, the force evaluations,
@@ -387,8 +477,21 @@ pub fn convergence(
             (fine, format!("rk4 dt={dt_ref:e}"), estimate)
         }
     };
+    // Verlet's own damping is a force only Verlet feels: its reference has it too.
+    let verlet_reference = options
+        .methods
+        .contains(&Method::Verlet)
+        .then(|| verlet_own_reference(scene, t_end, dt_min, &steps_for))
+        .flatten();
     let mut methods = Vec::new();
     for &method in &options.methods {
+        let own = verlet_reference
+            .as_ref()
+            .filter(|_| method == Method::Verlet);
+        let (reference_x, reference_error) = match own {
+            Some((_, Some((x, e)))) => (x, *e),
+            _ => (&reference_x, reference_error),
+        };
         let mut points = Vec::new();
         for (level, &dt) in dts.iter().enumerate() {
             let steps = steps_for(dt);
@@ -404,9 +507,10 @@ pub fn convergence(
                 continue;
             };
             let error = (!diverged)
-                .then(|| max_distance(&x, &reference_x))
+                .then(|| max_distance(&x, reference_x))
                 .filter(|e| e.is_finite());
-            let fitted = error.is_some_and(|e| e > 10.0 * reference_error && e > 0.0);
+            let fitted = error.is_some_and(|e| e > 10.0 * reference_error && e > 0.0)
+                && own.is_none_or(|o| o.1.is_some());
             points.push(Point {
                 dt,
                 error,
@@ -421,10 +525,16 @@ pub fn convergence(
             .filter(|p| p.fitted)
             .filter_map(|p| p.error.map(|e| (p.dt, e)))
             .collect();
+        let order = if own.is_some_and(|o| o.1.is_none()) {
+            None
+        } else {
+            fitted_slope(&fit)
+        };
         methods.push(MethodConvergence {
             method,
-            order: fitted_slope(&fit),
+            order,
             points,
+            reference: own.map(|o| o.0.clone()),
         });
     }
     Ok(ConvergenceReport {

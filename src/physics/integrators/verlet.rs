@@ -25,7 +25,9 @@
 //!
 //! **Damping.** GAMES101's factor `(1 - γ)` shrinks the remembered displacement every step: a
 //! drag of rate `≈ γ/dt`, so its strength changes with `dt` (γ = 5e-5 is 0.05 1/s at dt = 1 ms
-//! and 0.003 1/s at 1/64 s), and it is first order. The rate `r` is the same drag `-r v` at every
+//! and 0.003 1/s at 1/64 s): at a fixed `γ` each dt solves another equation and the runs
+//! converge to no solution as dt shrinks; only `γ = r dt` is a fixed drag, and that is first
+//! order (it sees the lagging velocity). The rate `r` is the same drag `-r v` at every
 //! `dt`, applied with the centred velocity `(x_{n+1} - x_{n-1})/(2 dt)`, which solves for
 //! `x_{n+1}` in closed form (the second line): second order. The rope scenes keep GAMES101's
 //! `γ = 5e-5` and `r = 0`; the course cubes and cloths have spring dampers and use neither
