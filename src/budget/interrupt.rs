@@ -1,11 +1,18 @@
 //! Ctrl-C and the terminating signals (SIGTERM, SIGHUP, SIGQUIT): a flag that the long loops
 //! check, so that they stop between steps and remove what they had not finished writing.
 
-use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, LazyLock};
 
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+/// Set by Ctrl-C or a terminating signal (shared with `signal_hook::flag`'s handlers).
+static INTERRUPTED: LazyLock<Arc<AtomicBool>> = LazyLock::new(Arc::default);
 /// The terminating signal that set [`INTERRUPTED`], 0 for Ctrl-C.
-static SIGNAL: AtomicI32 = AtomicI32::new(0);
+static SIGNAL: LazyLock<Arc<AtomicUsize>> = LazyLock::new(Arc::default);
+
+/// The number of the signal that stopped the run, 0 for Ctrl-C.
+fn signal() -> i32 {
+    i32::try_from(SIGNAL.load(Ordering::SeqCst)).unwrap_or(0)
+}
 
 /// The run was stopped by Ctrl-C or a terminating signal.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
@@ -14,7 +21,7 @@ pub struct Interrupted;
 
 /// What stopped the run, in words.
 fn cause() -> String {
-    match SIGNAL.load(Ordering::SeqCst) {
+    match signal() {
         0 => "interrupted (Ctrl-C)".to_string(),
         sig => format!("stopped by {}", signal_name(sig)),
     }
@@ -41,7 +48,7 @@ fn signal_name(sig: i32) -> String {
 /// for SIGTERM), as a shell reports a process the signal ended.
 #[must_use]
 pub fn exit_status() -> u8 {
-    match SIGNAL.load(Ordering::SeqCst) {
+    match signal() {
         0 => 130,
         sig => u8::try_from(128 + sig).unwrap_or(1),
     }
@@ -79,17 +86,20 @@ pub fn install(mode: Mode) {
         if mode == Mode::Flag {
             use signal_hook::consts::{SIGHUP, SIGQUIT, SIGTERM};
             for sig in [SIGTERM, SIGHUP, SIGQUIT] {
-                // SAFETY: the action only reads and writes atomics and calls `_exit`, which are
-                // async-signal-safe.
-                let _ = unsafe {
-                    signal_hook::low_level::register(sig, move || {
-                        if INTERRUPTED.load(Ordering::SeqCst) {
-                            signal_hook::low_level::exit(128 + sig);
-                        }
-                        SIGNAL.store(sig, Ordering::SeqCst);
-                        INTERRUPTED.store(true, Ordering::SeqCst);
-                    })
-                };
+                // In this order: a second signal exits at once with 128 + its number; the
+                // first records which signal it was and sets the flag. Each registration
+                // fails only when the signal cannot be caught: then it keeps its default.
+                let _ = signal_hook::flag::register_conditional_shutdown(
+                    sig,
+                    128 + sig,
+                    Arc::clone(&INTERRUPTED),
+                );
+                let _ = signal_hook::flag::register_usize(
+                    sig,
+                    Arc::clone(&SIGNAL),
+                    usize::try_from(sig).unwrap_or(0),
+                );
+                let _ = signal_hook::flag::register(sig, Arc::clone(&INTERRUPTED));
             }
         }
     });

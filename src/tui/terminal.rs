@@ -1,10 +1,11 @@
 //! The terminal around the app: opening it on the menu or a lesson, raw mode and the
 //! alternate screen, restored on return, on error, on panic and on every terminating signal
-//! (SIGTERM, SIGHUP, SIGINT sent with `kill`, SIGQUIT): the signal's handler writes the escape
-//! sequences that leave the app's modes and puts back the terminal settings saved before raw
-//! mode, with async-signal-safe calls only, then lets the signal end the process as it would
-//! have (so the shell still sees "terminated by SIGTERM"). The student's progress needs no
-//! saving there: it is saved whenever it changes.
+//! (SIGTERM, SIGHUP, SIGINT sent with `kill`, SIGQUIT): a thread of its own waits for the
+//! signal (`signal_hook::iterator`, no code in the signal handler itself), takes standard
+//! output's lock so that no frame is drawn after it, writes the escape sequences that leave the
+//! app's modes, puts back the terminal settings saved before raw mode, then lets the signal end
+//! the process as it would have (so the shell still sees "terminated by SIGTERM"). The
+//! student's progress needs no saving there: it is saved whenever it changes.
 
 use std::io::{IsTerminal, stdout};
 
@@ -129,8 +130,11 @@ mod signals {
     use std::sync::OnceLock;
     use std::sync::atomic::{AtomicBool, Ordering};
 
+    use std::io::Write;
+
     use rustix::termios::{OptionalActions, Termios, tcgetattr, tcsetattr};
     use signal_hook::consts::{SIGHUP, SIGINT, SIGQUIT, SIGTERM};
+    use signal_hook::iterator::Signals;
 
     /// The terminal's settings before raw mode.
     static SAVED: OnceLock<Termios> = OnceLock::new();
@@ -143,26 +147,32 @@ mod signals {
     const LEAVE: &[u8] = b"\x1b[?1006l\x1b[?1015l\x1b[?1003l\x1b[?1002l\x1b[?1000l\
         \x1b[2J\x1b[1;1H\x1b[?1049l\x1b[?25h";
 
-    /// Saves the terminal's settings (before raw mode) and installs the handlers, once.
+    /// Saves the terminal's settings (before raw mode) and starts the thread that answers the
+    /// terminating signals, once.
     pub(super) fn install() {
         static ONCE: std::sync::Once = std::sync::Once::new();
         ONCE.call_once(|| {
             if let Ok(t) = tcgetattr(rustix::stdio::stdin()) {
                 let _ = SAVED.set(t);
             }
-            for sig in [SIGTERM, SIGHUP, SIGINT, SIGQUIT] {
-                // SAFETY: the action calls only async-signal-safe functions: atomic loads,
-                // write(2), tcsetattr (an ioctl), and signal-hook's default-action emulation
-                // (sigaction, sigprocmask, raise).
-                let _ = unsafe {
-                    signal_hook::low_level::register(sig, move || {
+            // Fails only when the signals cannot be caught: then they keep their default.
+            let Ok(mut signals) = Signals::new([SIGTERM, SIGHUP, SIGINT, SIGQUIT]) else {
+                return;
+            };
+            let _ = std::thread::Builder::new()
+                .name("springlab-signals".into())
+                .spawn(move || {
+                    if let Some(sig) = signals.forever().next() {
+                        // Held until the process ends: the app draws nothing after this.
+                        let mut out = std::io::stdout().lock();
                         if ARMED.swap(false, Ordering::SeqCst) {
-                            leave();
+                            leave(&mut out);
                         }
                         let _ = signal_hook::low_level::emulate_default_handler(sig);
-                    })
-                };
-            }
+                        // A signal whose default is not to end the process: end it anyway.
+                        std::process::exit(128 + sig);
+                    }
+                });
         });
     }
 
@@ -171,16 +181,10 @@ mod signals {
         ARMED.store(on, Ordering::SeqCst);
     }
 
-    /// Restores the terminal from a signal handler.
-    fn leave() {
-        let out = rustix::stdio::stdout();
-        let mut rest = LEAVE;
-        while !rest.is_empty() {
-            match rustix::io::write(out, rest) {
-                Ok(0) | Err(_) => break,
-                Ok(n) => rest = &rest[n..],
-            }
-        }
+    /// Restores the terminal from the signal thread.
+    fn leave(out: &mut impl Write) {
+        let _ = out.write_all(LEAVE);
+        let _ = out.flush();
         if let Some(t) = SAVED.get() {
             let _ = tcsetattr(rustix::stdio::stdin(), OptionalActions::Now, t);
         }
