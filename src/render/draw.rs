@@ -45,7 +45,7 @@ use super::camera::{Camera, Projection, View, scene_bounds};
 use super::colour::{self, Colour};
 use super::occlude::Occluders;
 use super::paint::{Item, Shape, draw_background, draw_shapes, fill_rect, point, stroke_line};
-use super::shadow::{Casters, Lighting, draw_plane_shadows, scene_balls};
+use super::shadow::{CastShadows, Casters, Lighting, draw_plane_shadows, scene_balls};
 use super::style::{Colouring, Overlay, Style};
 use super::surface::{Lattice, quad_edges};
 use super::terrain::{Bowl, Floor, bowl_items, draw_floor, push_polygon, static_geometry};
@@ -332,8 +332,11 @@ impl Renderer {
                     }
                 }
             }
+            // Bodies and spheres shade the bowls too.
+            let cast = (self.style.shadows && !self.bowls.is_empty())
+                .then(|| CastShadows::new(&self.casters(scene)));
             for bowl in &self.bowls {
-                bowl_items(&view, bowl, &occ, &lights, &mut items);
+                bowl_items(&view, bowl, &occ, &lights, cast.as_ref(), &mut items);
             }
         }
         // Back to front; a stable sort keeps creation order on ties.

@@ -355,6 +355,102 @@ pub(super) fn draw_plane_shadows(
     }
 }
 
+/// The casters' shadows on curved receivers (a bowl), point by point: each caster's outline
+/// seen from the light, in coordinates across the light, with its level along the light.
+#[derive(Clone, Debug, Default)]
+pub(super) struct CastShadows {
+    across: (DVec3, DVec3),
+    /// Outline, its box `(x0, y0, x1, y1)` and its mean level along the light (m).
+    rings: Vec<(Vec<(f64, f64)>, [f64; 4], f64)>,
+    /// Discs: centre, radius and level (m).
+    discs: Vec<((f64, f64), f64, f64)>,
+}
+
+impl CastShadows {
+    /// The shadows of `casters`' polygons and balls.
+    pub(super) fn new(casters: &Casters) -> CastShadows {
+        let l = light();
+        let (u, w) = plane_axes(l);
+        let flat = |p: DVec3| (p.dot(u), p.dot(w));
+        let mut rings = Vec::with_capacity(casters.polys.len());
+        for &(start, len) in &casters.polys {
+            let pts = &casters.points[start as usize..(start + len) as usize];
+            let ring: Vec<(f64, f64)> = pts.iter().map(|&p| flat(p)).collect();
+            let mut bx = [
+                f64::INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+            ];
+            for &(x, y) in &ring {
+                bx = [bx[0].min(x), bx[1].min(y), bx[2].max(x), bx[3].max(y)];
+            }
+            let level = pts.iter().map(|p| p.dot(l)).sum::<f64>() / pts.len().max(1) as f64;
+            rings.push((ring, bx, level));
+        }
+        let discs = casters
+            .balls
+            .iter()
+            .map(|&(c, r)| (flat(c), r, c.dot(l)))
+            .collect();
+        CastShadows {
+            across: (u, w),
+            rings,
+            discs,
+        }
+    }
+
+    /// The share of the sun that reaches `p` past the casters (0..=1), with a penumbra of
+    /// `t tan α` at a distance `t` from the caster.
+    pub(super) fn sun(&self, p: DVec3) -> f64 {
+        let l = light();
+        let tan = SUN_RADIUS.tan();
+        let (x, y) = (p.dot(self.across.0), p.dot(self.across.1));
+        let lp = p.dot(l);
+        let mut v = 1.0;
+        for (ring, bx, level) in &self.rings {
+            let t = level - lp;
+            if t <= 0.0 {
+                continue;
+            }
+            let w = t * tan + 0.01;
+            if x < bx[0] - w || y < bx[1] - w || x > bx[2] + w || y > bx[3] + w {
+                continue;
+            }
+            let (inside, d) = inside_and_distance(ring, x, y);
+            let signed = if inside { -d } else { d };
+            v *= (0.5 + signed / (2.0 * w)).clamp(0.0, 1.0);
+        }
+        for &((cx, cy), r, level) in &self.discs {
+            let t = level - lp;
+            if t <= 0.0 {
+                continue;
+            }
+            let w = t * tan + r / 50.0;
+            let rho = ((x - cx).powi(2) + (y - cy).powi(2)).sqrt();
+            v *= (0.5 + (rho - r) / (2.0 * w)).clamp(0.0, 1.0);
+        }
+        v
+    }
+}
+
+/// Even-odd test of `(x, y)` against the polygon `ring` and its distance to the outline.
+fn inside_and_distance(ring: &[(f64, f64)], x: f64, y: f64) -> (bool, f64) {
+    let mut inside = false;
+    let mut dist2 = f64::INFINITY;
+    for i in 0..ring.len() {
+        let (a, b) = (ring[i], ring[(i + 1) % ring.len()]);
+        if (a.1 > y) != (b.1 > y) && x < a.0 + (y - a.1) / (b.1 - a.1) * (b.0 - a.0) {
+            inside = !inside;
+        }
+        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+        let t =
+            (((x - a.0) * dx + (y - a.1) * dy) / (dx * dx + dy * dy).max(1e-18)).clamp(0.0, 1.0);
+        dist2 = dist2.min((a.0 + t * dx - x).powi(2) + (a.1 + t * dy - y).powi(2));
+    }
+    (inside, dist2.sqrt())
+}
+
 /// A bowl as a shadow caster on its own inside.
 #[derive(Clone, Copy, Debug)]
 struct BowlWall {

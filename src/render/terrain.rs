@@ -14,7 +14,7 @@ use super::camera::{View, plane_axes, scene_bounds};
 use super::colour;
 use super::occlude::Occluders;
 use super::paint::{Item, Shape, grow, nice, point, project3, stroke_line};
-use super::shadow::Lighting;
+use super::shadow::{CastShadows, Lighting};
 use crate::physics::bowl::Rim;
 use crate::physics::collide::Collider;
 use crate::scene::Scene;
@@ -252,8 +252,13 @@ pub(super) fn bowl_items(
     bowl: &Bowl,
     occ: &Occluders,
     lights: &Lighting,
+    cast: Option<&CastShadows>,
     items: &mut Vec<Item>,
 ) {
+    // The light that reaches each corner, once per corner (they are shared).
+    let sun = |p: DVec3| lights.sun(p) * cast.map_or(1.0, |c| c.sun(p));
+    let lit = !lights.is_empty() || cast.is_some();
+    let mut memo: Vec<(DVec3, f64)> = Vec::new();
     for &[a, b, c] in &bowl.triangles {
         let centroid = (a + b + c) / 3.0;
         let mut n = (b - a).cross(c - a).normalize_or_zero();
@@ -273,11 +278,20 @@ pub(super) fn bowl_items(
         } else {
             colour::BOWL_OUTSIDE
         };
-        let colour = if lights.is_empty() {
-            colour::shade(base, n)
+        let colour = if lit {
+            let mut share = 0.0;
+            for p in [a, b, c] {
+                // The tessellation visits a corner's neighbours close together.
+                let known = memo.iter().rev().take(160).find(|m| m.0 == p).map(|m| m.1);
+                share += known.unwrap_or_else(|| {
+                    let v = sun(p);
+                    memo.push((p, v));
+                    v
+                });
+            }
+            colour::shade_lit(base, n, share / 3.0, 1.0)
         } else {
-            let sun = [a, b, c].iter().map(|&p| lights.sun(p)).sum::<f64>() / 3.0;
-            colour::shade_lit(base, n, sun, 1.0)
+            colour::shade(base, n)
         };
         push_polygon(view, occ, &[a, b, c], colour, items);
     }
