@@ -294,6 +294,11 @@ impl Renderer {
             self.floors.iter().map(|f| (f.point, f.normal)),
             balls.iter().copied(),
         );
+        // What casts shadows on the planes and bowls, once per frame.
+        let casters = (self.style.shadows
+            && self.style.colliders
+            && !(self.floors.is_empty() && self.bowls.is_empty()))
+        .then(|| self.casters(scene));
         let lights = Lighting::new(
             scene,
             &self.bowls,
@@ -333,8 +338,10 @@ impl Renderer {
                 }
             }
             // Bodies and spheres shade the bowls too.
-            let cast = (self.style.shadows && !self.bowls.is_empty())
-                .then(|| CastShadows::new(&self.casters(scene)));
+            let cast = casters
+                .as_ref()
+                .filter(|_| !self.bowls.is_empty())
+                .map(CastShadows::new);
             for bowl in &self.bowls {
                 bowl_items(&view, bowl, &occ, &lights, cast.as_ref(), &mut items);
             }
@@ -346,8 +353,7 @@ impl Renderer {
                 .then_with(|| b.depth.total_cmp(&a.depth))
         });
         let split = items.partition_point(|i| i.layer == 0);
-        let casters = (self.style.shadows && self.style.colliders && !self.floors.is_empty())
-            .then(|| self.casters(scene));
+
         draw_shapes(&mut pixmap, &mut paint, &items[..split]);
         if self.style.colliders {
             for floor in &self.floors {

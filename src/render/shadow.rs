@@ -74,10 +74,10 @@ pub(super) const SKY_RADIUS: f64 = 0.4;
 pub(super) const SUN_DARK: f64 = 0.42;
 /// Opacity of the sky's shadow right under a body that touches a plane.
 pub(super) const SKY_DARK: f64 = 0.38;
-/// Directions the sun's disc is sampled at: the centre and a ring.
-const SUN_SAMPLES: usize = 5;
+/// Directions the sun's disc is sampled at: a ring.
+const SUN_SAMPLES: usize = 4;
 /// Layers of the sky's shadow: the footprint right under a group, spread ever wider.
-const SKY_LAYERS: usize = 4;
+const SKY_LAYERS: usize = 3;
 /// Segments of a sphere's silhouette circle.
 const CIRCLE: usize = 20;
 
@@ -86,17 +86,15 @@ fn light() -> DVec3 {
     colour::LIGHT.normalize()
 }
 
-/// `count` unit directions spread over the cone of half-angle `angle` about `axis`: the axis,
-/// then a ring at `angle`.
+/// `count` unit directions on the ring at half-angle `angle` about `axis`.
 fn cone(axis: DVec3, angle: f64, count: usize) -> Vec<DVec3> {
     let (u, w) = plane_axes(axis);
-    let mut out = vec![axis];
-    let ring = count.saturating_sub(1);
-    for k in 0..ring {
-        let phi = std::f64::consts::TAU * (k as f64 + 0.5) / ring as f64;
-        out.push((axis + angle.tan() * (phi.cos() * u + phi.sin() * w)).normalize());
-    }
-    out
+    (0..count)
+        .map(|k| {
+            let phi = std::f64::consts::TAU * (k as f64 + 0.5) / count as f64;
+            (axis + angle.tan() * (phi.cos() * u + phi.sin() * w)).normalize()
+        })
+        .collect()
 }
 
 /// Per-sample opacity so that `count` layers add up to `total`: `1 - (1 - a)^count = total`.
@@ -150,6 +148,37 @@ impl Casters {
         if self.groups.last() != Some(&g) {
             self.groups.push(g);
         }
+    }
+
+    /// True when the shadows of every caster (along the light, with room for the penumbra)
+    /// fall inside the patch of `floor`.
+    fn fit(&self, floor: &Floor) -> bool {
+        let (q, n) = (floor.point, floor.normal);
+        let l = light();
+        if l.dot(n) <= 1e-6 {
+            return false;
+        }
+        let (u, w) = plane_axes(n);
+        let coords = |p: DVec3| ((p - q).dot(u), (p - q).dot(w));
+        let (a, b) = (coords(floor.outline[0]), coords(floor.outline[2]));
+        let (u0, u1, w0, w1) = (a.0.min(b.0), a.0.max(b.0), a.1.min(b.1), a.1.max(b.1));
+        let within = |(pu, pw): (f64, f64), r: f64| {
+            pu - r >= u0 && pu + r <= u1 && pw - r >= w0 && pw + r <= w1
+        };
+        // The sun's shadow along the light, the sky's under the point, spread.
+        let inside = |p: DVec3, r: f64| {
+            let h = (p - q).dot(n).max(0.0);
+            within(
+                coords(p - l * (h / l.dot(n))),
+                r + h * SUN_RADIUS.tan() + 0.05,
+            ) && within(coords(p), r + 2.0 * h * SKY_RADIUS.tan() + 0.05)
+        };
+        self.points.iter().all(|&p| inside(p, 0.0))
+            && self
+                .strips
+                .iter()
+                .all(|&(a, b, r)| inside(a, r) && inside(b, r))
+            && self.balls.iter().all(|&(c, r)| inside(c, r))
     }
 
     fn is_empty(&self) -> bool {
@@ -303,18 +332,25 @@ pub(super) fn draw_plane_shadows(
     if casters.is_empty() || casters.groups.is_empty() || (view.eye - q).dot(n) <= 0.0 {
         return;
     }
-    let Some(region) = floor_path(view, floor) else {
-        return;
+    // The patch usually holds every shadow (`terrain::floor`): then only a hole needs
+    // cutting out.
+    let mask = if floor.hole.is_empty() && casters.fit(floor) {
+        None
+    } else {
+        let Some(region) = floor_path(view, floor) else {
+            return;
+        };
+        let Some(mut mask) = Mask::new(pixmap.width(), pixmap.height()) else {
+            return;
+        };
+        mask.fill_path(
+            &region,
+            FillRule::EvenOdd,
+            paint.anti_alias,
+            Transform::identity(),
+        );
+        Some(mask)
     };
-    let Some(mut mask) = Mask::new(pixmap.width(), pixmap.height()) else {
-        return;
-    };
-    mask.fill_path(
-        &region,
-        FillRule::EvenOdd,
-        paint.anti_alias,
-        Transform::identity(),
-    );
     let mut fill = |path: Option<tiny_skia::Path>, alpha: f64| {
         if let Some(path) = path {
             let a = (alpha * 255.0).round().clamp(1.0, 255.0) as u8;
@@ -324,7 +360,7 @@ pub(super) fn draw_plane_shadows(
                 paint,
                 FillRule::Winding,
                 Transform::identity(),
-                Some(&mask),
+                mask.as_ref(),
             );
         }
     };
@@ -610,8 +646,7 @@ mod tests {
         let axis = light();
         let dirs = cone(axis, SUN_RADIUS, SUN_SAMPLES);
         assert_eq!(dirs.len(), SUN_SAMPLES);
-        assert_eq!(dirs[0], axis);
-        for d in &dirs[1..] {
+        for d in &dirs {
             assert!((d.length() - 1.0).abs() < 1e-12);
             assert!((d.dot(axis).acos() - SUN_RADIUS).abs() < 1e-9);
         }

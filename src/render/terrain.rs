@@ -44,8 +44,10 @@ pub(super) struct Bowl {
     pub(super) radius: f64,
     /// Height of the rim (m).
     pub(super) rim: f64,
-    /// Triangles from the bottom to the rim.
-    pub(super) triangles: Vec<[DVec3; 3]>,
+    /// Corners of the tessellation, ring by ring from the bottom.
+    pub(super) vertices: Vec<DVec3>,
+    /// Triangles from the bottom to the rim, as indices into `vertices`.
+    pub(super) triangles: Vec<[u32; 3]>,
 }
 
 /// Segments of a bowl's tessellation: around and from the bottom to the rim.
@@ -84,12 +86,16 @@ pub(super) fn static_geometry(scene: &Scene) -> (Vec<Floor>, Vec<Bowl>) {
                     center,
                     radius,
                     rim_height,
-                } => bowls.push(Bowl {
-                    center,
-                    radius,
-                    rim: Rim::of(center, radius, rim_height).height,
-                    triangles: bowl_triangles(center, radius, rim_height),
-                }),
+                } => {
+                    let (vertices, triangles) = bowl_mesh(center, radius, rim_height);
+                    bowls.push(Bowl {
+                        center,
+                        radius,
+                        rim: Rim::of(center, radius, rim_height).height,
+                        vertices,
+                        triangles,
+                    });
+                }
                 Collider::Sphere { .. } => {}
             }
         }
@@ -213,23 +219,33 @@ pub(super) fn cut(lo: f64, hi: f64, hole: Option<(f64, f64, f64)>) -> Vec<(f64, 
     }
 }
 
-/// Triangles of the bowl: the sphere below the rim, from the bottom (polar angle 0) to the rim
-/// angle `θ_rim = acos((c_y - rim)/r)`, each with vertices
-/// `c + r (sin θ cos φ, -cos θ, sin θ sin φ)`.
-pub(super) fn bowl_triangles(center: DVec3, radius: f64, rim_height: f64) -> Vec<[DVec3; 3]> {
+/// The bowl's tessellation: the sphere below the rim, from the bottom (polar angle 0) to the
+/// rim angle `θ_rim = acos((c_y - rim)/r)`, corners `c + r (sin θ cos φ, -cos θ, sin θ sin φ)`
+/// ring by ring, and triangles as indices into them.
+pub(super) fn bowl_mesh(
+    center: DVec3,
+    radius: f64,
+    rim_height: f64,
+) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     let rim = Rim::of(center, radius, rim_height).height;
     let theta_rim = ((center.y - rim) / radius).clamp(-1.0, 1.0).acos();
-    let at = |i: usize, j: usize| {
-        let theta = theta_rim * i as f64 / BOWL_RINGS as f64;
-        let phi = std::f64::consts::TAU * j as f64 / BOWL_SEGMENTS as f64;
-        center
-            + radius
-                * DVec3::new(
-                    theta.sin() * phi.cos(),
-                    -theta.cos(),
-                    theta.sin() * phi.sin(),
-                )
-    };
+    let mut vertices = Vec::with_capacity((BOWL_RINGS + 1) * (BOWL_SEGMENTS + 1));
+    for i in 0..=BOWL_RINGS {
+        for j in 0..=BOWL_SEGMENTS {
+            let theta = theta_rim * i as f64 / BOWL_RINGS as f64;
+            let phi = std::f64::consts::TAU * j as f64 / BOWL_SEGMENTS as f64;
+            vertices.push(
+                center
+                    + radius
+                        * DVec3::new(
+                            theta.sin() * phi.cos(),
+                            -theta.cos(),
+                            theta.sin() * phi.sin(),
+                        ),
+            );
+        }
+    }
+    let at = |i: usize, j: usize| (i * (BOWL_SEGMENTS + 1) + j) as u32;
     let mut t = Vec::with_capacity(2 * BOWL_RINGS * BOWL_SEGMENTS);
     for i in 0..BOWL_RINGS {
         for j in 0..BOWL_SEGMENTS {
@@ -241,7 +257,7 @@ pub(super) fn bowl_triangles(center: DVec3, radius: f64, rim_height: f64) -> Vec
             }
         }
     }
-    t
+    (vertices, t)
 }
 
 /// The bowl's triangles, inside and outside coloured differently, shaded by the light that
@@ -255,11 +271,15 @@ pub(super) fn bowl_items(
     cast: Option<&CastShadows>,
     items: &mut Vec<Item>,
 ) {
-    // The light that reaches each corner, once per corner (they are shared).
-    let sun = |p: DVec3| lights.sun(p) * cast.map_or(1.0, |c| c.sun(p));
-    let lit = !lights.is_empty() || cast.is_some();
-    let mut memo: Vec<(DVec3, f64)> = Vec::new();
-    for &[a, b, c] in &bowl.triangles {
+    // The light that reaches each corner, once per corner.
+    let sun: Option<Vec<f64>> = (!lights.is_empty() || cast.is_some()).then(|| {
+        bowl.vertices
+            .iter()
+            .map(|&p| lights.sun(p) * cast.map_or(1.0, |c| c.sun(p)))
+            .collect()
+    });
+    for &tri in &bowl.triangles {
+        let [a, b, c] = tri.map(|i| bowl.vertices[i as usize]);
         let centroid = (a + b + c) / 3.0;
         let mut n = (b - a).cross(c - a).normalize_or_zero();
         let to_eye = if view.perspective {
@@ -278,20 +298,12 @@ pub(super) fn bowl_items(
         } else {
             colour::BOWL_OUTSIDE
         };
-        let colour = if lit {
-            let mut share = 0.0;
-            for p in [a, b, c] {
-                // The tessellation visits a corner's neighbours close together.
-                let known = memo.iter().rev().take(160).find(|m| m.0 == p).map(|m| m.1);
-                share += known.unwrap_or_else(|| {
-                    let v = sun(p);
-                    memo.push((p, v));
-                    v
-                });
+        let colour = match &sun {
+            Some(v) => {
+                let share = tri.iter().map(|&i| v[i as usize]).sum::<f64>() / 3.0;
+                colour::shade_lit(base, n, share, 1.0)
             }
-            colour::shade_lit(base, n, share / 3.0, 1.0)
-        } else {
-            colour::shade(base, n)
+            None => colour::shade(base, n),
         };
         push_polygon(view, occ, &[a, b, c], colour, items);
     }
