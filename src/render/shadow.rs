@@ -391,13 +391,17 @@ pub(super) fn draw_plane_shadows(
     }
 }
 
+/// A caster's outline across the light, its box `(x0, y0, x1, y1)` and its level along the
+/// light (m).
+type Outline = (Vec<(f64, f64)>, [f64; 4], f64);
+
 /// The casters' shadows on curved receivers (a bowl), point by point: each caster's outline
 /// seen from the light, in coordinates across the light, with its level along the light.
 #[derive(Clone, Debug, Default)]
 pub(super) struct CastShadows {
     across: (DVec3, DVec3),
     /// Outline, its box `(x0, y0, x1, y1)` and its mean level along the light (m).
-    rings: Vec<(Vec<(f64, f64)>, [f64; 4], f64)>,
+    rings: Vec<Outline>,
     /// Discs: centre, radius and level (m).
     discs: Vec<((f64, f64), f64, f64)>,
 }
