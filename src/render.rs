@@ -14,6 +14,11 @@
 //!   ones marked), cloth and jelly lattices as Lambert-shaded surfaces, colliders (floors with
 //!   their hole and grid, bowls, tilted planes, spheres with a radial gradient) and a text
 //!   overlay, back to front.
+//! - `occlude`: terrain that hides: shapes that cross a floor are cut along it (what is below
+//!   shows only through the hole), shapes a sphere hides are sorted behind it.
+//! - `shadow`: soft shadows of bodies, particles and spheres on the floors and planes (on by
+//!   default, [`Style::shadows`]), spheres shading the surfaces, a bowl's wall and the floor's
+//!   rim shading its inside; one light with the Lambert shading.
 //! - [`surface`]: recognising a cloth (grid) or jelly (block) from a body's struct springs.
 //! - [`text`]: the bundled font (DejaVu Sans Mono) and text drawing; no system fonts.
 //! - [`chart`]: line and scatter charts with linear or log-log axes, for `--energy-chart` and
@@ -29,7 +34,9 @@ pub mod chart;
 pub mod colour;
 pub mod draw;
 pub mod export;
+mod occlude;
 mod paint;
+mod shadow;
 pub mod style;
 pub mod surface;
 mod terrain;

@@ -109,6 +109,9 @@ pub struct RenderArgs {
     /// Leave out the text overlay.
     #[arg(long)]
     pub no_overlay: bool,
+    /// Leave out the shadows (on the floors and planes, and of spheres on surfaces).
+    #[arg(long)]
+    pub no_shadows: bool,
     /// Camera orbit angle about the vertical axis in degrees (0: looking from +z).
     #[arg(long, allow_negative_numbers = true)]
     pub orbit: Option<f64>,
@@ -252,6 +255,7 @@ fn render(
         cloth_surface: !args.no_surfaces,
         jelly_surface: !args.no_surfaces,
         overlay: !args.no_overlay,
+        shadows: !args.no_shadows,
         ..Style::default()
     };
     let projection = if args.ortho {

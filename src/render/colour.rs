@@ -165,9 +165,10 @@ pub const AMBIENT: f64 = 0.38;
 /// Diffuse weight `k_d` of [`lambert`].
 pub const DIFFUSE: f64 = 0.62;
 
-/// Unit direction to the light, in world coordinates: from above, a little to +x and +z (the
-/// side the default camera looks from).
-pub const LIGHT: DVec3 = DVec3::new(0.29, 0.87, 0.40);
+/// Unit direction to the light, in world coordinates: 60° above the horizon, from -x and +z,
+/// that is from the upper left of the default camera (orbit 35°), so that shadows fall to the
+/// right and a little away from the viewer, where they can be seen.
+pub const LIGHT: DVec3 = DVec3::new(-0.25, 0.866_025_403_784_438_6, 0.433_012_701_892_219_3);
 
 /// Lambert intensity `k_a + k_d max(0, N̂·L̂)` for the unit normal `normal` (module docs).
 #[must_use]
@@ -179,6 +180,15 @@ pub fn lambert(normal: DVec3) -> f64 {
 #[must_use]
 pub fn shade(base: Colour, normal: DVec3) -> Colour {
     base.scaled(lambert(normal))
+}
+
+/// `base` shaded by `k_a v_sky + k_d max(0, N̂·L̂) v_sun`: Lambert's law with the shares of
+/// the sun `sun` and of the sky `sky` (0..=1) that reach the point (`super::shadow`).
+#[must_use]
+pub fn shade_lit(base: Colour, normal: DVec3, sun: f64, sky: f64) -> Colour {
+    let i = AMBIENT * sky.clamp(0.0, 1.0)
+        + DIFFUSE * normal.dot(LIGHT.normalize()).max(0.0) * sun.clamp(0.0, 1.0);
+    base.scaled(i)
 }
 
 /// The diverging strain colour of `strain` (dimensionless, `(L - L0)/L0`) with full colour at

@@ -17,7 +17,13 @@
 //! the hole of a floor with a hole cut out, and a grid of nice spacing), in a layer of their
 //! own: first every shape *below* a plane the camera is above (the bowl under the floor's hole,
 //! a jelly falling through it), then the planes, then everything else. Seen from the free side
-//! of a plane nothing on that side can be behind it, so this order is exact for planes.
+//! of a plane nothing on that side can be behind it, so this order is exact for planes once the
+//! shapes that cross a plane are cut along it ([`super::occlude`]): what is below is then seen
+//! only through the hole. Spheres hide what is behind them by the same module's ordering.
+//!
+//! **Shadows** ([`super::shadow`]) are painted on each plane right after it, under everything
+//! above it; shadows on surfaces (a sphere over the cloth, a bowl's rim on its inside) are part
+//! of those surfaces' shading.
 //!
 //! **Spheres** are drawn as discs of the projected radius `r s / z_c` (px) around the projected
 //! centre (exact for orthographic views, the usual small-angle approximation for perspective),
@@ -37,12 +43,12 @@ use tiny_skia::{Paint, Pixmap};
 
 use super::camera::{Camera, Projection, View, scene_bounds};
 use super::colour::{self, Colour};
-use super::paint::{
-    Item, Shape, draw_background, draw_shapes, fill_rect, grow, point, project3, stroke_line,
-};
+use super::occlude::Occluders;
+use super::paint::{Item, Shape, draw_background, draw_shapes, fill_rect, point, stroke_line};
+use super::shadow::{CastShadows, Casters, Lighting, draw_plane_shadows, scene_balls};
 use super::style::{Colouring, Overlay, Style};
 use super::surface::{Lattice, quad_edges};
-use super::terrain::{Bowl, Floor, bowl_items, draw_floor, static_geometry};
+use super::terrain::{Bowl, Floor, bowl_items, draw_floor, push_polygon, static_geometry};
 use super::text::{Align, draw_text, text_width, vertical_metrics};
 use super::{MAX_SIDE, RenderError};
 use crate::physics::SpringKind;
@@ -63,6 +69,12 @@ struct BodyGeometry {
     edges: Vec<(u32, u32, [u32; 2])>,
     /// Particle disc radius in metres: an eighth of the median spring rest length.
     particle_radius: f64,
+    /// A jelly's outer faces whether or not it is drawn as a surface: its shadow is the
+    /// shadow of a solid block.
+    hull: Vec<[u32; 4]>,
+    /// The hull's edges: ends, the two quads beside, and whether the first quad runs from
+    /// the first end to the second.
+    hull_edges: Vec<(u32, u32, [u32; 2], bool)>,
 }
 
 /// A scene renderer: camera, style, image size and the geometry found once from the scene.
@@ -124,10 +136,23 @@ impl Renderer {
             .bodies
             .iter()
             .map(|b| {
-                let lattice = Lattice::detect(&b.model).filter(|l| match l {
+                let detected = Lattice::detect(&b.model);
+                let lattice = detected.filter(|l| match l {
                     Lattice::Grid { .. } => style.cloth_surface,
                     Lattice::Block { .. } => style.jelly_surface,
                 });
+                let hull = detected
+                    .filter(Lattice::is_closed)
+                    .map(|l| l.quads())
+                    .unwrap_or_default();
+                let hull_edges = edges_with_quads(&hull)
+                    .into_iter()
+                    .map(|(a, b, q)| {
+                        let quad = hull[q[0] as usize];
+                        let forward = (0..4).any(|k| quad[k] == a && quad[(k + 1) % 4] == b);
+                        (a, b, q, forward)
+                    })
+                    .collect();
                 let quads = lattice.map(|l| l.quads()).unwrap_or_default();
                 let edges = edges_with_quads(&quads);
                 let mut rest: Vec<f64> = b
@@ -145,6 +170,8 @@ impl Renderer {
                     quads,
                     edges,
                     particle_radius: median / 8.0,
+                    hull,
+                    hull_edges,
                 }
             })
             .collect();
@@ -255,15 +282,29 @@ impl Renderer {
             ..Paint::default()
         };
 
-        // Planes the camera is above split the shapes into two layers.
-        let above: Vec<(DVec3, DVec3)> = self
-            .floors
-            .iter()
-            .filter(|f| (view.eye - f.point).dot(f.normal) > 0.0)
-            .map(|f| (f.point, f.normal))
-            .collect();
-        let layer_of =
-            |p: DVec3| -> u8 { u8::from(!above.iter().any(|&(q, n)| (p - q).dot(n) < -1e-9)) };
+        // Planes the camera is above cut the shapes into two layers; balls order the shapes
+        // around them (`occlude`).
+        let balls: Vec<(DVec3, f64)> = if self.style.colliders {
+            scene_balls(scene)
+        } else {
+            Vec::new()
+        };
+        let occ = Occluders::new(
+            &view,
+            self.floors.iter().map(|f| (f.point, f.normal)),
+            balls.iter().copied(),
+        );
+        // What casts shadows on the planes and bowls, once per frame.
+        let casters = (self.style.shadows
+            && self.style.colliders
+            && !(self.floors.is_empty() && self.bowls.is_empty()))
+        .then(|| self.casters(scene));
+        let lights = Lighting::new(
+            scene,
+            &self.bowls,
+            &self.floors,
+            self.style.shadows && self.style.colliders,
+        );
 
         let mut items = Vec::new();
         let mut any_springs = [false; 3];
@@ -271,15 +312,15 @@ impl Renderer {
             let x = &body.state.x;
             let surface = geom.lattice.is_some() && geom.particles == x.len();
             if surface {
-                self.surface_items(&view, body, geom, s, &layer_of, &mut items);
+                self.surface_items(&view, body, geom, s, &occ, &lights, &mut items);
             } else {
-                self.spring_items(&view, body, s, &layer_of, &mut items, &mut any_springs);
+                self.spring_items(&view, body, s, &occ, &mut items, &mut any_springs);
             }
-            self.particle_items(&view, body, geom, surface, s, &layer_of, &mut items);
+            self.particle_items(&view, body, geom, surface, s, &occ, &mut items);
             if self.style.colliders {
                 for sphere in &body.state.spheres {
                     if let Some(item) =
-                        ball_item(&view, sphere.center, sphere.radius, colour::BALL, &layer_of)
+                        ball_item(&view, sphere.center, sphere.radius, colour::BALL, &occ)
                     {
                         items.push(item);
                     }
@@ -290,15 +331,19 @@ impl Renderer {
             for body in &scene.bodies {
                 for c in &body.model.colliders {
                     if let Collider::Sphere { center, radius } = *c
-                        && let Some(item) =
-                            ball_item(&view, center, radius, colour::SPHERE, &layer_of)
+                        && let Some(item) = ball_item(&view, center, radius, colour::SPHERE, &occ)
                     {
                         items.push(item);
                     }
                 }
             }
+            // Bodies and spheres shade the bowls too.
+            let cast = casters
+                .as_ref()
+                .filter(|_| !self.bowls.is_empty())
+                .map(CastShadows::new);
             for bowl in &self.bowls {
-                bowl_items(&view, bowl, &layer_of, &mut items);
+                bowl_items(&view, bowl, &occ, &lights, cast.as_ref(), &mut items);
             }
         }
         // Back to front; a stable sort keeps creation order on ties.
@@ -308,10 +353,14 @@ impl Renderer {
                 .then_with(|| b.depth.total_cmp(&a.depth))
         });
         let split = items.partition_point(|i| i.layer == 0);
+
         draw_shapes(&mut pixmap, &mut paint, &items[..split]);
         if self.style.colliders {
             for floor in &self.floors {
                 draw_floor(&mut pixmap, &mut paint, &view, floor, s);
+                if let Some(casters) = &casters {
+                    self.draw_shadows(&mut pixmap, &mut paint, &view, casters, floor);
+                }
             }
         }
         draw_shapes(&mut pixmap, &mut paint, &items[split..]);
@@ -327,7 +376,7 @@ impl Renderer {
         view: &View,
         body: &crate::scene::Body,
         s: f32,
-        layer_of: &impl Fn(DVec3) -> u8,
+        occ: &Occluders,
         items: &mut Vec<Item>,
         any: &mut [bool; 3],
     ) {
@@ -341,15 +390,7 @@ impl Renderer {
             if a >= x.len() || b >= x.len() {
                 continue;
             }
-            let (ca, cb) = (view.to_camera(x[a]), view.to_camera(x[b]));
-            let Some((ca, cb)) = view.clip_segment(ca, cb) else {
-                continue;
-            };
-            let (Some(pa), Some(pb)) = (view.project_camera(ca), view.project_camera(cb)) else {
-                continue;
-            };
             let k = kind_index(spring.kind);
-            any[k] = true;
             let (mut colour, width): (Colour, f32) = match spring.kind {
                 SpringKind::Struct => (colour::STRUCT, 1.5),
                 SpringKind::Shear => (colour::SHEAR, 0.9),
@@ -361,16 +402,28 @@ impl Renderer {
             if many && spring.kind != SpringKind::Struct {
                 colour = colour.with_alpha(110);
             }
-            items.push(Item {
-                layer: layer_of(0.5 * (x[a] + x[b])),
-                depth: 0.5 * (ca.z + cb.z),
-                shape: Shape::Line {
-                    a: point(pa.x, pa.y),
-                    b: point(pb.x, pb.y),
-                    // Dense lattices: at most 1 px, which tiny-skia draws as a fast hairline.
-                    width: if many { width.min(1.0) * s } else { width * s },
-                    colour,
-                },
+            // Dense lattices: at most 1 px, which tiny-skia draws as a fast hairline.
+            let width = if many { width.min(1.0) * s } else { width * s };
+            occ.split_segment(x[a], x[b], |layer, wa, wb| {
+                let (ca, cb) = (view.to_camera(wa), view.to_camera(wb));
+                let Some((ca, cb)) = view.clip_segment(ca, cb) else {
+                    return;
+                };
+                let (Some(pa), Some(pb)) = (view.project_camera(ca), view.project_camera(cb))
+                else {
+                    return;
+                };
+                any[k] = true;
+                items.push(Item {
+                    layer,
+                    depth: occ.key(0.5 * (wa + wb), 0.5 * (ca.z + cb.z)),
+                    shape: Shape::Line {
+                        a: point(pa.x, pa.y),
+                        b: point(pb.x, pb.y),
+                        width,
+                        colour,
+                    },
+                });
             });
         }
     }
@@ -384,7 +437,7 @@ impl Renderer {
         geom: &BodyGeometry,
         surface: bool,
         s: f32,
-        layer_of: &impl Fn(DVec3) -> u8,
+        occ: &Occluders,
         items: &mut Vec<Item>,
     ) {
         for (i, &p) in body.state.x.iter().enumerate() {
@@ -397,9 +450,9 @@ impl Renderer {
             let r = r.clamp(1.2 * s, 5.0 * s);
             let c = point(q.x, q.y);
             items.push(Item {
-                layer: layer_of(p),
+                layer: occ.layer(p),
                 // Slightly in front of the springs that end here.
-                depth: q.depth - 1e-6 * q.depth.abs().max(1.0),
+                depth: occ.key(p, q.depth - 1e-6 * q.depth.abs().max(1.0)),
                 shape: if pinned {
                     Shape::Pin {
                         c,
@@ -417,13 +470,15 @@ impl Renderer {
     }
 
     /// Shaded triangles and mesh lines of a body drawn as a surface.
+    #[allow(clippy::too_many_arguments)]
     fn surface_items(
         &self,
         view: &View,
         body: &crate::scene::Body,
         geom: &BodyGeometry,
         s: f32,
-        layer_of: &impl Fn(DVec3) -> u8,
+        occ: &Occluders,
+        lights: &Lighting,
         items: &mut Vec<Item>,
     ) {
         let x = &body.state.x;
@@ -437,6 +492,9 @@ impl Renderer {
             Colouring::ByStrain { .. } => Some(vertex_strains(body)),
             Colouring::ByKind => None,
         };
+        // The sun's share at each particle, when something can shade the surface.
+        let sun: Option<Vec<f64>> =
+            (!lights.is_empty()).then(|| x.iter().map(|&p| lights.sun(p)).collect());
         let mut visible = vec![!closed; geom.quads.len()];
         // Nearest depth of each quad's drawn triangles: its mesh lines go just in front of it.
         let mut quad_depth = vec![f64::INFINITY; geom.quads.len()];
@@ -465,24 +523,16 @@ impl Renderer {
                     let e = tri.iter().map(|&i| vs[i as usize]).sum::<f64>() / 3.0;
                     base = colour::strain_colour(e, max_strain);
                 }
-                let colour = colour::shade(base, n.try_normalize().unwrap_or(to_eye.normalize()));
-                let cam = [a, b, c].map(|p| view.to_camera(p));
-                if cam.iter().any(|p| p.z < view.near) {
-                    continue;
-                }
-                let Some(p) = project3(view, cam) else {
-                    continue;
+                let n = n.try_normalize().unwrap_or(to_eye.normalize());
+                let colour = match &sun {
+                    Some(v) => {
+                        let sun = tri.iter().map(|&i| v[i as usize]).sum::<f64>() / 3.0;
+                        colour::shade_lit(base, n, sun, lights.sky(centroid, n))
+                    }
+                    None => colour::shade(base, n),
                 };
-                let depth = (cam[0].z + cam[1].z + cam[2].z) / 3.0;
+                let depth = push_polygon(view, occ, &[a, b, c], colour, items);
                 quad_depth[qi] = quad_depth[qi].min(depth);
-                items.push(Item {
-                    layer: layer_of(centroid),
-                    depth,
-                    shape: Shape::Triangle {
-                        p: grow(p, 0.5),
-                        colour,
-                    },
-                });
             }
         }
         if !self.style.mesh_lines {
@@ -497,14 +547,6 @@ impl Renderer {
             if !quads.iter().any(|&q| visible[q as usize]) {
                 continue;
             }
-            let (xa, xb) = (x[a as usize], x[b as usize]);
-            let (ca, cb) = (view.to_camera(xa), view.to_camera(xb));
-            let Some((ca, cb)) = view.clip_segment(ca, cb) else {
-                continue;
-            };
-            let (Some(pa), Some(pb)) = (view.project_camera(ca), view.project_camera(cb)) else {
-                continue;
-            };
             // Just in front of the nearest triangle of the quads beside it (module docs).
             let near = quads
                 .iter()
@@ -513,17 +555,89 @@ impl Renderer {
             if !near.is_finite() {
                 continue;
             }
-            items.push(Item {
-                layer: layer_of(0.5 * (xa + xb)),
-                depth: near - 1e-9 * near.abs().max(1.0),
-                shape: Shape::Line {
-                    a: point(pa.x, pa.y),
-                    b: point(pb.x, pb.y),
-                    width: 0.6 * s,
-                    colour: line,
-                },
+            let depth = near - 1e-9 * near.abs().max(1.0);
+            occ.split_segment(x[a as usize], x[b as usize], |layer, xa, xb| {
+                let (ca, cb) = (view.to_camera(xa), view.to_camera(xb));
+                let Some((ca, cb)) = view.clip_segment(ca, cb) else {
+                    return;
+                };
+                let (Some(pa), Some(pb)) = (view.project_camera(ca), view.project_camera(cb))
+                else {
+                    return;
+                };
+                items.push(Item {
+                    layer,
+                    depth,
+                    shape: Shape::Line {
+                        a: point(pa.x, pa.y),
+                        b: point(pb.x, pb.y),
+                        width: 0.6 * s,
+                        colour: line,
+                    },
+                });
             });
         }
+    }
+
+    /// The shadows of the scene's bodies, particles and spheres on `floor` (module
+    /// [`super::shadow`]).
+    fn draw_shadows(
+        &self,
+        pixmap: &mut Pixmap,
+        paint: &mut Paint,
+        view: &View,
+        casters: &Casters,
+        floor: &Floor,
+    ) {
+        draw_plane_shadows(pixmap, paint, view, floor, casters);
+    }
+
+    /// What casts shadows on the planes: each body's surface quads (a closed body's that face
+    /// the light) or its shown springs and particles, with its spheres; then the static spheres.
+    fn casters(&self, scene: &Scene) -> Casters {
+        let mut c = Casters::new();
+        let light = colour::LIGHT;
+        for (body, geom) in scene.bodies.iter().zip(&self.bodies) {
+            let x = &body.state.x;
+            let surface = geom.lattice.is_some() && geom.particles == x.len();
+            if !geom.hull.is_empty() && geom.particles == x.len() {
+                silhouette(geom, x, light, &mut c);
+            } else if surface {
+                for q in &geom.quads {
+                    c.polygon(&q.map(|i| x[i as usize]));
+                }
+            } else if body.model.springs().len() <= 4000 {
+                let half = 0.35 * geom.particle_radius;
+                for spring in body.model.springs() {
+                    let (a, b) = (spring.a as usize, spring.b as usize);
+                    if self.style.springs.shows(spring.kind) && a < x.len() && b < x.len() {
+                        c.strip(x[a], x[b], half);
+                    }
+                }
+                if self.style.particles && x.len() <= 400 {
+                    for &p in x {
+                        c.ball(p, geom.particle_radius);
+                    }
+                }
+            }
+            if self.style.colliders {
+                for sphere in &body.state.spheres {
+                    c.ball(sphere.center, sphere.radius);
+                }
+            }
+            c.end_group();
+        }
+        if self.style.colliders {
+            for body in &scene.bodies {
+                for col in &body.model.colliders {
+                    if let Collider::Sphere { center, radius } = *col {
+                        c.ball(center, radius);
+                    }
+                }
+            }
+            c.end_group();
+        }
+        c
     }
 
     /// The text box in the top-left corner and the colour legend in the bottom-left.
@@ -748,13 +862,67 @@ fn edges_with_quads(quads: &[[u32; 4]]) -> Vec<(u32, u32, [u32; 2])> {
         .collect()
 }
 
+/// The outlines of a closed body seen from the light, as polygons of `casters`: the hull's
+/// edges between a quad that faces the light and one that does not, chained into loops, each
+/// run the way its lit quad runs (so that every loop turns the same way seen from the light).
+fn silhouette(geom: &BodyGeometry, x: &[DVec3], light: DVec3, casters: &mut Casters) {
+    let lit: Vec<bool> = geom
+        .hull
+        .iter()
+        .map(|q| {
+            let [a, b, c, d] = q.map(|i| x[i as usize]);
+            (c - a).cross(d - b).dot(light) > 0.0
+        })
+        .collect();
+    // Directed silhouette edges, sorted by their start for the walk.
+    let mut edges: Vec<(u32, u32)> = geom
+        .hull_edges
+        .iter()
+        .filter(|(_, _, q, _)| lit[q[0] as usize] != lit[q[1] as usize])
+        .map(|&(a, b, q, forward)| {
+            // The lit quad's direction: the first quad's, or the reverse for the second.
+            if lit[q[0] as usize] == forward {
+                (a, b)
+            } else {
+                (b, a)
+            }
+        })
+        .collect();
+    edges.sort_unstable();
+    let mut used = vec![false; edges.len()];
+    let mut ring = Vec::new();
+    for first in 0..edges.len() {
+        if used[first] {
+            continue;
+        }
+        ring.clear();
+        let mut e = first;
+        loop {
+            used[e] = true;
+            ring.push(x[edges[e].0 as usize]);
+            let next = edges[e].1;
+            let start = edges.partition_point(|&(a, _)| a < next);
+            match (start..edges.len())
+                .take_while(|&k| edges[k].0 == next)
+                .find(|&k| !used[k])
+            {
+                Some(k) => e = k,
+                None => break,
+            }
+        }
+        if ring.len() >= 3 {
+            casters.polygon(&ring);
+        }
+    }
+}
+
 /// A shaded disc for a sphere of `radius` (m) at `center`.
 fn ball_item(
     view: &View,
     center: DVec3,
     radius: f64,
     base: Colour,
-    layer_of: &impl Fn(DVec3) -> u8,
+    occ: &Occluders,
 ) -> Option<Item> {
     let q = view.project(center)?;
     let r = (radius * view.pixels_per_metre(q.depth)) as f32;
@@ -766,7 +934,7 @@ fn ball_item(
     let (lx, ly) = (l.dot(view.right) as f32, -(l.dot(view.up)) as f32);
     let len = (lx * lx + ly * ly).sqrt().max(1e-6);
     Some(Item {
-        layer: layer_of(center),
+        layer: occ.layer(center),
         depth: q.depth,
         shape: Shape::Ball {
             c: point(q.x, q.y),

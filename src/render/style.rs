@@ -95,13 +95,16 @@ pub struct Style {
     pub colliders: bool,
     /// Draw the text overlay (scene, method, dt, t, energy) and the colour legend.
     pub overlay: bool,
+    /// Shadows: bodies, particles and spheres on the floors and planes, spheres on the
+    /// surfaces, a bowl's rim on its inside (`super::shadow`).
+    pub shadows: bool,
     /// Rasteriser settings.
     pub quality: Quality,
 }
 
 impl Default for Style {
     /// Every spring kind coloured by kind, particles, cloth and jelly as surfaces with mesh
-    /// lines, colliders and the overlay.
+    /// lines, colliders, shadows and the overlay.
     fn default() -> Style {
         Style {
             springs: KindToggles::ALL,
@@ -112,6 +115,7 @@ impl Default for Style {
             mesh_lines: true,
             colliders: true,
             overlay: true,
+            shadows: true,
             quality: Quality::default(),
         }
     }

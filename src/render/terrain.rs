@@ -8,11 +8,13 @@
 //! [`crate::physics::bowl::Rim`] gives.
 
 use glam::DVec3;
-use tiny_skia::{FillRule, Paint, PathBuilder, Pixmap, Transform};
+use tiny_skia::{FillRule, Paint, Path, PathBuilder, Pixmap, Transform};
 
 use super::camera::{View, plane_axes, scene_bounds};
 use super::colour;
+use super::occlude::Occluders;
 use super::paint::{Item, Shape, grow, nice, point, project3, stroke_line};
+use super::shadow::{CastShadows, Lighting};
 use crate::physics::bowl::Rim;
 use crate::physics::collide::Collider;
 use crate::scene::Scene;
@@ -27,6 +29,8 @@ pub(super) struct Floor {
     pub(super) outline: [DVec3; 4],
     /// Hole polygon (empty when there is none).
     pub(super) hole: Vec<DVec3>,
+    /// The hole's centre and radius (m).
+    pub(super) hole_circle: Option<(DVec3, f64)>,
     /// Grid segments.
     pub(super) grid: Vec<(DVec3, DVec3)>,
 }
@@ -36,8 +40,14 @@ pub(super) struct Floor {
 pub(super) struct Bowl {
     /// Centre of the bowl's sphere (m).
     pub(super) center: DVec3,
-    /// Triangles from the bottom to the rim.
-    pub(super) triangles: Vec<[DVec3; 3]>,
+    /// Radius of the bowl's sphere (m).
+    pub(super) radius: f64,
+    /// Height of the rim (m).
+    pub(super) rim: f64,
+    /// Corners of the tessellation, ring by ring from the bottom.
+    pub(super) vertices: Vec<DVec3>,
+    /// Triangles from the bottom to the rim, as indices into `vertices`.
+    pub(super) triangles: Vec<[u32; 3]>,
 }
 
 /// Segments of a bowl's tessellation: around and from the bottom to the rim.
@@ -76,10 +86,16 @@ pub(super) fn static_geometry(scene: &Scene) -> (Vec<Floor>, Vec<Bowl>) {
                     center,
                     radius,
                     rim_height,
-                } => bowls.push(Bowl {
-                    center,
-                    triangles: bowl_triangles(center, radius, rim_height),
-                }),
+                } => {
+                    let (vertices, triangles) = bowl_mesh(center, radius, rim_height);
+                    bowls.push(Bowl {
+                        center,
+                        radius,
+                        rim: Rim::of(center, radius, rim_height).height,
+                        vertices,
+                        triangles,
+                    });
+                }
                 Collider::Sphere { .. } => {}
             }
         }
@@ -104,6 +120,17 @@ pub(super) fn floor(
     } else {
         bounds.corners()
     };
+    // The content's corners and, for those above the plane, their shadows along the light
+    // (`super::shadow`): the patch holds the shadows too.
+    let l = colour::LIGHT.normalize();
+    let shadows = corners.map(|c| {
+        let h = (c - point).dot(n);
+        if h > 0.0 && l.dot(n) > 0.1 {
+            c - l * (h / l.dot(n))
+        } else {
+            c
+        }
+    });
     for c in corners {
         let (cu, cw) = ((c - point).dot(u), (c - point).dot(w));
         if first {
@@ -117,6 +144,13 @@ pub(super) fn floor(
     }
     // Half the content's size more on every side, at least 1 m across.
     let margin = 0.5 * (u1 - u0).max(w1 - w0).max(1.0);
+    for c in shadows {
+        let (cu, cw) = ((c - point).dot(u), (c - point).dot(w));
+        u0 = u0.min(cu);
+        u1 = u1.max(cu);
+        w0 = w0.min(cw);
+        w1 = w1.max(cw);
+    }
     let spacing = nice((u1 - u0 + w1 - w0 + 4.0 * margin) / 24.0, true);
     let snap_down = |v: f64| (v / spacing).floor() * spacing;
     let snap_up = |v: f64| (v / spacing).ceil() * spacing;
@@ -160,6 +194,7 @@ pub(super) fn floor(
         normal: n,
         outline,
         hole: hole_poly,
+        hole_circle: hole,
         grid,
     }
 }
@@ -184,23 +219,33 @@ pub(super) fn cut(lo: f64, hi: f64, hole: Option<(f64, f64, f64)>) -> Vec<(f64, 
     }
 }
 
-/// Triangles of the bowl: the sphere below the rim, from the bottom (polar angle 0) to the rim
-/// angle `θ_rim = acos((c_y - rim)/r)`, each with vertices
-/// `c + r (sin θ cos φ, -cos θ, sin θ sin φ)`.
-pub(super) fn bowl_triangles(center: DVec3, radius: f64, rim_height: f64) -> Vec<[DVec3; 3]> {
+/// The bowl's tessellation: the sphere below the rim, from the bottom (polar angle 0) to the
+/// rim angle `θ_rim = acos((c_y - rim)/r)`, corners `c + r (sin θ cos φ, -cos θ, sin θ sin φ)`
+/// ring by ring, and triangles as indices into them.
+pub(super) fn bowl_mesh(
+    center: DVec3,
+    radius: f64,
+    rim_height: f64,
+) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     let rim = Rim::of(center, radius, rim_height).height;
     let theta_rim = ((center.y - rim) / radius).clamp(-1.0, 1.0).acos();
-    let at = |i: usize, j: usize| {
-        let theta = theta_rim * i as f64 / BOWL_RINGS as f64;
-        let phi = std::f64::consts::TAU * j as f64 / BOWL_SEGMENTS as f64;
-        center
-            + radius
-                * DVec3::new(
-                    theta.sin() * phi.cos(),
-                    -theta.cos(),
-                    theta.sin() * phi.sin(),
-                )
-    };
+    let mut vertices = Vec::with_capacity((BOWL_RINGS + 1) * (BOWL_SEGMENTS + 1));
+    for i in 0..=BOWL_RINGS {
+        for j in 0..=BOWL_SEGMENTS {
+            let theta = theta_rim * i as f64 / BOWL_RINGS as f64;
+            let phi = std::f64::consts::TAU * j as f64 / BOWL_SEGMENTS as f64;
+            vertices.push(
+                center
+                    + radius
+                        * DVec3::new(
+                            theta.sin() * phi.cos(),
+                            -theta.cos(),
+                            theta.sin() * phi.sin(),
+                        ),
+            );
+        }
+    }
+    let at = |i: usize, j: usize| (i * (BOWL_SEGMENTS + 1) + j) as u32;
     let mut t = Vec::with_capacity(2 * BOWL_RINGS * BOWL_SEGMENTS);
     for i in 0..BOWL_RINGS {
         for j in 0..BOWL_SEGMENTS {
@@ -212,25 +257,30 @@ pub(super) fn bowl_triangles(center: DVec3, radius: f64, rim_height: f64) -> Vec
             }
         }
     }
-    t
+    (vertices, t)
 }
 
-/// The bowl's triangles, inside and outside coloured differently.
+/// The bowl's triangles, inside and outside coloured differently, shaded by the light that
+/// reaches them (its own wall and the floor around it cast shadows inside it), cut by the planes
+/// of `occ`.
 pub(super) fn bowl_items(
     view: &View,
     bowl: &Bowl,
-    layer_of: &impl Fn(DVec3) -> u8,
+    occ: &Occluders,
+    lights: &Lighting,
+    cast: Option<&CastShadows>,
     items: &mut Vec<Item>,
 ) {
-    for &[a, b, c] in &bowl.triangles {
+    // The light that reaches each corner, once per corner.
+    let sun: Option<Vec<f64>> = (!lights.is_empty() || cast.is_some()).then(|| {
+        bowl.vertices
+            .iter()
+            .map(|&p| lights.sun(p) * cast.map_or(1.0, |c| c.sun(p)))
+            .collect()
+    });
+    for &tri in &bowl.triangles {
+        let [a, b, c] = tri.map(|i| bowl.vertices[i as usize]);
         let centroid = (a + b + c) / 3.0;
-        let cam = [a, b, c].map(|p| view.to_camera(p));
-        if cam.iter().any(|p| p.z < view.near) {
-            continue;
-        }
-        let Some(p) = project3(view, cam) else {
-            continue;
-        };
         let mut n = (b - a).cross(c - a).normalize_or_zero();
         let to_eye = if view.perspective {
             view.eye - centroid
@@ -248,27 +298,64 @@ pub(super) fn bowl_items(
         } else {
             colour::BOWL_OUTSIDE
         };
-        items.push(Item {
-            layer: layer_of(centroid),
-            depth: (cam[0].z + cam[1].z + cam[2].z) / 3.0,
-            shape: Shape::Triangle {
-                p: grow(p, 0.5),
-                colour: colour::shade(base, n),
-            },
-        });
+        let colour = match &sun {
+            Some(v) => {
+                let share = tri.iter().map(|&i| v[i as usize]).sum::<f64>() / 3.0;
+                colour::shade_lit(base, n, share, 1.0)
+            }
+            None => colour::shade(base, n),
+        };
+        push_polygon(view, occ, &[a, b, c], colour, items);
     }
 }
 
-/// A floor: the shaded patch with its hole cut out, its grid and the hole's rim.
-pub(super) fn draw_floor(
-    pixmap: &mut Pixmap,
-    paint: &mut Paint,
+/// The convex world polygon `poly` as shaded triangles: cut by the planes of `occ`, clipped to
+/// the near distance, each piece at its own depth. Returns the nearest sort depth pushed.
+pub(super) fn push_polygon(
     view: &View,
-    floor: &Floor,
-    s: f32,
-) {
-    let camera_above = (view.eye - floor.point).dot(floor.normal) > 0.0;
-    let alpha = if camera_above { 255 } else { 70 };
+    occ: &Occluders,
+    poly: &[DVec3],
+    colour: colour::Colour,
+    items: &mut Vec<Item>,
+) -> f64 {
+    let mut nearest = f64::INFINITY;
+    occ.split_polygon(poly, |layer, piece| {
+        let mut buf = [DVec3::ZERO; 8];
+        if piece.len() > buf.len() {
+            return;
+        }
+        let cam = &mut buf[..piece.len()];
+        for (c, &p) in cam.iter_mut().zip(piece) {
+            *c = view.to_camera(p);
+        }
+        if cam.iter().any(|p| p.z < view.near) {
+            return;
+        }
+        let centroid = piece.iter().copied().sum::<DVec3>() / piece.len() as f64;
+        let depth = occ.key(
+            centroid,
+            cam.iter().map(|p| p.z).sum::<f64>() / cam.len() as f64,
+        );
+        nearest = nearest.min(depth);
+        for k in 1..cam.len() - 1 {
+            let Some(p) = project3(view, [cam[0], cam[k], cam[k + 1]]) else {
+                continue;
+            };
+            items.push(Item {
+                layer,
+                depth,
+                shape: Shape::Triangle {
+                    p: grow(p, 0.5),
+                    colour,
+                },
+            });
+        }
+    });
+    nearest
+}
+
+/// The floor's region on the screen: its outline with the hole cut out (even-odd).
+pub(super) fn floor_path(view: &View, floor: &Floor) -> Option<Path> {
     let mut pb = PathBuilder::new();
     let add_ring = |pb: &mut PathBuilder, ring: &[DVec3]| {
         let cam: Vec<DVec3> = ring.iter().map(|&p| view.to_camera(p)).collect();
@@ -292,7 +379,20 @@ pub(super) fn draw_floor(
     if !floor.hole.is_empty() {
         add_ring(&mut pb, &floor.hole);
     }
-    if let Some(path) = pb.finish() {
+    pb.finish()
+}
+
+/// A floor: the shaded patch with its hole cut out, its grid and the hole's rim.
+pub(super) fn draw_floor(
+    pixmap: &mut Pixmap,
+    paint: &mut Paint,
+    view: &View,
+    floor: &Floor,
+    s: f32,
+) {
+    let camera_above = (view.eye - floor.point).dot(floor.normal) > 0.0;
+    let alpha = if camera_above { 255 } else { 70 };
+    if let Some(path) = floor_path(view, floor) {
         paint.set_color(
             colour::shade(colour::GROUND, floor.normal)
                 .with_alpha(alpha)
