@@ -56,14 +56,16 @@ command -v cc >/dev/null 2>&1 || fail "no C compiler (cc) to link with: apt-get 
 SYSROOT="$(rustc --print sysroot)" || fail "rustc does not run"
 echo "export RUSTC='$SYSROOT/bin/rustc'" >springlab.env
 ./springlab grade --sandbox-report
-rm -rf /tmp/springlab-warm
-./springlab homework new /tmp/springlab-warm --assignment {{ASSIGNMENT}} >/dev/null
+# A folder of its own (never a fixed name in a shared /tmp), removed on the way out.
+WARM="$(mktemp -d)" || fail "cannot make a temporary folder"
+trap 'rm -rf "$WARM"' EXIT
+./springlab homework new "$WARM/hw" --assignment {{ASSIGNMENT}} >/dev/null
 # A grader error (a rustc too old for edition 2024, an unreadable toolchain) exits non-zero;
 # the untouched starter must build.
-./springlab grade /tmp/springlab-warm --target-dir "$PWD/target" --json /tmp/springlab-warm.json \
-  >/tmp/springlab-warm.txt 2>&1 || { cat /tmp/springlab-warm.txt >&2; fail "the grader cannot run"; }
-if grep -q "the crate did not build" /tmp/springlab-warm.txt; then
-  cat /tmp/springlab-warm.txt >&2
+./springlab grade "$WARM/hw" --target-dir "$PWD/target" --json "$WARM/report.json" \
+  >"$WARM/grade.txt" 2>&1 || { cat "$WARM/grade.txt" >&2; fail "the grader cannot run"; }
+if grep -q "the crate did not build" "$WARM/grade.txt"; then
+  cat "$WARM/grade.txt" >&2
   fail "this toolchain ($(rustc --version)) cannot build the untouched starter crate"
 fi
 echo "setup.sh: ready ($(rustc --version))"
