@@ -628,6 +628,29 @@ fn attack() {
     assert!(!everything.contains("mem of"), "{everything}");
 }
 
+/// `springlab grade dir OUTPUT_FLAG path` as sandbox uid 64012: its exit status and stderr.
+fn grade_into(root: &Path, dir: &Path, flag: &str, path: &Path) -> (bool, String) {
+    let t = target();
+    let out = springlab(
+        root,
+        &[
+            "grade",
+            dir.to_str().expect("utf-8"),
+            flag,
+            path.to_str().expect("utf-8"),
+            "--target-dir",
+            t.to_str().expect("utf-8"),
+            "--sandbox-uid",
+            "64012",
+        ],
+        &[],
+    );
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
 /// A FIFO (and a symbolic link) at the report path: refused with a message and a non-zero exit,
 /// never blocked on or followed.
 #[test]
@@ -637,23 +660,8 @@ fn a_fifo_or_link_at_the_report_path_is_refused() {
     let fifo = root.join("results.json");
     let made = Command::new("mkfifo").arg(&fifo).status().expect("mkfifo");
     assert!(made.success());
-    let t = target();
-    let out = springlab(
-        &root,
-        &[
-            "grade",
-            dir.to_str().expect("utf-8"),
-            "--gradescope",
-            fifo.to_str().expect("utf-8"),
-            "--target-dir",
-            t.to_str().expect("utf-8"),
-            "--sandbox-uid",
-            "64012",
-        ],
-        &[],
-    );
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success());
+    let (ok, stderr) = grade_into(&root, &dir, "--gradescope", &fifo);
+    assert!(!ok);
     assert!(
         stderr.contains("refusing to write a result over a FIFO"),
         "{stderr}"
@@ -670,22 +678,8 @@ fn a_fifo_or_link_at_the_report_path_is_refused() {
     std::fs::write(&elsewhere, "mine").expect("write");
     let link = root.join("report.json");
     std::os::unix::fs::symlink(&elsewhere, &link).expect("symlink");
-    let out = springlab(
-        &root,
-        &[
-            "grade",
-            dir.to_str().expect("utf-8"),
-            "--json",
-            link.to_str().expect("utf-8"),
-            "--target-dir",
-            t.to_str().expect("utf-8"),
-            "--sandbox-uid",
-            "64012",
-        ],
-        &[],
-    );
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success());
+    let (ok, stderr) = grade_into(&root, &dir, "--json", &link);
+    assert!(!ok);
     assert!(stderr.contains("over a symbolic link"), "{stderr}");
     assert_eq!(std::fs::read_to_string(&elsewhere).expect("read"), "mine");
 }
