@@ -48,25 +48,24 @@
 //! represented (image sides above 8192 pixels, particle indices above 2³²) stays refused.
 //!
 //! Work estimated at more than [`NOTICE_SECONDS`] is announced on standard error before it
-//! starts, with the estimate; on a terminal a progress bar appears for anything that takes
-//! more than a second ([`Progress`]), and Ctrl-C stops the run cleanly ([`interrupt`]).
+//! starts, with the estimate (the command line adds a progress bar and Ctrl-C handling).
+//!
+//! The budget is a leaf: it reads scenes through [`Stepped`] (particles, springs, method per
+//! body), which the scene module implements, and takes what the studies and the renderer know
+//! (a frequency bound, bytes per pixel) as arguments. Its number formats are [`crate::format`]'s.
 
 use glam::{DMat3, DVec3};
 
 use crate::physics::Spring;
 
 mod estimates;
-mod format;
-pub mod interrupt;
-mod progress;
 mod search;
 
+pub use crate::format::{approx, bytes, duration, short};
 pub use estimates::{
-    STABILITY_MIN_STEPS, add_frames, body_bytes, builtin_size, convergence, evaluations_per_step,
-    omega_bound, run, scene_bytes, stability, steps_for, updates_per_step,
+    BodySize, STABILITY_MIN_STEPS, Stepped, add_frames, body_bytes, convergence,
+    evaluations_per_step, run, scene_bytes, stability, steps_for, updates_per_step,
 };
-pub use format::{approx, bytes, duration, short};
-pub use progress::Progress;
 pub use search::{advise, runs};
 
 /// Updates per second assumed when an estimate is turned into a time.
@@ -96,10 +95,6 @@ pub const WORKSPACE_PARTICLE_BYTES: f64 = (15 * size_of::<DVec3>() + size_of::<D
 /// Bytes per spring of the [`Workspace`](crate::physics::Workspace): the implicit solver's Jacobian blocks (`DMat3`) and
 /// XPBD's multipliers (`f64`).
 pub const WORKSPACE_SPRING_BYTES: f64 = (size_of::<DMat3>() + 8) as f64;
-
-/// Bytes per pixel while rendering: the frame being drawn and the frames queued for the encoder
-/// (4 × RGBA each), the RGB copy, and the GIF encoder's RGBA copy and palette indices.
-pub const PIXEL_BYTES: f64 = (4 * (2 + crate::render::export::QUEUE) + 3 + 4 + 1) as f64;
 
 /// Bytes per byte of a scene file while it is parsed and built (the TOML reader's values with
 /// their spans: measured 53 on a 16 MiB file of `[[particles]]`, 0.9 GB at the peak).
@@ -402,28 +397,6 @@ impl Estimate {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn numbers_are_echoed_briefly() {
-        assert_eq!(short(1e300), "1e300");
-        assert_eq!(short(1e-320), "1e-320");
-        assert_eq!(short(-1e300), "-1e300");
-        assert_eq!(short(0.015625), "0.015625");
-        assert_eq!(short(10.0), "10");
-        assert_eq!(short(1e9), "1e9");
-        assert_eq!(short(f64::NAN), "NaN");
-        assert_eq!(approx(18_446_744_073_709_551_615.0), "1.84e19");
-        assert_eq!(approx(1e300), "1e300");
-        assert_eq!(approx(4_999_995.0), "4999995");
-        assert_eq!(approx(0.999_999_999_999_999_9), "1");
-        assert_eq!(approx(f64::INFINITY), "more than 1e308");
-        assert_eq!(bytes(3.7e9), "3.7 GB");
-        assert_eq!(bytes(2.0 * 1024.0 * 1024.0 * 1024.0), "2.1 GB");
-        assert_eq!(bytes(512.0), "512 bytes");
-        assert_eq!(duration(30.2), "31 s");
-        assert_eq!(duration(3600.0), "60 min");
-        assert_eq!(duration(f64::INFINITY), "forever");
-    }
 
     #[test]
     fn the_first_quantity_over_its_limit_is_refused() {

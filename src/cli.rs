@@ -26,7 +26,9 @@
 mod advise;
 mod bench;
 mod grade;
+pub mod interrupt;
 mod lessons;
+mod progress;
 mod render;
 mod run;
 mod scenes;
@@ -38,8 +40,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use crate::budget::interrupt::Interrupted;
 use crate::budget::{Estimate, Limits};
+use interrupt::Interrupted;
 
 /// springlab: mass-spring systems, their integrators, and where each one fails.
 #[derive(Debug, Parser)]
@@ -124,7 +126,7 @@ pub fn main() -> ExitCode {
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) if e.chain().any(|c| c.is::<Interrupted>()) => {
             eprintln!("springlab: {e}");
-            ExitCode::from(crate::budget::interrupt::exit_status())
+            ExitCode::from(interrupt::exit_status())
         }
         Err(e) => {
             eprintln!("springlab: {}", message(&e));

@@ -71,6 +71,7 @@ pub mod runner;
 pub mod sandbox;
 mod shared;
 mod system;
+mod token;
 
 pub use assignments::{
     Body, Bowl, ClothHomework, ContactCoefficients, DVec3, JellyHomework, Mass, Particle, Plane,

@@ -14,7 +14,7 @@ pub mod rope;
 
 use std::path::Path;
 
-use crate::budget::{BudgetError, Estimate, Limits, scene_bytes};
+use crate::budget::{BodySize, BudgetError, Estimate, Limits, Stepped, scene_bytes};
 
 use crate::physics::{Method, MethodParams, Model, State};
 pub use params::{ParamError, ParamSpec, Params, Range, Value};
@@ -76,6 +76,25 @@ impl Scene {
             return names.first().copied().unwrap_or_default().to_string();
         }
         names.join(",")
+    }
+}
+
+/// The budget's view of a scene: every body's particles, springs and method.
+impl Stepped for Scene {
+    fn bodies(&self) -> Vec<BodySize> {
+        self.bodies
+            .iter()
+            .map(|b| BodySize {
+                particles: b.model.particle_count() as f64,
+                springs: b.model.springs().len() as f64,
+                method: b.method,
+                params: b.params,
+            })
+            .collect()
+    }
+
+    fn dt(&self) -> f64 {
+        self.dt
     }
 }
 
@@ -146,6 +165,10 @@ pub struct SceneDef {
     pub params: fn() -> Vec<ParamSpec>,
     /// Builds the scene from parameter values.
     pub build: fn(&Params) -> Result<Scene, SceneError>,
+    /// Particles and springs the scene builds from parameter values, computed without building
+    /// it (so that a scene over the memory budget is refused before it is allocated): exact
+    /// when every spring kind is active, an upper bound otherwise.
+    pub size: fn(&Params) -> (f64, f64),
 }
 
 impl SceneDef {
@@ -163,60 +186,70 @@ pub const BUILTIN: &[SceneDef] = &[
         summary: "one spring, one free particle, no gravity: x(t) = 1 + 0.1 cos(10 t) exactly",
         params: rope::oscillator_params,
         build: rope::oscillator,
+        size: rope::oscillator_size,
     },
     SceneDef {
         name: "rope",
         summary: "GAMES101 rope in SI units: 3 nodes of 1 kg, k = 100 N/m, node 0 pinned, dt = 1/64 s",
         params: rope::rope_params,
         build: rope::rope_scene,
+        size: rope::rope_size,
     },
     SceneDef {
         name: "ropes",
         summary: "GAMES101's two ropes side by side: semi-implicit Euler and Verlet at once",
         params: rope::ropes_params,
         build: rope::ropes_scene,
+        size: rope::ropes_size,
     },
     SceneDef {
         name: "cube-plane",
         summary: "NYCU 2021: a 10×10×10 spring cube (K = 2000, D = 60) dropped on the plane y = -1",
         params: course::cube_params,
         build: course::cube_plane,
+        size: course::cube_size,
     },
     SceneDef {
         name: "cube-tilted",
         summary: "NYCU 2021: the cube lands on a 45° slope (normal (1,1,0)), tips over and slides down",
         params: course::cube_params,
         build: course::cube_tilted,
+        size: course::cube_size,
     },
     SceneDef {
         name: "cube-sphere",
         summary: "NYCU 2021: the cube lands off-centre on a ball of radius 3 at (0,-1,0) and slides off",
         params: course::cube_params,
         build: course::cube_sphere,
+        size: course::cube_size,
     },
     SceneDef {
         name: "cube-bowl",
         summary: "NYCU 2021: the cube falls into a bowl of radius 7 centred at (2,7,1), rim at y = 7",
         params: course::cube_params,
         build: course::cube_bowl,
+        size: course::cube_size,
     },
     SceneDef {
         name: "jelly-bowl",
         summary: "NYCU 2023: the jelly hits the edge of a hole in the floor and falls into the bowl below",
         params: course::jelly_params,
         build: course::jelly_bowl,
+        size: course::cube_size,
     },
     SceneDef {
         name: "cloth-spheres",
         summary: "NYCU 2022: four 125 kg spheres fall onto a 25×25 cloth pinned at its corners, dt = 1e-4",
         params: course::cloth_spheres_params,
         build: course::cloth_spheres,
+        size: course::cloth_size,
     },
     SceneDef {
         name: "cloth-sphere",
         summary: "NYCU 2024: a 25×25 cloth drapes over a sphere of radius 1 that moves at a set velocity",
         params: course::cloth_sphere_params,
         build: course::cloth_sphere,
+        size: course::cloth_size,
     },
 ];
 
@@ -235,7 +268,7 @@ pub fn build_builtin(name: &str, sets: &[String]) -> Result<Scene, SceneError> {
 }
 
 /// [`build_builtin`] within `limits`: a scene whose particles and springs would need more memory
-/// than `limits.memory` is refused before it is built ([`crate::budget::builtin_size`]).
+/// than `limits.memory` is refused before it is built ([`SceneDef::size`]).
 ///
 /// # Errors
 /// As [`build_builtin`], and [`SceneError::Budget`].
@@ -271,17 +304,16 @@ pub fn check_size(
     what: &str,
     limits: &Limits,
 ) -> Result<(), SceneError> {
-    if let Some((particles, springs)) = crate::budget::builtin_size(def.name, params) {
-        Estimate {
-            what: what.to_string(),
-            particles,
-            springs,
-            memory: crate::budget::BASE_BYTES
-                + crate::budget::body_bytes(particles, springs, &Method::ALL, 1.0),
-            ..Estimate::default()
-        }
-        .check(limits)?;
+    let (particles, springs) = (def.size)(params);
+    Estimate {
+        what: what.to_string(),
+        particles,
+        springs,
+        memory: crate::budget::BASE_BYTES
+            + crate::budget::body_bytes(particles, springs, &Method::ALL, 1.0),
+        ..Estimate::default()
     }
+    .check(limits)?;
     Ok(())
 }
 
@@ -296,7 +328,7 @@ pub fn load(name_or_path: &str, sets: &[String]) -> Result<Scene, SceneError> {
 
 /// [`load`] within `limits`: files over `limits.file_bytes` are not read, and a scene whose
 /// model, state and integrator buffers would exceed `limits.memory` is refused before it is
-/// built (from the counts of a scene file, or [`crate::budget::builtin_size`] of a built-in).
+/// built (from the counts of a scene file, or [`SceneDef::size`] of a built-in).
 ///
 /// # Errors
 /// As [`load`], and [`SceneError::Budget`] or [`SceneError::FileTooLarge`].

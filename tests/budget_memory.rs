@@ -139,7 +139,7 @@ fn builtin_sizes_are_the_exact_counts_of_the_builders() {
         for s in &sets {
             params.set_text(s).expect("valid");
         }
-        let (particles, springs) = budget::builtin_size(name, &params).expect("known scene");
+        let (particles, springs) = (def.size)(&params);
         let built = scene::load(name, &sets).expect("builds");
         assert_eq!(particles, built.particle_count() as f64, "{name} {sets:?}");
         assert_eq!(springs, built.spring_count() as f64, "{name} {sets:?}");
@@ -151,7 +151,7 @@ fn builtin_sizes_are_the_exact_counts_of_the_builders() {
     for s in &sets {
         params.set_text(s).expect("valid");
     }
-    let (_, springs) = budget::builtin_size("cube-plane", &params).expect("known");
+    let (_, springs) = (def.size)(&params);
     assert!(
         springs
             > scene::load("cube-plane", &sets)

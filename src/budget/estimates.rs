@@ -1,12 +1,43 @@
 //! The estimates of each command: work and memory of scenes, a run, the convergence and
 //! stability studies, frames drawn.
+//!
+//! The estimates read a scene through [`Stepped`] (its bodies' sizes, methods and time step),
+//! which the scene module implements: the budget knows numbers, not scenes.
 
 use super::{
-    BASE_BYTES, Estimate, OVERHEAD, PARTICLE_BYTES, PIXEL_BYTES, SPRING_BYTES,
-    WORKSPACE_PARTICLE_BYTES, WORKSPACE_SPRING_BYTES, approx, short,
+    BASE_BYTES, Estimate, OVERHEAD, PARTICLE_BYTES, SPRING_BYTES, WORKSPACE_PARTICLE_BYTES,
+    WORKSPACE_SPRING_BYTES, approx, short,
 };
-use crate::physics::{Method, MethodParams};
-use crate::scene::Scene;
+use crate::physics::{Method, MethodParams, OscillatorLimit};
+
+/// One body as the estimates see it: its size and how it is stepped.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodySize {
+    /// Particles.
+    pub particles: f64,
+    /// Springs.
+    pub springs: f64,
+    /// The method that steps it.
+    pub method: Method,
+    /// The method's settings.
+    pub params: MethodParams,
+}
+
+/// What is stepped: the bodies of a scene and its own time step.
+pub trait Stepped {
+    /// Every body's size, method and settings.
+    fn bodies(&self) -> Vec<BodySize>;
+    /// The scene's own time step (s).
+    fn dt(&self) -> f64;
+    /// Particles over all bodies.
+    fn particles(&self) -> f64 {
+        self.bodies().iter().map(|b| b.particles).sum()
+    }
+    /// Springs over all bodies.
+    fn springs(&self) -> f64 {
+        self.bodies().iter().map(|b| b.springs).sum()
+    }
+}
 
 /// Force evaluations (or their equivalent in work) of one step of `method` (its declaration).
 #[must_use]
@@ -16,14 +47,13 @@ pub fn evaluations_per_step(method: Method, params: &MethodParams) -> f64 {
 
 /// Updates of one step of `scene`, every body with its own method, or with `method` when given.
 #[must_use]
-pub fn updates_per_step(scene: &Scene, method: Option<Method>) -> f64 {
+pub fn updates_per_step(scene: &(impl Stepped + ?Sized), method: Option<Method>) -> f64 {
     scene
-        .bodies
+        .bodies()
         .iter()
         .map(|b| {
             let m = method.unwrap_or(b.method);
-            evaluations_per_step(m, &b.params)
-                * (b.model.particle_count() as f64 + b.model.springs().len() as f64 + OVERHEAD)
+            evaluations_per_step(m, &b.params) * (b.particles + b.springs + OVERHEAD)
         })
         .sum()
 }
@@ -50,79 +80,38 @@ pub fn body_bytes(particles: f64, springs: f64, methods: &[Method], copies: f64)
 /// Bytes of `scene` while being stepped, each body by its own method or by each of `methods`
 /// in turn, with `copies` copies of the models and states, plus [`BASE_BYTES`].
 #[must_use]
-pub fn scene_bytes(scene: &Scene, methods: Option<&[Method]>, copies: f64) -> f64 {
+pub fn scene_bytes(
+    scene: &(impl Stepped + ?Sized),
+    methods: Option<&[Method]>,
+    copies: f64,
+) -> f64 {
     BASE_BYTES
         + scene
-            .bodies
+            .bodies()
             .iter()
             .map(|b| {
                 let own = [b.method];
-                body_bytes(
-                    b.model.particle_count() as f64,
-                    b.model.springs().len() as f64,
-                    methods.unwrap_or(&own),
-                    copies,
-                )
+                body_bytes(b.particles, b.springs, methods.unwrap_or(&own), copies)
             })
             .sum::<f64>()
 }
 
-/// Particles and springs the built-in scene `name` builds from `params`, before it is built (so
-/// that a scene over the memory budget is refused without being allocated); `None` for a scene
-/// this table does not know. Exact when every spring kind is active (tested against the
-/// builders in `tests/budget_memory.rs`), an upper bound otherwise:
-///
-/// ```text
-/// rope        N = nodes                  S = nodes - 1             (ropes: twice)
-/// cube        N = bodies · n³            S = bodies · (3n²(n-1) + 6n(n-1)² + 4(n-1)³ + 3n²(n-2))
-/// cloth       N = n²                     S = 2n(n-1) + 2(n-1)² + 2n(n-2)
-/// ```
-/// where the cube's springs are struct (edges), shear (face and body diagonals) and bend (two
-/// apart along an axis), and the cloth's the same in two dimensions.
-#[must_use]
-pub fn builtin_size(name: &str, params: &crate::scene::Params) -> Option<(f64, f64)> {
-    let integer = |key: &str| {
-        params
-            .iter()
-            .find(|(k, _)| *k == key)
-            .and_then(|(_, v)| match v {
-                crate::scene::Value::Integer(i) => Some(*i as f64),
-                _ => None,
-            })
-    };
-    match name {
-        "oscillator" => Some((2.0, 1.0)),
-        "rope" => integer("nodes").map(|n| (n, n - 1.0)),
-        "ropes" => integer("nodes").map(|n| (2.0 * n, 2.0 * (n - 1.0))),
-        "cube-plane" | "cube-tilted" | "cube-sphere" | "cube-bowl" | "jelly-bowl" => {
-            let (bodies, n) = (integer("bodies")?, integer("n")?);
-            let m = n - 1.0;
-            let springs =
-                3.0 * n * n * m + 6.0 * n * m * m + 4.0 * m * m * m + 3.0 * n * n * (n - 2.0);
-            Some((bodies * n * n * n, bodies * springs))
-        }
-        "cloth-spheres" | "cloth-sphere" => {
-            let n = integer("n")?;
-            Some((
-                n * n,
-                2.0 * n * (n - 1.0) + 2.0 * (n - 1.0) * (n - 1.0) + 2.0 * n * (n - 2.0),
-            ))
-        }
-        _ => None,
-    }
-}
-
 /// The estimate of one run of `scene` for `steps` steps at `dt` (s) (`springlab run`).
 #[must_use]
-pub fn run(what: impl Into<String>, scene: &Scene, dt: f64, steps: f64) -> Estimate {
-    let particles = scene.particle_count() as f64;
+pub fn run(
+    what: impl Into<String>,
+    scene: &(impl Stepped + ?Sized),
+    dt: f64,
+    steps: f64,
+) -> Estimate {
+    let particles = scene.particles();
     Estimate {
         what: what.into(),
         steps,
         steps_detail: format!("{} s at dt = {} s", approx(steps * dt), short(dt)),
         runs: 1.0,
         particles,
-        springs: scene.spring_count() as f64,
+        springs: scene.springs(),
         work: steps * updates_per_step(scene, None),
         // The report's positions and velocities (2 × [f64; 3] per particle).
         memory: scene_bytes(scene, None, 1.0) + 48.0 * particles,
@@ -142,7 +131,7 @@ pub fn steps_for(time: f64, dt: f64) -> f64 {
 #[must_use]
 pub fn convergence(
     what: impl Into<String>,
-    scene: &Scene,
+    scene: &(impl Stepped + ?Sized),
     methods: &[Method],
     time: f64,
     dt: f64,
@@ -162,7 +151,7 @@ pub fn convergence(
             runs += f64::from(repeats.max(1));
         }
     }
-    let particles = scene.particle_count() as f64;
+    let particles = scene.particles();
     Estimate {
         what: what.into(),
         steps: reference,
@@ -175,7 +164,7 @@ pub fn convergence(
         ),
         runs: if levels > 2000 { f64::INFINITY } else { runs },
         particles,
-        springs: scene.spring_count() as f64,
+        springs: scene.springs(),
         work: if levels > 2000 { f64::INFINITY } else { work },
         // The scene, its copy being run, and a few position lists.
         memory: scene_bytes(scene, Some(methods), 2.0) + 4.0 * 24.0 * particles,
@@ -183,23 +172,11 @@ pub fn convergence(
     }
 }
 
-/// An upper bound on the fastest angular frequency of `scene` (rad/s), by Gershgorin's theorem:
-/// `ω² ≤` the largest [`spring_gershgorin`](crate::study::modes::spring_gershgorin) of its bodies.
-#[must_use]
-pub fn omega_bound(scene: &Scene) -> f64 {
-    scene
-        .bodies
-        .iter()
-        .map(|b| crate::study::modes::spring_gershgorin(&b.model))
-        .fold(0.0, f64::max)
-        .sqrt()
-}
-
 /// The theoretical stability limit `dt·ω` of `method` on the undamped oscillator, where there
 /// is one (the study starts its search there, see `study::stability`).
 fn theory_limit(method: Method) -> Option<f64> {
     match method.declaration().oscillator {
-        crate::physics::OscillatorLimit::Below(limit) => Some(limit),
+        OscillatorLimit::Below(limit) => Some(limit),
         _ => None,
     }
 }
@@ -210,18 +187,20 @@ pub const STABILITY_MIN_STEPS: f64 = 100.0;
 
 /// The estimate of a stability study over `horizon` seconds: per method one probe at
 /// `dt·ω = 100` and about 13 near the theoretical limit (or `dt·ω = 1`), each
-/// `max(⌈T/dt⌉, min_steps)` steps, with `ω` the Gershgorin bound of [`omega_bound`]; and the
-/// run of the scene at its own dt that finds its stiffest state (`⌈T/dt⌉` steps, a sample of
-/// `ω_max` every 5 ms counted as 50 power iterations over the springs).
+/// `max(⌈T/dt⌉, min_steps)` steps, with `ω` = `omega` (rad/s) an upper bound on the scene's
+/// fastest angular frequency (the study's Gershgorin bound); and the run of the scene at its own
+/// dt that finds its stiffest state (`⌈T/dt⌉` steps, a sample of `ω_max` every
+/// `sample_interval` seconds counted as 50 power iterations over the springs).
 #[must_use]
 pub fn stability(
     what: impl Into<String>,
-    scene: &Scene,
+    scene: &(impl Stepped + ?Sized),
     methods: &[Method],
     horizon: f64,
     min_steps: f64,
+    omega: f64,
+    sample_interval: f64,
 ) -> Estimate {
-    let omega = omega_bound(scene);
     let probe = |z: f64| (horizon * omega / z).ceil().max(min_steps);
     let mut work = 0.0;
     let mut runs = 0.0;
@@ -230,11 +209,10 @@ pub fn stability(
         work += (probe(100.0) + 13.0 * probe(z)) * updates_per_step(scene, Some(m));
         runs += 14.0;
     }
-    let own_steps = (horizon / scene.dt).ceil();
-    let interval = crate::study::stability::STIFFEST_SAMPLE_INTERVAL;
-    let samples = own_steps.min((horizon / interval).ceil()) + 1.0;
-    work += own_steps * updates_per_step(scene, None)
-        + samples * 50.0 * (scene.particle_count() + scene.spring_count()) as f64;
+    let own_steps = (horizon / scene.dt()).ceil();
+    let samples = own_steps.min((horizon / sample_interval).ceil()) + 1.0;
+    let (particles, springs) = (scene.particles(), scene.springs());
+    work += own_steps * updates_per_step(scene, None) + samples * 50.0 * (particles + springs);
     runs += 1.0;
     let floor = 0.01;
     Estimate {
@@ -246,22 +224,29 @@ pub fn stability(
             approx(omega)
         ),
         runs,
-        particles: scene.particle_count() as f64,
-        springs: scene.spring_count() as f64,
+        particles,
+        springs,
         work,
         memory: scene_bytes(scene, Some(methods), 2.0),
         ..Estimate::default()
     }
 }
 
-/// Adds the drawing of `frames` frames of `width × height` pixels to `estimate`.
-pub fn add_frames(estimate: &mut Estimate, frames: f64, width: u32, height: u32, detail: &str) {
+/// Adds the drawing of `frames` frames of `width × height` pixels to `estimate`, each pixel
+/// taking `pixel_bytes` bytes while it is drawn, queued and encoded.
+pub fn add_frames(
+    estimate: &mut Estimate,
+    frames: f64,
+    (width, height): (u32, u32),
+    pixel_bytes: f64,
+    detail: &str,
+) {
     let pixels = f64::from(width) * f64::from(height);
     estimate.frame_pixels = pixels;
     estimate.total_pixels = frames * pixels;
     estimate.frames = frames;
     estimate.pixels_detail = detail.to_string();
-    estimate.memory += pixels * PIXEL_BYTES;
+    estimate.memory += pixels * pixel_bytes;
     // Drawing costs about as much per pixel as an update (a fill, an encode).
     estimate.work += frames * pixels;
 }

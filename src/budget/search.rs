@@ -1,20 +1,19 @@
 //! Estimates of the commands that search over many runs: `study resolution` and `advise`
-//! (see `crate::study::resolution` and `crate::study::advise`).
+//! (see the studies `resolution` and `advise`).
 
-use super::{BASE_BYTES, Estimate, approx, scene_bytes, short, updates_per_step};
+use super::{BASE_BYTES, Estimate, Stepped, approx, scene_bytes, short, updates_per_step};
 use crate::physics::Method;
-use crate::scene::Scene;
 
 /// The estimate of a command that makes the runs `(scene, method, steps)` one after another
 /// (`study resolution`): steps of the longest, the sum of their work, the memory of the largest
 /// scene with a copy being run.
 #[must_use]
-pub fn runs(what: impl Into<String>, runs: &[(&Scene, Method, f64)]) -> Estimate {
+pub fn runs<S: Stepped>(what: impl Into<String>, runs: &[(&S, Method, f64)]) -> Estimate {
     let longest = runs
         .iter()
         .max_by(|a, b| a.2.total_cmp(&b.2))
         .map(|r| (r.0, r.2));
-    let largest = |f: fn(&Scene) -> usize| runs.iter().map(|r| f(r.0)).max().unwrap_or(0) as f64;
+    let largest = |f: fn(&S) -> f64| runs.iter().map(|r| f(r.0)).fold(0.0, f64::max);
     Estimate {
         what: what.into(),
         steps: longest.map_or(0.0, |l| l.1),
@@ -22,19 +21,19 @@ pub fn runs(what: impl Into<String>, runs: &[(&Scene, Method, f64)]) -> Estimate
             format!(
                 "the longest run: {} steps of {} particles",
                 approx(steps),
-                scene.particle_count()
+                scene.particles()
             )
         }),
         runs: runs.len() as f64,
-        particles: largest(Scene::particle_count),
-        springs: largest(Scene::spring_count),
+        particles: largest(S::particles),
+        springs: largest(S::springs),
         work: runs
             .iter()
-            .map(|(scene, m, steps)| steps * updates_per_step(scene, Some(*m)))
+            .map(|(scene, m, steps)| steps * updates_per_step(*scene, Some(*m)))
             .sum(),
         memory: runs
             .iter()
-            .map(|(scene, m, _)| scene_bytes(scene, Some(&[*m]), 2.0))
+            .map(|(scene, m, _)| scene_bytes(*scene, Some(&[*m]), 2.0))
             .fold(0.0, f64::max),
         ..Estimate::default()
     }
@@ -52,10 +51,10 @@ pub fn runs(what: impl Into<String>, runs: &[(&Scene, Method, f64)]) -> Estimate
 /// one-evaluation step of the smallest model.
 #[must_use]
 #[allow(clippy::too_many_arguments)]
-pub fn advise(
+pub fn advise<S: Stepped>(
     what: impl Into<String>,
-    reference: &Scene,
-    models: &[&Scene],
+    reference: &S,
+    models: &[&S],
     time: f64,
     first_steps: f64,
     halvings: u32,
@@ -73,10 +72,10 @@ pub fn advise(
         + verifications * reference_run * (1.0 + confirm);
     let cheapest = models
         .iter()
-        .map(|m| updates_per_step(m, Some(Method::SemiImplicitEuler)))
+        .map(|m| updates_per_step(*m, Some(Method::SemiImplicitEuler)))
         .fold(f64::INFINITY, f64::min);
     let steps = last * (per_step / cheapest).max(1.0);
-    let largest = |f: fn(&Scene) -> usize| models.iter().map(|m| f(m)).max().unwrap_or(0) as f64;
+    let largest = |f: fn(&S) -> f64| models.iter().map(|m| f(m)).fold(0.0, f64::max);
     Estimate {
         what: what.into(),
         steps,
@@ -88,15 +87,15 @@ pub fn advise(
         ),
         // At most: the chain, every model × method halved `MAX_HALVINGS` times, the checks.
         runs: f64::from(halvings + 1) + search_runs + verifications * 2.0,
-        particles: largest(Scene::particle_count),
-        springs: largest(Scene::spring_count),
+        particles: largest(S::particles),
+        springs: largest(S::springs),
         work,
         // Every model is built before the search (one model and state each) and one is run at
         // a time; the reference's snapshots are small.
         memory: BASE_BYTES
             + models
                 .iter()
-                .map(|m| scene_bytes(m, None, 1.0) - BASE_BYTES)
+                .map(|m| scene_bytes(*m, None, 1.0) - BASE_BYTES)
                 .sum::<f64>()
             + scene_bytes(reference, Some(&Method::ALL), 1.0)
             - BASE_BYTES,

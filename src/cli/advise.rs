@@ -4,7 +4,9 @@ use std::io::Write;
 
 use clap::Args;
 
-use crate::budget::{self, Limits, Progress, interrupt};
+use super::interrupt;
+use super::progress::Progress;
+use crate::budget::{self, Limits};
 use crate::study::advise::{self, AdviseOptions, AdviseReport, MarginKind, Plan, Stage, Verdict};
 use crate::study::observe::Unit;
 use crate::study::stability;

@@ -128,7 +128,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
         );
     }
     estimate(&workloads, args.repeats, args.budget).enforce(&budget::Limits::forced(args.force))?;
-    budget::interrupt::install(budget::interrupt::Mode::Exit);
+    super::interrupt::install(super::interrupt::Mode::Exit);
     let runs: usize = workloads
         .iter()
         .map(|&w| {
@@ -139,7 +139,7 @@ pub fn run(args: &BenchArgs) -> anyhow::Result<()> {
             }
         })
         .sum();
-    let mut progress = budget::Progress::new(runs as u64, "bench");
+    let mut progress = super::progress::Progress::new(runs as u64, "bench");
     let mut results = Vec::with_capacity(workloads.len());
     for w in workloads {
         progress.label(format!(

@@ -22,8 +22,10 @@ use std::path::PathBuf;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 
+use super::interrupt;
+use super::progress::Progress;
 use super::run::{apply_methods, check_dt, check_dt_within};
-use crate::budget::{self, Limits, Progress, interrupt, short};
+use crate::budget::{self, Limits, short};
 use crate::output;
 use crate::physics::SpringKind;
 use crate::render::chart::{self, Chart, Series};
@@ -397,8 +399,8 @@ pub fn prepare(
         budget::add_frames(
             &mut estimate,
             frames,
-            width,
-            height,
+            (width, height),
+            crate::render::export::PIXEL_BYTES,
             &format!("--size {}", args.size.trim()),
         );
     }

@@ -7,7 +7,9 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use clap::Args;
 
-use crate::budget::{self, Estimate, Limits, Progress, interrupt, short};
+use super::interrupt;
+use super::progress::Progress;
+use crate::budget::{self, Estimate, Limits, short};
 use crate::output::{self, AtomicFile};
 use crate::physics::Method;
 use crate::scene::{self, Scene};

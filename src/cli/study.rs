@@ -6,7 +6,10 @@ use std::time::Instant;
 use anyhow::bail;
 use clap::{Args, Subcommand};
 
-use crate::budget::{self, Limits, Progress, interrupt, short};
+use super::interrupt;
+use super::progress::Progress;
+use crate::budget::{self, Limits};
+use crate::format::short;
 use crate::output;
 use crate::physics::Method;
 use crate::scene;
@@ -450,8 +453,21 @@ pub fn prepare_stability(
         &options.methods,
         options.horizon,
         budget::STABILITY_MIN_STEPS,
+        omega_bound(&scene),
+        stability::STIFFEST_SAMPLE_INTERVAL,
     );
     Ok((scene, options, sets, estimate))
+}
+
+/// An upper bound on the fastest angular frequency of `scene` (rad/s), by Gershgorin's theorem:
+/// `ω² ≤` the largest [`spring_gershgorin`](crate::study::modes::spring_gershgorin) of its bodies.
+fn omega_bound(scene: &scene::Scene) -> f64 {
+    scene
+        .bodies
+        .iter()
+        .map(|b| crate::study::modes::spring_gershgorin(&b.model))
+        .fold(0.0, f64::max)
+        .sqrt()
 }
 
 fn run_stability(args: &StabilityArgs) -> anyhow::Result<()> {

@@ -157,7 +157,7 @@ impl Builder {
             )
         })?;
         let _ = std::fs::remove_file(&probe);
-        let tag: String = super::remote::random_tag();
+        let tag: String = super::token::random_tag();
         let scratch =
             std::env::temp_dir().join(format!("springlab-grade-{}-{tag}", std::process::id()));
         std::fs::create_dir(&scratch)
@@ -453,7 +453,7 @@ fn copy_in(from: &Path, to: &Path) -> std::io::Result<()> {
     if let Some(parent) = to.parent() {
         std::fs::create_dir_all(parent)?;
     }
-    let tmp = to.with_extension(format!("tmp-{}", super::remote::random_tag()));
+    let tmp = to.with_extension(format!("tmp-{}", super::token::random_tag()));
     let _no_fork = super::sandbox::writing_executable();
     let mut src = std::fs::File::open(from)?;
     let mut dst = std::fs::OpenOptions::new()

@@ -57,7 +57,6 @@ mod traits;
 
 use convert::*;
 use frames::read_replies;
-pub(crate) use process::random_tag;
 use process::*;
 pub use traits::Remote;
 
@@ -242,7 +241,7 @@ impl Session {
                 )));
             }
         };
-        let token = random_token();
+        let token = super::token::random_token();
         let mut pattern = MAGIC.to_vec();
         pattern.extend_from_slice(&token);
         let (event_tx, from_child) = mpsc::channel();

@@ -406,7 +406,7 @@ pub fn write_result(path: &Path, bytes: &[u8]) -> Result<(), String> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "result".to_string());
-    let tmp = dir.join(format!(".{name}.{}.tmp", super::remote::random_tag()));
+    let tmp = dir.join(format!(".{name}.{}.tmp", super::token::random_tag()));
     let io = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
     let mut file = std::fs::OpenOptions::new()
         .write(true)

@@ -40,6 +40,11 @@ use crate::output::AtomicFile;
 /// Frames that may wait for the encoder before the drawing thread blocks.
 pub const QUEUE: usize = 3;
 
+/// Bytes per pixel while rendering, for the budget: the frame being drawn and the frames queued
+/// for the encoder (4 × RGBA each), the RGB copy, and the GIF encoder's RGBA copy and palette
+/// indices.
+pub const PIXEL_BYTES: f64 = (4 * (2 + QUEUE) + 3 + 4 + 1) as f64;
+
 /// Where the frames go.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Outputs {

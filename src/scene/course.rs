@@ -291,6 +291,33 @@ pub fn jelly_params() -> Vec<ParamSpec> {
     lattice_specs(DVec3::new(-4.8, 7.0, 0.0), 0.2)
 }
 
+/// Particles and springs of a cube scene, before it is built: `bodies` cubes of `n³` particles,
+/// each with its struct (edges), shear (face and body diagonals) and bend (two apart along an
+/// axis) springs:
+///
+/// ```text
+/// N = bodies · n³        S = bodies · (3n²(n-1) + 6n(n-1)² + 4(n-1)³ + 3n²(n-2))
+/// ```
+/// Exact when every spring kind is active, an upper bound otherwise (`tests/budget_memory.rs`).
+pub fn cube_size(params: &Params) -> (f64, f64) {
+    let (bodies, n) = (params.integer("bodies") as f64, params.integer("n") as f64);
+    let m = n - 1.0;
+    let springs = 3.0 * n * n * m + 6.0 * n * m * m + 4.0 * m * m * m + 3.0 * n * n * (n - 2.0);
+    (bodies * n * n * n, bodies * springs)
+}
+
+/// Particles and springs of a cloth scene, before it is built: `n²` particles, the struct,
+/// shear and bend springs of the cube's lattice in two dimensions:
+///
+/// ```text
+/// N = n²        S = 2n(n-1) + 2(n-1)² + 2n(n-2)
+/// ```
+pub fn cloth_size(params: &Params) -> (f64, f64) {
+    let n = params.integer("n") as f64;
+    let springs = 2.0 * n * (n - 1.0) + 2.0 * (n - 1.0) * (n - 1.0) + 2.0 * n * (n - 2.0);
+    (n * n, springs)
+}
+
 /// A cube scene: `bodies` lattices on `colliders`, with the contact coefficients `contact`
 /// (restitution and friction then taken from the parameters).
 fn lattice_scene(

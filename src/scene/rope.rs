@@ -104,6 +104,23 @@ fn rope_specs(separation: bool) -> Vec<ParamSpec> {
     p
 }
 
+/// Particles and springs of the oscillator: two particles, one spring.
+pub fn oscillator_size(_: &Params) -> (f64, f64) {
+    (2.0, 1.0)
+}
+
+/// Particles and springs of `rope`, before it is built: `nodes` particles, `nodes - 1` springs.
+pub fn rope_size(params: &Params) -> (f64, f64) {
+    let n = params.integer("nodes") as f64;
+    (n, n - 1.0)
+}
+
+/// Particles and springs of `ropes`: twice [`rope_size`].
+pub fn ropes_size(params: &Params) -> (f64, f64) {
+    let (n, s) = rope_size(params);
+    (2.0 * n, 2.0 * s)
+}
+
 /// Parameters of `rope`.
 pub fn rope_params() -> Vec<ParamSpec> {
     rope_specs(false)

@@ -73,3 +73,30 @@ pub fn duration(seconds: f64) -> String {
         format!("{} years", approx(seconds / 31_557_600.0))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_are_echoed_briefly() {
+        assert_eq!(short(1e300), "1e300");
+        assert_eq!(short(1e-320), "1e-320");
+        assert_eq!(short(-1e300), "-1e300");
+        assert_eq!(short(0.015625), "0.015625");
+        assert_eq!(short(10.0), "10");
+        assert_eq!(short(1e9), "1e9");
+        assert_eq!(short(f64::NAN), "NaN");
+        assert_eq!(approx(18_446_744_073_709_551_615.0), "1.84e19");
+        assert_eq!(approx(1e300), "1e300");
+        assert_eq!(approx(4_999_995.0), "4999995");
+        assert_eq!(approx(0.999_999_999_999_999_9), "1");
+        assert_eq!(approx(f64::INFINITY), "more than 1e308");
+        assert_eq!(bytes(3.7e9), "3.7 GB");
+        assert_eq!(bytes(2.0 * 1024.0 * 1024.0 * 1024.0), "2.1 GB");
+        assert_eq!(bytes(512.0), "512 bytes");
+        assert_eq!(duration(30.2), "31 s");
+        assert_eq!(duration(3600.0), "60 min");
+        assert_eq!(duration(f64::INFINITY), "forever");
+    }
+}
