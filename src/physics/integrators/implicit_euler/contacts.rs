@@ -1,0 +1,317 @@
+//! Implicit Euler's contacts inside the solve (Baraff & Witkin §5.3): a particle the solve would
+//! carry into a collider or a sphere gets its velocity along the surface normal `N` prescribed,
+//! so that the step ends on the surface, and the solve is repeated with that constraint (the
+//! filter `S = I - N Nᵀ` on its rows); projecting it out after the step would squeeze its
+//! springs and add energy. The contact set is an active set of at most [`MAX_CONTACT_PASSES`]
+//! solves: add the particles a solve still carries inside, release those whose constraint
+//! impulse `J_i = (A Δv - b)_i·N_i` (N·s) pulls (`J < 0`). A dynamic sphere gets the reaction
+//! `-J_i N_i`.
+//!
+//! ```text
+//! x̃      = x_n + dt (v_n + Δv)               where the unconstrained solve would end
+//! φ̃, N   = signed distance and normal at x̃   (φ̃ < 0: inside)
+//! Δv·N    = (v_n + Δv)·N - φ̃/dt - v_n·N       prescribed: x_{n+1} lands on the surface
+//! (S A S) y = S (b - A z),   Δv = z + y       z: the prescribed parts, y ⊥ N
+//! ```
+//! where `φ̃` is in m (against a sphere where it ends the step).
+
+use glam::DVec3;
+
+use super::Constraint;
+use super::solve::{SolveStats, System};
+use crate::physics::collide::Contact;
+use crate::physics::forces::Model;
+use crate::physics::integrators::MethodParams;
+use crate::physics::particles::State;
+use crate::physics::stencil::{Kernel, Stencil};
+
+use crate::physics::fast::implicit_lattice::inside_spheres;
+
+/// At most this many solves per step: the first without contact constraints, each further one
+/// with the particles the previous solve carried into a collider.
+pub const MAX_CONTACT_PASSES: u32 = 4;
+
+/// The scratch of the contact passes: the CG vectors (`Δv` ends in `cg[0]`), the contact set
+/// and a list of particles.
+pub(super) struct Scratch<'a> {
+    pub(super) cg: &'a mut [Vec<DVec3>; 4],
+    pub(super) constraints: &'a mut Vec<Constraint>,
+    pub(super) inside: &'a mut Vec<usize>,
+}
+
+/// Solves `system` with the contacts inside the solve (module docs): from the warm start's
+/// contact set when `warm`, at most [`MAX_CONTACT_PASSES`] solves, releasing the constraints that
+/// pull and prescribing the particles a solve carries into a collider. Returns how the solve
+/// went and, when there were constraints and `account` or a sphere to push, the energy the
+/// contacts removed (J; the spheres get the reactions).
+pub(super) fn solve(
+    system: &System,
+    state: &mut State,
+    params: &MethodParams,
+    warm: bool,
+    account: bool,
+    scratch: Scratch,
+) -> (SolveStats, Option<f64>) {
+    let (model, dt) = (system.model, system.dt);
+    let Scratch {
+        cg,
+        constraints,
+        inside,
+    } = scratch;
+    let contacts = has_contacts(model, state);
+    if warm && contacts {
+        start_contacts(model, state, dt, &cg[0], constraints, inside);
+    } else {
+        constraints.clear();
+    }
+    let mut stats = SolveStats::default();
+    loop {
+        // Later passes start from the previous pass's Δv (it changed only near contacts).
+        let (iterations, residual, converged) = system.solve(
+            constraints,
+            (params.cg_tolerance, params.cg_max_iterations),
+            cg,
+            warm || stats.passes > 0,
+        );
+        stats.record(iterations, residual, converged);
+        if !converged || !contacts || stats.passes >= MAX_CONTACT_PASSES {
+            break;
+        }
+        // Release the constraints that pull; prescribe the particles this solve carries into
+        // a collider.
+        let [dv, _, _, ap] = &mut *cg;
+        let released = !constraints.is_empty() && {
+            system.apply(dv, ap);
+            release_pulling(constraints, |i| ap[i] - system.rhs[i])
+        };
+        if !(add_contacts(model, state, dt, dv, constraints, inside) || released) {
+            break;
+        }
+    }
+    stats.constrained = constraints.len() as u32;
+    let mut removed = None;
+    if !constraints.is_empty() && (account || constraints.iter().any(|c| c.sphere.is_some())) {
+        // The constraint impulses J = (A Δv - b)·N (N·s) do the work J (v_{n+1}·N) on the
+        // particles; minus that is what the contacts inside the solve removed (J).
+        let [dv, _, _, ap] = &mut *cg;
+        system.apply(dv, ap);
+        removed = Some(contact_impulses(state, constraints, dv, |i| {
+            ap[i] - system.rhs[i]
+        }));
+    }
+    (stats, removed)
+}
+
+/// Adds or updates a constraint for every free particle that `x_n + dt (v_n + Δv)` puts inside
+/// a collider (module docs): a constrained particle that still ends inside (a curved surface, or
+/// another face of the terrain) gets the new normal and target. Returns whether anything
+/// changed; keeps `constraints` sorted by particle. `inside` is scratch.
+pub(super) fn add_contacts(
+    model: &Model,
+    state: &State,
+    dt: f64,
+    dv: &[DVec3],
+    constraints: &mut Vec<Constraint>,
+    inside: &mut Vec<usize>,
+) -> bool {
+    // Deeper than this (m) counts as inside: rounding of a landing exactly on the surface is not.
+    const DEPTH: f64 = 1e-12;
+    let ends = sphere_ends(model, state, dt);
+    // Without colliders, only the particles that the test of `nearest_contact` finds inside a
+    // sphere, taken eight at a time first.
+    let candidates: &mut dyn Iterator<Item = usize> = if model.colliders.is_empty() {
+        let kernel = model.stencil().map_or_else(Kernel::best, Stencil::kernel);
+        inside_spheres(kernel, &state.x, &state.v, dv, dt, &ends, inside);
+        &mut inside.iter().copied()
+    } else {
+        &mut (0..state.x.len())
+    };
+    let mut changed = false;
+    for i in candidates {
+        if model.inv_mass[i] == 0.0 {
+            continue;
+        }
+        let v = state.v[i] + dv[i];
+        let x = state.x[i] + dt * v;
+        let Some((contact, sphere)) =
+            nearest_contact(model, &ends, x, true).filter(|(c, _)| c.phi < -DEPTH)
+        else {
+            continue;
+        };
+        // (v_n + Δv)·N - φ̃/dt is the normal velocity that ends on the surface.
+        let target = v.dot(contact.normal) - contact.phi / dt;
+        let constraint = Constraint {
+            i,
+            normal: contact.normal,
+            dv_n: target - state.v[i].dot(contact.normal),
+            sphere,
+        };
+        match constraints.binary_search_by_key(&i, |c| c.i) {
+            Ok(k) => constraints[k] = constraint,
+            Err(k) => constraints.insert(k, constraint),
+        }
+        changed = true;
+    }
+    changed
+}
+
+/// The contact set the first solve starts from, with the warm start `dv` (module docs, "Warm
+/// start"): the last step's contacts re-aimed ([`carry_over`]) and, when the only things to touch
+/// are spheres, the particles `dv` carries inside one ([`add_contacts`]; `inside` is scratch).
+pub(super) fn start_contacts(
+    model: &Model,
+    state: &State,
+    dt: f64,
+    dv: &[DVec3],
+    constraints: &mut Vec<Constraint>,
+    inside: &mut Vec<usize>,
+) {
+    carry_over(model, state, dt, dv, constraints);
+    if model.colliders.is_empty() {
+        add_contacts(model, state, dt, dv, constraints, inside);
+    }
+}
+
+/// The last step's constraints as the first guess of this step's (with the warm start): each
+/// constrained particle gets the contact nearest to where the warm start `dv` carries it
+/// (collider or sphere, inside or not) and the normal velocity that lands it there. A guess that
+/// pulls is released after the first solve ([`release_pulling`]); one that is missing is found
+/// by [`add_contacts`].
+fn carry_over(
+    model: &Model,
+    state: &State,
+    dt: f64,
+    dv: &[DVec3],
+    constraints: &mut Vec<Constraint>,
+) {
+    let ends = sphere_ends(model, state, dt);
+    constraints.retain_mut(|c| {
+        let v = state.v[c.i] + dv[c.i];
+        let x = state.x[c.i] + dt * v;
+        let Some((contact, sphere)) = nearest_contact(model, &ends, x, false) else {
+            return false;
+        };
+        *c = Constraint {
+            i: c.i,
+            normal: contact.normal,
+            dv_n: v.dot(contact.normal) - contact.phi / dt - state.v[c.i].dot(contact.normal),
+            sphere,
+        };
+        true
+    });
+}
+
+/// Removes the constraints whose impulse `J_i = (A Δv - b)_i·N_i` (N·s; `impulse(i)` is
+/// `(A Δv - b)_i`) is negative: a contact pushes, it never pulls a particle onto a surface it
+/// would leave (the contact's complementarity condition, `J ≥ 0`). Returns whether any went.
+pub(super) fn release_pulling(
+    constraints: &mut Vec<Constraint>,
+    impulse: impl Fn(usize) -> DVec3,
+) -> bool {
+    let before = constraints.len();
+    constraints.retain(|c| impulse(c.i).dot(c.normal) >= 0.0);
+    constraints.len() != before
+}
+
+/// Where each sphere ends this step (`collide::advance_spheres`: gravity, then the move), and
+/// its radius (m).
+fn sphere_ends(model: &Model, state: &State, dt: f64) -> Vec<(DVec3, f64)> {
+    state
+        .spheres
+        .iter()
+        .map(|s| {
+            let velocity = if s.kinematic {
+                s.velocity
+            } else {
+                s.velocity + dt * model.gravity
+            };
+            (s.center + dt * velocity, s.radius)
+        })
+        .collect()
+}
+
+/// The contact with the smallest signed distance at `x` over the colliders and the spheres'
+/// end positions `ends` (the sphere's index with it), if any; with `inside`, the spheres that
+/// `x` is outside of are skipped (a test of the squared distance, no square root).
+fn nearest_contact(
+    model: &Model,
+    ends: &[(DVec3, f64)],
+    x: DVec3,
+    inside: bool,
+) -> Option<(Contact, Option<usize>)> {
+    // The first of the smallest, colliders before spheres.
+    let mut nearest: Option<(Contact, Option<usize>)> = None;
+    let mut consider = |contact: Contact, sphere: Option<usize>| {
+        if nearest.is_none_or(|(n, _)| contact.phi.total_cmp(&n.phi).is_lt()) {
+            nearest = Some((contact, sphere));
+        }
+    };
+    for c in &model.colliders {
+        if let Some(contact) = c.contact(x) {
+            consider(contact, None);
+        }
+    }
+    for (k, &(center, radius)) in ends.iter().enumerate() {
+        let d = x - center;
+        let distance2 = d.length_squared();
+        if (inside && distance2 >= radius * radius) || distance2 == 0.0 {
+            continue;
+        }
+        let distance = distance2.sqrt();
+        consider(
+            Contact {
+                phi: distance - radius,
+                normal: d / distance,
+            },
+            Some(k),
+        );
+    }
+    nearest
+}
+
+/// True when the step may need contact constraints: colliders or spheres.
+pub(super) fn has_contacts(model: &Model, state: &State) -> bool {
+    !model.colliders.is_empty() || !state.spheres.is_empty()
+}
+
+/// The constraint impulses of a solve and what they did (module docs, "Contacts with
+/// spheres"): `impulse(i)` is `(A Δv - b)_i` (N·s) of the constrained particle `i`; its part
+/// along the normal, `J_i = (A Δv - b)_i·N_i`, acts on the particle, and `-J_i N_i` on the
+/// dynamic sphere it touches (a kinematic one takes nothing):
+///
+/// ```text
+/// V_s ← V_s - Σ_{i on s} J_i N_i / M_s
+/// removed = -Σ_i J_i (v_n + Δv)_i·N_i  -  Σ_s ½ M_s (|V_s'|² - |V_s|²)
+/// ```
+/// where `V_s` (m/s) and `M_s` (kg) are the sphere's velocity and mass. Returns `removed` (J):
+/// the energy the contacts inside the solve took out (the work of the impulses on the
+/// particles and the spheres' change of kinetic energy, negated).
+pub(super) fn contact_impulses(
+    state: &mut State,
+    constraints: &[Constraint],
+    dv: &[DVec3],
+    impulse: impl Fn(usize) -> DVec3,
+) -> f64 {
+    let before: f64 = state.spheres.iter().map(sphere_kinetic).sum();
+    let mut removed = 0.0;
+    for c in constraints {
+        let j = impulse(c.i).dot(c.normal);
+        removed -= j * (state.v[c.i] + dv[c.i]).dot(c.normal);
+        if let Some(s) = c.sphere.map(|k| &mut state.spheres[k])
+            && !s.kinematic
+        {
+            s.velocity -= (j / s.mass) * c.normal;
+        }
+    }
+    let after: f64 = state.spheres.iter().map(sphere_kinetic).sum();
+    removed - (after - before)
+}
+
+/// A dynamic sphere's kinetic energy (J); a kinematic one's is not counted.
+fn sphere_kinetic(s: &crate::physics::collide::DynamicSphere) -> f64 {
+    if s.kinematic {
+        0.0
+    } else {
+        0.5 * s.mass * s.velocity.length_squared()
+    }
+}
