@@ -169,6 +169,16 @@ pub struct SceneDef {
     /// it (so that a scene over the memory budget is refused before it is allocated): exact
     /// when every spring kind is active, an upper bound otherwise.
     pub size: fn(&Params) -> (f64, f64),
+    /// When the studies take the scene's observable by default (s): after what the scene is
+    /// about has happened.
+    ///
+    /// ```text
+    /// cube-plane, cube-tilted, cube-sphere, cube-bowl, jelly-bowl   2.5   after the landing (≈ 1.4 s)
+    /// cloth-sphere                                                  3     draped and nearly at rest
+    /// cloth-spheres                                                 1     the cloth caught the spheres (≈ 0.5 s)
+    /// rope, ropes, oscillator                                       1
+    /// ```
+    pub observe_at: f64,
 }
 
 impl SceneDef {
@@ -187,6 +197,7 @@ pub const BUILTIN: &[SceneDef] = &[
         params: rope::oscillator_params,
         build: rope::oscillator,
         size: rope::oscillator_size,
+        observe_at: 1.0,
     },
     SceneDef {
         name: "rope",
@@ -194,6 +205,7 @@ pub const BUILTIN: &[SceneDef] = &[
         params: rope::rope_params,
         build: rope::rope_scene,
         size: rope::rope_size,
+        observe_at: 1.0,
     },
     SceneDef {
         name: "ropes",
@@ -201,6 +213,7 @@ pub const BUILTIN: &[SceneDef] = &[
         params: rope::ropes_params,
         build: rope::ropes_scene,
         size: rope::ropes_size,
+        observe_at: 1.0,
     },
     SceneDef {
         name: "cube-plane",
@@ -208,6 +221,7 @@ pub const BUILTIN: &[SceneDef] = &[
         params: course::cube_params,
         build: course::cube_plane,
         size: course::cube_size,
+        observe_at: 2.5,
     },
     SceneDef {
         name: "cube-tilted",
@@ -215,6 +229,7 @@ pub const BUILTIN: &[SceneDef] = &[
         params: course::cube_params,
         build: course::cube_tilted,
         size: course::cube_size,
+        observe_at: 2.5,
     },
     SceneDef {
         name: "cube-sphere",
@@ -222,6 +237,7 @@ pub const BUILTIN: &[SceneDef] = &[
         params: course::cube_params,
         build: course::cube_sphere,
         size: course::cube_size,
+        observe_at: 2.5,
     },
     SceneDef {
         name: "cube-bowl",
@@ -229,6 +245,7 @@ pub const BUILTIN: &[SceneDef] = &[
         params: course::cube_params,
         build: course::cube_bowl,
         size: course::cube_size,
+        observe_at: 2.5,
     },
     SceneDef {
         name: "jelly-bowl",
@@ -236,6 +253,7 @@ pub const BUILTIN: &[SceneDef] = &[
         params: course::jelly_params,
         build: course::jelly_bowl,
         size: course::cube_size,
+        observe_at: 2.5,
     },
     SceneDef {
         name: "cloth-spheres",
@@ -243,6 +261,7 @@ pub const BUILTIN: &[SceneDef] = &[
         params: course::cloth_spheres_params,
         build: course::cloth_spheres,
         size: course::cloth_size,
+        observe_at: 1.0,
     },
     SceneDef {
         name: "cloth-sphere",
@@ -250,6 +269,7 @@ pub const BUILTIN: &[SceneDef] = &[
         params: course::cloth_sphere_params,
         build: course::cloth_sphere,
         size: course::cloth_size,
+        observe_at: 3.0,
     },
 ];
 
@@ -291,6 +311,20 @@ pub fn build_builtin_with(
     }
     check_size(def, &params, &format!("scene `{name}`"), limits)?;
     (def.build)(&params)
+}
+
+/// Builds the built-in `def` from `params` (a [`SceneDef::default_params`] with values set)
+/// within `limits`, as [`load_with`] builds it from `--set` text: refused before it is built
+/// when its size needs more than `limits.memory`, and after, from its bodies.
+///
+/// # Errors
+/// Values that make no scene, and [`SceneError::Budget`].
+pub fn build_from(def: &SceneDef, params: &Params, limits: &Limits) -> Result<Scene, SceneError> {
+    let what = format!("scene `{}`", def.name);
+    check_size(def, params, &what, limits)?;
+    let scene = (def.build)(params)?;
+    check_memory(&scene, &what, limits)?;
+    Ok(scene)
 }
 
 /// Refuses the built-in `def` with `params` before it is built when its particles and springs

@@ -173,8 +173,10 @@ fn coefficient_specs(stiffness: f64, damping: f64) -> Vec<ParamSpec> {
     ]
 }
 
-/// The coefficients of each kind: the override when it is `>= 0`, else the common value.
-fn coefficients(params: &Params) -> KindCoefficients {
+/// The coefficients of each kind: the override when it is `>= 0`, else the common value (the
+/// one place of that rule; the resolution study asks it too).
+#[must_use]
+pub fn coefficients(params: &Params) -> KindCoefficients {
     let stiffness = params.number("stiffness");
     let damping = params.number("damping");
     let pick = |key: &str, common: f64| {

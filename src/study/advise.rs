@@ -220,12 +220,11 @@ pub fn plan(
                     if !r.has_kind(kinds) {
                         continue;
                     }
-                    let sets = r.sets_for(n, kinds);
                     models.push(Model {
                         n: Some(n),
                         kinds,
-                        scene: scene::load_with(name, &sets, limits)?,
-                        sets,
+                        scene: r.scene(n, kinds, limits)?,
+                        sets: r.sets_for(n, kinds),
                     });
                 }
             }

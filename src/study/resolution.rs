@@ -55,6 +55,7 @@ use super::StudyError;
 use super::modes::omega_max;
 use super::observe::{self, Difference, Measurement, Observable, Observation, Unit};
 use crate::physics::Method;
+use crate::scene::lattice::KindCoefficients;
 use crate::scene::{self, Params, Scene, SceneDef, Value};
 
 /// How a built-in scene's body is divided (module docs).
@@ -135,12 +136,18 @@ impl Kinds {
         }
     }
 
-    /// The assignments that remove the kind.
-    fn sets(self) -> Vec<String> {
+    /// The parameter values that remove the kind.
+    fn values(self) -> Vec<(&'static str, Value)> {
+        let zero = |stiffness, damping| {
+            vec![
+                (stiffness, Value::Number(0.0)),
+                (damping, Value::Number(0.0)),
+            ]
+        };
         match self {
             Kinds::All => Vec::new(),
-            Kinds::NoBend => vec!["bend_stiffness=0".into(), "bend_damping=0".into()],
-            Kinds::NoShear => vec!["shear_stiffness=0".into(), "shear_damping=0".into()],
+            Kinds::NoBend => zero("bend_stiffness", "bend_damping"),
+            Kinds::NoShear => zero("shear_stiffness", "shear_damping"),
         }
     }
 }
@@ -211,22 +218,17 @@ impl Refinement {
     /// True when the scene has the springs that `kinds` removes (so the variant differs).
     #[must_use]
     pub fn has_kind(&self, kinds: Kinds) -> bool {
-        let active = |stiffness: &str, damping: &str| {
-            let value = |key: &str, common: &str| {
-                let v = self.params.number(key);
-                if v < 0.0 {
-                    self.params.number(common)
-                } else {
-                    v
-                }
-            };
-            value(stiffness, "stiffness") > 0.0 || value(damping, "damping") > 0.0
+        // The coefficients as the lattice scenes build them (an override of -1: the common
+        // value); a rope has one kind.
+        let active = |kind: fn(&KindCoefficients) -> (f64, f64)| {
+            let (stiffness, damping) = kind(&scene::course::coefficients(&self.params));
+            stiffness > 0.0 || damping > 0.0
         };
         match (self.dimension, kinds) {
             (_, Kinds::All) => true,
             (Dimension::Line, _) => false,
-            (_, Kinds::NoBend) => active("bend_stiffness", "bend_damping"),
-            (_, Kinds::NoShear) => active("shear_stiffness", "shear_damping"),
+            (_, Kinds::NoBend) => active(|c| c.bend),
+            (_, Kinds::NoShear) => active(|c| c.shear),
         }
     }
 
@@ -255,27 +257,58 @@ impl Refinement {
         levels
     }
 
-    /// The `--set` assignments of level `n` with `kinds` (module docs): the user's, then the
+    /// The parameter values of level `n` with `kinds` on top of the user's (module docs): the
     /// scaled values (none at the scene's own resolution), then those that remove a kind.
+    fn values_for(&self, n: i64, kinds: Kinds) -> Vec<(&'static str, Value)> {
+        let mut values = if n == self.base {
+            Vec::new()
+        } else {
+            self.scaled(n)
+        };
+        values.extend(kinds.values());
+        values
+    }
+
+    /// The `--set` assignments of level `n` with `kinds`, to show and repeat a level: the
+    /// user's, then [`Refinement::params`]'s values as text (the levels are built from the
+    /// values, not from this text).
     #[must_use]
     pub fn sets_for(&self, n: i64, kinds: Kinds) -> Vec<String> {
         let mut sets = self.sets.clone();
-        if n != self.base {
-            sets.extend(self.scaled(n));
+        for (key, value) in self.values_for(n, kinds) {
+            sets.push(match value {
+                Value::Indices(list) => {
+                    let items: Vec<String> = list.iter().map(i64::to_string).collect();
+                    format!("{key}=[{}]", items.join(","))
+                }
+                other => format!("{key}={other}"),
+            });
         }
-        sets.extend(kinds.sets());
         sets
     }
 
-    /// The assignments that make level `n` from the scene's own (module docs).
-    fn scaled(&self, n: i64) -> Vec<String> {
+    /// The parameters of level `n` with `kinds`: the scene's with the user's assignments, then
+    /// the level's values (module docs).
+    ///
+    /// # Errors
+    /// A level outside a parameter's range.
+    pub fn params(&self, n: i64, kinds: Kinds) -> Result<Params, StudyError> {
+        let mut params = self.params.clone();
+        for (key, value) in self.values_for(n, kinds) {
+            params.set(key, value).map_err(scene::SceneError::from)?;
+        }
+        Ok(params)
+    }
+
+    /// The values that make level `n` from the scene's own (module docs).
+    fn scaled(&self, n: i64) -> Vec<(&'static str, Value)> {
         let p = &self.params;
         let base = self.base as f64;
         let level = n as f64;
         let mut sets = Vec::new();
-        let mut put = |key: &str, value: f64| {
+        let mut put = |key: &'static str, value: f64| {
             if value != p.number(key) {
-                sets.push(format!("{key}={}", crate::budget::short(value)));
+                sets.push((key, Value::Number(value)));
             }
         };
         let spring_keys = [
@@ -288,7 +321,7 @@ impl Refinement {
             "shear_damping",
             "bend_damping",
         ];
-        let springs = |ratio: f64, put: &mut dyn FnMut(&str, f64)| {
+        let springs = |ratio: f64, put: &mut dyn FnMut(&'static str, f64)| {
             for key in spring_keys {
                 // The per-kind overrides: -1 (any negative) means "the common value".
                 let v = p.number(key);
@@ -325,11 +358,10 @@ impl Refinement {
             if moved.iter().zip(&pinned).any(|(a, &b)| *a != b as i64)
                 || moved.len() != pinned.len()
             {
-                let list: Vec<String> = moved.iter().map(i64::to_string).collect();
-                sets.push(format!("pinned=[{}]", list.join(",")));
+                sets.push(("pinned", Value::Indices(moved)));
             }
         }
-        sets.push(format!("{}={n}", self.dimension.key()));
+        sets.push((self.dimension.key(), Value::Integer(n)));
         sets
     }
 
@@ -343,11 +375,8 @@ impl Refinement {
         kinds: Kinds,
         limits: &crate::budget::Limits,
     ) -> Result<Scene, StudyError> {
-        Ok(scene::load_with(
-            &self.scene,
-            &self.sets_for(n, kinds),
-            limits,
-        )?)
+        let def = scene::builtin(&self.scene).ok_or_else(|| not_refinable(&self.scene))?;
+        Ok(scene::build_from(def, &self.params(n, kinds)?, limits)?)
     }
 }
 
@@ -438,21 +467,11 @@ impl Default for ResolutionOptions {
 /// The default tolerance `X` (m, or s for times).
 pub const DEFAULT_TOLERANCE: f64 = 0.01;
 
-/// The instant the observable is taken at by default (s), per scene:
-///
-/// ```text
-/// cube-plane, cube-tilted, cube-sphere, cube-bowl, jelly-bowl   2.5   after the landing (≈ 1.4 s)
-/// cloth-sphere                                                  3     draped and nearly at rest
-/// cloth-spheres                                                 1     the cloth caught the spheres (≈ 0.5 s)
-/// rope, ropes, oscillator, scene files                          1
-/// ```
+/// The instant the observable is taken at by default (s): the built-in scene's
+/// [`observe_at`](crate::scene::SceneDef::observe_at), 1 s for a scene file.
 #[must_use]
 pub fn default_time(scene: &str) -> f64 {
-    match scene {
-        "cube-plane" | "cube-tilted" | "cube-sphere" | "cube-bowl" | "jelly-bowl" => 2.5,
-        "cloth-sphere" => 3.0,
-        _ => 1.0,
-    }
+    scene::builtin(scene).map_or(1.0, |def| def.observe_at)
 }
 
 /// The largest step a level runs at: the scene's `dt`, or half the method's damped-theory limit
