@@ -10,6 +10,9 @@
 //!
 //! `cargo run --release --example custom_method`
 
+// Index loops read like the formula (x_i, v_i, a_i), as in the crate's own integrators.
+#![allow(clippy::needless_range_loop)]
+
 use glam::DVec3;
 use springlab::physics::{Method, MethodParams, Model, State, Workspace, accelerations};
 
