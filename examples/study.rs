@@ -17,8 +17,14 @@ fn main() {
         Method::Rk4,
     ] {
         match max_stable_dt(&scene, method) {
+            Ok(Some(0.0)) => {
+                println!(
+                    "{:>22}: no stable dt (undamped, it gains energy at every dt)",
+                    method.name()
+                );
+            }
             Ok(Some(dt)) => println!(
-                "{:>22}: dt ≤ {dt:.5} s (dt·ω ≤ {:.3})",
+                "{:>22}: dt ≤ {dt:.5} s (dt times the bound: {:.3})",
                 method.name(),
                 dt * omega
             ),
