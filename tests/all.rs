@@ -44,6 +44,7 @@ mod render;
 mod render_cli;
 mod render_depth;
 mod scene_files;
+mod simulation_fused;
 mod study_convergence;
 mod study_stability;
 mod tui;
