@@ -3,7 +3,7 @@
 //! sphere, the oscillator's exact solution, the measured (perturbation-growth) stability limit,
 //! and `springlab run`'s own positions.
 
-mod common;
+use crate::common;
 use common::{json, springlab};
 
 use std::f64::consts::PI;

@@ -3,9 +3,9 @@
 //! `springlab bench` command line on bad input.
 //!
 //! The checksum tests run each workload once for its full N steps; run them with
-//! `cargo test --release --test bench_workloads`.
+//! `cargo test --release --test all bench_workloads::`.
 
-mod common;
+use crate::common;
 use common::springlab;
 
 use sha2::{Digest, Sha256};

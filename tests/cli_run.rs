@@ -1,6 +1,6 @@
 //! `springlab run` and `springlab scenes` through the real binary.
 
-mod common;
+use crate::common;
 use common::{json, springlab};
 
 fn stderr_of_failure(args: &[&str]) -> String {

@@ -1,7 +1,7 @@
 //! `springlab run <file.toml>`: the binary prints `file:line:col: message` for a bad scene file
 //! and exits non-zero; a good file runs.
 
-mod common;
+use crate::common;
 use common::springlab;
 
 use std::path::PathBuf;

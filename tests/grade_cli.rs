@@ -2,7 +2,7 @@
 //! the refusals with their messages, and a crate that does not build, which still gets a
 //! report, a Gradescope file and exit code 0.
 
-mod common;
+use crate::common;
 use common::springlab;
 
 use std::path::{Path, PathBuf};

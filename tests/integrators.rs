@@ -1,7 +1,7 @@
 //! The integrators against exact solutions: convergence orders and stability limits on the
 //! harmonic oscillator `x(t) = 1 + A cos(ω t)`, ω = √(k/m) = 10 rad/s.
 
-mod common;
+use crate::common;
 
 use common::{fitted_order, oscillator, oscillator_x};
 use springlab::physics::Method;

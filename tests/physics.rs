@@ -1,6 +1,6 @@
 //! Conservation laws and invariants of the force model and the integrators.
 
-mod common;
+use crate::common;
 
 use common::Rng;
 use glam::DVec3;

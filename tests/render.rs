@@ -2,7 +2,7 @@
 //!
 //! Golden images live in `tests/images/<area>/<name>.png` (320×240). A frame matches when at
 //! most 0.05 % of its pixels differ from the golden by more than 3 levels in a channel.
-//! `SPRINGLAB_BLESS=1 cargo test --release --test render` rewrites the goldens; a failing
+//! `SPRINGLAB_BLESS=1 cargo test --release --test all render::` rewrites the goldens; a failing
 //! comparison writes the new image to `target/render-test-output/` for a look.
 
 #[path = "common/render_scenes.rs"]

@@ -1,6 +1,6 @@
 //! `springlab study convergence` and `work-precision` through the binary.
 
-mod common;
+use crate::common;
 use common::{json, springlab};
 
 fn orders(v: &serde_json::Value) -> Vec<(String, Option<f64>)> {

@@ -1,7 +1,7 @@
 //! `springlab study stability`: the stiffest mode against closed forms and docs/workloads.md, the
 //! measured limits against the oscillator's amplification factors, determinism and bad input.
 
-mod common;
+use crate::common;
 use common::{json, springlab};
 
 use serde_json::Value;

@@ -662,7 +662,13 @@ pub fn runs(
     Ok(out)
 }
 
-/// Runs the study on the planned `runs` (see [`runs`]); calls `progress(i)` before run `i`.
+/// The work of a planned run (spring updates), to start the costliest first.
+fn weight_of(p: &PlannedRun) -> f64 {
+    p.scene.spring_count() as f64 * p.steps as f64
+}
+
+/// Runs the study on the planned `runs` (see [`runs`]) over the cores; calls `progress(i)` as
+/// run `i` starts (`i = planned.len()`: the time-step check).
 #[must_use]
 pub fn resolution(
     refinement: &Refinement,
@@ -671,10 +677,33 @@ pub fn resolution(
     planned: &[PlannedRun],
     progress: &mut dyn FnMut(usize, i64, Kinds),
 ) -> ResolutionReport {
+    // The runs are independent, and so is the time-step check (the base level at dt / 2, the
+    // last job): all of them spread over the cores, the costliest first; each result is the
+    // same whichever thread computes it.
+    let base = planned
+        .iter()
+        .position(|p| p.n == refinement.base && p.kinds == Kinds::All);
+    let job = |i: usize| match planned.get(i) {
+        Some(p) => observe::measure(&p.scene, options.method, p.dt, p.steps),
+        None => {
+            let p = &planned[base.unwrap_or_default()];
+            observe::measure(&p.scene, options.method, p.dt / 2.0, p.steps * 2)
+        }
+    };
+    let weight = |i: usize| match planned.get(i) {
+        Some(p) => weight_of(p),
+        None => 2.0 * base.map_or(0.0, |b| weight_of(&planned[b])),
+    };
+    let jobs = planned.len() + usize::from(base.is_some());
+    let threads = crate::physics::pool::Pool::global().threads();
+    let mut measured =
+        crate::physics::pool::independent(jobs, threads, weight, job, |i| match planned.get(i) {
+            Some(p) => progress(i, p.n, p.kinds),
+            None => progress(planned.len(), refinement.base, Kinds::All),
+        });
+    let half = base.and_then(|_| measured.pop());
     let mut runs: Vec<LevelRun> = Vec::with_capacity(planned.len());
-    for (i, p) in planned.iter().enumerate() {
-        progress(i, p.n, p.kinds);
-        let run = observe::measure(&p.scene, options.method, p.dt, p.steps);
+    for (p, run) in planned.iter().zip(measured) {
         runs.push(LevelRun {
             n: p.n,
             kinds: p.kinds,
@@ -734,16 +763,10 @@ pub fn resolution(
         })
         .filter(|_| changes.last().is_some_and(|c| c.1));
     // The time step's own error at the scene's level.
-    let time_step_check = planned
-        .iter()
-        .position(|p| p.n == refinement.base && p.kinds == Kinds::All)
-        .map(|i| {
-            let p = &planned[i];
-            progress(planned.len(), refinement.base, Kinds::All);
-            let half = observe::measure(&p.scene, options.method, p.dt / 2.0, p.steps * 2);
-            let reference = runs[i].run.observation.clone();
-            diff(&half.observation, &reference, count)
-        });
+    let time_step_check = base.zip(half).map(|(i, half)| {
+        let reference = runs[i].run.observation.clone();
+        diff(&half.observation, &reference, count)
+    });
     let first = planned.first().map(|p| Observable::of(&p.scene));
     ResolutionReport {
         scene: refinement.scene.clone(),

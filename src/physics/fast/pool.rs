@@ -224,6 +224,72 @@ impl Pool {
     }
 }
 
+/// Runs `job(0)`, …, `job(count - 1)` on up to `threads` scoped threads and returns their
+/// results in index order; `started(i)` is called on the calling thread as job `i` starts.
+///
+/// For independent runs (the levels of a study, a verification beside its confirmation):
+/// heaviest first by `weight` (largest-processing-time first, so that the longest job does not
+/// start last), each job taken from a shared counter by the next free thread. A job's result
+/// depends only on its index, never on the thread that runs it, so the results are the same
+/// bit for bit for any `threads`; with one thread the jobs run on the caller in index order.
+/// A job that steps a simulation may still use [`Pool::global`]: the first to ask gets its
+/// workers, the others run their parts themselves ([`Pool::run`]).
+///
+/// Reference: R. L. Graham, "Bounds on multiprocessing timing anomalies", *SIAM J. Appl.
+/// Math.* 17 (1969) 416–429 (largest processing time first).
+///
+/// # Panics
+/// If a job panics.
+pub fn independent<R: Send>(
+    count: usize,
+    threads: usize,
+    weight: impl Fn(usize) -> f64,
+    job: impl Fn(usize) -> R + Sync,
+    mut started: impl FnMut(usize),
+) -> Vec<R> {
+    let threads = threads.clamp(1, count.max(1));
+    if threads == 1 {
+        return (0..count)
+            .map(|i| {
+                started(i);
+                job(i)
+            })
+            .collect();
+    }
+    let mut order: Vec<usize> = (0..count).collect();
+    order.sort_by(|&a, &b| weight(b).total_cmp(&weight(a)).then(a.cmp(&b)));
+    let next = AtomicUsize::new(0);
+    let mut results: Vec<Option<R>> = (0..count).map(|_| None).collect();
+    thread::scope(|scope| {
+        let (tx, rx) = std::sync::mpsc::channel::<(usize, Option<R>)>();
+        for _ in 0..threads {
+            let tx = tx.clone();
+            let (next, order, job) = (&next, &order, &job);
+            scope.spawn(move || {
+                loop {
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(&i) = order.get(k) else { break };
+                    if tx.send((i, None)).is_err() || tx.send((i, Some(job(i)))).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        // Ends when every thread has finished (or one panicked: the scope then panics too).
+        for (i, result) in rx {
+            match result {
+                None => started(i),
+                Some(r) => results[i] = Some(r),
+            }
+        }
+    });
+    results
+        .into_iter()
+        .map(|r| r.expect("every job ran (a panic would have ended the scope)"))
+        .collect()
+}
+
 impl Pool {
     /// Calls `body(start, a_part, b_part)` for `parts` (at most 8) contiguous, equally long
     /// pieces of `a` and `b` (which must be equally long), where `start` is the index of the
@@ -365,6 +431,20 @@ fn worker(shared: &Shared, k: usize) {
 mod tests {
     use super::*;
     use std::sync::atomic::AtomicU32;
+
+    #[test]
+    fn independent_jobs_return_in_index_order_for_any_thread_count() {
+        // Job i sums 1..=i the long way: its result is i (i + 1) / 2 whoever runs it.
+        let job = |i: usize| (1..=i as u64).sum::<u64>();
+        for threads in 1..=4 {
+            let mut seen = Vec::new();
+            let out = super::independent(9, threads, |i| (i % 4) as f64, job, |i| seen.push(i));
+            let want: Vec<u64> = (0..9u64).map(|i| i * (i + 1) / 2).collect();
+            assert_eq!(out, want, "{threads} threads");
+            seen.sort_unstable();
+            assert_eq!(seen, (0..9).collect::<Vec<_>>(), "each job started once");
+        }
+    }
 
     #[test]
     fn every_part_runs_exactly_once() {

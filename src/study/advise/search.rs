@@ -49,6 +49,43 @@ fn command(plan: &Plan, c: &Candidate) -> String {
     line
 }
 
+/// A verification's two runs, side by side on two cores where there are two (each the same
+/// whichever thread runs it): the candidate again with the energy accounting on, and the
+/// confirmation of the whole scene at 1.5 × dt over the run's time.
+fn verify(
+    scene: &Scene,
+    method: Method,
+    dt: f64,
+    steps: u64,
+    time: f64,
+) -> (Measurement, Confirmation) {
+    let confirm_dt = MARGIN * dt;
+    let confirm_count = ((time / confirm_dt).ceil() as u64).max(stability::CONFIRM_MIN_STEPS);
+    let confirm = || {
+        stability::confirm_steps(
+            scene,
+            method,
+            confirm_dt,
+            confirm_count,
+            stability::energy_scale(scene),
+        )
+    };
+    if crate::physics::pool::Pool::global().threads() < 2 {
+        return (
+            observe::measure_accounted(scene, method, dt, steps),
+            confirm(),
+        );
+    }
+    std::thread::scope(|scope| {
+        let confirmation = scope.spawn(confirm);
+        let run = observe::measure_accounted(scene, method, dt, steps);
+        let confirmation = confirmation
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (run, confirmation)
+    })
+}
+
 /// Runs the plan (module docs). `progress` is called before every run.
 ///
 /// # Errors
@@ -301,22 +338,11 @@ pub fn advise(plan: &Plan, progress: &mut dyn FnMut(&Stage)) -> Result<AdviseRep
         let c = &candidates[i];
         let model = &plan.models[c.model];
         progress(&Stage::Verify(c.method, c.dt));
-        let run = observe::measure_accounted(&model.scene, c.method, c.dt, c.steps);
+        let (run, confirmation) = verify(&model.scene, c.method, c.dt, c.steps, time);
         let energy_residual = run.energy_residual.unwrap_or(f64::NAN);
         let error = observe::history_difference(&run.snapshots, &reference_run.snapshots, time);
         let error_at_t = run.difference(&reference_obs, time);
         let accurate = accepted(&error, &e_ref, x);
-        let horizon = time;
-        let confirm_dt = MARGIN * c.dt;
-        let confirm_count =
-            ((horizon / confirm_dt).ceil() as u64).max(stability::CONFIRM_MIN_STEPS);
-        let confirmation = stability::confirm_steps(
-            &model.scene,
-            c.method,
-            confirm_dt,
-            confirm_count,
-            stability::energy_scale(&model.scene),
-        );
         let holds = accurate && confirmation.passed;
         verifications.push(Verification {
             candidate: i,
