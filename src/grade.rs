@@ -63,6 +63,7 @@ mod data;
 pub mod external;
 pub mod homework;
 mod jelly;
+pub mod live;
 mod reference;
 pub mod remote;
 mod report;
