@@ -15,7 +15,8 @@ use std::time::{Duration, Instant};
 use springlab::grade::Assignment;
 use springlab::grade::build::Builder;
 use springlab::grade::live::{
-    BuildOptions, Frame, Live, LiveOptions, Quantity, Setup, build_homework, builder,
+    BuildOptions, Frame, Live, LiveOptions, Quantity, Reload, Setup, Watcher, build_homework,
+    builder,
 };
 use springlab::lesson::{self, Lesson};
 use springlab::physics::Method;
@@ -301,4 +302,61 @@ fn a_panicking_looping_or_exiting_crate_is_a_message_and_the_reference_keeps_goi
         asked.elapsed() < Duration::from_secs(1),
         "stopping returns while the student's loop runs"
     );
+}
+
+/// The next report of `watcher` that is not `Building`, waiting up to a minute.
+fn settled(watcher: &Watcher) -> Reload {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while Instant::now() < deadline {
+        match watcher.next(Duration::from_millis(200)) {
+            Some(Reload::Building) | None => {}
+            Some(other) => return other,
+        }
+    }
+    panic!("no build result within a minute");
+}
+
+#[test]
+fn a_save_rebuilds_the_crate_and_reports_the_first_compiler_error_or_reloaded() {
+    let parent = scratch("watch");
+    let dir = homework(&parent, "rope", "rope", ROPE, INTEGRATORS);
+    let watcher = Watcher::start(&dir, the_builder(), options()).expect("watch");
+    assert_eq!(
+        watcher.next(Duration::from_secs(5)).map(|r| r.status()),
+        Some("building…".to_string())
+    );
+    let Reload::Reloaded(first) = settled(&watcher) else {
+        panic!("the first build succeeds");
+    };
+    assert_eq!(first.assignment, Assignment::Rope);
+    // A save with a type error: the compiler's first error, bounded.
+    let broken = patch(
+        ROPE,
+        "        let d = b - a;\n        let l = d.length();",
+        "        let d = b - a;\n        let l: u8 = d.length();",
+    );
+    std::fs::write(dir.join("src/lib.rs"), &broken).expect("save");
+    let Reload::Failed(why) = settled(&watcher) else {
+        panic!("the broken save does not build");
+    };
+    assert!(
+        why.starts_with("your crate did not build: error[E0308]: mismatched types"),
+        "{why}"
+    );
+    assert!(why.lines().count() <= 12 && why.len() <= 1300, "{why}");
+    // The fix: reloaded, and the new program is the correct one.
+    std::fs::write(dir.join("src/lib.rs"), ROPE).expect("save");
+    let Reload::Reloaded(fixed) = settled(&watcher) else {
+        panic!("the fixed crate builds");
+    };
+    let live = Live::start(
+        fixed.homework.clone(),
+        setup(Assignment::Rope, 3, 3, None, 1.0),
+        LiveOptions::default(),
+    );
+    live.run_free();
+    let last = std::iter::from_fn(|| live.next_frame(Duration::from_secs(30)))
+        .find(|f| f.finished)
+        .expect("finishes");
+    assert_eq!(last.parting, None);
 }
