@@ -18,7 +18,11 @@ use springlab::grade::live::{
     BuildOptions, Frame, Live, LiveOptions, Quantity, Reload, Setup, Watcher, build_homework,
     builder,
 };
+use ratatui::Terminal;
+use ratatui::backend::TestBackend;
+use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 use springlab::lesson::{self, Lesson};
+use springlab::tui::{App, Screen, Theme};
 use springlab::physics::Method;
 
 const ROPE: &str = include_str!("homework/rope.rs");
@@ -359,4 +363,61 @@ fn a_save_rebuilds_the_crate_and_reports_the_first_compiler_error_or_reloaded() 
         .find(|f| f.finished)
         .expect("finishes");
     assert_eq!(last.parting, None);
+}
+
+/// The app, headless, on lesson 4 with the crate in `dir` attached; runs until the screen
+/// (120×40) shows `wanted` and returns it.
+fn app_until(dir: &Path, wanted: &str) -> (App, String) {
+    let mut app = App::new(lesson::builtin(), Theme { color: false })
+        .with_homework_options(Some(dir.to_path_buf()), options());
+    let i = app.find_lesson("verlet").expect("lesson 4");
+    app.open_lesson(i).expect("opens");
+    app.handle_key(KeyEvent::new(KeyCode::Char(' '), KeyModifiers::NONE));
+    let deadline = Instant::now() + Duration::from_secs(120);
+    loop {
+        app.tick(0.05);
+        let mut terminal = Terminal::new(TestBackend::new(120, 40)).expect("backend");
+        terminal
+            .draw(|frame| frame.render_widget(&app, frame.area()))
+            .expect("draw");
+        let text = terminal.backend().to_string();
+        if text.contains(wanted) {
+            return (app, text);
+        }
+        assert!(Instant::now() < deadline, "never shown: {wanted}\n{text}");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+#[test]
+fn the_app_shows_both_ropes_the_parting_and_a_failure_and_quits_at_once() {
+    let parent = scratch("app");
+    let lib = patch(
+        ROPE,
+        "(1.0 - damping) * (x - m.last_position)",
+        "(x - m.last_position)",
+    );
+    let undamped = homework(&parent, "undamped", "rope", &lib, INTEGRATORS);
+    let (_, text) = app_until(&undamped, "parted at step 2");
+    assert!(text.contains("── yours ── reference"), "{text}");
+    assert!(text.contains("verlet()"), "{text}");
+
+    let verlet = "fn verlet(&self, rope: &mut Rope, dt: f64, damping: f64, physics: &Physics) {";
+    let lib = patch(
+        ROPE,
+        verlet,
+        &format!(
+            "{verlet}\n        static CALLS: std::sync::atomic::AtomicUsize = \
+             std::sync::atomic::AtomicUsize::new(0);\n        \
+             if CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) == 11 {{\n            \
+             let empty: Vec<usize> = Vec::new();\n            let _ = empty[rope.masses.len()];\n        }}"
+        ),
+    );
+    let panics = homework(&parent, "panics", "rope", &lib, INTEGRATORS);
+    let (mut app, _) = app_until(&panics, "your verlet() panicked at step 12: index out of bounds");
+    let asked = Instant::now();
+    app.handle_key(KeyEvent::new(KeyCode::Char('q'), KeyModifiers::NONE));
+    assert!(matches!(app.screen(), Screen::Menu), "q leaves the lesson");
+    drop(app);
+    assert!(asked.elapsed() < Duration::from_secs(1), "q answers at once");
 }
