@@ -12,18 +12,18 @@ use std::process::Command;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use ratatui::Terminal;
+use ratatui::backend::TestBackend;
+use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 use springlab::grade::Assignment;
 use springlab::grade::build::Builder;
 use springlab::grade::live::{
     BuildOptions, Frame, Live, LiveOptions, Quantity, Reload, Setup, Watcher, build_homework,
     builder,
 };
-use ratatui::Terminal;
-use ratatui::backend::TestBackend;
-use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 use springlab::lesson::{self, Lesson};
-use springlab::tui::{App, Screen, Theme};
 use springlab::physics::Method;
+use springlab::tui::{App, Screen, Theme};
 
 const ROPE: &str = include_str!("homework/rope.rs");
 const JELLY: &str = include_str!("homework/jelly.rs");
@@ -414,10 +414,49 @@ fn the_app_shows_both_ropes_the_parting_and_a_failure_and_quits_at_once() {
         ),
     );
     let panics = homework(&parent, "panics", "rope", &lib, INTEGRATORS);
-    let (mut app, _) = app_until(&panics, "your verlet() panicked at step 12: index out of bounds");
+    let (mut app, _) = app_until(
+        &panics,
+        "your verlet() panicked at step 12: index out of bounds",
+    );
     let asked = Instant::now();
     app.handle_key(KeyEvent::new(KeyCode::Char('q'), KeyModifiers::NONE));
     assert!(matches!(app.screen(), Screen::Menu), "q leaves the lesson");
     drop(app);
-    assert!(asked.elapsed() < Duration::from_secs(1), "q answers at once");
+    assert!(
+        asked.elapsed() < Duration::from_secs(1),
+        "q answers at once"
+    );
+}
+
+#[test]
+fn a_failed_check_names_the_lesson_that_shows_it_live() {
+    let parent = scratch("see-it");
+    let lib = patch(
+        ROPE,
+        "(1.0 - damping) * (x - m.last_position)",
+        "(x - m.last_position)",
+    );
+    homework(&parent, "undamped", "rope", &lib, INTEGRATORS);
+    let t = target();
+    let out = Command::new(env!("CARGO_BIN_EXE_springlab"))
+        .current_dir(&parent)
+        .args(["grade", "undamped", "--target-dir"])
+        .arg(&t)
+        .output()
+        .expect("run springlab grade");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("score 30 / 35"), "{stdout}");
+    // The damping item fails; its hint names lesson 4; the passing items name nothing.
+    assert_eq!(
+        stdout
+            .matches("see it: springlab lesson 4 --homework .")
+            .count(),
+        stdout.matches("): failed").count(),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("see it: springlab lesson 4 --homework ."),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("see it: springlab lesson 3"), "{stdout}");
 }

@@ -181,17 +181,31 @@ pub fn lessons_of(assignment: Assignment) -> &'static [u32] {
     }
 }
 
-/// The lesson step that shows integrator `item` (a grader item id) live, as a command.
+/// The lesson that shows integrator item `item` (a grader item id) live, as a command run in
+/// the crate's folder: the rope's Euler methods in lesson 3 (explicit Euler on the rope is its
+/// step 3, semi-implicit Euler on the oscillator its step 2), Verlet and its damping in lesson 4
+/// (step 1 on), the jelly's in lesson 5 and the cloth's in lesson 6, whose steps run methods the
+/// traits lack: `m` picks the method there.
 #[must_use]
 pub fn see_it(assignment: Assignment, item: &str) -> Option<String> {
-    let lesson = match (assignment, item) {
-        (Assignment::Rope, "explicit" | "semi_implicit") => 3,
-        (Assignment::Rope, "verlet" | "damping") => 4,
-        (Assignment::Jelly, "explicit" | "implicit" | "midpoint" | "rk4") => 5,
-        (Assignment::Cloth, "explicit" | "implicit" | "midpoint" | "rk4") => 6,
+    let (lesson, method) = match (assignment, item) {
+        (Assignment::Rope, "explicit") => (3, None),
+        (Assignment::Rope, "semi_implicit") => (3, None),
+        (Assignment::Rope, "verlet" | "damping") => (4, None),
+        (Assignment::Jelly, m @ ("explicit" | "implicit" | "midpoint" | "rk4")) => (5, Some(m)),
+        (Assignment::Cloth, m @ ("explicit" | "implicit" | "midpoint" | "rk4")) => (6, Some(m)),
         _ => return None,
     };
-    Some(format!("springlab lesson {lesson} --homework ."))
+    let pick = method.map_or(String::new(), |m| {
+        let name = match m {
+            "explicit" => "explicit Euler",
+            "implicit" => "implicit Euler",
+            "midpoint" => "midpoint",
+            _ => "RK4",
+        };
+        format!(" (m: choose {name})")
+    });
+    Some(format!("springlab lesson {lesson} --homework .{pick}"))
 }
 
 /// What one comparison runs: a body of a lesson step's scene, its method and time step.
