@@ -47,7 +47,7 @@ mod body;
 mod build;
 mod watch;
 
-use body::Track;
+use body::{Measure, Track};
 pub use build::{BuildOptions, Built, build_homework, builder, first_error, grader_hint};
 pub use watch::{Reload, Watcher};
 
@@ -562,7 +562,9 @@ fn work(
         if step >= target {
             if step >= horizon && !finished_sent {
                 finished_sent = true;
-                let frame = frame_of(step, setup, &theirs, yours.as_ref(), parting, &failure);
+                let r = Measure::of(&theirs, setup);
+                let y = yours.as_ref().map(|t| Measure::of(t, setup));
+                let frame = frame_of(step, setup, &r, y.as_ref(), parting, &failure);
                 if tx
                     .send(Frame {
                         finished: true,
@@ -596,14 +598,25 @@ fn work(
             }
         }
         vmax = vmax.max(theirs.speed());
+        let framed = step.is_multiple_of(options.frame_every.max(1)) || step == target;
+        // Measured once per step, and only when the parting test or a frame needs it.
+        let mut measured = None;
         if parting.is_none()
             && let Some(track) = yours.as_ref()
         {
-            parting = body::parting(&theirs, track, &scales, vmax, setup, step);
+            let (r, y) = (Measure::of(&theirs, setup), Measure::of(track, setup));
+            parting = body::parting(&r, &y, &scales, vmax, setup, step);
             event |= parting.is_some();
+            measured = Some((r, Some(y)));
         }
-        if event || step % options.frame_every.max(1) == 0 || step == target {
-            let frame = frame_of(step, setup, &theirs, yours.as_ref(), parting, &failure);
+        if event || framed {
+            let (r, y) = measured.unwrap_or_else(|| {
+                (
+                    Measure::of(&theirs, setup),
+                    yours.as_ref().map(|t| Measure::of(t, setup)),
+                )
+            });
+            let frame = frame_of(step, setup, &r, y.as_ref(), parting, &failure);
             if tx.send(frame).is_err() {
                 break;
             }
@@ -615,19 +628,19 @@ fn work(
 fn frame_of(
     step: u64,
     setup: &Setup,
-    theirs: &Track,
-    yours: Option<&Track>,
+    theirs: &Measure,
+    yours: Option<&Measure>,
     parting: Option<Parting>,
     failure: &Option<String>,
 ) -> Frame {
     Frame {
         step,
         time: step as f64 * setup.dt,
-        reference: theirs.positions(),
-        yours: yours.map(Track::positions),
-        distance: yours.map_or(0.0, |y| body::distance(theirs, y)),
-        energy_reference: theirs.energy(setup),
-        energy_yours: yours.map(|y| y.energy(setup)),
+        reference: theirs.positions().to_vec(),
+        yours: yours.map(|y| y.positions().to_vec()),
+        distance: yours.map_or(0.0, |y| theirs.distance(y)),
+        energy_reference: theirs.energy,
+        energy_yours: yours.map(|y| y.energy),
         parting,
         failure: failure.clone(),
         finished: false,

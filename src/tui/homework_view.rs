@@ -20,7 +20,7 @@ use ratatui::style::{Color, Style};
 use ratatui::symbols::Marker;
 use ratatui::text::{Line, Span};
 use ratatui::widgets::canvas::{Canvas, Line as CanvasLine};
-use ratatui::widgets::{Axis, Chart, Clear, Dataset, GraphType, Widget};
+use ratatui::widgets::{Axis, Chart, Clear, Dataset, GraphType, Paragraph, Widget, Wrap};
 
 use super::lesson_run::LessonRun;
 use super::pane::dot_view;
@@ -53,6 +53,8 @@ pub struct HomeworkView {
     key: Option<Key>,
     /// The run's step count last seen (a smaller one is a reset).
     seen_steps: u64,
+    /// The comparison has not caught up with the run yet.
+    behind: bool,
     /// Build status: "building…", "reloaded", or the compiler's first error.
     status: String,
     /// Why there is no comparison on this step.
@@ -89,6 +91,7 @@ impl HomeworkView {
             live: None,
             key: None,
             seen_steps: 0,
+            behind: false,
             status: "building…".to_string(),
             idle: None,
             hint: Arc::new(Mutex::new(None)),
@@ -103,11 +106,7 @@ impl HomeworkView {
     pub fn busy(&self) -> bool {
         self.status == "building…"
             || (self.hint_for.is_some() && self.hint.lock().is_ok_and(|h| h.is_none()))
-            || self
-                .last
-                .as_ref()
-                .is_some_and(|f| !f.finished && f.failure.is_none())
-                && self.live.is_some()
+            || self.behind
     }
 
     /// The status line's text.
@@ -160,6 +159,12 @@ impl HomeworkView {
                 self.keep(&frame);
                 self.last = Some(frame);
             }
+            self.behind = self
+                .last
+                .as_ref()
+                .map_or(sim.steps > 0, |f| f.step < sim.steps);
+        } else {
+            self.behind = false;
         }
     }
 
@@ -211,10 +216,10 @@ impl HomeworkView {
 
     fn keep(&mut self, f: &Frame) {
         if self.samples.len() >= SAMPLES {
-            let mut i = 0;
+            let mut i = 0usize;
             self.samples.retain(|_| {
                 i += 1;
-                i % 2 == 0
+                i.is_multiple_of(2)
             });
         }
         self.samples.push((
@@ -323,7 +328,7 @@ pub fn render(app: &App, run: &LessonRun, theme: Theme, inner: Rect, buf: &mut B
     if inner.width < 20 || inner.height < 8 {
         return;
     }
-    let strip_height = (inner.height / 3).clamp(5, 9);
+    let strip_height = (inner.height * 2 / 5).clamp(6, 12);
     let [scene, strip] =
         Layout::vertical([Constraint::Fill(1), Constraint::Length(strip_height)]).areas(inner);
     if let (Some(f), Some(live)) = (&view.last, &view.live) {
@@ -346,12 +351,15 @@ pub fn render(app: &App, run: &LessonRun, theme: Theme, inner: Rect, buf: &mut B
     }
     Clear.render(strip, buf);
     let text = view.lines();
-    let text_rows = (text.len() as u16).min(strip.height);
+    // Wrapped: a compiler error or a hint is longer than the pane is wide.
+    let width = usize::from(strip.width.max(1));
+    let rows: usize = text.iter().map(|l| l.width().max(1).div_ceil(width)).sum();
+    let text_rows = u16::try_from(rows).unwrap_or(u16::MAX).min(strip.height);
     let [words, plots] =
         Layout::vertical([Constraint::Length(text_rows), Constraint::Fill(1)]).areas(strip);
-    for (row, line) in text.iter().enumerate().take(words.height as usize) {
-        buf.set_line(words.x, words.y + row as u16, line, words.width);
-    }
+    Paragraph::new(text)
+        .wrap(Wrap { trim: false })
+        .render(words, buf);
     if plots.height >= 3 && view.samples.len() > 1 {
         let [left, right] =
             Layout::horizontal([Constraint::Percentage(50), Constraint::Fill(1)]).areas(plots);

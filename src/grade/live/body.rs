@@ -164,11 +164,6 @@ impl Track {
     }
 }
 
-/// Largest distance between the two bodies' particles (m).
-pub(super) fn distance(a: &Track, b: &Track) -> f64 {
-    largest_difference(&a.positions(), &b.positions())
-}
-
 fn largest_difference(a: &[DVec3], b: &[DVec3]) -> f64 {
     a.iter()
         .zip(b)
@@ -214,19 +209,47 @@ impl Scales {
     }
 }
 
+/// A body's positions (m), velocities (m/s) and energy (J) after a step, measured once.
+pub(super) struct Measure {
+    x: Vec<DVec3>,
+    v: Vec<DVec3>,
+    /// Total energy (J).
+    pub(super) energy: f64,
+}
+
+impl Measure {
+    pub(super) fn of(track: &Track, setup: &Setup) -> Measure {
+        Measure {
+            x: track.positions(),
+            v: track.velocities(setup),
+            energy: track.energy(setup),
+        }
+    }
+
+    /// Positions (m).
+    pub(super) fn positions(&self) -> &[DVec3] {
+        &self.x
+    }
+
+    /// Largest distance to `other`'s particles (m).
+    pub(super) fn distance(&self, other: &Measure) -> f64 {
+        largest_difference(&self.x, &other.x)
+    }
+}
+
 /// The first quantity whose difference passes its tolerance at this step, if any.
 pub(super) fn parting(
-    theirs: &Track,
-    yours: &Track,
+    theirs: &Measure,
+    yours: &Measure,
     scales: &Scales,
     vmax: f64,
     setup: &Setup,
     step: u64,
 ) -> Option<Parting> {
     let tau = setup.tolerance;
-    let dx = distance(theirs, yours);
-    let dv = largest_difference(&theirs.velocities(setup), &yours.velocities(setup));
-    let de = (theirs.energy(setup) - yours.energy(setup)).abs();
+    let dx = theirs.distance(yours);
+    let dv = largest_difference(&theirs.v, &yours.v);
+    let de = (theirs.energy - yours.energy).abs();
     let energy_scale = scales.mass * (scales.gravity * scales.length + vmax * vmax);
     [
         (Quantity::Position, dx, tau * scales.length),
