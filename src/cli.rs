@@ -76,6 +76,10 @@ pub enum Command {
         /// The lesson's number or short name (see `springlab lessons`).
         #[arg(value_name = "N|SLUG")]
         which: String,
+        /// A homework crate whose integrators step the lesson's body beside the reference,
+        /// rebuilt on every save (`H` in the app detaches and attaches it).
+        #[arg(long, value_name = "DIR")]
+        homework: Option<std::path::PathBuf>,
     },
     /// List the lessons (and the errors of lesson files that do not load).
     Lessons,
@@ -108,7 +112,9 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let dir = cli.lessons.as_deref();
     let result = match cli.command {
-        Some(Command::Lesson { which }) => lessons::open(dir, &which, cli.view, cli.no_save),
+        Some(Command::Lesson { which, homework }) => {
+            lessons::open(dir, &which, cli.view, cli.no_save, homework.as_deref())
+        }
         Some(Command::Lessons) => lessons::list(dir),
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::Scenes(args)) => scenes::list(&args),

@@ -63,6 +63,7 @@ mod data;
 pub mod external;
 pub mod homework;
 mod jelly;
+pub mod live;
 mod reference;
 pub mod remote;
 mod report;
@@ -151,17 +152,23 @@ impl Assignment {
 /// Grades a GAMES101 rope homework (see [`RopeHomework`] and the module's rubric table).
 #[must_use]
 pub fn grade_rope<H: RopeHomework>(homework: H, options: &Options) -> Report {
-    runner::grade(rope::rubric::<H>(), homework, options)
+    let mut report = runner::grade(rope::rubric::<H>(), homework, options);
+    checks::link_back(&mut report, Assignment::Rope);
+    report
 }
 
 /// Grades an NYCU 2023 jelly homework (see [`JellyHomework`]).
 #[must_use]
 pub fn grade_jelly<H: JellyHomework>(homework: H, options: &Options) -> Report {
-    runner::grade(jelly::rubric::<H>(), homework, options)
+    let mut report = runner::grade(jelly::rubric::<H>(), homework, options);
+    checks::link_back(&mut report, Assignment::Jelly);
+    report
 }
 
 /// Grades an NYCU 2022 cloth homework (see [`ClothHomework`]).
 #[must_use]
 pub fn grade_cloth<H: ClothHomework>(homework: H, options: &Options) -> Report {
-    runner::grade(cloth::rubric::<H>(), homework, options)
+    let mut report = runner::grade(cloth::rubric::<H>(), homework, options);
+    checks::link_back(&mut report, Assignment::Cloth);
+    report
 }

@@ -23,6 +23,7 @@ pub mod export;
 pub mod graphics;
 pub mod halfblocks;
 pub mod help;
+mod homework_view;
 pub mod lesson_run;
 pub mod lesson_view;
 pub mod markdown;
@@ -157,6 +158,12 @@ pub struct App {
     progress: Progress,
     /// The `--lessons` directory the lessons came from (`None`: the built-in ones).
     lessons_dir: Option<std::path::PathBuf>,
+    /// The attached homework crate (`--homework DIR`, `H`).
+    homework: Option<homework_view::HomeworkView>,
+    /// The `--homework` folder.
+    homework_dir: Option<std::path::PathBuf>,
+    /// Where the attached crate is built.
+    homework_options: crate::grade::live::BuildOptions,
 }
 
 impl App {
@@ -190,6 +197,9 @@ impl App {
             opened: 0,
             progress: Progress::in_memory(),
             lessons_dir: None,
+            homework: None,
+            homework_dir: None,
+            homework_options: crate::grade::live::BuildOptions::default(),
         }
     }
 
@@ -473,7 +483,7 @@ impl App {
     /// True while the simulation runs (or something else needs frames without input).
     #[must_use]
     pub fn is_animating(&self) -> bool {
-        !self.help && self.lesson().is_some_and(LessonRun::is_running)
+        !self.help && self.lesson().is_some_and(LessonRun::is_running) || self.homework_busy()
     }
 
     /// Advances the open lesson's simulation by `wall_dt` seconds of wall time (see the module
@@ -492,6 +502,7 @@ impl App {
                 run.tick_until(wall_dt, deadline);
             }
         }
+        self.sync_homework();
         self.sync_progress();
     }
 
@@ -545,6 +556,8 @@ impl App {
                 } else if matches!(key.code, KeyCode::Char('q') | KeyCode::Esc) {
                     self.screen = Screen::Menu;
                     self.clear = true;
+                } else if key.code == KeyCode::Char('H') {
+                    self.toggle_homework();
                 } else if key.code == KeyCode::Char('v') {
                     self.view = self.view.next(raster);
                     self.report_aspect();

@@ -29,6 +29,7 @@ mod grade_reference;
 mod grade_report;
 mod grade_sandbox;
 mod grade_timeout;
+mod homework_live;
 mod integrators;
 mod lattice;
 mod lesson8;

@@ -1,7 +1,7 @@
 //! `springlab` (the lesson menu), `springlab lesson <N|slug>` and `springlab lessons`.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 
@@ -35,11 +35,11 @@ pub fn load(dir: Option<&Path>) -> anyhow::Result<Vec<Result<Lesson, LessonError
 /// # Errors
 /// No terminal, an unreadable `--lessons` directory, or a terminal failure.
 pub fn menu(dir: Option<&Path>, view: Option<tui::ViewMode>, no_save: bool) -> anyhow::Result<()> {
-    tui::run(load(dir)?, None, view, options(dir, no_save))
+    tui::run(load(dir)?, None, view, options(dir, no_save, None))
 }
 
 /// Where progress goes (`--no-save`: nowhere) and the lessons' directory.
-fn options(dir: Option<&Path>, no_save: bool) -> tui::RunOptions {
+fn options(dir: Option<&Path>, no_save: bool, homework: Option<PathBuf>) -> tui::RunOptions {
     let progress = match tui::Progress::default_path() {
         Some(path) if !no_save => tui::Progress::load(&path),
         _ => tui::Progress::in_memory(),
@@ -47,22 +47,33 @@ fn options(dir: Option<&Path>, no_save: bool) -> tui::RunOptions {
     tui::RunOptions {
         progress,
         lessons_dir: dir.map(Path::to_path_buf),
+        homework,
     }
 }
 
 /// `springlab lesson <N|slug>`: the app, opened on that lesson.
 ///
 /// # Errors
-/// No such lesson (the message lists them), a lesson that failed to load, no terminal.
+/// No such lesson (the message lists them), a lesson that failed to load, `--homework` not a
+/// homework crate, no terminal.
 pub fn open(
     dir: Option<&Path>,
     which: &str,
     view: Option<tui::ViewMode>,
     no_save: bool,
+    homework: Option<&Path>,
 ) -> anyhow::Result<()> {
     let lessons = load(dir)?;
     let index = find(&lessons, which)?;
-    tui::run(lessons, Some(index), view, options(dir, no_save))
+    if let Some(h) = homework {
+        crate::grade::external::assignment_of(h).map_err(|e| anyhow::anyhow!("--homework: {e}"))?;
+    }
+    tui::run(
+        lessons,
+        Some(index),
+        view,
+        options(dir, no_save, homework.map(Path::to_path_buf)),
+    )
 }
 
 /// The index of lesson `which` (a number or a slug) in `lessons`.

@@ -478,3 +478,36 @@ pub(crate) fn check_setup(
         hint,
     ))
 }
+
+/// Names, under every failed check of an integrator item, the lesson step that shows the
+/// method live beside the reference (`see it: springlab lesson 4 --homework .`): appended to
+/// the check's hint, or to the item's reason when a check failed without feedback (a panic, a
+/// time-out).
+pub(crate) fn link_back(report: &mut super::Report, assignment: super::Assignment) {
+    use super::{CheckOutcome, ItemStatus};
+    for item in &mut report.items {
+        if item.status == ItemStatus::Full {
+            continue;
+        }
+        let Some(command) = super::live::see_it(assignment, &item.id) else {
+            continue;
+        };
+        let line = format!("see it: {command}");
+        let mut unexplained = item.checks.is_empty();
+        for check in &mut item.checks {
+            if check.outcome != CheckOutcome::Failed {
+                continue;
+            }
+            match &mut check.feedback {
+                Some(f) => f.hint = format!("{}; {line}", f.hint),
+                None => unexplained = true,
+            }
+        }
+        if unexplained {
+            item.reason = Some(match item.reason.take() {
+                Some(r) => format!("{r}; {line}"),
+                None => line,
+            });
+        }
+    }
+}

@@ -35,6 +35,7 @@ impl Widget for &App {
                     buf,
                 );
                 self.canvas_area.set(canvas);
+                super::homework_view::render(self, run, theme, canvas, buf);
             }
         }
         if self.help {

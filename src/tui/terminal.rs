@@ -25,6 +25,8 @@ pub struct RunOptions {
     pub progress: Progress,
     /// The `--lessons` directory, if any.
     pub lessons_dir: Option<std::path::PathBuf>,
+    /// The `--homework` crate, if any.
+    pub homework: Option<std::path::PathBuf>,
 }
 
 /// Opens the app on the menu, or on lesson `open` (an index into `lessons`), and runs it until
@@ -57,7 +59,8 @@ pub fn run(
     let mut app = App::new(lessons, theme)
         .with_display(view.unwrap_or(default), graphics, ColourDepth::from_env())
         .with_progress(options.progress)
-        .with_lessons_dir(options.lessons_dir);
+        .with_lessons_dir(options.lessons_dir)
+        .with_homework(options.homework);
     if let Ok(size) = terminal.size() {
         app.resize(size.width, size.height);
     }

@@ -1,0 +1,268 @@
+//! One body of the comparison: stepped by a homework's integrator, measured (positions,
+//! velocities, energy), and the parting test of `live.rs`'s module docs.
+
+use glam::DVec3;
+
+use super::super::assignments::{Rope, State};
+use super::super::system::Physics;
+use super::{Homework, Integrator, Parting, Quantity, Setup};
+use crate::physics::{self, collide};
+
+/// The body in the homework's own types.
+enum Shape {
+    Rope(Rope),
+    Lattice(State),
+}
+
+/// A body and the physics it is stepped with.
+pub(super) struct Track {
+    shape: Shape,
+    physics: Physics,
+}
+
+impl Track {
+    /// The body at the step's start, in the types of `setup`'s assignment.
+    pub(super) fn new(setup: &Setup) -> Track {
+        let model = &setup.model;
+        let x = &setup.start.x;
+        let v = &setup.start.v;
+        // The springs in the order springlab projects them (colour by colour: red-black on a
+        // chain), so that a Verlet pass over the list in order is the reference's pass.
+        let springs: Vec<physics::Spring> = model
+            .spring_colours()
+            .flatten()
+            .map(|&i| model.springs()[i as usize])
+            .collect();
+        let shape = match setup.assignment {
+            super::Assignment::Rope => Shape::Rope(Rope::from_physics(
+                x,
+                v,
+                |i| model.mass.get(i).copied().unwrap_or(1.0),
+                |i| model.inv_mass.get(i).is_some_and(|&w| w == 0.0),
+                &springs,
+            )),
+            _ => Shape::Lattice(State {
+                x: x.clone(),
+                v: v.clone(),
+            }),
+        };
+        Track {
+            shape,
+            physics: Physics::from_model(model.clone()),
+        }
+    }
+
+    /// One step of `setup.integrator` by `homework`, then the scene's collision response.
+    pub(super) fn step(&mut self, homework: &Homework, setup: &Setup) {
+        let (dt, p) = (setup.dt, &self.physics);
+        match (&mut self.shape, homework) {
+            (Shape::Rope(rope), Homework::Rope(h)) => match setup.integrator {
+                Integrator::ExplicitEuler => h.explicit_euler(rope, dt, p),
+                Integrator::SemiImplicitEuler => h.semi_implicit_euler(rope, dt, p),
+                _ => h.verlet(rope, dt, setup.damping, p),
+            },
+            (Shape::Lattice(state), Homework::Jelly(h)) => match setup.integrator {
+                Integrator::ImplicitEuler => h.implicit_euler(state, dt, p),
+                Integrator::Midpoint => h.midpoint(state, dt, p),
+                Integrator::Rk4 => h.rk4(state, dt, p),
+                _ => h.explicit_euler(state, dt, p),
+            },
+            (Shape::Lattice(state), Homework::Cloth(h)) => match setup.integrator {
+                Integrator::ImplicitEuler => h.implicit_euler(state, dt, p),
+                Integrator::Midpoint => h.midpoint(state, dt, p),
+                Integrator::Rk4 => h.rk4(state, dt, p),
+                _ => h.explicit_euler(state, dt, p),
+            },
+            _ => std::panic::panic_any(format!(
+                "the crate implements the {} homework, this step needs the {} homework",
+                homework.assignment().name(),
+                setup.assignment.name()
+            )),
+        }
+        if let Shape::Lattice(state) = &mut self.shape
+            && !setup.model.colliders.is_empty()
+            && state.x.len() == setup.model.particle_count()
+            && state.v.len() == state.x.len()
+        {
+            let mut s =
+                physics::State::new(std::mem::take(&mut state.x), std::mem::take(&mut state.v));
+            collide::resolve(&setup.model, &mut s, dt);
+            state.x = s.x;
+            state.v = s.v;
+        }
+    }
+
+    /// What is wrong with the state a student's step returned, if anything.
+    pub(super) fn problem(&self, method: &str, step: u64) -> Option<String> {
+        let n = self.physics.particle_count();
+        let (count, what) = match &self.shape {
+            Shape::Rope(r) => (r.masses.len(), "masses"),
+            Shape::Lattice(s) => (s.x.len().min(s.v.len()), "particles"),
+        };
+        if count != n {
+            return Some(format!(
+                "your {method}() returned {count} {what} at step {step}; the body has {n}"
+            ));
+        }
+        let x = self.positions();
+        let v = self.raw_velocities();
+        let bad = (0..n).find(|&i| !x[i].is_finite() || !v[i].is_finite())?;
+        let which = if x[bad].is_finite() {
+            "velocity"
+        } else {
+            "position"
+        };
+        Some(format!(
+            "your {method}() returned a {which} that is not a number (NaN or infinite) at step \
+             {step}, particle {bad}"
+        ))
+    }
+
+    /// Positions (m).
+    pub(super) fn positions(&self) -> Vec<DVec3> {
+        match &self.shape {
+            Shape::Rope(r) => r.masses.iter().map(|m| m.position).collect(),
+            Shape::Lattice(s) => s.x.clone(),
+        }
+    }
+
+    fn raw_velocities(&self) -> Vec<DVec3> {
+        match &self.shape {
+            Shape::Rope(r) => r.masses.iter().map(|m| m.velocity).collect(),
+            Shape::Lattice(s) => s.v.clone(),
+        }
+    }
+
+    /// Velocities (m/s); a Verlet rope's are `(x_n - x_{n-1})/dt`.
+    pub(super) fn velocities(&self, setup: &Setup) -> Vec<DVec3> {
+        match &self.shape {
+            Shape::Rope(r) if setup.integrator == Integrator::Verlet => r
+                .masses
+                .iter()
+                .map(|m| (m.position - m.last_position) / setup.dt)
+                .collect(),
+            _ => self.raw_velocities(),
+        }
+    }
+
+    /// Largest speed (m/s); 0 when any is not finite.
+    pub(super) fn speed(&self) -> f64 {
+        self.raw_velocities()
+            .iter()
+            .map(|v| v.length())
+            .fold(0.0, f64::max)
+    }
+
+    /// Total energy (J): kinetic, gravity and elastic, under the body's model.
+    pub(super) fn energy(&self, setup: &Setup) -> f64 {
+        let x = self.positions();
+        let v = self.velocities(setup);
+        if x.len() != setup.model.particle_count() || v.len() != x.len() {
+            return f64::NAN;
+        }
+        physics::energy::energy(&setup.model, &physics::State::new(x, v)).total
+    }
+}
+
+fn largest_difference(a: &[DVec3], b: &[DVec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (*p - *q).length())
+        .fold(0.0, f64::max)
+}
+
+/// The body's length, speed and mass scales `L`, `V`, `M` and gravity `|g|` (module docs).
+pub(super) struct Scales {
+    length: f64,
+    pub(super) velocity: f64,
+    mass: f64,
+    gravity: f64,
+}
+
+impl Scales {
+    pub(super) fn of(setup: &Setup) -> Scales {
+        let x = &setup.start.x;
+        let (lo, hi) = x.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let diagonal = if x.is_empty() {
+            0.0
+        } else {
+            (hi - lo).length()
+        };
+        let length = diagonal.max(1e-3);
+        let gravity = setup.model.gravity.length();
+        let speed = setup.start.v.iter().map(|v| v.length()).fold(0.0, f64::max);
+        let mass = setup
+            .model
+            .mass
+            .iter()
+            .filter(|m| m.is_finite())
+            .sum::<f64>();
+        Scales {
+            length,
+            velocity: (gravity * length).sqrt().max(speed).max(1e-3),
+            mass,
+            gravity,
+        }
+    }
+}
+
+/// A body's positions (m), velocities (m/s) and energy (J) after a step, measured once.
+pub(super) struct Measure {
+    x: Vec<DVec3>,
+    v: Vec<DVec3>,
+    /// Total energy (J).
+    pub(super) energy: f64,
+}
+
+impl Measure {
+    pub(super) fn of(track: &Track, setup: &Setup) -> Measure {
+        Measure {
+            x: track.positions(),
+            v: track.velocities(setup),
+            energy: track.energy(setup),
+        }
+    }
+
+    /// Positions (m).
+    pub(super) fn positions(&self) -> &[DVec3] {
+        &self.x
+    }
+
+    /// Largest distance to `other`'s particles (m).
+    pub(super) fn distance(&self, other: &Measure) -> f64 {
+        largest_difference(&self.x, &other.x)
+    }
+}
+
+/// The first quantity whose difference passes its tolerance at this step, if any.
+pub(super) fn parting(
+    theirs: &Measure,
+    yours: &Measure,
+    scales: &Scales,
+    vmax: f64,
+    setup: &Setup,
+    step: u64,
+) -> Option<Parting> {
+    let tau = setup.tolerance;
+    let dx = theirs.distance(yours);
+    let dv = largest_difference(&theirs.v, &yours.v);
+    let de = (theirs.energy - yours.energy).abs();
+    let energy_scale = scales.mass * (scales.gravity * scales.length + vmax * vmax);
+    [
+        (Quantity::Position, dx, tau * scales.length),
+        (Quantity::Velocity, dv, tau * vmax),
+        (Quantity::Energy, de, tau * energy_scale),
+    ]
+    .into_iter()
+    .find(|&(_, d, t)| d > t || d.is_nan())
+    .map(|(quantity, amount, tolerance)| Parting {
+        step,
+        time: step as f64 * setup.dt,
+        quantity,
+        amount,
+        tolerance,
+    })
+}

@@ -1,0 +1,462 @@
+//! Your code in the lesson, headless: real homework crates (built through the grader's sandbox,
+//! run as programs of their own) step a lesson step's body beside springlab's reference. Each
+//! planted mistake of the courses is reported with the step and the quantity where the two part;
+//! the correct crates do not part over the step's horizon; a crate that panics, loops or exits
+//! gives its message while the reference keeps going.
+//!
+//! Builds are shared with `grade_boundary.rs` (one target directory, programs cached by
+//! content), and one crate carries several mistakes when each sits in a different method.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use ratatui::Terminal;
+use ratatui::backend::TestBackend;
+use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
+use springlab::grade::Assignment;
+use springlab::grade::build::Builder;
+use springlab::grade::live::{
+    BuildOptions, Frame, Live, LiveOptions, Quantity, Reload, Setup, Watcher, build_homework,
+    builder,
+};
+use springlab::lesson::{self, Lesson};
+use springlab::physics::Method;
+use springlab::tui::{App, Screen, Theme};
+
+const ROPE: &str = include_str!("homework/rope.rs");
+const JELLY: &str = include_str!("homework/jelly.rs");
+const INTEGRATORS: &str = include_str!("homework/integrators.rs");
+
+fn target() -> PathBuf {
+    Path::new(env!("CARGO_TARGET_TMPDIR")).join("grade-builds")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("homework-live-{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create scratch dir");
+    dir
+}
+
+/// `text` with `from` replaced by `to`, which must occur exactly once.
+fn patch(text: &str, from: &str, to: &str) -> String {
+    assert_eq!(text.matches(from).count(), 1, "{from}");
+    text.replace(from, to)
+}
+
+/// A homework crate `parent/name` of `assignment` with `lib` as src/lib.rs and `integrators`
+/// beside it.
+fn homework(parent: &Path, name: &str, assignment: &str, lib: &str, integrators: &str) -> PathBuf {
+    let out = Command::new(env!("CARGO_BIN_EXE_springlab"))
+        .current_dir(parent)
+        .args(["homework", "new", name, "--assignment", assignment])
+        .output()
+        .expect("run springlab");
+    assert!(out.status.success(), "{out:?}");
+    let dir = parent.join(name);
+    std::fs::write(dir.join("src/lib.rs"), lib).expect("write lib.rs");
+    std::fs::write(dir.join("src/integrators.rs"), integrators).expect("write");
+    dir
+}
+
+fn options() -> BuildOptions {
+    BuildOptions {
+        target_dir: target(),
+        call_limit: Duration::from_secs(4),
+    }
+}
+
+fn the_builder() -> Arc<Builder> {
+    builder(&options()).expect("builder")
+}
+
+fn lesson(number: u32) -> Lesson {
+    lesson::builtin()
+        .into_iter()
+        .map(|l| l.expect("lesson parses"))
+        .find(|l| l.number == number)
+        .expect("lesson exists")
+}
+
+/// The set-up of lesson `number`'s step `step` (from 1) with `method` if given, over the
+/// step's horizon (`seconds` when it has none).
+fn setup(
+    assignment: Assignment,
+    number: u32,
+    step: usize,
+    method: Option<Method>,
+    seconds: f64,
+) -> Setup {
+    let l = lesson(number);
+    let s = &l.steps[step - 1];
+    let mut scene = s.build_scene().expect("scene");
+    if let Some(m) = method {
+        scene.set_method(m);
+    }
+    let horizon = if s.horizon() > 0.0 {
+        s.horizon()
+    } else {
+        seconds
+    };
+    Setup::from_scene(assignment, number, &scene, horizon).expect("setup")
+}
+
+/// Runs the comparison to its horizon and returns the last frame (and every frame's failure
+/// state stays in it).
+fn run(dir: &Path, builder: &Arc<Builder>, setup: Setup) -> Frame {
+    let built = build_homework(dir, builder, &options()).expect("builds");
+    let horizon = setup.horizon;
+    let live = Live::start(built.homework, setup, LiveOptions::default());
+    live.run_free();
+    loop {
+        let frame = live
+            .next_frame(Duration::from_secs(60))
+            .expect("a frame within a minute");
+        if frame.finished {
+            assert_eq!(frame.step, horizon, "finishes at the horizon");
+            return frame;
+        }
+    }
+}
+
+fn parting(frame: &Frame) -> (u64, Quantity) {
+    let p = frame
+        .parting
+        .unwrap_or_else(|| panic!("a parting is reported: {frame:?}"));
+    println!("{}", p.describe());
+    (p.step, p.quantity)
+}
+
+#[test]
+fn correct_crates_never_part_from_the_reference() {
+    let parent = scratch("correct");
+    let b = the_builder();
+    let rope = homework(&parent, "rope", "rope", ROPE, INTEGRATORS);
+    let cases = [
+        // Lesson 1: the rope's semi-implicit Euler; lesson 3: explicit Euler on the rope;
+        // lesson 4: Verlet beside semi-implicit Euler, with damping.
+        setup(Assignment::Rope, 1, 1, None, 10.0),
+        setup(Assignment::Rope, 3, 3, None, 5.0),
+        setup(Assignment::Rope, 4, 3, None, 10.0),
+    ];
+    for s in cases {
+        let name = s.integrator.name();
+        let frame = run(&rope, &b, s);
+        assert_eq!(frame.failure, None, "{name}");
+        assert_eq!(frame.parting, None, "{name}: {frame:?}");
+        assert!(frame.distance < 1e-9, "{name}: {}", frame.distance);
+    }
+    let jelly = homework(&parent, "jelly", "jelly", JELLY, INTEGRATORS);
+    let s = setup(Assignment::Jelly, 5, 2, Some(Method::Rk4), 0.5);
+    let frame = run(&jelly, &b, s);
+    assert_eq!(frame.failure, None);
+    assert_eq!(frame.parting, None, "{frame:?}");
+}
+
+#[test]
+fn each_planted_mistake_parts_at_its_step_and_quantity() {
+    let parent = scratch("mistakes");
+    let b = the_builder();
+    // Three mistakes in three methods of one crate: Verlet without its damping factor,
+    // explicit Euler adding the acceleration to the position, semi-implicit Euler moving with
+    // the old velocity.
+    let mut lib = patch(
+        ROPE,
+        "(1.0 - damping) * (x - m.last_position)",
+        "(x - m.last_position)",
+    );
+    lib = patch(
+        &lib,
+        "                m.position += dt * m.velocity;\n                m.velocity += dt * a;",
+        "                m.position += dt * a;\n                m.velocity += dt * a;",
+    );
+    lib = patch(
+        &lib,
+        "                m.velocity += dt * a;\n                m.position += dt * m.velocity;",
+        "                m.position += dt * m.velocity;\n                m.velocity += dt * a;",
+    );
+    let rope = homework(&parent, "rope", "rope", &lib, INTEGRATORS);
+    // Verlet without damping: the rope starts at rest (x_0 - x_{-1} = 0), so step 1 agrees;
+    // at step 2 the displacement lacks γ of itself, seen first in Verlet's velocity
+    // (x_n - x_{n-1})/dt, which divides the position difference by dt.
+    let verlet = run(&rope, &b, setup(Assignment::Rope, 4, 3, None, 10.0));
+    assert_eq!(parting(&verlet), (2, Quantity::Velocity));
+    // x += a dt: wrong from the first step on, in the position.
+    let explicit = run(&rope, &b, setup(Assignment::Rope, 3, 3, None, 5.0));
+    assert_eq!(parting(&explicit), (1, Quantity::Position));
+    // Semi-implicit Euler with the old velocity is explicit Euler: the position lags by dt² a.
+    let semi = run(&rope, &b, setup(Assignment::Rope, 1, 1, None, 10.0));
+    assert_eq!(parting(&semi), (1, Quantity::Position));
+
+    // The pinned end moves: projection moves both ends of every spring by half.
+    let pins = patch(
+        ROPE,
+        "match (pa, pb) {",
+        "match (false && pa, false && pb) {",
+    );
+    let pins = homework(&parent, "pins", "rope", &pins, INTEGRATORS);
+    // The first projection already moves the pin; Verlet's velocity shows it first (the
+    // displacement over dt = 1/64 s passes τV before the displacement passes τL).
+    let moved = run(&pins, &b, setup(Assignment::Rope, 4, 3, None, 10.0));
+    assert_eq!(parting(&moved), (1, Quantity::Velocity));
+
+    // RK4 without k1 in the final combination: wrong from the first step.
+    let rk4 = patch(
+        &patch(INTEGRATORS, "(k1x[i] + 2.0 * k2x[i]", "(2.0 * k2x[i]"),
+        "(k1v[i] + 2.0 * k2v[i]",
+        "(2.0 * k2v[i]",
+    );
+    let jelly = homework(&parent, "jelly", "jelly", JELLY, &rk4);
+    let frame = run(
+        &jelly,
+        &b,
+        setup(Assignment::Jelly, 5, 2, Some(Method::Rk4), 0.5),
+    );
+    // The weights sum to 5/6: the velocity update lacks a sixth of a dt of acceleration at
+    // once, the position only dt² of it.
+    assert_eq!(parting(&frame), (1, Quantity::Velocity));
+}
+
+#[test]
+fn a_panicking_looping_or_exiting_crate_is_a_message_and_the_reference_keeps_going() {
+    let parent = scratch("hostile");
+    let b = the_builder();
+    let verlet = "fn verlet(&self, rope: &mut Rope, dt: f64, damping: f64, physics: &Physics) {";
+    let explicit = "fn explicit_euler(&self, rope: &mut Rope, dt: f64, physics: &Physics) {";
+    let semi = "fn semi_implicit_euler(&self, rope: &mut Rope, dt: f64, physics: &Physics) {";
+    let mut lib = patch(
+        ROPE,
+        verlet,
+        &format!(
+            "{verlet}\n        static CALLS: std::sync::atomic::AtomicUsize = \
+             std::sync::atomic::AtomicUsize::new(0);\n        \
+             if CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) == 11 {{\n            \
+             let empty: Vec<usize> = Vec::new();\n            let _ = empty[rope.masses.len()];\n        }}"
+        ),
+    );
+    lib = patch(
+        &lib,
+        explicit,
+        &format!("{explicit}\n        std::process::exit(3);"),
+    );
+    lib = patch(&lib, semi, &format!("{semi}\n        loop {{}}"));
+    let dir = homework(&parent, "hostile", "rope", &lib, INTEGRATORS);
+
+    let panics = run(&dir, &b, setup(Assignment::Rope, 4, 3, None, 10.0));
+    let why = panics.failure.expect("the panic is reported");
+    assert!(
+        why.starts_with("your verlet() panicked at step 12: index out of bounds")
+            && why.contains("src/lib.rs:"),
+        "{why}"
+    );
+    assert_eq!(panics.yours, None, "your side stops");
+    assert_eq!(panics.reference.len(), 12, "the reference keeps its rope");
+
+    let exits = run(&dir, &b, setup(Assignment::Rope, 3, 3, None, 5.0));
+    let why = exits.failure.expect("the exit is reported");
+    assert!(
+        why.starts_with("your program ended during explicit_euler() at step 1")
+            && why.contains("status 3"),
+        "{why}"
+    );
+
+    // The endless loop: the call's deadline ends it, the reference goes on; stopping never
+    // waits for a call in progress.
+    let quick = BuildOptions {
+        call_limit: Duration::from_millis(500),
+        ..options()
+    };
+    let built = build_homework(&dir, &b, &quick).expect("builds");
+    let live = Live::start(
+        built.homework,
+        setup(Assignment::Rope, 1, 1, None, 10.0),
+        LiveOptions::default(),
+    );
+    live.run_free();
+    let failed = loop {
+        let frame = live.next_frame(Duration::from_secs(30)).expect("a frame");
+        if frame.failure.is_some() {
+            break frame;
+        }
+    };
+    let why = failed.failure.expect("failure");
+    assert_eq!(
+        why, "your semi_implicit_euler() did not return in time at step 1",
+        "{why}"
+    );
+    let later = live
+        .next_frame(Duration::from_secs(30))
+        .expect("the reference goes on");
+    assert!(later.step > failed.step);
+    drop(live);
+
+    let built = build_homework(&dir, &b, &quick).expect("builds");
+    let live = Live::start(
+        built.homework,
+        setup(Assignment::Rope, 1, 1, None, 10.0),
+        LiveOptions::default(),
+    );
+    live.run_free();
+    std::thread::sleep(Duration::from_millis(100));
+    let asked = Instant::now();
+    drop(live);
+    assert!(
+        asked.elapsed() < Duration::from_secs(1),
+        "stopping returns while the student's loop runs"
+    );
+}
+
+/// The next report of `watcher` that is not `Building`, waiting up to a minute.
+fn settled(watcher: &Watcher) -> Reload {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while Instant::now() < deadline {
+        match watcher.next(Duration::from_millis(200)) {
+            Some(Reload::Building) | None => {}
+            Some(other) => return other,
+        }
+    }
+    panic!("no build result within a minute");
+}
+
+#[test]
+fn a_save_rebuilds_the_crate_and_reports_the_first_compiler_error_or_reloaded() {
+    let parent = scratch("watch");
+    let dir = homework(&parent, "rope", "rope", ROPE, INTEGRATORS);
+    let watcher = Watcher::start(&dir, the_builder(), options()).expect("watch");
+    assert_eq!(
+        watcher.next(Duration::from_secs(5)).map(|r| r.status()),
+        Some("building…".to_string())
+    );
+    let Reload::Reloaded(first) = settled(&watcher) else {
+        panic!("the first build succeeds");
+    };
+    assert_eq!(first.assignment, Assignment::Rope);
+    // A save with a type error: the compiler's first error, bounded.
+    let broken = patch(
+        ROPE,
+        "        let d = b - a;\n        let l = d.length();",
+        "        let d = b - a;\n        let l: u8 = d.length();",
+    );
+    std::fs::write(dir.join("src/lib.rs"), &broken).expect("save");
+    let Reload::Failed(why) = settled(&watcher) else {
+        panic!("the broken save does not build");
+    };
+    assert!(
+        why.starts_with("your crate did not build: error[E0308]: mismatched types"),
+        "{why}"
+    );
+    assert!(why.lines().count() <= 12 && why.len() <= 1300, "{why}");
+    // The fix: reloaded, and the new program is the correct one.
+    std::fs::write(dir.join("src/lib.rs"), ROPE).expect("save");
+    let Reload::Reloaded(fixed) = settled(&watcher) else {
+        panic!("the fixed crate builds");
+    };
+    let live = Live::start(
+        fixed.homework.clone(),
+        setup(Assignment::Rope, 3, 3, None, 1.0),
+        LiveOptions::default(),
+    );
+    live.run_free();
+    let last = std::iter::from_fn(|| live.next_frame(Duration::from_secs(30)))
+        .find(|f| f.finished)
+        .expect("finishes");
+    assert_eq!(last.parting, None);
+}
+
+/// The app, headless, on lesson 4 with the crate in `dir` attached; runs until the screen
+/// (120×40) shows `wanted` and returns it.
+fn app_until(dir: &Path, wanted: &str) -> (App, String) {
+    let mut app = App::new(lesson::builtin(), Theme { color: false })
+        .with_homework_options(Some(dir.to_path_buf()), options());
+    let i = app.find_lesson("verlet").expect("lesson 4");
+    app.open_lesson(i).expect("opens");
+    app.handle_key(KeyEvent::new(KeyCode::Char(' '), KeyModifiers::NONE));
+    let deadline = Instant::now() + Duration::from_secs(120);
+    loop {
+        app.tick(0.05);
+        let mut terminal = Terminal::new(TestBackend::new(120, 40)).expect("backend");
+        terminal
+            .draw(|frame| frame.render_widget(&app, frame.area()))
+            .expect("draw");
+        let text = terminal.backend().to_string();
+        if text.contains(wanted) {
+            return (app, text);
+        }
+        assert!(Instant::now() < deadline, "never shown: {wanted}\n{text}");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+#[test]
+fn the_app_shows_both_ropes_the_parting_and_a_failure_and_quits_at_once() {
+    let parent = scratch("app");
+    let lib = patch(
+        ROPE,
+        "(1.0 - damping) * (x - m.last_position)",
+        "(x - m.last_position)",
+    );
+    let undamped = homework(&parent, "undamped", "rope", &lib, INTEGRATORS);
+    let (_, text) = app_until(&undamped, "parted at step 2");
+    assert!(text.contains("── yours ── reference"), "{text}");
+    assert!(text.contains("verlet()"), "{text}");
+
+    let verlet = "fn verlet(&self, rope: &mut Rope, dt: f64, damping: f64, physics: &Physics) {";
+    let lib = patch(
+        ROPE,
+        verlet,
+        &format!(
+            "{verlet}\n        static CALLS: std::sync::atomic::AtomicUsize = \
+             std::sync::atomic::AtomicUsize::new(0);\n        \
+             if CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) == 11 {{\n            \
+             let empty: Vec<usize> = Vec::new();\n            let _ = empty[rope.masses.len()];\n        }}"
+        ),
+    );
+    let panics = homework(&parent, "panics", "rope", &lib, INTEGRATORS);
+    let (mut app, _) = app_until(
+        &panics,
+        "your verlet() panicked at step 12: index out of bounds",
+    );
+    let asked = Instant::now();
+    app.handle_key(KeyEvent::new(KeyCode::Char('q'), KeyModifiers::NONE));
+    assert!(matches!(app.screen(), Screen::Menu), "q leaves the lesson");
+    drop(app);
+    assert!(
+        asked.elapsed() < Duration::from_secs(1),
+        "q answers at once"
+    );
+}
+
+#[test]
+fn a_failed_check_names_the_lesson_that_shows_it_live() {
+    let parent = scratch("see-it");
+    let lib = patch(
+        ROPE,
+        "(1.0 - damping) * (x - m.last_position)",
+        "(x - m.last_position)",
+    );
+    homework(&parent, "undamped", "rope", &lib, INTEGRATORS);
+    let t = target();
+    let out = Command::new(env!("CARGO_BIN_EXE_springlab"))
+        .current_dir(&parent)
+        .args(["grade", "undamped", "--target-dir"])
+        .arg(&t)
+        .output()
+        .expect("run springlab grade");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("score 30 / 35"), "{stdout}");
+    // The damping item fails; its hint names lesson 4; the passing items name nothing.
+    assert_eq!(
+        stdout
+            .matches("see it: springlab lesson 4 --homework .")
+            .count(),
+        stdout.matches("): failed").count(),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("see it: springlab lesson 4 --homework ."),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("see it: springlab lesson 3"), "{stdout}");
+}
