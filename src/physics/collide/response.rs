@@ -66,7 +66,7 @@ pub fn resolve_logged<'a, 'b>(
     if owed > 0.0 {
         // Every particle's velocity changes: record them all (the records made above come first
         // and are the ones kept).
-        if let Some(log) = log.as_deref_mut() {
+        if let Some(log) = log {
             for i in (0..n).filter(|&i| model.inv_mass[i] != 0.0) {
                 log.record(i, state.x[i], state.v[i]);
             }
