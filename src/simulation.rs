@@ -418,6 +418,10 @@ impl Simulation {
             energy_initial: self.energy_initial,
             dissipated: self.accounting.then_some(self.dissipated),
             residual: self.accounting.then(|| self.energy_residual()),
+            not_accurate: self
+                .accounting
+                .then(|| self.energy_residual())
+                .filter(|r| r.abs() > self.energy_initial.abs()),
             solver: (self.solver.solves > 0).then(|| self.solver_report()),
             bodies: self
                 .scene
@@ -651,6 +655,10 @@ pub struct RunReport {
     /// `energy.total + dissipated.total - energy_initial` (J): the method's own energy error;
     /// null when accounting is off.
     pub residual: Option<f64>,
+    /// The residual (J) when it is larger than the starting energy, `|residual| > |E₀|`: the run
+    /// stayed bounded but the method created (or removed) more energy than the scene has, so
+    /// its motion is not to be trusted (issue 26); null otherwise.
+    pub not_accurate: Option<f64>,
     /// Implicit Euler's linear solves; the key is left out when no body uses it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub solver: Option<SolverReport>,

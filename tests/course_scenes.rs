@@ -566,9 +566,14 @@ fn cube_sphere_lands_on_the_ball_and_slides_off() {
         closest < 0.01,
         "the cube never touched the ball ({closest} m)"
     );
-    // Off-centre landing: it leaves towards +x, +z, symmetrically in x and z.
+    // Off-centre landing: it leaves towards +x, +z, symmetrically in x and z. The slide off the
+    // top of a ball is an unstable motion that grows any difference between the two halves: the
+    // energy budget of the contacts sums each particle's springs in the particle's own order, and
+    // those rounding-level (1e-16 J) differences between mirror particles grow to a few 1e-4 m
+    // over the slide; 1 mm (1e-4 of the 7 m travelled) still tells a symmetric slide from a
+    // lopsided one.
     let c = centroid(&sim);
-    assert!(c.x > 3.0 && (c.x - c.z).abs() < 1e-6, "{c}");
+    assert!(c.x > 3.0 && (c.x - c.z).abs() < 1e-3, "{c}");
 }
 
 #[test]

@@ -338,6 +338,17 @@ pub fn print_summary(out: &mut impl Write, r: &RunReport) -> std::io::Result<()>
         )?;
     }
     match &r.diverged {
+        None if r.not_accurate.is_some() => {
+            let x = r.not_accurate.unwrap_or(0.0);
+            let verb = if x > 0.0 { "created" } else { "removed" };
+            writeln!(
+                out,
+                "bounded but not accurate: the method {verb} {:.3e} J (more than the {:.3e} J \
+                 the scene started with)",
+                x.abs(),
+                r.energy_initial
+            )
+        }
         None => writeln!(out, "stable: no divergence"),
         Some(d) => writeln!(
             out,

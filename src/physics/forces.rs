@@ -410,6 +410,9 @@ impl<'a> From<&'a Model> for World<'a> {
             contact: &model.contact,
             gravity: model.gravity,
             inv_mass: &model.inv_mass,
+            springs: &model.springs,
+            incident: &model.incident,
+            incident_start: &model.incident_start,
         }
     }
 }

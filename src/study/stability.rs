@@ -90,11 +90,18 @@ use serde::Serialize;
 
 use super::StudyError;
 use super::linear::{self, Linearisation};
-use super::modes::{omega_max, omega_max_from};
-use super::theory::{self, Spectrum, TheoryLimit};
-use crate::physics::{Method, OscillatorLimit, State, energy};
+use super::modes::omega_max;
+use super::theory::{self, TheoryLimit};
+use crate::physics::{Method, OscillatorLimit, energy};
 use crate::scene::{self, Scene};
-use crate::simulation::Simulation;
+
+mod confirm;
+mod stiffest;
+
+pub use confirm::{confirm_run, confirm_steps};
+use confirm::{confirm_step_count, confirm_with_omega};
+pub use stiffest::stiffest;
+use stiffest::stiffest_state;
 
 /// Default horizon `T` (s).
 pub const DEFAULT_HORIZON: f64 = 2.0;
@@ -538,77 +545,6 @@ pub fn stability(
     })
 }
 
-/// The stiffest state of `scene` along a run of `horizon` seconds (s) with its own methods
-/// and `dt` (module docs), for library callers: [`StiffestState`] with `ω_max` of the stiffest
-/// body at the start as the reference of its `ratio`. `None` when no body has stiffness.
-#[must_use]
-pub fn stiffest(scene: &Scene, horizon: f64) -> Option<StiffestState> {
-    let (body, omega) = scene
-        .bodies
-        .iter()
-        .map(|b| omega_max(&b.model, &b.state).omega)
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-        .filter(|(_, w)| *w > 0.0 && w.is_finite())?;
-    Some(stiffest_state(scene, horizon, (body, omega)).0)
-}
-
-/// The stiffest state of `scene` along a run of `horizon` seconds (module docs): the report,
-/// the index of its body and the damped theory's spectrum there. `omega` (rad/s) is `ω_max` of
-/// body `stiffest` at the start, the answer when no sample is stiffer.
-fn stiffest_state(
-    scene: &Scene,
-    horizon: f64,
-    (stiffest, omega): (usize, f64),
-) -> (StiffestState, usize, Spectrum) {
-    let mut sim = Simulation::new(scene.clone());
-    sim.set_accounting(false);
-    let dt = scene.dt;
-    let every = ((STIFFEST_SAMPLE_INTERVAL / dt).round() as u64).max(1);
-    let steps = (horizon / dt).ceil() as u64;
-    let mut warm: Vec<Vec<DVec3>> = vec![Vec::new(); scene.bodies.len()];
-    // (ω_max, body, time, state) of the stiffest sample so far; the start counts.
-    let mut best: Option<(f64, usize, f64, State)> = None;
-    let mut samples = 0;
-    let mut stopped = None;
-    for k in 0..=steps {
-        if k > 0
-            && let Some(d) = sim.step()
-        {
-            stopped = Some(format!("diverged at t = {:.4e} s: {}", d.time, d.reason));
-            break;
-        }
-        if k % every != 0 && k != steps {
-            continue;
-        }
-        for (i, b) in sim.scene.bodies.iter().enumerate() {
-            let w = omega_max_from(&b.model, &b.state, &mut warm[i]).omega;
-            samples += 1;
-            if w.is_finite() && best.as_ref().is_none_or(|(top, ..)| w > *top) {
-                best = Some((w, i, sim.time(), b.state.clone()));
-            }
-        }
-    }
-    let (w, body, time, state) = match best {
-        Some((w, body, time, state)) if w > omega => (w, body, time, state),
-        // Never stiffer than at the start (or nothing finite): the start is the stiffest.
-        _ => (omega, stiffest, 0.0, scene.bodies[stiffest].state.clone()),
-    };
-    let b = &scene.bodies[body];
-    let spectrum = theory::spectrum(&b.model, &state, w);
-    let report = StiffestState {
-        method: b.method,
-        dt,
-        samples,
-        time,
-        omega_max: w,
-        ratio: w / omega,
-        theory_spectrum: spectrum.how.clone(),
-        stopped,
-    };
-    (report, body, spectrum)
-}
-
 /// Below a failed `z`: lower it by 5 % three times, then halve, until a run passes (none below
 /// the floor); then bisect to [`CONFIRM_TOLERANCE`]. `failed` ends as the smallest failing `z`.
 fn below(run: &mut dyn FnMut(f64) -> bool, failed: &mut f64) -> Option<f64> {
@@ -845,129 +781,5 @@ impl Context<'_> {
     fn confirmation(&self, method: Method, dt: f64) -> Confirmation {
         let steps = confirm_step_count(dt, self.horizon);
         confirm_with_omega(self.scene, method, dt, steps, self.scale, self.omega)
-    }
-}
-
-/// One confirmation run (module docs): `scene` with `method` at `dt` (s) for
-/// `min(⌈50 horizon/dt⌉, 20 000)` steps (at least 100), judged against the energy scale `scale`
-/// (J, [`energy_scale`]). Library callers can use it to check a `dt` of their own.
-#[must_use]
-pub fn confirm_run(
-    scene: &Scene,
-    method: Method,
-    dt: f64,
-    horizon: f64,
-    scale: f64,
-) -> Confirmation {
-    confirm_steps(scene, method, dt, confirm_step_count(dt, horizon), scale)
-}
-
-/// `min(⌈50 horizon/dt⌉, 20 000)` steps, at least 100.
-fn confirm_step_count(dt: f64, horizon: f64) -> u64 {
-    ((CONFIRM_HORIZONS * horizon / dt).ceil() as u64).clamp(CONFIRM_MIN_STEPS, CONFIRM_MAX_STEPS)
-}
-
-/// [`confirm_run`] for a given number of steps; `dt_omega` uses the stiffest body's `ω_max`
-/// ([`omega_max`]).
-#[must_use]
-pub fn confirm_steps(
-    scene: &Scene,
-    method: Method,
-    dt: f64,
-    steps: u64,
-    scale: f64,
-) -> Confirmation {
-    let omega = scene
-        .bodies
-        .iter()
-        .map(|b| omega_max(&b.model, &b.state).omega)
-        .filter(|w| w.is_finite())
-        .fold(0.0, f64::max);
-    confirm_with_omega(scene, method, dt, steps, scale, omega)
-}
-
-/// [`confirm_steps`] with `ω_max` (rad/s) already known.
-fn confirm_with_omega(
-    scene: &Scene,
-    method: Method,
-    dt: f64,
-    steps: u64,
-    scale: f64,
-    omega: f64,
-) -> Confirmation {
-    {
-        let mut scene = scene.clone();
-        scene.set_method(method);
-        let driven = scene.bodies.iter().any(|b| {
-            b.state
-                .spheres
-                .iter()
-                .any(|s| s.kinematic && s.velocity != DVec3::ZERO)
-        });
-        let mut sim = Simulation::new(scene);
-        sim.set_dt(dt);
-        sim.set_accounting(false);
-        let e0 = sim.energy().total;
-        let level = (!driven && scale > 0.0).then_some(CONFIRM_ENERGY_SCALES * scale);
-        // Every step on small scenes (a sampled oscillating energy would alias), every 10 on
-        // large ones, where the energy is a noticeable share of a step's cost.
-        let every = if sim.scene.spring_count() < 2_000 {
-            1
-        } else {
-            CONFIRM_ENERGY_EVERY
-        };
-        let explosion = CONFIRM_EXPLOSION_SCALES * scale;
-        // The largest and the smallest rise E - E_0 of each quarter of the run.
-        let mut quarters = [f64::NEG_INFINITY; 4];
-        let mut lowest = [f64::INFINITY; 4];
-        let mut reason = None;
-        for k in 0..steps {
-            if let Some(d) = sim.step() {
-                reason = Some(format!("diverged at t = {:.4e} s: {}", d.time, d.reason));
-                break;
-            }
-            if level.is_some() && (k % every == 0 || k + 1 == steps) {
-                let r = sim.energy().total - e0;
-                let q = (4 * k / steps) as usize;
-                quarters[q] = quarters[q].max(r);
-                lowest[q] = lowest[q].min(r);
-                if r.is_nan() || r > explosion {
-                    reason = Some(format!(
-                        "energy rose {r:.4e} J above its start, more than {explosion:.4e} J \
-                         (10⁴ S), at t = {:.4e} s",
-                        sim.time()
-                    ));
-                    break;
-                }
-            }
-        }
-        let residual_max = quarters.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        if reason.is_none()
-            && let Some(level) = level
-        {
-            if quarters[3] > level && quarters[3] > CONFIRM_GROWTH * quarters[1] {
-                reason = Some(format!(
-                    "energy still rising: {:.4e} J above its start in the last quarter of the \
-                     run, {:.4e} J in the second, above {level:.4e} J (10 S)",
-                    quarters[3], quarters[1]
-                ));
-            } else if lowest[3] > level {
-                reason = Some(format!(
-                    "energy pumped up: never below {:.4e} J above its start in the last quarter \
-                     of the run, more than {level:.4e} J (10 S)",
-                    lowest[3]
-                ));
-            }
-        }
-        let allowed = level;
-        Confirmation {
-            dt,
-            dt_omega: dt * omega,
-            steps: sim.steps,
-            passed: reason.is_none(),
-            reason,
-            rise_max: allowed.map(|_| residual_max),
-            rise_allowed: allowed,
-        }
     }
 }

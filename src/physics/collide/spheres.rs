@@ -136,11 +136,15 @@ pub fn collide_spheres_logged<'a, 'b>(
     }
     for s in spheres.iter_mut().filter(|s| !s.kinematic) {
         for collider in model.colliders {
+            // A sphere has no springs: its climb is paid from its own motion (what that cannot
+            // pay is not owed: a sphere is a body of its own).
+            let gravity = model.gravity;
+            let rise = |from: DVec3, to: DVec3| -gravity.dot(to - from);
             respond(
                 collider,
                 s.radius,
                 params,
-                model.gravity,
+                &rise,
                 &mut s.center,
                 &mut s.velocity,
             );

@@ -1,0 +1,275 @@
+//! Velocity response and projection after a step (module docs of `collide`, "Velocity response
+//! and projection").
+
+use glam::DVec3;
+
+use super::{Bodies, Collider, Contact, ContactParams, DynamicSphere, World, step_spheres};
+
+/// Velocity response and positional projection of every free particle against the model's
+/// colliders, after a step of `dt` seconds (module docs). Keeps position Verlet's history
+/// consistent: a particle whose velocity changed gets `x_prev = x - dt v`.
+pub fn resolve<'a, 'b>(model: impl Into<World<'a>>, state: impl Into<Bodies<'b>>, dt: f64) {
+    resolve_logged(model, state, dt, None);
+}
+
+/// [`resolve`], recording in `log` (when given) every particle it changes.
+///
+/// The energy budget of the module docs: each particle pays its projection from its own kinetic
+/// energy first; what it cannot pay the whole body pays at the end ([`take_kinetic`]).
+pub fn resolve_logged<'a, 'b>(
+    model: impl Into<World<'a>>,
+    state: impl Into<Bodies<'b>>,
+    dt: f64,
+    mut log: Option<&mut Changes>,
+) {
+    let (model, state) = (model.into(), state.into());
+    if model.colliders.is_empty() {
+        return;
+    }
+    let params = &model.contact;
+    let gravity = model.gravity;
+    let n = state.x.len().min(model.particle_count());
+    // Where every particle was before the responses: each particle's springs are measured
+    // against these, so that no particle's answer depends on the order (module docs).
+    let before: Vec<DVec3> = state.x[..n].to_vec();
+    let mut owed = 0.0;
+    for i in 0..n {
+        let w = model.inv_mass[i];
+        if w == 0.0 {
+            continue;
+        }
+        let (x_old, v_old) = (state.x[i], state.v[i]);
+        let (mut x, mut v) = (x_old, v_old);
+        let mut touched = false;
+        for collider in model.colliders {
+            // The rise of potential energy per kg from `from` to `to` (J/kg): gravity, and the
+            // springs at i (neighbours where they were) where they gain; a release is not paid
+            // back.
+            let rise = |from: DVec3, to: DVec3| {
+                let elastic = model.elastic_at(&before, i, to) - model.elastic_at(&before, i, from);
+                -gravity.dot(to - from) + w * elastic.max(0.0)
+            };
+            if let Some(debt) = respond(collider, 0.0, params, &rise, &mut x, &mut v) {
+                touched = true;
+                owed += debt / w;
+            }
+        }
+        if touched {
+            state.x[i] = x;
+            state.v[i] = v;
+            keep_verlet_history(state.history_valid, &mut state.x_prev[i], x, v, dt);
+            if let Some(log) = log.as_deref_mut() {
+                log.record(i, x_old, v_old);
+            }
+        }
+    }
+    if owed > 0.0 {
+        // Every particle's velocity changes: record them all (the records made above come first
+        // and are the ones kept).
+        if let Some(log) = log {
+            for i in (0..n).filter(|&i| model.inv_mass[i] != 0.0) {
+                log.record(i, state.x[i], state.v[i]);
+            }
+        }
+        take_kinetic(model.inv_mass, &mut state.v[..n], owed);
+        for i in (0..n).filter(|&i| model.inv_mass[i] != 0.0) {
+            keep_verlet_history(
+                state.history_valid,
+                &mut state.x_prev[i],
+                state.x[i],
+                state.v[i],
+                dt,
+            );
+        }
+    }
+}
+
+/// `Σ ½ m |v|²` over the free particles (J), `m = 1/w` from the inverse masses `inv_mass`
+/// (1/kg).
+fn kinetic_energy(inv_mass: &[f64], v: &[DVec3]) -> f64 {
+    inv_mass
+        .iter()
+        .zip(v)
+        .filter(|(w, _)| **w != 0.0)
+        .map(|(w, v)| 0.5 * v.length_squared() / w)
+        .sum()
+}
+
+/// Takes `amount` joules (at most all there is) out of the kinetic energy of the free particles
+/// by scaling every velocity by one factor, and returns what it took (J):
+///
+/// ```text
+/// K  = Σ ½ m_i |v_i|²
+/// v' = √(1 - ΔE/K) v,       ΔE = min(amount, K)
+/// ```
+/// where `m_i` (kg) are the masses (`inv_mass`: 1/kg, zero for a pinned particle, which is
+/// left alone) and `v_i` (m/s) the velocities. One factor for all keeps the shape of the motion
+/// (the direction of every velocity and their ratios); it is the body's payment for a contact
+/// correction that raised its potential energy (module docs, "energy budget").
+pub fn take_kinetic(inv_mass: &[f64], v: &mut [DVec3], amount: f64) -> f64 {
+    let kinetic = kinetic_energy(inv_mass, v);
+    if amount <= 0.0 || kinetic <= 0.0 {
+        return 0.0;
+    }
+    let taken = amount.min(kinetic);
+    let factor = (1.0 - taken / kinetic).max(0.0).sqrt();
+    for (w, v) in inv_mass.iter().zip(v.iter_mut()) {
+        if *w != 0.0 {
+            *v *= factor;
+        }
+    }
+    taken
+}
+
+/// What a collision response changed, for the energy it removed without a pass over the whole
+/// system ([`crate::physics::energy::energy_change`]): every particle it moved or slowed, with its
+/// position (m) and velocity (m/s) before the first change, and the dynamic spheres' energy
+/// before (J).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Changes {
+    /// `(particle, x before, v before)`, sorted by particle, each once after [`Changes::finish`].
+    pub(crate) particles: Vec<(u32, DVec3, DVec3)>,
+    /// Kinetic and gravitational energy of the non-kinematic spheres before (J).
+    pub(crate) spheres_before: f64,
+    /// After [`Changes::finish`]: `slot[i]` is the index of particle `i` in `particles`, or
+    /// `u32::MAX` when it did not change (grown to the particle count on first use).
+    slot: Vec<u32>,
+}
+
+impl Changes {
+    /// Forgets everything recorded.
+    pub fn clear(&mut self) {
+        for &(i, ..) in &self.particles {
+            if let Some(s) = self.slot.get_mut(i as usize) {
+                *s = u32::MAX;
+            }
+        }
+        self.particles.clear();
+        self.spheres_before = 0.0;
+    }
+
+    pub(super) fn record(&mut self, i: usize, x: DVec3, v: DVec3) {
+        self.particles.push((i as u32, x, v));
+    }
+
+    /// Sorts the records by particle and keeps each particle's first (its state before any
+    /// change); `particles` is the system's particle count.
+    pub fn finish(&mut self, particles: usize) {
+        // A stable sort keeps the records of one particle in the order they were made.
+        self.particles.sort_by_key(|p| p.0);
+        self.particles.dedup_by_key(|p| p.0);
+        if self.slot.len() < particles {
+            self.slot.resize(particles, u32::MAX);
+        }
+        for (k, &(i, ..)) in self.particles.iter().enumerate() {
+            self.slot[i as usize] = k as u32;
+        }
+    }
+
+    /// The record of particle `i`, if it changed.
+    pub(crate) fn of(&self, i: usize) -> Option<&(u32, DVec3, DVec3)> {
+        let k = *self.slot.get(i)?;
+        self.particles.get(k as usize)
+    }
+}
+
+/// Kinetic and gravitational energy of the non-kinematic dynamic `spheres` under `gravity`
+/// (m/s²), in J, as [`crate::physics::energy::energy`] counts them.
+#[must_use]
+pub fn spheres_energy(gravity: DVec3, spheres: &[DynamicSphere]) -> f64 {
+    spheres
+        .iter()
+        .filter(|s| !s.kinematic)
+        .map(|s| 0.5 * s.mass * s.velocity.length_squared() - s.mass * gravity.dot(s.center))
+        .sum()
+}
+
+/// The response of one point (a particle, or a sphere's centre with `offset` its radius, m) to
+/// one collider: projection, climb, bounce, impact friction (module docs). `rise(from, to)` is
+/// the potential energy per kg (J/kg) that moving the point from `from` to `to` adds. Returns
+/// `None` when nothing changed, else what the point's own kinetic energy could not pay and it
+/// owes its body (J/kg).
+pub(super) fn respond(
+    collider: &Collider,
+    offset: f64,
+    params: &ContactParams,
+    rise: &dyn Fn(DVec3, DVec3) -> f64,
+    x: &mut DVec3,
+    v: &mut DVec3,
+) -> Option<f64> {
+    if !collider.may_touch(*x, params.epsilon + offset) {
+        return None;
+    }
+    let Contact { phi, normal } = collider.contact(*x)?;
+    // A sphere touches when its centre is within its radius of the surface.
+    let phi = phi - offset;
+    let v_n = v.dot(normal);
+    if phi >= params.epsilon || (phi >= 0.0 && v_n >= 0.0) {
+        return None;
+    }
+    let mut v_t = *v - v_n * normal;
+    // Squared normal speed at the surface: s² = v_N² - 2 Δu, with Δu = u(x + Δx) - u(x) and
+    // Δx = -φ N.
+    let mut s2 = v_n * v_n;
+    if phi < 0.0 {
+        let start = *x;
+        *x = start - phi * normal;
+        s2 -= 2.0 * rise(start, *x);
+    }
+    let mut debt = 0.0;
+    if s2 < 0.0 {
+        // The climb costs more than the normal motion has: take the rest (J/kg) from the
+        // tangential kinetic energy, ½|v_T|² → max(0, ½|v_T|² - ½|s²|), and owe the body what
+        // that does not cover.
+        let t2 = v_t.length_squared();
+        if t2 + s2 > 0.0 {
+            v_t *= ((t2 + s2) / t2).sqrt();
+        } else {
+            debt = -0.5 * (t2 + s2);
+            v_t = DVec3::ZERO;
+        }
+        s2 = 0.0;
+    }
+    let s = s2.sqrt();
+    let v_n_new = if v_n >= 0.0 {
+        // Already moving away: only the climb to the surface slows it.
+        s
+    } else if s > params.rest_speed {
+        // Colliding: v_N' = -k_r v_N at the surface.
+        params.restitution * s
+    } else {
+        // Resting contact: no bounce.
+        0.0
+    };
+    // Impact friction: |v_T| loses k_f times the normal velocity gained, never reversing.
+    let gained = v_n_new - v_n;
+    let t = v_t.length();
+    if gained > 0.0 && t > 0.0 {
+        v_t *= (1.0 - params.friction * gained / t).max(0.0);
+    }
+    *v = v_t + v_n_new * normal;
+    Some(debt)
+}
+
+/// After a particle's `x` or `v` changed outside the integrator: Verlet's implied velocity
+/// `(x - x_prev)/dt` becomes the new `v` again (`x_prev = x - dt v`), if Verlet has a history.
+pub(super) fn keep_verlet_history(
+    history_valid: bool,
+    x_prev: &mut DVec3,
+    x: DVec3,
+    v: DVec3,
+    dt: f64,
+) {
+    if history_valid {
+        *x_prev = x - dt * v;
+    }
+}
+
+/// Everything collisions do after an integrator step of `dt` seconds: [`step_spheres`], then
+/// [`resolve`]. Returns at once when the model has no colliders and the state no spheres, so
+/// scenes without obstacles pay nothing. `Simulation::step` calls it for every body.
+pub fn after_step<'a, 'b>(model: impl Into<World<'a>>, state: impl Into<Bodies<'b>>, dt: f64) {
+    let (model, mut state) = (model.into(), state.into());
+    step_spheres(model, state.reborrow(), dt);
+    resolve(model, state, dt);
+}
