@@ -34,12 +34,16 @@ pub fn load(dir: Option<&Path>) -> anyhow::Result<Vec<Result<Lesson, LessonError
 ///
 /// # Errors
 /// No terminal, an unreadable `--lessons` directory, or a terminal failure.
-pub fn menu(dir: Option<&Path>, view: Option<tui::ViewMode>, no_save: bool) -> anyhow::Result<()> {
-    tui::run(load(dir)?, None, view, options(dir, no_save))
+pub fn menu(
+    dir: Option<&Path>,
+    view: Option<tui::ViewMode>,
+    (no_save, theme): (bool, Option<tui::Background>),
+) -> anyhow::Result<()> {
+    tui::run(load(dir)?, None, view, options(dir, no_save, theme))
 }
 
 /// Where progress goes (`--no-save`: nowhere) and the lessons' directory.
-fn options(dir: Option<&Path>, no_save: bool) -> tui::RunOptions {
+fn options(dir: Option<&Path>, no_save: bool, theme: Option<tui::Background>) -> tui::RunOptions {
     let progress = match tui::Progress::default_path() {
         Some(path) if !no_save => tui::Progress::load(&path),
         _ => tui::Progress::in_memory(),
@@ -47,6 +51,7 @@ fn options(dir: Option<&Path>, no_save: bool) -> tui::RunOptions {
     tui::RunOptions {
         progress,
         lessons_dir: dir.map(Path::to_path_buf),
+        theme,
     }
 }
 
@@ -58,11 +63,11 @@ pub fn open(
     dir: Option<&Path>,
     which: &str,
     view: Option<tui::ViewMode>,
-    no_save: bool,
+    (no_save, theme): (bool, Option<tui::Background>),
 ) -> anyhow::Result<()> {
     let lessons = load(dir)?;
     let index = find(&lessons, which)?;
-    tui::run(lessons, Some(index), view, options(dir, no_save))
+    tui::run(lessons, Some(index), view, options(dir, no_save, theme))
 }
 
 /// The index of lesson `which` (a number or a slug) in `lessons`.
