@@ -188,6 +188,9 @@ pub struct LessonRun {
     limit: Option<(Limit, f64)>,
     /// The spectra recomputed off the drawing thread after a change of the coefficients.
     background: background::Spectra,
+    /// The limit waits to be recomputed (once for a burst of keys: see
+    /// [`LessonRun::poll_background`]).
+    limit_stale: bool,
 }
 
 impl LessonRun {
@@ -238,6 +241,7 @@ impl LessonRun {
             spectra: Vec::new(),
             limit: None,
             background: background::Spectra::default(),
+            limit_stale: false,
         };
         let n = run.lesson.steps.len();
         run.met = vec![false; n];
@@ -366,27 +370,35 @@ impl LessonRun {
             .collect()
     }
 
-    /// Takes the spectra the worker finished since the last call; true when the limit changed.
+    /// Takes the spectra the worker finished since the last call and recomputes the limit
+    /// when a key changed what it depends on (once per frame however many keys came in: the
+    /// theory's limit over every mode of the cloth takes tens of milliseconds); true when the
+    /// limit changed.
     pub fn poll_background(&mut self) -> bool {
-        match self.background.poll() {
-            Some(spectra) => {
-                self.spectra = spectra;
-                self.refresh_limit();
-                self.version += 1;
-                true
-            }
-            None => false,
+        if let Some(spectra) = self.background.poll() {
+            self.spectra = spectra;
+            self.limit_stale = true;
         }
+        self.refresh_stale_limit()
     }
 
-    /// Waits for the spectra of the newest change (the public key API and tests read an
-    /// up-to-date limit after every key).
+    /// Waits for the spectra of the newest change and the limit (the public key API and tests
+    /// read an up-to-date limit after every key).
     pub fn settle(&mut self) {
         if let Some(spectra) = self.background.settle() {
             self.spectra = spectra;
-            self.refresh_limit();
-            self.version += 1;
+            self.limit_stale = true;
         }
+        self.refresh_stale_limit();
+    }
+
+    fn refresh_stale_limit(&mut self) -> bool {
+        if !std::mem::take(&mut self.limit_stale) {
+            return false;
+        }
+        self.refresh_limit();
+        self.version += 1;
+        true
     }
 
     /// True while the spectra of the newest change are being computed.

@@ -301,7 +301,7 @@ impl LessonRun {
             }
         }
         self.sim.rebase_energy();
-        self.refresh_limit();
+        self.limit_stale = true;
         self.message = Some(match target {
             None => format!("method: {method}"),
             Some(b) => format!(
@@ -384,7 +384,7 @@ impl LessonRun {
             body.params.verlet_damping = ladder(g, up, FIRST_VERLET_GAMMA, 10.0, MAX_VERLET_GAMMA);
         }
         self.sim.rebase_energy();
-        self.refresh_limit();
+        self.limit_stale = true;
         let dt = self.sim.dt();
         let g = self
             .sim
@@ -429,7 +429,7 @@ impl LessonRun {
             }
         }
         self.sim.rebase_energy();
-        self.refresh_limit();
+        self.limit_stale = true;
         let p = self
             .sim
             .scene
