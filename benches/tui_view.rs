@@ -48,7 +48,7 @@ fn bench_views(c: &mut Criterion) {
     let mut group = c.benchmark_group(format!("pane/{}x{}-cells", inner.width, inner.height));
     let mut buf = Buffer::empty(screen);
     group.bench_function("braille", |b| {
-        b.iter(|| sim_view::Braille.paint(&run, Theme { color: true }, inner, &mut buf));
+        b.iter(|| sim_view::Braille.paint(&run, Theme::DARK, inner, &mut buf));
     });
     for (name, depth) in [
         ("halfblocks-24bit", ColourDepth::TrueColour),
@@ -90,7 +90,7 @@ fn bench_views(c: &mut Criterion) {
             });
         });
     }
-    let mut app = App::new(lesson::builtin(), Theme { color: true }).with_display(
+    let mut app = App::new(lesson::builtin(), Theme::DARK).with_display(
         ViewMode::HalfBlocks,
         Graphics::NONE,
         ColourDepth::TrueColour,

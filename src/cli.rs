@@ -62,6 +62,14 @@ pub struct Cli {
     /// the user's data directory (a classroom machine).
     #[arg(long, global = true)]
     pub no_save: bool,
+    /// The lesson app's colours: for a light or a dark terminal background. Default: the
+    /// background the terminal reports (dark when it does not answer).
+    #[arg(long, global = true, value_name = "light|dark", value_parser = parse_theme)]
+    pub theme: Option<crate::tui::Background>,
+}
+
+fn parse_theme(s: &str) -> Result<crate::tui::Background, String> {
+    crate::tui::Background::parse(s)
 }
 
 fn parse_view(s: &str) -> Result<crate::tui::ViewMode, String> {
@@ -112,9 +120,13 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let dir = cli.lessons.as_deref();
     let result = match cli.command {
-        Some(Command::Lesson { which, homework }) => {
-            lessons::open(dir, &which, cli.view, cli.no_save, homework.as_deref())
-        }
+        Some(Command::Lesson { which, homework }) => lessons::open(
+            dir,
+            &which,
+            cli.view,
+            (cli.no_save, cli.theme),
+            homework.as_deref(),
+        ),
         Some(Command::Lessons) => lessons::list(dir),
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::Scenes(args)) => scenes::list(&args),
@@ -124,7 +136,7 @@ pub fn main() -> ExitCode {
         Some(Command::Advise(args)) => advise::run(&args),
         Some(Command::Homework(args)) => grade::homework(&args),
         Some(Command::Grade(args)) => grade::grade(&args),
-        None => lessons::menu(dir, cli.view, cli.no_save),
+        None => lessons::menu(dir, cli.view, (cli.no_save, cli.theme)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -35,6 +35,7 @@ pub mod raster;
 pub mod sim_view;
 pub mod status;
 mod terminal;
+pub mod theme;
 
 use std::cell::{Cell, RefCell};
 use std::time::{Duration, Instant};
@@ -51,6 +52,7 @@ pub use lesson_run::LessonRun;
 pub use progress::Progress;
 use raster::{Encoder, Job, PaneRenderer};
 pub use terminal::{RunOptions, init_terminal, restore_terminal, run};
+pub use theme::Background;
 
 /// The smallest terminal the app draws into (columns, rows).
 pub const MIN_SIZE: (u16, u16) = (80, 24);
@@ -65,32 +67,67 @@ const RASTER_FRAME: Duration = Duration::from_micros(33_333);
 /// Wall time a frame may spend stepping before the rest of its steps are dropped.
 const STEP_BUDGET: Duration = Duration::from_millis(20);
 
-/// Colours from the 16-colour palette, or none at all (`NO_COLOR`).
+/// Colours from the 16-colour palette made for the terminal's background ([`theme`]), or none
+/// at all (`NO_COLOR`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Theme {
     /// False when the `NO_COLOR` environment variable is set and not empty.
     pub color: bool,
+    /// The background the colours are chosen for.
+    pub background: Background,
 }
 
 impl Theme {
-    /// Colours unless `NO_COLOR` is set to a non-empty value (<https://no-color.org>).
+    /// No colours (as with `NO_COLOR`).
+    pub const PLAIN: Theme = Theme {
+        color: false,
+        background: Background::Dark,
+    };
+
+    /// Colours for a dark background.
+    pub const DARK: Theme = Theme {
+        color: true,
+        background: Background::Dark,
+    };
+
+    /// Colours for a light background.
+    pub const LIGHT: Theme = Theme {
+        color: true,
+        background: Background::Light,
+    };
+
+    /// Colours unless `NO_COLOR` is set to a non-empty value (<https://no-color.org>), for a
+    /// dark background (see [`Theme::on`]).
     #[must_use]
     pub fn from_env() -> Theme {
         let no_color = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
-        Theme { color: !no_color }
+        Theme {
+            color: !no_color,
+            background: Background::Dark,
+        }
     }
 
-    /// `c`, or the terminal's default colour when colours are off.
+    /// The same theme for `background`.
+    #[must_use]
+    pub fn on(self, background: Background) -> Theme {
+        Theme { background, ..self }
+    }
+
+    /// `c` as drawn on the background, or the terminal's default colour when colours are off.
     #[must_use]
     pub fn color(self, c: Color) -> Color {
-        if self.color { c } else { Color::Reset }
+        if self.color {
+            theme::for_background(c, self.background)
+        } else {
+            Color::Reset
+        }
     }
 
     /// A style with foreground `c` (plain when colours are off).
     #[must_use]
     pub fn fg(self, c: Color) -> Style {
         if self.color {
-            Style::new().fg(c)
+            Style::new().fg(self.color(c))
         } else {
             Style::new()
         }
@@ -100,7 +137,7 @@ impl Theme {
     #[must_use]
     pub fn dim(self) -> Style {
         if self.color {
-            Style::new().fg(Color::DarkGray)
+            Style::new().fg(self.color(Color::DarkGray))
         } else {
             Style::new().add_modifier(Modifier::DIM)
         }
@@ -510,7 +547,7 @@ impl App {
     pub fn handle_event(&mut self, event: &Event) -> bool {
         match event {
             Event::Key(key) => {
-                self.handle_key(*key);
+                self.key(*key);
                 true
             }
             Event::Mouse(mouse) => self.handle_mouse(*mouse),
@@ -523,8 +560,28 @@ impl App {
         }
     }
 
-    /// Handles a key press (releases and repeats of other kinds are ignored).
+    /// Handles a key press (releases and repeats of other kinds are ignored) and waits for
+    /// what it recomputes in the background, so that the state read next is up to date (the
+    /// event loop does not wait: see [`App::handle_event`]).
     pub fn handle_key(&mut self, key: KeyEvent) {
+        self.key(key);
+        if let Some(run) = self.lesson_mut() {
+            run.settle();
+        }
+    }
+
+    /// Whether the lesson's background work has news; true when the screen must be redrawn.
+    fn poll_background(&mut self) -> bool {
+        self.lesson_mut().is_some_and(LessonRun::poll_background)
+    }
+
+    /// True while the lesson waits for background work.
+    fn background_pending(&self) -> bool {
+        self.lesson().is_some_and(LessonRun::computing)
+    }
+
+    /// A key press, its background work left running.
+    fn key(&mut self, key: KeyEvent) {
         if key.kind == KeyEventKind::Release {
             return;
         }

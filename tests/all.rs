@@ -6,8 +6,8 @@
 //!   may race;
 //! - `budget_memory.rs` and `parsers_prop.rs` measure allocations with a counting global
 //!   allocator (one per binary, and no other test allocating meanwhile);
-//! - `tui_snapshots.rs`: insta names snapshot files after the module path, and the committed
-//!   snapshots carry the names of a binary of their own.
+//! - `tui_snapshots.rs` and `tui_layout.rs`: insta names snapshot files after the module path,
+//!   and the committed snapshots carry the names of a binary of their own.
 //!
 //! `every_test_file_runs` below fails when a file of `tests/` is in neither list, so a new
 //! test file cannot be left out silently. Run one file's tests with a filter:
@@ -34,9 +34,11 @@ mod homework_live;
 mod integrators;
 mod lattice;
 mod lesson8;
+mod lesson8_app;
 mod lesson_goals;
 mod lesson_numbers;
 mod lesson_prop;
+mod lesson_spoilers;
 mod lessons;
 mod links;
 mod nothing_lost;
@@ -56,6 +58,7 @@ mod tui_cli;
 mod tui_export;
 mod tui_raster;
 mod tui_signals;
+mod tui_theme;
 
 /// Every `tests/*.rs` file is a module of this binary or a `[[test]]` target of its own.
 #[test]

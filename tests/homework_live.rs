@@ -368,7 +368,7 @@ fn a_save_rebuilds_the_crate_and_reports_the_first_compiler_error_or_reloaded() 
 /// The app, headless, on lesson 4 with the crate in `dir` attached; runs until the screen
 /// (120×40) shows `wanted` and returns it.
 fn app_until(dir: &Path, wanted: &str) -> (App, String) {
-    let mut app = App::new(lesson::builtin(), Theme { color: false })
+    let mut app = App::new(lesson::builtin(), Theme::PLAIN)
         .with_homework_options(Some(dir.to_path_buf()), options());
     let i = app.find_lesson("verlet").expect("lesson 4");
     app.open_lesson(i).expect("opens");

@@ -33,7 +33,7 @@ fn code(key: Key) -> KeyCode {
 /// The app at step `step` (0-based) of lesson `index`, its prediction answered with option 1
 /// (a step with a prediction waits for an answer before it runs).
 fn open_at(index: usize, step: usize) -> App {
-    let mut app = App::new(lesson::builtin(), Theme { color: false });
+    let mut app = App::new(lesson::builtin(), Theme::PLAIN);
     app.open_lesson(index).expect("the lesson opens");
     for _ in 0..step {
         app.handle_key(KeyEvent::new(KeyCode::Char('n'), KeyModifiers::NONE));
@@ -108,6 +108,68 @@ fn lessons() -> Vec<Lesson> {
         .into_iter()
         .map(|l| l.expect("built-in lessons load"))
         .collect()
+}
+
+/// Wall time (s) a student watches after a try item that does not reach the goal.
+const WATCH: f64 = 0.5;
+
+/// A student moving through every lesson with `n`: at each step the prediction answered (with
+/// option 1: the try keys must work whatever was predicted), then exactly the keys of each try
+/// item in the order the lesson lists them, from the state the previous items and steps left,
+/// watching half a second after each; the goal's item must meet the goal, and the screen say so.
+#[test]
+fn a_student_playing_every_try_list_in_order_meets_every_goal() {
+    let mut goals = 0;
+    for (li, l) in lessons().iter().enumerate() {
+        let mut app = App::new(lesson::builtin(), Theme::PLAIN);
+        app.open_lesson(li).expect("the lesson opens");
+        for (si, step) in l.steps.iter().enumerate() {
+            if si > 0 {
+                app.handle_key(KeyEvent::new(KeyCode::Char('n'), KeyModifiers::NONE));
+            }
+            assert_eq!(app.lesson().expect("open").step_index(), si);
+            if app.lesson().expect("open").awaiting_prediction() {
+                app.handle_key(KeyEvent::new(KeyCode::Char('1'), KeyModifiers::NONE));
+            }
+            let goal_keys = step.goal_keys().map(|k| k as *const Keys);
+            for (ti, item) in step.try_list.iter().enumerate() {
+                let Some(keys) = &item.keys else { continue };
+                let at = format!(
+                    "lesson {} step {} \"{}\" try {} ({keys})",
+                    l.number,
+                    si + 1,
+                    step.title,
+                    ti + 1
+                );
+                play(&mut app, keys);
+                if goal_keys == Some(keys as *const Keys) {
+                    let goal = step.goal.as_ref().expect("goal keys belong to a goal");
+                    let verdict = goal_verdict(&mut app, goal);
+                    let run = app.lesson().expect("open");
+                    assert_eq!(
+                        verdict,
+                        Some(true),
+                        "{at}: goal not met (t = {:.3} s, dt = {} s, diverged {:?})",
+                        run.sim().time(),
+                        run.sim().dt(),
+                        run.sim().diverged
+                    );
+                    assert_eq!(run.goal_state(), Some(true), "{at}: the screen says met");
+                    goals += 1;
+                } else {
+                    play(
+                        &mut app,
+                        &Keys::parse(&format!("wait:{WATCH}")).expect("a wait"),
+                    );
+                }
+            }
+        }
+    }
+    let all: usize = lessons()
+        .iter()
+        .map(|l| l.steps.iter().filter(|s| s.goal.is_some()).count())
+        .sum();
+    assert_eq!(goals, all, "every goal was played");
 }
 
 #[test]

@@ -16,7 +16,7 @@ use springlab::simulation::Simulation;
 use springlab::tui::{App, LessonRun, Screen, Theme, pane};
 
 fn app() -> App {
-    App::new(lesson::builtin(), Theme { color: false })
+    App::new(lesson::builtin(), Theme::PLAIN)
 }
 
 /// The app with lesson `slug` open at its first step.
@@ -572,7 +572,7 @@ fn a_malformed_lesson_shows_its_error_in_the_menu() {
     )
     .expect("write");
     let lessons = lesson::load_dir(&dir).expect("readable");
-    let mut app = App::new(lessons, Theme { color: false });
+    let mut app = App::new(lessons, Theme::PLAIN);
     let text = screen_text(&app, 100, 32);
     assert!(text.contains("Building a rope"), "{text}");
     assert!(text.contains("this lesson has an error"), "{text}");
@@ -646,7 +646,7 @@ fn cloth_app(name: &str, n: usize) -> (App, PathBuf) {
     )
     .expect("write");
     let lessons = lesson::load_dir(&dir).expect("readable");
-    let mut app = App::new(lessons, Theme { color: false });
+    let mut app = App::new(lessons, Theme::PLAIN);
     app.open_lesson(0).expect("opens");
     (app, dir)
 }
@@ -858,7 +858,7 @@ fn no_color_draws_without_colours() {
             .iter()
             .all(|c| c.fg == Color::Reset && c.bg == Color::Reset)
     );
-    let mut coloured = App::new(lesson::builtin(), Theme { color: true });
+    let mut coloured = App::new(lesson::builtin(), Theme::DARK);
     coloured.open_lesson(1).expect("opens");
     let terminal = draw(&coloured, 100, 32);
     assert!(
@@ -896,7 +896,7 @@ fn v_cycles_the_views_and_the_status_line_names_the_view() {
         protocol: Some(Protocol::Sixel),
         ..Graphics::NONE
     };
-    let mut raster = App::new(lesson::builtin(), Theme { color: true }).with_display(
+    let mut raster = App::new(lesson::builtin(), Theme::DARK).with_display(
         ViewMode::Raster,
         sixel,
         ColourDepth::TrueColour,
@@ -908,7 +908,7 @@ fn v_cycles_the_views_and_the_status_line_names_the_view() {
         assert_eq!(raster.view(), want);
     }
     // Asking for the raster view without a protocol gives half-blocks.
-    let fallback = App::new(lesson::builtin(), Theme { color: true }).with_display(
+    let fallback = App::new(lesson::builtin(), Theme::DARK).with_display(
         ViewMode::Raster,
         Graphics::NONE,
         ColourDepth::Palette256,
@@ -923,7 +923,7 @@ fn the_raster_view_shows_the_encoded_frame() {
         protocol: Some(Protocol::Kitty),
         ..Graphics::NONE
     };
-    let mut app = App::new(lesson::builtin(), Theme { color: true }).with_display(
+    let mut app = App::new(lesson::builtin(), Theme::DARK).with_display(
         ViewMode::Raster,
         kitty,
         ColourDepth::TrueColour,
@@ -960,7 +960,7 @@ fn a_raster_frame_of_another_lesson_is_never_shown() {
         protocol: Some(Protocol::Kitty),
         ..Graphics::NONE
     };
-    let mut app = App::new(lesson::builtin(), Theme { color: true }).with_display(
+    let mut app = App::new(lesson::builtin(), Theme::DARK).with_display(
         ViewMode::Raster,
         kitty,
         ColourDepth::TrueColour,
@@ -1002,7 +1002,7 @@ fn a_raster_frame_of_another_lesson_is_never_shown() {
 /// ■ of lesson 1's first step has the spring's braille dots beside it in its own row.
 #[test]
 fn particle_marks_sit_on_the_braille_line() {
-    let mut app = App::new(lesson::builtin(), Theme { color: false }).with_display(
+    let mut app = App::new(lesson::builtin(), Theme::PLAIN).with_display(
         springlab::tui::ViewMode::Braille,
         springlab::tui::Graphics::NONE,
         springlab::tui::ColourDepth::None,
@@ -1034,7 +1034,7 @@ fn progress_is_saved_and_restored() {
     let dir = temp_dir("progress");
     let path = dir.join("progress.json");
     let hooke = |progress: Progress| {
-        let mut app = App::new(lesson::builtin(), Theme { color: false }).with_progress(progress);
+        let mut app = App::new(lesson::builtin(), Theme::PLAIN).with_progress(progress);
         let i = app.find_lesson("hooke").expect("lesson 2");
         app.open_lesson(i).expect("opens");
         app
@@ -1122,7 +1122,7 @@ fn status_line_shows_the_damped_limit() {
         panic!("conditional: {limit:?}")
     };
     assert!((dt - 0.2).abs() < 1e-3, "{dt}");
-    assert!(screen_text(&app, 120, 40).contains("limit 0.200 s"));
+    assert!(screen_text(&app, 120, 40).contains("limit 0.2 s"));
     keys(&mut app, "1++++");
     assert!(screen_text(&app, 120, 40).contains("✗ over limit"));
     // Explicit Euler without damping: unstable at every dt; with the damper, a limit.
@@ -1147,7 +1147,7 @@ fn status_line_shows_the_damped_limit() {
 /// first view.
 #[test]
 fn lesson_1_pins_the_particle_on_the_right() {
-    let app = App::new(lesson::builtin(), Theme { color: false }).with_display(
+    let app = App::new(lesson::builtin(), Theme::PLAIN).with_display(
         springlab::tui::ViewMode::Braille,
         springlab::tui::Graphics::NONE,
         springlab::tui::ColourDepth::None,

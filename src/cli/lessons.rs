@@ -34,12 +34,20 @@ pub fn load(dir: Option<&Path>) -> anyhow::Result<Vec<Result<Lesson, LessonError
 ///
 /// # Errors
 /// No terminal, an unreadable `--lessons` directory, or a terminal failure.
-pub fn menu(dir: Option<&Path>, view: Option<tui::ViewMode>, no_save: bool) -> anyhow::Result<()> {
-    tui::run(load(dir)?, None, view, options(dir, no_save, None))
+pub fn menu(
+    dir: Option<&Path>,
+    view: Option<tui::ViewMode>,
+    (no_save, theme): (bool, Option<tui::Background>),
+) -> anyhow::Result<()> {
+    tui::run(load(dir)?, None, view, options(dir, (no_save, theme), None))
 }
 
-/// Where progress goes (`--no-save`: nowhere) and the lessons' directory.
-fn options(dir: Option<&Path>, no_save: bool, homework: Option<PathBuf>) -> tui::RunOptions {
+/// Where progress goes (`--no-save`: nowhere), the lessons' directory, the theme and the homework.
+fn options(
+    dir: Option<&Path>,
+    (no_save, theme): (bool, Option<tui::Background>),
+    homework: Option<PathBuf>,
+) -> tui::RunOptions {
     let progress = match tui::Progress::default_path() {
         Some(path) if !no_save => tui::Progress::load(&path),
         _ => tui::Progress::in_memory(),
@@ -48,6 +56,7 @@ fn options(dir: Option<&Path>, no_save: bool, homework: Option<PathBuf>) -> tui:
         progress,
         lessons_dir: dir.map(Path::to_path_buf),
         homework,
+        theme,
     }
 }
 
@@ -60,7 +69,7 @@ pub fn open(
     dir: Option<&Path>,
     which: &str,
     view: Option<tui::ViewMode>,
-    no_save: bool,
+    (no_save, theme): (bool, Option<tui::Background>),
     homework: Option<&Path>,
 ) -> anyhow::Result<()> {
     let lessons = load(dir)?;
@@ -72,7 +81,7 @@ pub fn open(
         lessons,
         Some(index),
         view,
-        options(dir, no_save, homework.map(Path::to_path_buf)),
+        options(dir, (no_save, theme), homework.map(Path::to_path_buf)),
     )
 }
 

@@ -133,12 +133,20 @@ impl Keys {
         Ok(Keys { strokes })
     }
 
-    /// True when the sequence does more than start the run and wait: it asks for an action.
+    /// True when the sequence does more than restore the step (`R`), start the run and wait:
+    /// it asks for an action.
     #[must_use]
     pub fn is_action(&self) -> bool {
         self.strokes
             .iter()
-            .any(|s| matches!(s, Stroke::Key(k) if *k != Key::Space))
+            .any(|s| matches!(s, Stroke::Key(k) if !matches!(k, Key::Space | Key::Char('R'))))
+    }
+
+    /// True when the sequence starts with `R`: from the step as it opened, whatever was done
+    /// before.
+    #[must_use]
+    pub fn from_step_start(&self) -> bool {
+        matches!(self.strokes.first(), Some(Stroke::Key(Key::Char('R'))))
     }
 }
 

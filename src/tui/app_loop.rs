@@ -25,6 +25,7 @@ impl App {
             self.resize(size.width, size.height);
         }
         while !self.quit {
+            dirty |= self.poll_background();
             self.submit_raster();
             if let Some(encoder) = &mut self.encoder
                 && encoder.poll()
@@ -83,8 +84,9 @@ impl App {
                         break;
                     }
                 }
-            } else if self.raster_in_flight() {
-                // A frame is being encoded: wait for it or for input, whichever comes first.
+            } else if self.raster_in_flight() || self.background_pending() {
+                // A frame is being encoded or the limit recomputed: wait for it or for input,
+                // whichever comes first.
                 if event::poll(Duration::from_millis(5))? {
                     dirty |= self.handle_pending_events()?;
                 }

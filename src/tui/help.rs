@@ -18,6 +18,10 @@ pub const LESSON_KEYS: &[(&str, &str)] = &[
         "back to t = 0 and the first view (keeps method, dt, k, pins)",
     ),
     (
+        "R",
+        "the step as it opened: its method, dt, k, pins and view, at t = 0",
+    ),
+    (
         "m",
         "choose a method: its letter or number (listed), or Enter; Tab: one body",
     ),
@@ -50,6 +54,14 @@ pub const LESSON_KEYS: &[(&str, &str)] = &[
     ("", "Predictions and charts"),
     ("1 – 6", "answer a prediction (before the run)"),
     ("1 – 8", "show / hide a method in lesson 7's charts"),
+    (
+        "+D",
+        "energy plot: total + dissipated, flat for an exact method",
+    ),
+    (
+        "res",
+        "energy plot: E + D - E0, the method's own energy error",
+    ),
     ("", "View"),
     ("arrows", "orbit the camera; Shift + arrows: pan"),
     ("i / o", "zoom in / out (also the mouse wheel)"),

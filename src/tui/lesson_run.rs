@@ -6,12 +6,14 @@
 //! and the mouse change it (`controls.rs`); `goals.rs` judges the goal and the prediction after
 //! each step.
 
+mod background;
+mod camera;
+mod clock;
 mod controls;
 mod goals;
+mod reveal;
 
-use std::time::Instant;
-
-use glam::DVec3;
+use clock::Rates;
 
 use super::pane::{DOTS, SpringFilter};
 use super::plots::{self, History, Oscillator, Studies};
@@ -78,36 +80,6 @@ struct Drag {
     inv_mass: f64,
     /// Depth of the particle in view coordinates (m): it moves in the view plane.
     depth: f64,
-}
-
-/// Rolling measurements of the run against wall time (from the wall times passed to
-/// [`LessonRun::tick`], so deterministic in tests).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct Rates {
-    wall: f64,
-    simulated: f64,
-    steps: u64,
-    /// Simulated seconds per wall second over the last half second, where the time that waits
-    /// in the accumulator for the next whole step (less than one step) counts as kept: the
-    /// factor is the speed exactly while no time is dropped, and below it by the time dropped.
-    real_time_factor: Option<f64>,
-    /// Steps per wall second over the last half second.
-    steps_per_second: Option<f64>,
-}
-
-impl Rates {
-    fn add(&mut self, wall: f64, simulated: f64, steps: u64) {
-        self.wall += wall;
-        self.simulated += simulated;
-        self.steps += steps;
-        if self.wall >= 0.5 {
-            self.real_time_factor = Some(self.simulated / self.wall);
-            self.steps_per_second = Some(self.steps as f64 / self.wall);
-            self.wall = 0.0;
-            self.simulated = 0.0;
-            self.steps = 0;
-        }
-    }
 }
 
 /// The four corners of an `n × n` cloth body (keys 1–4).
@@ -214,6 +186,11 @@ pub struct LessonRun {
     spectra: Vec<Option<crate::study::theory::Spectrum>>,
     /// The stability limit of the present methods, dampers and drag included.
     limit: Option<(Limit, f64)>,
+    /// The spectra recomputed off the drawing thread after a change of the coefficients.
+    background: background::Spectra,
+    /// The limit waits to be recomputed (once for a burst of keys: see
+    /// [`LessonRun::poll_background`]).
+    limit_stale: bool,
 }
 
 impl LessonRun {
@@ -263,6 +240,8 @@ impl LessonRun {
             shown: [true; Method::COUNT],
             spectra: Vec::new(),
             limit: None,
+            background: background::Spectra::default(),
+            limit_stale: false,
         };
         let n = run.lesson.steps.len();
         run.met = vec![false; n];
@@ -323,13 +302,7 @@ impl LessonRun {
 
     /// Everything that follows from a freshly built scene.
     fn start_step(&mut self) {
-        self.initial = self.sim.states().cloned().collect();
-        self.generation += 1;
-        self.home = Camera::for_scene(&self.sim.scene, self.aspect, Projection::default());
-        self.camera = self.home;
-        self.follow = true;
-        self.pan_drag = None;
-        self.oscillator = Oscillator::detect(&self.sim.scene);
+        self.restart_scene();
         let step = &self.lesson.steps[self.step];
         self.studies = Studies::compute(&step.plots, &step.scene, &step.params);
         self.text = crate::lesson::numbers::fill(
@@ -338,12 +311,8 @@ impl LessonRun {
             &step.params,
             Some(self.scene_at_start()),
         );
-        self.cloth = find_cloth(&self.sim);
-        self.running = false;
-        self.drag = None;
         self.text_scroll = 0;
         self.hscroll = 0;
-        self.chooser = None;
         self.revealed = None;
         if let Some(v) = self.visited.get_mut(self.step)
             && !*v
@@ -351,7 +320,28 @@ impl LessonRun {
             *v = true;
             self.progress_changed = true;
         }
-        self.refresh_spectra();
+    }
+
+    /// What a freshly built scene of this step starts with: its initial states, its first view,
+    /// every method shown in the study charts, paused at `t = 0` (shared by a new step and `R`;
+    /// the text, the studies and the prediction's answer stay).
+    fn restart_scene(&mut self) {
+        self.initial = self.sim.states().cloned().collect();
+        self.generation += 1;
+        self.home = Camera::for_scene(&self.sim.scene, self.aspect, Projection::default());
+        self.camera = self.home;
+        self.follow = true;
+        self.pan_drag = None;
+        self.oscillator = Oscillator::detect(&self.sim.scene);
+        self.cloth = find_cloth(&self.sim);
+        self.running = false;
+        self.drag = None;
+        self.chooser = None;
+        self.shown = [true; Method::COUNT];
+        // A new step waits for its spectra (its text's numbers need as much): the status line
+        // is right from the first frame.
+        self.spectra = background::compute(&self.bodies_at_start());
+        self.refresh_limit();
         self.restart_records();
     }
 
@@ -361,23 +351,60 @@ impl LessonRun {
         &self.text
     }
 
-    /// Recomputes every body's spectrum (after a change of stiffness, damping, drag or pins)
-    /// and the limit.
+    /// Asks the background worker for every body's spectrum (after a change of stiffness,
+    /// damping, drag or pins); the limit follows when it arrives ([`LessonRun::poll_background`],
+    /// [`LessonRun::settle`]).
     fn refresh_spectra(&mut self) {
-        use crate::study::{omega_max, theory};
-        self.spectra = self
-            .sim
+        let bodies = self.bodies_at_start();
+        self.background.request(bodies);
+    }
+
+    /// Every body's model with its initial state.
+    fn bodies_at_start(&self) -> Vec<(crate::physics::Model, State)> {
+        self.sim
             .scene
             .bodies
             .iter()
             .zip(&self.initial)
-            .map(|(b, initial)| {
-                let omega = omega_max(&b.model, initial).omega;
-                (omega > 0.0 && omega.is_finite())
-                    .then(|| theory::spectrum(&b.model, initial, omega))
-            })
-            .collect();
+            .map(|(b, initial)| (b.model.clone(), initial.clone()))
+            .collect()
+    }
+
+    /// Takes the spectra the worker finished since the last call and recomputes the limit
+    /// when a key changed what it depends on (once per frame however many keys came in: the
+    /// theory's limit over every mode of the cloth takes tens of milliseconds); true when the
+    /// limit changed.
+    pub fn poll_background(&mut self) -> bool {
+        if let Some(spectra) = self.background.poll() {
+            self.spectra = spectra;
+            self.limit_stale = true;
+        }
+        self.refresh_stale_limit()
+    }
+
+    /// Waits for the spectra of the newest change and the limit (the public key API and tests
+    /// read an up-to-date limit after every key).
+    pub fn settle(&mut self) {
+        if let Some(spectra) = self.background.settle() {
+            self.spectra = spectra;
+            self.limit_stale = true;
+        }
+        self.refresh_stale_limit();
+    }
+
+    fn refresh_stale_limit(&mut self) -> bool {
+        if !std::mem::take(&mut self.limit_stale) {
+            return false;
+        }
         self.refresh_limit();
+        self.version += 1;
+        true
+    }
+
+    /// True while the spectra of the newest change are being computed.
+    #[must_use]
+    pub fn computing(&self) -> bool {
+        self.background.pending()
     }
 
     /// The limit of the present methods and method settings over the bodies' spectra.
@@ -463,71 +490,6 @@ impl LessonRun {
         self.running
     }
 
-    /// The cap on steps per frame.
-    #[must_use]
-    pub fn max_steps_per_frame(&self) -> u64 {
-        self.max_steps_per_frame
-    }
-
-    /// Sets the cap on steps per frame (clamped to [`STEPS_PER_FRAME_RANGE`]).
-    pub fn set_max_steps_per_frame(&mut self, n: u64) {
-        self.max_steps_per_frame = n.clamp(STEPS_PER_FRAME_RANGE.0, STEPS_PER_FRAME_RANGE.1);
-    }
-
-    /// Steps taken in the last frame.
-    #[must_use]
-    pub fn last_frame_steps(&self) -> u64 {
-        self.last_frame_steps
-    }
-
-    /// Simulated time owed to the simulation (s).
-    #[must_use]
-    pub fn accumulator(&self) -> f64 {
-        self.accumulator
-    }
-
-    /// Simulated seconds per wall second.
-    #[must_use]
-    pub fn speed(&self) -> f64 {
-        self.speed
-    }
-
-    /// Measured simulated seconds per wall second, once half a second of wall time ran.
-    #[must_use]
-    pub fn real_time_factor(&self) -> Option<f64> {
-        self.rates.real_time_factor
-    }
-
-    /// Measured steps per wall second, once half a second of wall time ran.
-    #[must_use]
-    pub fn steps_per_second(&self) -> Option<f64> {
-        self.rates.steps_per_second
-    }
-
-    /// The camera.
-    #[must_use]
-    pub fn camera(&self) -> &Camera {
-        &self.camera
-    }
-
-    /// The step's initial camera (what `r` and `c` return to).
-    #[must_use]
-    pub fn home_camera(&self) -> &Camera {
-        &self.home
-    }
-
-    /// True while the camera follows the bodies.
-    #[must_use]
-    pub fn follows(&self) -> bool {
-        self.follow
-    }
-
-    /// Width / height of the scene pane in pixels, as last reported.
-    #[must_use]
-    pub fn aspect(&self) -> f64 {
-        self.aspect
-    }
-
     /// Changes whenever the scene's bodies or springs may have changed (a renderer made for an
     /// older generation must be rebuilt).
     #[must_use]
@@ -549,84 +511,6 @@ impl LessonRun {
     /// Shows `message` on the hint line.
     pub fn set_message(&mut self, message: impl Into<String>) {
         self.message = Some(message.into());
-    }
-
-    /// Tells the run the scene pane's aspect ratio (width / height in pixels). The step's
-    /// initial view is framed for it; a camera the user has not moved follows the new framing.
-    pub fn set_aspect(&mut self, aspect: f64) {
-        if !(aspect.is_finite() && aspect > 0.0) || (aspect / self.aspect - 1.0).abs() < 1e-3 {
-            return;
-        }
-        self.aspect = aspect;
-        self.version += 1;
-        let untouched = self.camera == self.home;
-        self.home = Camera::for_scene(&self.scene_at_start(), aspect, Projection::default());
-        if untouched {
-            self.camera = self.home;
-        }
-    }
-
-    /// The scene with the bodies' initial states.
-    fn scene_at_start(&self) -> crate::scene::Scene {
-        let mut scene = self.sim.scene.clone();
-        for (body, initial) in scene.bodies.iter_mut().zip(&self.initial) {
-            body.state = initial.clone();
-        }
-        scene
-    }
-
-    /// Turns following on or off.
-    pub fn set_follow(&mut self, on: bool) {
-        self.follow = on;
-        if on {
-            self.follow_bodies();
-        }
-    }
-
-    /// Moves the camera so that every body is in view (see [`Camera::follow`]).
-    fn follow_bodies(&mut self) {
-        if self.sim.diverged.is_some() {
-            return;
-        }
-        let mut points: Vec<DVec3> = Vec::new();
-        for body in &self.sim.scene.bodies {
-            points.extend(body.state.x.iter().copied());
-            for s in &body.state.spheres {
-                points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::X));
-                points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::Y));
-                points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::Z));
-            }
-        }
-        let max_distance = self.home.distance * FOLLOW_MAX_ZOOM_OUT;
-        let max_height = self.home.visible_height() * FOLLOW_MAX_ZOOM_OUT;
-        self.camera
-            .follow(&points, self.aspect, FOLLOW_ZONE, max_distance, max_height);
-    }
-
-    fn zoom(&mut self, factor: f64) {
-        let before = self.camera;
-        self.camera.zoom(factor);
-        if self.follow {
-            self.follow_bodies();
-            if factor > 1.0 && self.camera.distance >= before.distance {
-                self.message = Some(
-                    "following keeps every body in view: f stops following, to zoom closer".into(),
-                );
-            }
-        }
-    }
-
-    fn pan(&mut self, right: f64, up: f64) {
-        self.camera.pan(right, up);
-        if self.follow {
-            self.follow_bodies();
-        }
-    }
-
-    /// Back to the step's initial view.
-    pub fn reset_camera(&mut self) {
-        self.camera = self.home;
-        self.pan_drag = None;
     }
 
     /// Which springs are drawn.
@@ -748,69 +632,6 @@ impl LessonRun {
 
     fn springs(&self) -> impl Iterator<Item = &crate::physics::Spring> {
         self.sim.scene.bodies.iter().flat_map(|b| b.model.springs())
-    }
-
-    /// Advances the simulation by `wall_dt` seconds of wall time; see [`LessonRun::tick_until`].
-    pub fn tick(&mut self, wall_dt: f64) {
-        self.tick_until(wall_dt, None);
-    }
-
-    /// Adds `wall_dt` (s) times the speed factor to the accumulator and takes as many steps of
-    /// `dt` as fit, at most the cap on steps per frame, stopping early at `deadline` or at
-    /// divergence. When it stops early the rest of the accumulator is dropped: the run falls
-    /// behind real time rather than ever further behind. Does nothing while paused.
-    pub fn tick_until(&mut self, wall_dt: f64, deadline: Option<Instant>) {
-        if !self.running || self.sim.diverged.is_some() {
-            self.running = false;
-            self.accumulator = 0.0;
-            return;
-        }
-        let wall_dt = if wall_dt.is_finite() && wall_dt > 0.0 {
-            wall_dt
-        } else {
-            0.0
-        };
-        let owed_before = self.accumulator;
-        self.accumulator += wall_dt * self.speed;
-        let dt = self.sim.dt();
-        // Whole steps that fit, with a billionth of a step of slack against rounding
-        // (0.1 s at dt = 0.01 s is 10 steps, not 9.999...).
-        let fit = (self.accumulator / dt + 1e-9).floor();
-        let mut wanted = if fit >= self.max_steps_per_frame as f64 {
-            self.max_steps_per_frame
-        } else {
-            fit as u64
-        };
-        let mut behind = fit > self.max_steps_per_frame as f64;
-        let mut taken = 0;
-        while taken < wanted {
-            if self.step_once() {
-                taken += 1;
-                behind = true;
-                break;
-            }
-            taken += 1;
-            if let Some(deadline) = deadline
-                && taken % 16 == 0
-                && Instant::now() >= deadline
-            {
-                behind = true;
-                wanted = taken;
-            }
-        }
-        self.accumulator = if behind {
-            0.0
-        } else {
-            (self.accumulator - taken as f64 * dt).max(0.0)
-        };
-        self.last_frame_steps = taken;
-        self.version += 1;
-        // Kept: the steps taken and what the accumulator still owes (dropped time is not).
-        let kept = taken as f64 * dt + (self.accumulator - owed_before);
-        self.rates.add(wall_dt, kept, taken);
-        if self.follow {
-            self.follow_bodies();
-        }
     }
 
     /// Lines the step's text is scrolled down.

@@ -11,7 +11,7 @@ use ratatui::widgets::{Paragraph, Widget};
 use super::plots::{self};
 use super::sim_view::{self, Painter};
 use super::{Theme, markdown, status};
-use crate::lesson::Step;
+use crate::lesson::Plot;
 use crate::physics::Method;
 
 use super::lesson_run::{Chooser, LessonRun, method_key};
@@ -34,15 +34,14 @@ pub fn render(
     ])
     .areas(area);
     render_header(run, theme, header, buf);
-    let [left, right] =
-        Layout::horizontal([Constraint::Percentage(40), Constraint::Fill(1)]).areas(body);
+    let [left, right] = columns(body);
     render_text(run, theme, left, buf);
-    let step = run.step();
-    let (scene, plot_area) = split_right(step, right);
+    let shown = shown_plots(run, right);
+    let (scene, plot_area) = split_right(&shown, right);
     let canvas = sim_view::render(run, theme, painter, scene, buf);
     if let Some(plot_area) = plot_area {
         plots::render(
-            &step.plots,
+            &shown,
             run.history(),
             run.oscillator(),
             run.studies(),
@@ -58,13 +57,33 @@ pub fn render(
     canvas
 }
 
+/// Narrowest a plot is drawn (columns): below it the step's plots collapse to the first.
+pub const MIN_PLOT_WIDTH: u16 = 28;
+
+/// The text column and the right column of the body: 40 % for the text, 50 % on terminals
+/// under 100 columns (where the try list and goal would wrap too much).
+fn columns(body: Rect) -> [Rect; 2] {
+    let text = if body.width < 100 { 50 } else { 40 };
+    Layout::horizontal([Constraint::Percentage(text), Constraint::Fill(1)]).areas(body)
+}
+
+/// The plots shown now (see [`LessonRun::shown_plots`]), only the first when the right column
+/// is too narrow for them side by side.
+fn shown_plots(run: &LessonRun, right: Rect) -> Vec<Plot> {
+    let mut plots = run.shown_plots();
+    if plots.len() > 1 && right.width / (plots.len() as u16) < MIN_PLOT_WIDTH {
+        plots.truncate(1);
+    }
+    plots
+}
+
 /// The scene pane and the plots' area of the right column (no plots: the whole column).
-fn split_right(step: &Step, right: Rect) -> (Rect, Option<Rect>) {
-    if step.plots.is_empty() {
+fn split_right(plots: &[Plot], right: Rect) -> (Rect, Option<Rect>) {
+    if plots.is_empty() {
         return (right, None);
     }
     // Study charts (log-log, several methods) get more of the column than time plots.
-    let share = if step.plots.iter().any(|p| p.is_study()) {
+    let share = if plots.iter().any(|p| p.is_study()) {
         3
     } else {
         2
@@ -87,15 +106,13 @@ pub fn scene_inner(run: &LessonRun, area: Rect) -> Rect {
         Constraint::Length(1),
     ])
     .areas(area);
-    let [_, right] =
-        Layout::horizontal([Constraint::Percentage(40), Constraint::Fill(1)]).areas(body);
-    let (scene, _) = split_right(run.step(), right);
+    let [_, right] = columns(body);
+    let (scene, _) = split_right(&shown_plots(run, right), right);
     ratatui::widgets::Block::bordered().inner(scene)
 }
 
 fn render_header(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
     let lesson = run.lesson();
-    let step = run.step();
     let bold = Style::new().add_modifier(Modifier::BOLD);
     let line = Line::from(vec![
         Span::styled(
@@ -108,7 +125,7 @@ fn render_header(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
                 "step {}/{}: {}",
                 run.step_index() + 1,
                 lesson.steps.len(),
-                step.title
+                run.shown_title()
             ),
             bold,
         ),
@@ -134,8 +151,11 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
         .add_modifier(Modifier::BOLD)
         .patch(theme.fg(Color::Green));
     let key_style = theme.fg(Color::Cyan).add_modifier(Modifier::BOLD);
-    // The try list, the prediction and the goal, at most half of the column.
+    // The prediction, the try list and the goal, each a section; when they do not fit with a
+    // few rows of text, the explanation and then the reveal make room (the goal always shows).
     let mut tail: Vec<Line<'static>> = Vec::new();
+    let mut reveal: Vec<Line<'static>> = Vec::new();
+    let mut explain: Vec<Line<'static>> = Vec::new();
     if let Some(p) = &step.predict {
         tail.push(Line::from(vec![
             Span::styled("Predict ", bold_green),
@@ -171,19 +191,41 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
             tail.extend(lines);
         }
         if let Some(r) = run.revealed() {
-            tail.extend(
-                markdown::wrap_text(r, width, theme)
-                    .into_iter()
-                    .map(|l| l.patch_style(theme.fg(Color::LightGreen))),
-            );
+            reveal = markdown::wrap_text(r, width, theme)
+                .into_iter()
+                .map(|l| l.patch_style(theme.fg(Color::LightGreen)))
+                .collect();
             if !p.explain.is_empty() {
-                tail.extend(markdown::wrap_text(&p.explain, width, theme));
+                explain = markdown::wrap_text(&p.explain, width, theme);
             }
         }
     }
+    let mut rest: Vec<Line<'static>> = Vec::new();
     if !step.try_list.is_empty() {
-        tail.push(Line::from(Span::styled("Try", bold_green)));
-        for item in &step.try_list {
+        let restart = step.try_list.iter().any(|t| {
+            t.keys
+                .as_ref()
+                .is_some_and(crate::lesson::Keys::from_step_start)
+        });
+        rest.push(Line::from(vec![
+            Span::styled("Try", bold_green),
+            Span::styled(
+                if restart {
+                    "  (R: from the step's start)"
+                } else {
+                    ""
+                },
+                theme.dim(),
+            ),
+        ]));
+        for (i, item) in step.try_list.iter().enumerate() {
+            if !run.try_shown(i) {
+                rest.push(Line::styled(
+                    "• (after your prediction)".to_string(),
+                    theme.dim(),
+                ));
+                continue;
+            }
             let mut lines = markdown::bullet(&item.text, width, theme);
             if let Some(keys) = &item.keys {
                 let k = format!("  keys: {keys}");
@@ -201,7 +243,7 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
                     )));
                 }
             }
-            tail.extend(lines);
+            rest.extend(lines);
         }
     }
     if let Some(goal) = &step.goal {
@@ -210,19 +252,46 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
             Some(false) => ("✗ failed: r to retry", theme.fg(Color::LightRed)),
             None => ("… pending", theme.fg(Color::Yellow)),
         };
-        tail.push(Line::from(vec![
+        rest.push(Line::from(vec![
             Span::styled("Goal ", bold_green),
             Span::styled(mark, style.add_modifier(Modifier::BOLD)),
         ]));
-        tail.extend(markdown::wrap_text(&goal.text, width, theme));
+        if run.goal_shown() {
+            rest.extend(markdown::wrap_text(&goal.text, width, theme));
+        } else {
+            rest.push(Line::styled(
+                "(after your prediction)".to_string(),
+                theme.dim(),
+            ));
+        }
     }
-    let tail_height = (tail.len() as u16).min(area.height / 2);
+    // At least four rows of text (three and its scroll hint) above the rule.
+    let room = usize::from(area.height.saturating_sub(5));
+    let mut parts = [tail, reveal, explain, rest];
+    for drop in [2, 1] {
+        if parts.iter().map(Vec::len).sum::<usize>() > room {
+            parts[drop].clear();
+        }
+    }
+    let [predict, reveal, explain, rest] = parts;
+    let tail: Vec<Line<'static>> = predict
+        .into_iter()
+        .chain(reveal)
+        .chain(explain)
+        .chain(rest)
+        .collect();
+    let tail_height = (tail.len() as u16).min(area.height.saturating_sub(1));
     let [text_area, tail_area] = Layout::vertical([
         Constraint::Fill(1),
         Constraint::Length(if tail.is_empty() { 0 } else { tail_height + 1 }),
     ])
     .areas(area);
-    let marked = markdown::render_marked(run.text(), width, theme);
+    let held = if run.text_held_back() {
+        "\n\n*The rest of this step's text follows your prediction.*"
+    } else {
+        ""
+    };
+    let marked = markdown::render_marked(&format!("{}{held}", run.shown_text()), width, theme);
     let total = marked.len() as u16;
     // When the text does not fit, its last row holds the scroll hint (never over the text).
     let overflow = total > text_area.height;

@@ -1,11 +1,14 @@
 //! The two status lines under a lesson: the method and its numbers, then the run's progress.
 //!
 //! ```text
-//!  rk4 · dt 0.010 s · dt·ω 0.100 · k 100 N/m · k_d 0 N·s/m
+//!  rk4 · dt 0.01 s · dt·ω 0.100 · limit 0.2828 s · k 100 N/m · k_d 0 N·s/m · view: braille (v)
 //!  ‖ paused · t = 0.00 s · step 0 · 0/4096 steps/frame · ×— real time · — steps/s · — fps
 //! ```
 //! The first line ends with the scene pane's view (`view: raster (sixel, 30 images/s) (v)`,
-//! `view: halfblocks (v)`, `view: braille (v)`).
+//! `view: halfblocks (v)`, `view: braille (v)`). A line too long for the terminal drops whole
+//! fields, least needed first (k_d, k and passes, drag and γ, dt·ω, the view; the method, dt
+//! and its limit last), so no number is ever cut; dt and the limit have four significant
+//! digits.
 //! `ω` is the stiffest mode ω_max (power iteration, as the stability study); beside it the
 //! present method's largest stable dt on this scene by the damped theory
 //! ([`crate::study::theory`]: dampers and drag included, the bodies' initial state), yellow
@@ -25,6 +28,64 @@ use super::lesson_run::LessonRun;
 use super::plots::number;
 use super::sim_view::time_text;
 
+/// One field of a status line: its spans and its priority (0 is kept longest).
+type Field = (u8, Vec<Span<'static>>);
+
+/// The fields that fit `width` columns, whole, in their order: the lowest-priority fields are
+/// dropped first (never a field cut in the middle of a number), ` · ` between them.
+fn fit(fields: Vec<Field>, width: usize, sep: Style) -> Line<'static> {
+    let len = |f: &Field| f.1.iter().map(Span::width).sum::<usize>();
+    let total =
+        |fs: &[Field]| fs.iter().map(len).sum::<usize>() + 3 * fs.len().saturating_sub(1) + 1;
+    let mut fields = fields;
+    while total(&fields) > width && fields.len() > 1 {
+        let Some(worst) = fields
+            .iter()
+            .enumerate()
+            .max_by_key(|(i, f)| (f.0, *i))
+            .map(|(i, _)| i)
+        else {
+            break;
+        };
+        fields.remove(worst);
+    }
+    let mut spans = vec![Span::raw(" ")];
+    for (i, (_, f)) in fields.into_iter().enumerate() {
+        if i > 0 {
+            spans.push(Span::styled(" · ", sep));
+        }
+        spans.extend(f);
+    }
+    Line::from(spans)
+}
+
+/// A time step or a limit with four significant digits, so that two of them compare
+/// (`1.917e-3`, `2e-3`, `0.2`): trailing zeros dropped, scientific below 0.01.
+#[must_use]
+pub fn precise(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    if !(1e-2..1e5).contains(&a) {
+        let s = format!("{v:.3e}");
+        let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
+        let m = if m.contains('.') {
+            m.trim_end_matches('0').trim_end_matches('.')
+        } else {
+            m
+        };
+        return format!("{m}e{e}");
+    }
+    let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
 /// Draws the status lines of `run` into the two rows of `area`.
 pub fn render(
     run: &LessonRun,
@@ -36,22 +97,22 @@ pub fn render(
 ) {
     let sim = run.sim();
     let dt = sim.dt();
-    let sep = || Span::styled(" · ", theme.dim());
-    let mut first = vec![
-        Span::raw(" "),
-        Span::styled(
-            sim.scene.method_label(),
-            theme.fg(Color::Cyan).add_modifier(Modifier::BOLD),
+    let raw = |p: u8, s: String| (p, vec![Span::raw(s)]);
+    let mut first: Vec<Field> = vec![
+        (
+            0,
+            vec![Span::styled(
+                sim.scene.method_label(),
+                theme.fg(Color::Cyan).add_modifier(Modifier::BOLD),
+            )],
         ),
-        sep(),
-        Span::raw(format!("dt {} s", number(dt))),
+        raw(0, format!("dt {} s", precise(dt))),
     ];
     // dt against the method's limit on this scene: the damped theory (dampers and drag
     // included) of the bodies at their initial state.
     if let Some((limit, omega)) = run.limit() {
         use super::lesson_run::Limit;
-        first.push(sep());
-        first.push(Span::raw(format!("dt·ω {}", number(dt * omega))));
+        first.push(raw(4, format!("dt·ω {}", number(dt * omega))));
         let (text, style) = match limit {
             Limit::Below(max) => {
                 let ratio = dt / max;
@@ -63,7 +124,7 @@ pub fn render(
                     Style::default()
                 };
                 let mark = if ratio >= 1.0 { "✗ over " } else { "" };
-                (format!("{mark}limit {} s", number(*max)), style)
+                (format!("{mark}limit {} s", precise(*max)), style)
             }
             Limit::Never => (
                 "unstable at every dt".to_string(),
@@ -72,54 +133,73 @@ pub fn render(
             Limit::Always => ("stable at any dt".to_string(), Style::default()),
             Limit::NotCovered => ("limit: no theory".to_string(), theme.dim()),
         };
-        first.push(sep());
-        first.push(Span::styled(text, style));
+        let (text, style) = if run.computing() {
+            ("limit: computing…".to_string(), theme.dim())
+        } else {
+            (text, style)
+        };
+        first.push((1, vec![Span::styled(text, style)]));
     }
     if let Some(c) = run.uniform_drag().filter(|c| *c > 0.0) {
-        first.push(sep());
-        first.push(Span::raw(format!("c {} N·s/m", number(c))));
+        first.push(raw(4, format!("c {} N·s/m", number(c))));
     }
     if let Some(g) = run.verlet_gamma().filter(|g| *g > 0.0) {
-        first.push(sep());
-        first.push(Span::raw(format!("γ {}", number(g))));
+        first.push(raw(4, format!("γ {}", number(g))));
     }
     if let Some(p) = run.verlet_passes() {
-        first.push(sep());
-        first.push(Span::raw(format!(
-            "{p} pass{}",
-            if p == 1 { "" } else { "es" }
-        )));
-    }
-    if let Some(k) = run.uniform_stiffness() {
-        first.push(sep());
-        first.push(Span::raw(format!("k {} N/m", number(k))));
-    }
-    if let Some(c) = run.uniform_damping() {
-        first.push(sep());
-        first.push(Span::raw(format!("k_d {} N·s/m", number(c))));
-    }
-    if run.speed() != 1.0 {
-        first.push(sep());
-        first.push(Span::styled(
-            format!("speed ×{}", number(run.speed())),
-            theme.fg(Color::Yellow),
+        first.push(raw(
+            5,
+            format!("{p} pass{}", if p == 1 { "" } else { "es" }),
         ));
     }
+    if let Some(k) = run.uniform_stiffness() {
+        first.push(raw(5, format!("k {} N/m", number(k))));
+    }
+    if let Some(c) = run.uniform_damping() {
+        first.push(raw(6, format!("k_d {} N·s/m", number(c))));
+    }
+    if run.speed() != 1.0 {
+        first.push((
+            2,
+            vec![Span::styled(
+                format!("speed ×{}", number(run.speed())),
+                theme.fg(Color::Yellow),
+            )],
+        ));
+    }
+    // The view, after the coefficients are gone.
+    first.push((
+        3,
+        vec![Span::styled(
+            format!("view: {view} (v)"),
+            theme.fg(Color::Cyan),
+        )],
+    ));
 
     let dash = |v: Option<f64>| v.map_or_else(|| "—".to_string(), number);
-    let second = if let Some(d) = &sim.diverged {
+    let second: Vec<Field> = if let Some(d) = &sim.diverged {
         vec![
-            Span::styled(
-                format!(
-                    " ✗ unstable at step {}, t = {} s",
-                    d.step,
-                    time_text(d.time, dt)
-                ),
-                theme.fg(Color::LightRed).add_modifier(Modifier::BOLD),
+            (
+                0,
+                vec![Span::styled(
+                    format!(
+                        "✗ unstable at step {}, t = {} s",
+                        d.step,
+                        time_text(d.time, dt)
+                    ),
+                    theme.fg(Color::LightRed).add_modifier(Modifier::BOLD),
+                )],
             ),
-            Span::styled(
-                format!(": max |v| = {} m/s; r to start over", number(d.max_speed)),
-                theme.fg(Color::LightRed),
+            (
+                1,
+                vec![Span::styled(
+                    format!("max |v| = {} m/s", number(d.max_speed)),
+                    theme.fg(Color::LightRed),
+                )],
+            ),
+            (
+                0,
+                vec![Span::styled("r to start over", theme.fg(Color::LightRed))],
             ),
         ]
     } else {
@@ -129,42 +209,39 @@ pub fn render(
             ("‖ paused", theme.fg(Color::Yellow))
         };
         vec![
-            Span::raw(" "),
-            Span::styled(mark, style.add_modifier(Modifier::BOLD)),
-            sep(),
-            Span::raw(format!("t = {} s", time_text(sim.time(), dt))),
-            sep(),
-            Span::raw(format!("step {}", sim.steps)),
-            sep(),
-            Span::raw(format!(
-                "{}/{} steps/frame",
-                run.last_frame_steps(),
-                run.max_steps_per_frame()
-            )),
-            sep(),
-            Span::raw(format!("×{} real time", dash(run.real_time_factor()))),
-            sep(),
-            Span::raw(format!("{} steps/s", dash(run.steps_per_second()))),
-            sep(),
-            Span::raw(format!(
-                "{} fps",
-                fps.map_or_else(|| "—".to_string(), |f| format!("{f:.0}"))
-            )),
+            (
+                0,
+                vec![Span::styled(mark, style.add_modifier(Modifier::BOLD))],
+            ),
+            raw(0, format!("t = {} s", time_text(sim.time(), dt))),
+            raw(4, format!("step {}", sim.steps)),
+            raw(
+                5,
+                format!(
+                    "{}/{} steps/frame",
+                    run.last_frame_steps(),
+                    run.max_steps_per_frame()
+                ),
+            ),
+            raw(1, format!("×{} real time", dash(run.real_time_factor()))),
+            raw(3, format!("{} steps/s", dash(run.steps_per_second()))),
+            raw(
+                2,
+                format!(
+                    "{} fps",
+                    fps.map_or_else(|| "—".to_string(), |f| format!("{f:.0}"))
+                ),
+            ),
         ]
     };
-    buf.set_line(area.x, area.y, &Line::from(first), area.width);
-    // The view, right-aligned on the first line (over its end when the line is too long).
-    let label = format!(" view: {view} (v) ");
-    let width = label.chars().count() as u16;
-    if area.width > width {
-        buf.set_string(
-            area.x + area.width - width,
-            area.y,
-            label,
-            theme.fg(Color::Cyan),
-        );
-    }
+    let width = usize::from(area.width);
+    buf.set_line(area.x, area.y, &fit(first, width, theme.dim()), area.width);
     if area.height > 1 {
-        buf.set_line(area.x, area.y + 1, &Line::from(second), area.width);
+        buf.set_line(
+            area.x,
+            area.y + 1,
+            &fit(second, width, theme.dim()),
+            area.width,
+        );
     }
 }

@@ -27,6 +27,8 @@ pub struct RunOptions {
     pub lessons_dir: Option<std::path::PathBuf>,
     /// The `--homework` crate, if any.
     pub homework: Option<std::path::PathBuf>,
+    /// `--theme`: the background the colours are for (`None`: ask the terminal).
+    pub theme: Option<super::Background>,
 }
 
 /// Opens the app on the menu, or on lesson `open` (an index into `lessons`), and runs it until
@@ -50,6 +52,7 @@ pub fn run(
     let notice = options.progress.notice().map(str::to_string);
     let mut terminal = init_terminal().context("cannot set up the terminal")?;
     // Ask the terminal before anything else reads its input (raw mode is on).
+    let theme = theme.on(options.theme.unwrap_or_else(super::theme::detect));
     let graphics = Graphics::detect();
     let default = if graphics.protocol.is_some() {
         ViewMode::Raster

@@ -65,6 +65,7 @@ impl LessonRun {
             KeyCode::Char(' ') => self.toggle_run(),
             KeyCode::Char('s') => self.single_step(),
             KeyCode::Char('r') => self.reset(),
+            KeyCode::Char('R') => self.restore_step(),
             KeyCode::Char('m') => self.open_chooser(),
             KeyCode::Char('A') => self.scale_drag(true),
             KeyCode::Char('a') => self.scale_drag(false),
@@ -171,6 +172,24 @@ impl LessonRun {
         // The exact solution starts again from the initial state.
         self.oscillator = Oscillator::detect(&self.sim.scene);
         self.restart_records();
+    }
+
+    /// `R`: the step as it opened: its own scene, parameters, method, dt, pins, springs shown,
+    /// methods shown in the study charts and first view, paused at `t = 0`. The speed factor,
+    /// the steps-per-frame cap and the prediction's answer stay.
+    pub fn restore_step(&mut self) {
+        self.release();
+        match build(&self.lesson, self.step) {
+            Ok(sim) => {
+                self.sim = sim;
+                self.filter = SpringFilter::All;
+                self.restart_scene();
+                self.revealed = None;
+                self.message =
+                    Some("the step as it opened: its parameters, methods and view".into());
+            }
+            Err(e) => self.message = Some(e),
+        }
     }
 
     fn prediction_prompt(&self) -> String {
@@ -282,7 +301,7 @@ impl LessonRun {
             }
         }
         self.sim.rebase_energy();
-        self.refresh_limit();
+        self.limit_stale = true;
         self.message = Some(match target {
             None => format!("method: {method}"),
             Some(b) => format!(
@@ -346,7 +365,14 @@ impl LessonRun {
             .bodies
             .iter()
             .filter(|b| b.method.reads("iterations"))
-            .map(|b| b.params.iterations);
+            // XPBD runs at least one solver pass.
+            .map(|b| {
+                if b.method == Method::Xpbd {
+                    b.params.iterations.max(1)
+                } else {
+                    b.params.iterations
+                }
+            });
         let first = it.next()?;
         it.all(|p| p == first).then_some(first)
     }
@@ -358,7 +384,7 @@ impl LessonRun {
             body.params.verlet_damping = ladder(g, up, FIRST_VERLET_GAMMA, 10.0, MAX_VERLET_GAMMA);
         }
         self.sim.rebase_energy();
-        self.refresh_limit();
+        self.limit_stale = true;
         let dt = self.sim.dt();
         let g = self
             .sim
@@ -403,7 +429,7 @@ impl LessonRun {
             }
         }
         self.sim.rebase_energy();
-        self.refresh_limit();
+        self.limit_stale = true;
         let p = self
             .sim
             .scene

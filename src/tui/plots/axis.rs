@@ -35,16 +35,6 @@ impl Series {
 /// The points of one curve: (x, y).
 pub(super) type Points = Vec<(f64, f64)>;
 
-pub(super) fn dimmer(c: Color) -> Color {
-    match c {
-        Color::Green => Color::LightGreen,
-        Color::Yellow => Color::LightYellow,
-        Color::Cyan => Color::LightCyan,
-        Color::Magenta => Color::LightMagenta,
-        other => other,
-    }
-}
-
 /// A linear chart of `series` with the legend in the title.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn draw_chart(

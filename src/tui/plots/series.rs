@@ -8,7 +8,7 @@ use ratatui::style::Color;
 use crate::lesson::Plot;
 
 use super::View;
-use super::axis::{Points, Series, dimmer, draw_chart, not_available};
+use super::axis::{Points, Series, draw_chart, not_available};
 use super::history::{Bin, History, body_index};
 use super::study::{render_stability, render_study};
 
@@ -36,22 +36,27 @@ pub(super) fn render_one(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
             return;
         }
         Plot::Energy if bodies > 1 => {
-            let colours = [Color::Green, Color::Yellow, Color::Cyan, Color::Magenta];
+            // Eight distinct colours: a total and a kinetic energy per body, no two alike.
+            let totals = [Color::Green, Color::Magenta, Color::Cyan, Color::LightRed];
+            let kinetic = [
+                Color::Yellow,
+                Color::LightBlue,
+                Color::LightMagenta,
+                Color::LightCyan,
+            ];
             for (b, label) in history.labels.iter().enumerate() {
-                let c = colours[b % colours.len()];
                 curves.push((
                     format!("total {label}"),
                     format!("E{}", b + 1),
-                    c,
+                    totals[b % totals.len()],
                     body_index(b, 0),
                 ));
             }
             for (b, label) in history.labels.iter().enumerate() {
-                let c = colours[b % colours.len()];
                 curves.push((
                     format!("kin {label}"),
                     format!("K{}", b + 1),
-                    dimmer(c),
+                    kinetic[b % kinetic.len()],
                     body_index(b, 1),
                 ));
             }

@@ -1,0 +1,111 @@
+//! The run's camera: the step's first view framed for the pane, following the bodies, zoom,
+//! pan and the way back to the first view.
+
+use glam::DVec3;
+
+use super::{FOLLOW_MAX_ZOOM_OUT, FOLLOW_ZONE, LessonRun};
+use crate::render::{Camera, Projection};
+
+impl LessonRun {
+    /// The camera.
+    #[must_use]
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// The step's initial camera (what `r` and `c` return to).
+    #[must_use]
+    pub fn home_camera(&self) -> &Camera {
+        &self.home
+    }
+
+    /// True while the camera follows the bodies.
+    #[must_use]
+    pub fn follows(&self) -> bool {
+        self.follow
+    }
+
+    /// Width / height of the scene pane in pixels, as last reported.
+    #[must_use]
+    pub fn aspect(&self) -> f64 {
+        self.aspect
+    }
+
+    /// Tells the run the scene pane's aspect ratio (width / height in pixels). The step's
+    /// initial view is framed for it; a camera the user has not moved follows the new framing.
+    pub fn set_aspect(&mut self, aspect: f64) {
+        if !(aspect.is_finite() && aspect > 0.0) || (aspect / self.aspect - 1.0).abs() < 1e-3 {
+            return;
+        }
+        self.aspect = aspect;
+        self.version += 1;
+        let untouched = self.camera == self.home;
+        self.home = Camera::for_scene(&self.scene_at_start(), aspect, Projection::default());
+        if untouched {
+            self.camera = self.home;
+        }
+    }
+
+    /// The scene with the bodies' initial states.
+    pub(super) fn scene_at_start(&self) -> crate::scene::Scene {
+        let mut scene = self.sim.scene.clone();
+        for (body, initial) in scene.bodies.iter_mut().zip(&self.initial) {
+            body.state = initial.clone();
+        }
+        scene
+    }
+
+    /// Turns following on or off.
+    pub fn set_follow(&mut self, on: bool) {
+        self.follow = on;
+        if on {
+            self.follow_bodies();
+        }
+    }
+
+    /// Moves the camera so that every body is in view (see [`Camera::follow`]).
+    pub(super) fn follow_bodies(&mut self) {
+        if self.sim.diverged.is_some() {
+            return;
+        }
+        let mut points: Vec<DVec3> = Vec::new();
+        for body in &self.sim.scene.bodies {
+            points.extend(body.state.x.iter().copied());
+            for s in &body.state.spheres {
+                points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::X));
+                points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::Y));
+                points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::Z));
+            }
+        }
+        let max_distance = self.home.distance * FOLLOW_MAX_ZOOM_OUT;
+        let max_height = self.home.visible_height() * FOLLOW_MAX_ZOOM_OUT;
+        self.camera
+            .follow(&points, self.aspect, FOLLOW_ZONE, max_distance, max_height);
+    }
+
+    pub(super) fn zoom(&mut self, factor: f64) {
+        let before = self.camera;
+        self.camera.zoom(factor);
+        if self.follow {
+            self.follow_bodies();
+            if factor > 1.0 && self.camera.distance >= before.distance {
+                self.message = Some(
+                    "following keeps every body in view: f stops following, to zoom closer".into(),
+                );
+            }
+        }
+    }
+
+    pub(super) fn pan(&mut self, right: f64, up: f64) {
+        self.camera.pan(right, up);
+        if self.follow {
+            self.follow_bodies();
+        }
+    }
+
+    /// Back to the step's initial view.
+    pub fn reset_camera(&mut self) {
+        self.camera = self.home;
+        self.pan_drag = None;
+    }
+}
