@@ -20,6 +20,9 @@
 //! of a plane nothing on that side can be behind it, so this order is exact for planes once the
 //! shapes that cross a plane are cut along it ([`super::occlude`]): what is below is then seen
 //! only through the hole. Spheres hide what is behind them by the same module's ordering.
+//! A bowl under a floor's hole (a pit) seen from above shows only its inside through the hole,
+//! behind everything in it, so it is drawn first of all, into a picture kept while the camera
+//! stays (`pit`), its shadows laid over per pixel ([`super::shadow`]).
 //!
 //! **Shadows** ([`super::shadow`]) are painted on each plane right after it, under everything
 //! above it; shadows on surfaces (a sphere over the cloth, a bowl's rim on its inside) are part
@@ -45,7 +48,7 @@ use super::camera::{Camera, Projection, View, scene_bounds};
 use super::colour::{self, Colour};
 use super::occlude::Occluders;
 use super::paint::{Item, Shape, draw_background, draw_shapes, point};
-use super::shadow::{CastShadows, Lighting, draw_plane_shadows, scene_balls};
+use super::shadow::{CastShadows, Lighting, draw_bowl_shadows, draw_plane_shadows, scene_balls};
 use super::style::{Colouring, Overlay, Style};
 use super::surface::Lattice;
 use super::terrain::{Bowl, Floor, bowl_items, draw_floor, push_polygon, static_geometry};
@@ -54,12 +57,14 @@ use super::{MAX_SIDE, RenderError};
 
 mod casters;
 mod overlay;
+mod pit;
 use crate::physics::SpringKind;
 use crate::physics::collide::Collider;
 use crate::scene::Scene;
 use crate::simulation::Simulation;
 use casters::edges_with_quads;
 pub(crate) use overlay::font_size;
+use pit::PitCache;
 
 /// What is drawn of one body, found once from its springs.
 #[derive(Clone, Debug)]
@@ -94,6 +99,11 @@ pub struct Renderer {
     bodies: Vec<BodyGeometry>,
     floors: Vec<Floor>,
     bowls: Vec<Bowl>,
+    /// The share of the sun that reaches each bowl corner past the terrain (its wall, the
+    /// floor around a hole).
+    bowl_lit: Vec<Vec<f64>>,
+    /// The pictures only the camera changes (`pit`).
+    pit_cache: PitCache,
     /// The background gradient, drawn once and copied into every frame.
     background: Pixmap,
     /// Line widths and disc radii scale with the image height (1 at 480 px), but never below
@@ -181,6 +191,11 @@ impl Renderer {
             })
             .collect();
         let (floors, bowls) = static_geometry(scene);
+        let terrain = Lighting::terrain(&bowls, &floors);
+        let bowl_lit = bowls
+            .iter()
+            .map(|b| b.vertices.iter().map(|&p| terrain.sun(p)).collect())
+            .collect();
         let mut background = Pixmap::new(width, height).expect("size checked");
         let mut paint = Paint {
             anti_alias: style.quality.anti_alias,
@@ -196,6 +211,8 @@ impl Renderer {
             bodies,
             floors,
             bowls,
+            bowl_lit,
+            pit_cache: PitCache::default(),
             background,
             min_line_scale: 0.5,
         }
@@ -214,6 +231,7 @@ impl Renderer {
     /// drawn floor.
     pub fn refit_floors(&mut self, scene: &Scene) {
         self.floors = static_geometry(scene).0;
+        self.pit_cache.clear();
     }
 
     /// The default camera for `scene` ([`Camera::for_scene_window`]) with `projection`, keeping
@@ -277,8 +295,14 @@ impl Renderer {
     /// overlay.
     #[must_use]
     pub fn draw(&self, scene: &Scene, overlay: Option<&Overlay>) -> Pixmap {
-        let mut pixmap = self.background.clone();
         let view = View::new(&self.camera, self.width, self.height);
+        // The pit bowls come drawn in the kept pictures (`pit`).
+        let pits = self.pits(&view);
+        let layers = (!pits.is_empty()).then(|| self.pit_layers(&view, &pits));
+        let mut pixmap = match &layers {
+            Some(l) => l.under.clone(),
+            None => self.background.clone(),
+        };
         // Line widths and text grow with the image: 1 at 480 px high.
         let s = (self.height as f32 / 480.0).max(self.min_line_scale);
         let mut paint = Paint {
@@ -304,12 +328,8 @@ impl Renderer {
             && self.style.colliders
             && !(self.floors.is_empty() && self.bowls.is_empty()))
         .then(|| self.casters(scene));
-        let lights = Lighting::new(
-            scene,
-            &self.bowls,
-            &self.floors,
-            self.style.shadows && self.style.colliders,
-        );
+        let lights_on = self.style.shadows && self.style.colliders;
+        let lights = Lighting::new(scene, &self.bowls, &self.floors, lights_on);
 
         let mut items = Vec::new();
         let mut any_springs = [false; 3];
@@ -342,13 +362,23 @@ impl Renderer {
                     }
                 }
             }
-            // Bodies and spheres shade the bowls too.
+            // Bodies and spheres shade the other bowls corner by corner.
             let cast = casters
                 .as_ref()
-                .filter(|_| !self.bowls.is_empty())
+                .filter(|_| self.bowls.len() > pits.len())
                 .map(CastShadows::new);
-            for bowl in &self.bowls {
-                bowl_items(&view, bowl, &occ, &lights, cast.as_ref(), &mut items);
+            for (b, bowl) in self.bowls.iter().enumerate() {
+                if pits.contains(&b) {
+                    continue;
+                }
+                let sun: Option<Vec<f64>> = lights_on.then(|| {
+                    bowl.vertices
+                        .iter()
+                        .zip(&self.bowl_lit[b])
+                        .map(|(&p, &lit)| lit * cast.as_ref().map_or(1.0, |c| c.sun(p)))
+                        .collect()
+                });
+                bowl_items(&view, bowl, &occ, sun.as_deref(), false, &mut items);
             }
         }
         // Back to front; a stable sort keeps creation order on ties.
@@ -358,6 +388,23 @@ impl Renderer {
                 .then_with(|| b.depth.total_cmp(&a.depth))
         });
         let split = items.partition_point(|i| i.layer == 0);
+
+        // The bodies' shadows inside the pits, over the kept bowls and under everything else.
+        if let (Some(l), Some(c)) = (&layers, &casters)
+            && let (Some(dark), Some(holes)) = (&l.dark, &l.holes)
+        {
+            for &b in &l.bowls {
+                draw_bowl_shadows(
+                    &mut pixmap,
+                    paint.anti_alias,
+                    &view,
+                    &self.bowls[b],
+                    c,
+                    holes,
+                    dark,
+                );
+            }
+        }
 
         draw_shapes(&mut pixmap, &mut paint, &items[..split]);
         if self.style.colliders {
