@@ -19,7 +19,7 @@
 //! where `p`, `c`, `p'` are in m and `R` in m. The floor around the hole shades what its
 //! outline's shadow does not enclose: the hole's circle projected onto the bowl bounds the lit
 //! part. A body's shadow is its caster outline projected the same way. Both are sampled at the
-//! sun's few directions (`SUN_RADIUS`), which makes the penumbra. Each edge is thus a
+//! sun's disc at a ring of directions (`SUN_RADIUS`), which makes the penumbra. Each edge is thus a
 //! straight-sided polygon on the screen between projected corners, not a colour averaged over a
 //! mesh triangle, so the shadow's outline is as smooth as the casters' outlines.
 
@@ -28,12 +28,15 @@ use tiny_skia::{
     FillRule, FilterQuality, Mask, Paint, PathBuilder, Pattern, Pixmap, Rect, SpreadMode, Transform,
 };
 
-use super::{Casters, SUN_RADIUS, SUN_SAMPLES, cone, layer_alpha, light, push_polygon};
+use super::{Casters, SUN_RADIUS, cone, layer_alpha, light, push_polygon};
 use crate::render::camera::View;
 use crate::render::terrain::{Bowl, Floor};
 
 /// How much of the way to the shadowed picture the sun's full shadow goes.
 const PIT_DARK: f64 = 0.97;
+/// Directions the sun's disc is sampled at inside a pit: more than on the planes, as a body
+/// high above the bowl's bottom has a wide penumbra that fewer samples show as steps.
+const PIT_SAMPLES: usize = 8;
 
 /// Where the shadow of `p` lit from `d` falls on the inside of `bowl` (module docs).
 fn onto_bowl(bowl: &Bowl, d: DVec3, p: DVec3) -> DVec3 {
@@ -87,7 +90,7 @@ pub(in crate::render) fn draw_bowl_shadows(
     if casters.groups.is_empty() {
         return;
     }
-    let suns = cone(light(), SUN_RADIUS, SUN_SAMPLES);
+    let suns = cone(light(), SUN_RADIUS, PIT_SAMPLES);
     let a = layer_alpha(PIT_DARK, suns.len());
     for &d in &suns {
         if let Some(path) = casters.path_with(view, 0..casters.groups.len(), d, d, |p| {
@@ -114,7 +117,7 @@ pub(in crate::render) fn draw_pit_shade(
     }) else {
         return;
     };
-    let suns = cone(light(), SUN_RADIUS, SUN_SAMPLES);
+    let suns = cone(light(), SUN_RADIUS, PIT_SAMPLES);
     let a = layer_alpha(PIT_DARK, suns.len());
     let mut ring = Vec::with_capacity(floor.hole.len());
     for &d in &suns {
