@@ -20,6 +20,9 @@
 //! of a plane nothing on that side can be behind it, so this order is exact for planes once the
 //! shapes that cross a plane are cut along it ([`super::occlude`]): what is below is then seen
 //! only through the hole. Spheres hide what is behind them by the same module's ordering.
+//! A bowl under a floor's hole (a pit) seen from above shows only its inside through the hole,
+//! behind everything in it, so it is drawn first of all, into a picture kept while the camera
+//! stays (`pit`), its shadows laid over per pixel ([`super::shadow`]).
 //!
 //! **Shadows** ([`super::shadow`]) are painted on each plane right after it, under everything
 //! above it; shadows on surfaces (a sphere over the cloth, a bowl's rim on its inside) are part
@@ -44,17 +47,24 @@ use tiny_skia::{Paint, Pixmap};
 use super::camera::{Camera, Projection, View, scene_bounds};
 use super::colour::{self, Colour};
 use super::occlude::Occluders;
-use super::paint::{Item, Shape, draw_background, draw_shapes, fill_rect, point, stroke_line};
-use super::shadow::{CastShadows, Casters, Lighting, draw_plane_shadows, scene_balls};
+use super::paint::{Item, Shape, draw_background, draw_shapes, point};
+use super::shadow::{CastShadows, Lighting, draw_bowl_shadows, draw_plane_shadows, scene_balls};
 use super::style::{Colouring, Overlay, Style};
-use super::surface::{Lattice, quad_edges};
+use super::surface::Lattice;
 use super::terrain::{Bowl, Floor, bowl_items, draw_floor, push_polygon, static_geometry};
-use super::text::{Align, draw_text, text_width, vertical_metrics};
+use super::text::vertical_metrics;
 use super::{MAX_SIDE, RenderError};
+
+mod casters;
+mod overlay;
+mod pit;
 use crate::physics::SpringKind;
 use crate::physics::collide::Collider;
 use crate::scene::Scene;
 use crate::simulation::Simulation;
+use casters::edges_with_quads;
+pub(crate) use overlay::font_size;
+use pit::PitCache;
 
 /// What is drawn of one body, found once from its springs.
 #[derive(Clone, Debug)]
@@ -89,6 +99,11 @@ pub struct Renderer {
     bodies: Vec<BodyGeometry>,
     floors: Vec<Floor>,
     bowls: Vec<Bowl>,
+    /// The share of the sun that reaches each bowl corner past the terrain (its wall, the
+    /// floor around a hole).
+    bowl_lit: Vec<Vec<f64>>,
+    /// The pictures only the camera changes (`pit`).
+    pit_cache: PitCache,
     /// The background gradient, drawn once and copied into every frame.
     background: Pixmap,
     /// Line widths and disc radii scale with the image height (1 at 480 px), but never below
@@ -176,6 +191,11 @@ impl Renderer {
             })
             .collect();
         let (floors, bowls) = static_geometry(scene);
+        let terrain = Lighting::terrain(&bowls, &floors);
+        let bowl_lit = bowls
+            .iter()
+            .map(|b| b.vertices.iter().map(|&p| terrain.sun(p)).collect())
+            .collect();
         let mut background = Pixmap::new(width, height).expect("size checked");
         let mut paint = Paint {
             anti_alias: style.quality.anti_alias,
@@ -191,6 +211,8 @@ impl Renderer {
             bodies,
             floors,
             bowls,
+            bowl_lit,
+            pit_cache: PitCache::default(),
             background,
             min_line_scale: 0.5,
         }
@@ -209,6 +231,7 @@ impl Renderer {
     /// drawn floor.
     pub fn refit_floors(&mut self, scene: &Scene) {
         self.floors = static_geometry(scene).0;
+        self.pit_cache.clear();
     }
 
     /// The default camera for `scene` ([`Camera::for_scene_window`]) with `projection`, keeping
@@ -272,8 +295,14 @@ impl Renderer {
     /// overlay.
     #[must_use]
     pub fn draw(&self, scene: &Scene, overlay: Option<&Overlay>) -> Pixmap {
-        let mut pixmap = self.background.clone();
         let view = View::new(&self.camera, self.width, self.height);
+        // The pit bowls come drawn in the kept pictures (`pit`).
+        let pits = self.pits(&view);
+        let layers = (!pits.is_empty()).then(|| self.pit_layers(&view, &pits));
+        let mut pixmap = match &layers {
+            Some(l) => l.under.clone(),
+            None => self.background.clone(),
+        };
         // Line widths and text grow with the image: 1 at 480 px high.
         let s = (self.height as f32 / 480.0).max(self.min_line_scale);
         let mut paint = Paint {
@@ -299,12 +328,8 @@ impl Renderer {
             && self.style.colliders
             && !(self.floors.is_empty() && self.bowls.is_empty()))
         .then(|| self.casters(scene));
-        let lights = Lighting::new(
-            scene,
-            &self.bowls,
-            &self.floors,
-            self.style.shadows && self.style.colliders,
-        );
+        let lights_on = self.style.shadows && self.style.colliders;
+        let lights = Lighting::new(scene, &self.bowls, &self.floors, lights_on);
 
         let mut items = Vec::new();
         let mut any_springs = [false; 3];
@@ -337,13 +362,23 @@ impl Renderer {
                     }
                 }
             }
-            // Bodies and spheres shade the bowls too.
+            // Bodies and spheres shade the other bowls corner by corner.
             let cast = casters
                 .as_ref()
-                .filter(|_| !self.bowls.is_empty())
+                .filter(|_| self.bowls.len() > pits.len())
                 .map(CastShadows::new);
-            for bowl in &self.bowls {
-                bowl_items(&view, bowl, &occ, &lights, cast.as_ref(), &mut items);
+            for (b, bowl) in self.bowls.iter().enumerate() {
+                if pits.contains(&b) {
+                    continue;
+                }
+                let sun: Option<Vec<f64>> = lights_on.then(|| {
+                    bowl.vertices
+                        .iter()
+                        .zip(&self.bowl_lit[b])
+                        .map(|(&p, &lit)| lit * cast.as_ref().map_or(1.0, |c| c.sun(p)))
+                        .collect()
+                });
+                bowl_items(&view, bowl, &occ, sun.as_deref(), false, &mut items);
             }
         }
         // Back to front; a stable sort keeps creation order on ties.
@@ -354,12 +389,29 @@ impl Renderer {
         });
         let split = items.partition_point(|i| i.layer == 0);
 
+        // The bodies' shadows inside the pits, over the kept bowls and under everything else.
+        if let (Some(l), Some(c)) = (&layers, &casters)
+            && let (Some(dark), Some(holes)) = (&l.dark, &l.holes)
+        {
+            for &b in &l.bowls {
+                draw_bowl_shadows(
+                    &mut pixmap,
+                    paint.anti_alias,
+                    &view,
+                    &self.bowls[b],
+                    c,
+                    holes,
+                    dark,
+                );
+            }
+        }
+
         draw_shapes(&mut pixmap, &mut paint, &items[..split]);
         if self.style.colliders {
             for floor in &self.floors {
                 draw_floor(&mut pixmap, &mut paint, &view, floor, s);
                 if let Some(casters) = &casters {
-                    self.draw_shadows(&mut pixmap, &mut paint, &view, casters, floor);
+                    draw_plane_shadows(&mut pixmap, &mut paint, &view, floor, casters);
                 }
             }
         }
@@ -578,213 +630,6 @@ impl Renderer {
             });
         }
     }
-
-    /// The shadows of the scene's bodies, particles and spheres on `floor` (module
-    /// [`super::shadow`]).
-    fn draw_shadows(
-        &self,
-        pixmap: &mut Pixmap,
-        paint: &mut Paint,
-        view: &View,
-        casters: &Casters,
-        floor: &Floor,
-    ) {
-        draw_plane_shadows(pixmap, paint, view, floor, casters);
-    }
-
-    /// What casts shadows on the planes: each body's surface quads (a closed body's that face
-    /// the light) or its shown springs and particles, with its spheres; then the static spheres.
-    fn casters(&self, scene: &Scene) -> Casters {
-        let mut c = Casters::new();
-        let light = colour::LIGHT;
-        for (body, geom) in scene.bodies.iter().zip(&self.bodies) {
-            let x = &body.state.x;
-            let surface = geom.lattice.is_some() && geom.particles == x.len();
-            if !geom.hull.is_empty() && geom.particles == x.len() {
-                silhouette(geom, x, light, &mut c);
-            } else if surface {
-                for q in &geom.quads {
-                    c.polygon(&q.map(|i| x[i as usize]));
-                }
-            } else if body.model.springs().len() <= 4000 {
-                let half = 0.35 * geom.particle_radius;
-                for spring in body.model.springs() {
-                    let (a, b) = (spring.a as usize, spring.b as usize);
-                    if self.style.springs.shows(spring.kind) && a < x.len() && b < x.len() {
-                        c.strip(x[a], x[b], half);
-                    }
-                }
-                if self.style.particles && x.len() <= 400 {
-                    for &p in x {
-                        c.ball(p, geom.particle_radius);
-                    }
-                }
-            }
-            if self.style.colliders {
-                for sphere in &body.state.spheres {
-                    c.ball(sphere.center, sphere.radius);
-                }
-            }
-            c.end_group();
-        }
-        if self.style.colliders {
-            for body in &scene.bodies {
-                for col in &body.model.colliders {
-                    if let Collider::Sphere { center, radius } = *col {
-                        c.ball(center, radius);
-                    }
-                }
-            }
-            c.end_group();
-        }
-        c
-    }
-
-    /// The text box in the top-left corner and the colour legend in the bottom-left.
-    fn draw_overlay(&self, pixmap: &mut Pixmap, paint: &mut Paint, o: &Overlay, kinds: [bool; 3]) {
-        let px = font_size(self.height);
-        let (ascent, descent) = vertical_metrics(px);
-        let line_h = (ascent + descent) * 1.15;
-        let pad = 0.5 * px;
-        // Lines wider than the image break at their " · " separators.
-        let room = self.width as f32 - 4.0 * pad;
-        let lines: Vec<String> = o
-            .lines()
-            .iter()
-            .flat_map(|l| wrap(l, " · ", room, px))
-            .collect();
-        let w = lines
-            .iter()
-            .map(|l| text_width(l, px))
-            .fold(0.0f32, f32::max);
-        fill_rect(
-            pixmap,
-            paint,
-            pad,
-            pad,
-            w + 2.0 * pad,
-            line_h * lines.len() as f32 + pad,
-            colour::OVERLAY_BOX,
-        );
-        for (k, line) in lines.iter().enumerate() {
-            let baseline = pad + 0.5 * pad + ascent + k as f32 * line_h;
-            draw_text(
-                pixmap,
-                line,
-                2.0 * pad,
-                baseline,
-                px,
-                colour::TEXT,
-                Align::Left,
-            );
-        }
-        // Legend at the bottom left.
-        let h = self.height as f32;
-        match self.style.colouring {
-            Colouring::ByKind => {
-                let entries: Vec<(&str, Colour)> = SpringKind::ALL
-                    .iter()
-                    .filter(|k| kinds[kind_index(**k)])
-                    .map(|k| {
-                        (
-                            k.name(),
-                            match k {
-                                SpringKind::Struct => colour::STRUCT,
-                                SpringKind::Shear => colour::SHEAR,
-                                SpringKind::Bend => colour::BEND,
-                            },
-                        )
-                    })
-                    .collect();
-                if entries.is_empty() {
-                    return;
-                }
-                let sample = 1.6 * px;
-                let total: f32 = entries
-                    .iter()
-                    .map(|(n, _)| sample + 0.4 * px + text_width(n, px) + px)
-                    .sum();
-                fill_rect(
-                    pixmap,
-                    paint,
-                    pad,
-                    h - pad - line_h - pad,
-                    total + pad,
-                    line_h + pad,
-                    colour::OVERLAY_BOX,
-                );
-                let baseline = h - pad - 0.5 * pad - descent;
-                let mut x = 1.5 * pad;
-                for (name, c) in entries {
-                    let y = baseline - 0.35 * ascent;
-                    stroke_line(pixmap, paint, point(x, y), point(x + sample, y), 2.0, c);
-                    x += sample + 0.4 * px;
-                    draw_text(pixmap, name, x, baseline, px, colour::TEXT, Align::Left);
-                    x += text_width(name, px) + px;
-                }
-            }
-            Colouring::ByStrain { max_strain } => {
-                let bar_w = (12.0 * px).min(0.4 * self.width as f32);
-                let bar_h = 0.7 * px;
-                let label = |v: f64| format!("{:+.0}%", 100.0 * v);
-                let (lo, hi) = (label(-max_strain), label(max_strain));
-                let title = "strain";
-                let total = text_width(title, px) + px + bar_w + text_width(&hi, px) * 2.0 + px;
-                fill_rect(
-                    pixmap,
-                    paint,
-                    pad,
-                    h - pad - line_h - pad,
-                    total + 2.0 * pad,
-                    line_h + pad,
-                    colour::OVERLAY_BOX,
-                );
-                let baseline = h - pad - 0.5 * pad - descent;
-                let mut x = 1.5 * pad;
-                draw_text(pixmap, title, x, baseline, px, colour::TEXT, Align::Left);
-                x += text_width(title, px) + 0.5 * px;
-                draw_text(pixmap, &lo, x, baseline, px, colour::TEXT, Align::Left);
-                x += text_width(&lo, px) + 0.3 * px;
-                let steps = 32;
-                for k in 0..steps {
-                    let t = (k as f64 + 0.5) / steps as f64 * 2.0 - 1.0;
-                    let c = colour::strain_colour(t * max_strain, max_strain);
-                    let seg = bar_w / steps as f32;
-                    fill_rect(
-                        pixmap,
-                        paint,
-                        x + k as f32 * seg,
-                        baseline - 0.5 * ascent - 0.5 * bar_h,
-                        seg + 0.5,
-                        bar_h,
-                        c,
-                    );
-                }
-                x += bar_w + 0.3 * px;
-                draw_text(pixmap, &hi, x, baseline, px, colour::TEXT, Align::Left);
-            }
-        }
-    }
-}
-
-/// `line` split at `separator` into pieces no wider than `room` px where possible.
-fn wrap(line: &str, separator: &str, room: f32, px: f32) -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
-    for part in line.split(separator) {
-        match out.last_mut() {
-            Some(last) if text_width(&format!("{last}{separator}{part}"), px) <= room => {
-                last.push_str(separator);
-                last.push_str(part);
-            }
-            _ => out.push(part.to_string()),
-        }
-    }
-    out
-}
-
-/// Text size (px) for an image `height` px high.
-pub(crate) fn font_size(height: u32) -> f32 {
-    (height as f32 / 32.0).clamp(10.0, 48.0).round()
 }
 
 /// Checks an image size: each side 1 ..= [`MAX_SIDE`].
@@ -835,85 +680,6 @@ fn vertex_strains(body: &crate::scene::Body) -> Vec<f64> {
         .zip(&count)
         .map(|(s, &c)| if c > 0 { s / f64::from(c) } else { 0.0 })
         .collect()
-}
-
-/// Unique edges of `quads` with the indices of the (one or two) quads they border.
-fn edges_with_quads(quads: &[[u32; 4]]) -> Vec<(u32, u32, [u32; 2])> {
-    let edges = quad_edges(quads);
-    let mut owners: Vec<[u32; 2]> = vec![[u32::MAX; 2]; edges.len()];
-    for (qi, q) in quads.iter().enumerate() {
-        for k in 0..4 {
-            let (a, b) = (q[k], q[(k + 1) % 4]);
-            let key = (a.min(b), a.max(b));
-            if let Ok(e) = edges.binary_search(&key) {
-                let o = &mut owners[e];
-                if o[0] == u32::MAX {
-                    o[0] = qi as u32;
-                } else {
-                    o[1] = qi as u32;
-                }
-            }
-        }
-    }
-    edges
-        .into_iter()
-        .zip(owners)
-        .map(|((a, b), o)| (a, b, [o[0], if o[1] == u32::MAX { o[0] } else { o[1] }]))
-        .collect()
-}
-
-/// The outlines of a closed body seen from the light, as polygons of `casters`: the hull's
-/// edges between a quad that faces the light and one that does not, chained into loops, each
-/// run the way its lit quad runs (so that every loop turns the same way seen from the light).
-fn silhouette(geom: &BodyGeometry, x: &[DVec3], light: DVec3, casters: &mut Casters) {
-    let lit: Vec<bool> = geom
-        .hull
-        .iter()
-        .map(|q| {
-            let [a, b, c, d] = q.map(|i| x[i as usize]);
-            (c - a).cross(d - b).dot(light) > 0.0
-        })
-        .collect();
-    // Directed silhouette edges, sorted by their start for the walk.
-    let mut edges: Vec<(u32, u32)> = geom
-        .hull_edges
-        .iter()
-        .filter(|(_, _, q, _)| lit[q[0] as usize] != lit[q[1] as usize])
-        .map(|&(a, b, q, forward)| {
-            // The lit quad's direction: the first quad's, or the reverse for the second.
-            if lit[q[0] as usize] == forward {
-                (a, b)
-            } else {
-                (b, a)
-            }
-        })
-        .collect();
-    edges.sort_unstable();
-    let mut used = vec![false; edges.len()];
-    let mut ring = Vec::new();
-    for first in 0..edges.len() {
-        if used[first] {
-            continue;
-        }
-        ring.clear();
-        let mut e = first;
-        loop {
-            used[e] = true;
-            ring.push(x[edges[e].0 as usize]);
-            let next = edges[e].1;
-            let start = edges.partition_point(|&(a, _)| a < next);
-            match (start..edges.len())
-                .take_while(|&k| edges[k].0 == next)
-                .find(|&k| !used[k])
-            {
-                Some(k) => e = k,
-                None => break,
-            }
-        }
-        if ring.len() >= 3 {
-            casters.polygon(&ring);
-        }
-    }
 }
 
 /// A shaded disc for a sphere of `radius` (m) at `center`.

@@ -63,8 +63,11 @@ use tiny_skia::{FillRule, Mask, Paint, PathBuilder, Pixmap, Transform};
 use super::camera::{View, plane_axes};
 use super::colour::{self, Colour};
 use super::terrain::{Bowl, Floor, floor_path};
+
+mod pit;
 use crate::physics::collide::Collider;
 use crate::scene::Scene;
+pub(super) use pit::{draw_bowl_shadows, draw_pit_shade};
 
 /// Angular radius of the sun's disc (rad): how fast the penumbra widens with height.
 pub(super) const SUN_RADIUS: f64 = 0.045;
@@ -242,6 +245,20 @@ impl Casters {
             };
             centre + factor * (on - centre)
         };
+        self.path_with(view, groups, d, n, onto)
+    }
+
+    /// The path of the shadows of groups `groups` lit from `d`, every caster point moved to
+    /// where its shadow falls by `onto`; a strip's width is laid out across `n` (the receiver's
+    /// normal), every piece turned the same way round on the screen.
+    fn path_with(
+        &self,
+        view: &View,
+        groups: std::ops::Range<usize>,
+        d: DVec3,
+        n: DVec3,
+        onto: impl Fn(DVec3) -> DVec3,
+    ) -> Option<tiny_skia::Path> {
         let [p0, s0, b0] = if groups.start == 0 {
             [0; 3]
         } else {
@@ -523,6 +540,15 @@ impl Lighting {
         if !on {
             return Lighting::default();
         }
+        Lighting {
+            balls: scene_balls(scene),
+            ..Lighting::terrain(bowls, floors)
+        }
+    }
+
+    /// What shades the terrain alone: the bowls' walls and the floors' holes (the light that
+    /// reaches a bowl's corners whatever the bodies do).
+    pub(super) fn terrain(bowls: &[Bowl], floors: &[Floor]) -> Lighting {
         let mut gaps = Vec::new();
         for f in floors {
             if let Some((center, radius)) = f.hole_circle {
@@ -535,7 +561,7 @@ impl Lighting {
             }
         }
         Lighting {
-            balls: scene_balls(scene),
+            balls: Vec::new(),
             walls: bowls
                 .iter()
                 .map(|b| BowlWall {

@@ -8,13 +8,12 @@
 //! [`crate::physics::bowl::Rim`] gives.
 
 use glam::DVec3;
-use tiny_skia::{FillRule, Paint, Path, PathBuilder, Pixmap, Transform};
+use tiny_skia::{FillRule, LineCap, Paint, Path, PathBuilder, Pixmap, Stroke, Transform};
 
 use super::camera::{View, plane_axes, scene_bounds};
 use super::colour;
 use super::occlude::Occluders;
-use super::paint::{Item, Shape, grow, nice, point, project3, stroke_line};
-use super::shadow::{CastShadows, Lighting};
+use super::paint::{Item, Shape, grow, nice, project3};
 use crate::physics::bowl::Rim;
 use crate::physics::collide::Collider;
 use crate::scene::Scene;
@@ -48,6 +47,9 @@ pub(super) struct Bowl {
     pub(super) vertices: Vec<DVec3>,
     /// Triangles from the bottom to the rim, as indices into `vertices`.
     pub(super) triangles: Vec<[u32; 3]>,
+    /// The floor whose hole opens onto the bowl and hides the rest of it (a pit: the rim at or
+    /// below the floor, the hole inside the rim circle), as an index into the floors.
+    pub(super) pit: Option<usize>,
 }
 
 /// Segments of a bowl's tessellation: around and from the bottom to the rim.
@@ -94,13 +96,32 @@ pub(super) fn static_geometry(scene: &Scene) -> (Vec<Floor>, Vec<Bowl>) {
                         rim: Rim::of(center, radius, rim_height).height,
                         vertices,
                         triangles,
+                        pit: None,
                     });
                 }
                 Collider::Sphere { .. } => {}
             }
         }
     }
+    for bowl in &mut bowls {
+        bowl.pit = floors.iter().position(|f| covers(f, bowl));
+    }
     (floors, bowls)
+}
+
+/// True when `floor` hides all of `bowl` but what its hole shows: a horizontal floor at or
+/// above the rim whose hole lies inside the rim circle. Seen from above such a floor, a ray
+/// through the hole is inside the bowl's sphere until it meets the bowl's inside, so the
+/// outside is never seen and the inside is behind everything in the bowl.
+fn covers(floor: &Floor, bowl: &Bowl) -> bool {
+    let Some((centre, radius)) = floor.hole_circle else {
+        return false;
+    };
+    let rim = Rim::of(bowl.center, bowl.radius, bowl.rim);
+    let axis = DVec3::new(centre.x - bowl.center.x, 0.0, centre.z - bowl.center.z).length();
+    floor.normal.dot(DVec3::Y) > 1.0 - 1e-9
+        && floor.point.y >= bowl.rim - 1e-9
+        && axis + radius <= rim.radius_squared.max(0.0).sqrt() + 1e-6 * bowl.radius
 }
 
 /// A plane patch around the content `bounds` with grid lines every nice distance, and the hole.
@@ -260,24 +281,17 @@ pub(super) fn bowl_mesh(
     (vertices, t)
 }
 
-/// The bowl's triangles, inside and outside coloured differently, shaded by the light that
-/// reaches them (its own wall and the floor around it cast shadows inside it), cut by the planes
-/// of `occ`.
+/// The bowl's triangles, inside and outside coloured differently, shaded by the share of the
+/// sun `sun` that reaches each corner (none: no shadows), cut by the planes of `occ`; the
+/// triangles whose outside the camera sees are left out when `inside_only`.
 pub(super) fn bowl_items(
     view: &View,
     bowl: &Bowl,
     occ: &Occluders,
-    lights: &Lighting,
-    cast: Option<&CastShadows>,
+    sun: Option<&[f64]>,
+    inside_only: bool,
     items: &mut Vec<Item>,
 ) {
-    // The light that reaches each corner, once per corner.
-    let sun: Option<Vec<f64>> = (!lights.is_empty() || cast.is_some()).then(|| {
-        bowl.vertices
-            .iter()
-            .map(|&p| lights.sun(p) * cast.map_or(1.0, |c| c.sun(p)))
-            .collect()
-    });
     for &tri in &bowl.triangles {
         let [a, b, c] = tri.map(|i| bowl.vertices[i as usize]);
         let centroid = (a + b + c) / 3.0;
@@ -293,12 +307,15 @@ pub(super) fn bowl_items(
         }
         // That side is the inside when its normal points towards the sphere's centre.
         let inside = n.dot(bowl.center - centroid) > 0.0;
+        if inside_only && !inside {
+            continue;
+        }
         let base = if inside {
             colour::BOWL_INSIDE
         } else {
             colour::BOWL_OUTSIDE
         };
-        let colour = match &sun {
+        let colour = match sun {
             Some(v) => {
                 let share = tri.iter().map(|&i| v[i as usize]).sum::<f64>() / 3.0;
                 colour::shade_lit(base, n, share, 1.0)
@@ -400,44 +417,51 @@ pub(super) fn draw_floor(
         );
         pixmap.fill_path(&path, paint, FillRule::EvenOdd, Transform::identity(), None);
     }
-    for &(a, b) in &floor.grid {
-        stroke_world_segment(pixmap, paint, view, a, b, 0.8 * s, colour::GROUND_GRID);
-    }
+    // The grid and the hole's rim, each one path: one paint layer, one call.
+    stroke_world_segments(
+        pixmap,
+        paint,
+        view,
+        floor.grid.iter().copied(),
+        0.8 * s,
+        colour::GROUND_GRID,
+    );
     let n = floor.hole.len();
-    for k in 0..n {
-        let (a, b) = (floor.hole[k], floor.hole[(k + 1) % n]);
-        stroke_world_segment(
-            pixmap,
-            paint,
-            view,
-            a,
-            b,
-            1.5 * s,
-            colour::GROUND.scaled(0.45),
-        );
-    }
+    stroke_world_segments(
+        pixmap,
+        paint,
+        view,
+        (0..n).map(|k| (floor.hole[k], floor.hole[(k + 1) % n])),
+        1.5 * s,
+        colour::GROUND.scaled(0.45),
+    );
 }
 
-/// The world segment `a`–`b`, clipped to the view and stroked `width` px wide.
-fn stroke_world_segment(
+/// The world segments, clipped to the view, stroked `width` px wide as one path.
+fn stroke_world_segments(
     pixmap: &mut Pixmap,
     paint: &mut Paint,
     view: &View,
-    a: DVec3,
-    b: DVec3,
+    segments: impl Iterator<Item = (DVec3, DVec3)>,
     width: f32,
     c: colour::Colour,
 ) {
-    if let Some((ca, cb)) = view.clip_segment(view.to_camera(a), view.to_camera(b))
-        && let (Some(pa), Some(pb)) = (view.project_camera(ca), view.project_camera(cb))
-    {
-        stroke_line(
-            pixmap,
-            paint,
-            point(pa.x, pa.y),
-            point(pb.x, pb.y),
+    let mut pb = PathBuilder::new();
+    for (a, b) in segments {
+        if let Some((ca, cb)) = view.clip_segment(view.to_camera(a), view.to_camera(b))
+            && let (Some(pa), Some(pb2)) = (view.project_camera(ca), view.project_camera(cb))
+        {
+            pb.move_to(pa.x, pa.y);
+            pb.line_to(pb2.x, pb2.y);
+        }
+    }
+    if let Some(path) = pb.finish() {
+        paint.set_color(c.to_skia());
+        let stroke = Stroke {
             width,
-            c,
-        );
+            line_cap: LineCap::Round,
+            ..Stroke::default()
+        };
+        pixmap.stroke_path(&path, paint, &stroke, Transform::identity(), None);
     }
 }
