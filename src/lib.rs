@@ -15,7 +15,6 @@ pub mod bench;
 pub mod budget;
 pub mod cli;
 pub mod format;
-#[allow(unsafe_code)]
 pub mod grade;
 pub mod lesson;
 pub mod output;

@@ -24,6 +24,8 @@
 
 mod child;
 mod landlock;
+mod reap;
+pub(crate) use reap::reap;
 mod report;
 mod seccomp;
 
