@@ -31,6 +31,7 @@ pub mod menu;
 pub mod pane;
 pub mod plots;
 pub mod progress;
+mod query;
 pub mod raster;
 pub mod sim_view;
 pub mod status;

@@ -26,8 +26,7 @@
 //! wiped by tmux's next redraw); without it only the device attributes are asked of tmux itself
 //! (a tmux built with sixel support draws sixel). Otherwise the pane falls back to half-blocks.
 
-use std::io::Write;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Longest wait for the terminal's answers.
 pub const QUERY_TIMEOUT: Duration = Duration::from_millis(1000);
@@ -271,47 +270,11 @@ impl Answers {
 }
 
 /// Writes `queries` and reads standard input until the status answer or the timeout.
-#[cfg(unix)]
 fn ask(queries: &str) -> std::io::Result<Answers> {
-    use rustix::event::{PollFd, PollFlags, Timespec, poll};
-    use std::os::fd::AsFd;
-
-    let mut out = std::io::stdout();
-    out.write_all(queries.as_bytes())?;
-    out.flush()?;
-    let stdin = std::io::stdin();
-    let fd = stdin.as_fd();
-    let deadline = Instant::now() + QUERY_TIMEOUT;
-    let mut bytes = Vec::new();
-    loop {
-        let left = deadline.saturating_duration_since(Instant::now());
-        if left.is_zero() {
-            break;
-        }
-        let timeout = Timespec {
-            tv_sec: left.as_secs() as _,
-            tv_nsec: left.subsec_nanos().into(),
-        };
-        let mut fds = [PollFd::from_borrowed_fd(fd, PollFlags::IN)];
-        if poll(&mut fds, Some(&timeout))? == 0 {
-            break;
-        }
-        let mut chunk = [0u8; 256];
-        let n = rustix::io::read(fd, &mut chunk)?;
-        if n == 0 {
-            break;
-        }
-        bytes.extend_from_slice(&chunk[..n]);
-        if Answers::parse(&bytes).status {
-            break;
-        }
-    }
+    let bytes = super::query::ask(queries.as_bytes(), QUERY_TIMEOUT, |bytes| {
+        Answers::parse(bytes).status
+    })?;
     Ok(Answers::parse(&bytes))
-}
-
-#[cfg(not(unix))]
-fn ask(_queries: &str) -> std::io::Result<Answers> {
-    Ok(Answers::default())
 }
 
 /// How the scene pane draws the scene.

@@ -193,50 +193,14 @@ pub fn detect() -> Background {
     ask().unwrap_or(Background::Dark)
 }
 
-#[cfg(unix)]
 fn ask() -> Option<Background> {
-    use rustix::event::{PollFd, PollFlags, Timespec, poll};
-    use std::io::Write;
-    use std::os::fd::AsFd;
-    use std::time::Instant;
-
-    let mut out = std::io::stdout();
-    out.write_all(b"\x1b]11;?\x1b\\\x1b[c").ok()?;
-    out.flush().ok()?;
-    let stdin = std::io::stdin();
-    let fd = stdin.as_fd();
-    let deadline = Instant::now() + QUERY_TIMEOUT;
-    let mut bytes = Vec::new();
-    loop {
-        let left = deadline.saturating_duration_since(Instant::now());
-        if left.is_zero() {
-            break;
-        }
-        let timeout = Timespec {
-            tv_sec: left.as_secs() as _,
-            tv_nsec: left.subsec_nanos().into(),
-        };
-        let mut fds = [PollFd::from_borrowed_fd(fd, PollFlags::IN)];
-        if poll(&mut fds, Some(&timeout)).ok()? == 0 {
-            break;
-        }
-        let mut chunk = [0u8; 256];
-        let n = rustix::io::read(fd, &mut chunk).ok()?;
-        if n == 0 {
-            break;
-        }
-        bytes.extend_from_slice(&chunk[..n]);
-        // The device attributes' answer (`ESC [ ? … c`) comes after the background's.
-        if let Some(p) = bytes.windows(3).position(|w| w == b"\x1b[?")
-            && bytes[p..].contains(&b'c')
-        {
-            break;
-        }
-    }
+    // The device attributes' answer (`ESC [ ? … c`) comes after the background's.
+    let bytes = super::query::ask(b"\x1b]11;?\x1b\\\x1b[c", QUERY_TIMEOUT, |bytes| {
+        bytes
+            .windows(3)
+            .position(|w| w == b"\x1b[?")
+            .is_some_and(|p| bytes[p..].contains(&b'c'))
+    })
+    .ok()?;
     parse_reply(&bytes)
-}
-
-#[cfg(not(unix))]
-fn ask() -> Option<Background> {
-    None
 }
