@@ -47,19 +47,8 @@ echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 results=$(mktemp)
 trap 'rm -f "$results"' EXIT
 
-springlab_run() { # WORKLOAD -> "steps/s cx cy cz E"
-    "$springlab" bench "$1" --json --repeats "$repeats" --budget 0 --force |
-        awk '{
-            match($0, /"steps_per_second":[^,]*/); s = substr($0, RSTART + 19, RLENGTH - 19)
-            match($0, /"centroid":\[[^]]*\]/); c = substr($0, RSTART + 12, RLENGTH - 13); gsub(",", " ", c)
-            match($0, /"energy":[^,]*/); e = substr($0, RSTART + 9, RLENGTH - 9)
-            print s, c, e }'
-}
-cpp_run() { # WORKLOAD -> "steps/s cx cy cz E"
-    "$cpp" "$1" --reps "$repeats" | awk '/^RESULT/ {
-        for (i = 1; i <= NF; i++) { split($i, kv, "="); v[kv[1]] = kv[2] }
-        print v["steps_per_s"], v["cx"], v["cy"], v["cz"], v["E"] }'
-}
+# shellcheck source=bench-runs.sh
+. "$(dirname "$0")/bench-runs.sh"
 
 printf '%-6s %-12s %14s %14s %8s  %s\n' round workload "springlab /s" "C++ /s" ratio checksum
 for ((round = 1; round <= rounds; round++)); do

@@ -48,19 +48,8 @@ load_before=$(cut -d' ' -f1 /proc/loadavg)
 results=$(mktemp)
 trap 'rm -f "$results"' EXIT
 
-springlab_run() { # THREADS WORKLOAD -> "steps/s cx cy cz E"
-    SPRINGLAB_THREADS="$1" "$springlab" bench "$2" --json --repeats "$repeats" --budget 0 --force |
-        awk '{
-            match($0, /"steps_per_second":[^,]*/); s = substr($0, RSTART + 19, RLENGTH - 19)
-            match($0, /"centroid":\[[^]]*\]/); c = substr($0, RSTART + 12, RLENGTH - 13); gsub(",", " ", c)
-            match($0, /"energy":[^,]*/); e = substr($0, RSTART + 9, RLENGTH - 9)
-            print s, c, e }'
-}
-cpp_run() { # WORKLOAD -> "steps/s cx cy cz E"
-    "$cpp" "$1" --reps "$repeats" | awk '/^RESULT/ {
-        for (i = 1; i <= NF; i++) { split($i, kv, "="); v[kv[1]] = kv[2] }
-        print v["steps_per_s"], v["cx"], v["cy"], v["cz"], v["E"] }'
-}
+# shellcheck source=bench-runs.sh
+. "$(dirname "$0")/bench-runs.sh"
 compare() { # ROUND WORKLOAD COLUMN "springlab" "cpp": prints the ratio, records it
     echo "$1 $2 $3 $4 $5" | awk -v out="$results" '{
         ok = "ok"
@@ -77,9 +66,9 @@ printf '%-6s %-12s %-8s %14s %14s %8s  %s\n' round workload threads "springlab /
 for ((round = 1; round <= rounds; round++)); do
     for w in "${workloads[@]}"; do
         case $((round % 3)) in
-            1) one=$(springlab_run 1 "$w"); all=$(springlab_run "$cores" "$w"); c=$(cpp_run "$w") ;;
-            2) c=$(cpp_run "$w"); one=$(springlab_run 1 "$w"); all=$(springlab_run "$cores" "$w") ;;
-            *) all=$(springlab_run "$cores" "$w"); c=$(cpp_run "$w"); one=$(springlab_run 1 "$w") ;;
+            1) one=$(SPRINGLAB_THREADS=1 springlab_run "$w"); all=$(SPRINGLAB_THREADS="$cores" springlab_run "$w"); c=$(cpp_run "$w") ;;
+            2) c=$(cpp_run "$w"); one=$(SPRINGLAB_THREADS=1 springlab_run "$w"); all=$(SPRINGLAB_THREADS="$cores" springlab_run "$w") ;;
+            *) all=$(SPRINGLAB_THREADS="$cores" springlab_run "$w"); c=$(cpp_run "$w"); one=$(SPRINGLAB_THREADS=1 springlab_run "$w") ;;
         esac
         compare "$round" "$w" 1 "$one" "$c" >&2
         compare "$round" "$w" all "$all" "$c" >&2
