@@ -374,29 +374,30 @@ pub(super) fn push_polygon(
 /// The floor's region on the screen: its outline with the hole cut out (even-odd).
 pub(super) fn floor_path(view: &View, floor: &Floor) -> Option<Path> {
     let mut pb = PathBuilder::new();
-    let add_ring = |pb: &mut PathBuilder, ring: &[DVec3]| {
-        let cam: Vec<DVec3> = ring.iter().map(|&p| view.to_camera(p)).collect();
-        let clipped = view.clip_polygon(&cam);
-        let mut first = true;
-        for c in clipped {
-            if let Some(p) = view.project_camera(c) {
-                if first {
-                    pb.move_to(p.x, p.y);
-                    first = false;
-                } else {
-                    pb.line_to(p.x, p.y);
-                }
-            }
-        }
-        if !first {
-            pb.close();
-        }
-    };
-    add_ring(&mut pb, &floor.outline);
+    add_ring(&mut pb, view, &floor.outline);
     if !floor.hole.is_empty() {
-        add_ring(&mut pb, &floor.hole);
+        add_ring(&mut pb, view, &floor.hole);
     }
     pb.finish()
+}
+
+/// Adds the closed polygon `ring` (world points), clipped to the view and projected, to `pb`.
+pub(super) fn add_ring(pb: &mut PathBuilder, view: &View, ring: &[DVec3]) {
+    let cam: Vec<DVec3> = ring.iter().map(|&p| view.to_camera(p)).collect();
+    let mut first = true;
+    for c in view.clip_polygon(&cam) {
+        if let Some(p) = view.project_camera(c) {
+            if first {
+                pb.move_to(p.x, p.y);
+                first = false;
+            } else {
+                pb.line_to(p.x, p.y);
+            }
+        }
+    }
+    if !first {
+        pb.close();
+    }
 }
 
 /// A floor: the shaded patch with its hole cut out, its grid and the hole's rim.

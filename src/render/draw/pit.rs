@@ -13,7 +13,7 @@ use crate::render::occlude::Occluders;
 use crate::render::paint::{Item, draw_shapes};
 use crate::render::shadow::draw_pit_shade;
 use crate::render::style::Style;
-use crate::render::terrain::bowl_items;
+use crate::render::terrain::{add_ring, bowl_items};
 
 /// The kept pictures for one view and style.
 #[derive(Debug)]
@@ -160,18 +160,6 @@ impl Renderer {
 /// The hole's outline `ring` on the screen as a path.
 fn hole_path(view: &View, ring: &[glam::DVec3]) -> Option<tiny_skia::Path> {
     let mut pb = tiny_skia::PathBuilder::new();
-    let cam: Vec<glam::DVec3> = ring.iter().map(|&p| view.to_camera(p)).collect();
-    let mut first = true;
-    for c in view.clip_polygon(&cam) {
-        if let Some(p) = view.project_camera(c) {
-            if first {
-                pb.move_to(p.x, p.y);
-                first = false;
-            } else {
-                pb.line_to(p.x, p.y);
-            }
-        }
-    }
-    pb.close();
+    add_ring(&mut pb, view, ring);
     pb.finish()
 }
