@@ -460,3 +460,146 @@ fn a_failed_check_names_the_lesson_that_shows_it_live() {
     );
     assert!(!stdout.contains("see it: springlab lesson 3"), "{stdout}");
 }
+
+/// Every step of `dir`'s program on `setup`, to the horizon, with up to `ahead` steps per
+/// request: the student's positions and energy of each step.
+fn every_step(dir: &Path, b: &Arc<Builder>, setup: &Setup, ahead: u32) -> Vec<(Vec<u64>, u64)> {
+    let built = build_homework(dir, b, &options()).expect("builds");
+    let options = LiveOptions {
+        frame_every: 1,
+        ahead,
+        ..LiveOptions::default()
+    };
+    let live = Live::start(built.homework, setup.clone(), options);
+    live.run_free();
+    let mut steps = Vec::new();
+    loop {
+        let frame = live
+            .next_frame(Duration::from_secs(60))
+            .expect("a frame within a minute");
+        assert_eq!(frame.failure, None);
+        if frame.finished {
+            return steps;
+        }
+        let x = frame.yours.expect("your body");
+        let bits = x
+            .iter()
+            .flat_map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
+            .collect();
+        steps.push((bits, frame.energy_yours.expect("energy").to_bits()));
+    }
+}
+
+#[test]
+fn many_steps_per_request_give_the_bodies_of_one_call_per_step_bit_for_bit() {
+    let parent = scratch("batched");
+    let b = the_builder();
+    let rope = homework(&parent, "rope", "rope", ROPE, INTEGRATORS);
+    let verlet = setup(Assignment::Rope, 4, 3, None, 10.0);
+    let single = every_step(&rope, &b, &verlet, 1);
+    assert_eq!(single.len() as u64, verlet.horizon);
+    assert_eq!(every_step(&rope, &b, &verlet, 64), single, "Verlet rope");
+
+    // The 4×4×4 cube falls onto the plane y = -1 within its first second: the collision
+    // response between steps drops the steps a request computed past a contact.
+    let jelly = homework(&parent, "jelly", "jelly", JELLY, INTEGRATORS);
+    let rk4 = setup(Assignment::Jelly, 5, 2, Some(Method::Rk4), 1.6);
+    let single = every_step(&jelly, &b, &rk4, 1);
+    let lowest = single
+        .iter()
+        .flat_map(|(x, _)| x.chunks(3).map(|p| f64::from_bits(p[1])))
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        lowest < -0.95,
+        "the cube reaches the plane: lowest y {lowest}"
+    );
+    assert_eq!(every_step(&jelly, &b, &rk4, 64), single, "RK4 jelly");
+}
+
+#[test]
+fn a_program_of_another_protocol_version_is_told_to_update() {
+    let parent = scratch("old-version");
+    let b = the_builder();
+    // Before `main` (the grader's own main.rs) runs, this program answers the greeting as a
+    // program built against protocol version 2 would, then waits for the end of its input.
+    let old = format!(
+        "{ROPE}\n\
+         #[used]\n\
+         #[unsafe(link_section = \".init_array\")]\n\
+         static OLD_PROGRAM: extern \"C\" fn() = old_program;\n\
+         extern \"C\" fn old_program() {{\n\
+             use std::io::{{Read, Write}};\n\
+             use springlab_homework::wire::{{self, Wire}};\n\
+             let mut input = std::io::stdin().lock();\n\
+             let mut len = [0u8; 4];\n\
+             input.read_exact(&mut len).expect(\"length\");\n\
+             let mut hello = vec![0u8; u32::from_le_bytes(len) as usize];\n\
+             input.read_exact(&mut hello).expect(\"hello\");\n\
+             let mut token = [0u8; wire::TOKEN_LEN];\n\
+             token.copy_from_slice(&hello[5..5 + wire::TOKEN_LEN]);\n\
+             let mut greeting = vec![wire::to_grader::HELLO];\n\
+             2u32.put(&mut greeting);\n\
+             \"rope\".to_string().put(&mut greeting);\n\
+             let mut out = std::io::stdout().lock();\n\
+             out.write_all(&wire::reply_frame(&token, &greeting)).expect(\"write\");\n\
+             out.flush().expect(\"flush\");\n\
+             let _ = input.read_to_end(&mut Vec::new());\n\
+             std::process::exit(0);\n\
+         }}\n"
+    );
+    let dir = homework(&parent, "old", "rope", &old, INTEGRATORS);
+    let built = build_homework(&dir, &b, &options()).expect("builds");
+    let live = Live::start(
+        built.homework,
+        setup(Assignment::Rope, 1, 1, None, 10.0),
+        LiveOptions::default(),
+    );
+    live.advance_to(1);
+    let frame = live.next_frame(Duration::from_secs(60)).expect("a frame");
+    let why = frame.failure.expect("the program is refused");
+    assert_eq!(
+        why,
+        format!(
+            "your program did not start: the program speaks version 2 of the grader's protocol \
+             (its rope homework was built against another copy of springlab-homework); this \
+             springlab speaks version {}: update the crate's springlab-homework and build it \
+             again",
+            springlab_homework::wire::VERSION
+        )
+    );
+    assert_eq!(frame.yours, None);
+}
+
+#[test]
+fn implicit_euler_on_the_thousand_particle_jelly_is_refused_with_its_reason() {
+    // Lesson 5's implicit Euler step: the 10×10×10 jelly. A dense Jacobian of 1000 particles
+    // is 3000 × 3000 numbers (68 MiB), over the 16 MiB a message may hold; the reference
+    // keeps going.
+    let s = setup(Assignment::Jelly, 5, 7, None, 1.0);
+    assert_eq!(s.model.particle_count(), 1000);
+    assert_eq!(s.integrator.name(), "implicit_euler");
+    let live = Live::start(
+        springlab::grade::live::Homework::reference(Assignment::Jelly),
+        s,
+        LiveOptions {
+            frame_every: 1,
+            ..LiveOptions::default()
+        },
+    );
+    live.advance_to(2);
+    let first = live.next_frame(Duration::from_secs(60)).expect("a frame");
+    assert_eq!(
+        first.failure.as_deref(),
+        Some(
+            "your implicit_euler() is not run on this body: a Jacobian of 1000 particles is a \
+             dense 3000 × 3000 matrix (68 MiB), more than the 16 MiB a message between \
+             springlab and your program may hold; implicit Euler with Physics's dense \
+             Jacobians is for bodies of at most 482 particles"
+        )
+    );
+    assert_eq!(first.yours, None);
+    let second = live
+        .next_frame(Duration::from_secs(60))
+        .expect("the reference goes on");
+    assert_eq!((first.step, second.step), (1, 2));
+}

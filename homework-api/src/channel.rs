@@ -7,7 +7,7 @@ use std::io::{Read, Write};
 
 use crate::DVec3;
 use crate::wire::{
-    MAX_FRAME, Reader, TOKEN_LEN, Wire, WireError, reply_frame, to_grader, to_program,
+    MAX_FRAME, Reader, TOKEN_LEN, Wire, WireError, put_slice, reply_frame, to_grader, to_program,
 };
 
 thread_local! {
@@ -45,6 +45,16 @@ pub(crate) fn send(token: &[u8; TOKEN_LEN], payload: &[u8]) {
     }
 }
 
+/// Sends one STEP frame: the answer `value` of one step of a STEPS request.
+pub(crate) fn send_step(value: &[u8]) {
+    if let Some(token) = token() {
+        let mut payload = Vec::with_capacity(1 + value.len());
+        payload.push(to_grader::STEP);
+        payload.extend_from_slice(value);
+        send(&token, &payload);
+    }
+}
+
 /// The session token while the loop runs on this thread.
 fn token() -> Option<[u8; TOKEN_LEN]> {
     TOKEN.with(|t| *t.borrow())
@@ -59,9 +69,12 @@ pub(crate) fn ask_grader(what: u8, x: &[DVec3], v: &[DVec3], expected: usize) ->
              thread that received it"
         );
     };
-    let mut payload = vec![to_grader::PHYSICS, what];
-    x.to_vec().put(&mut payload);
-    v.to_vec().put(&mut payload);
+    // One buffer of the exact size, the positions and velocities written straight from the
+    // slices (no copies of the lists).
+    let mut payload = Vec::with_capacity(2 + 2 * (8 + 24 * x.len()));
+    payload.extend_from_slice(&[to_grader::PHYSICS, what]);
+    put_slice(x, &mut payload);
+    put_slice(v, &mut payload);
     send(&token, &payload);
     let Some(reply) = read_frame() else {
         // The grader stopped listening: nothing left to do.

@@ -11,7 +11,7 @@ use std::io::IsTerminal;
 use std::panic::{self, AssertUnwindSafe};
 use std::process::ExitCode;
 
-use crate::channel::{read_frame, send, set_token};
+use crate::channel::{read_frame, send, send_step, set_token};
 use crate::physics::Physics;
 use crate::wire::{
     Reader, TOKEN_LEN, VERSION, Wire, WireError, encode, method, to_grader, to_program,
@@ -49,8 +49,27 @@ fn unknown(m: u8, assignment: &str) -> WireError {
     ))
 }
 
-/// Runs one call: `(method, arguments) → the answer's bytes`.
-type Dispatch<'d> = dyn FnMut(u8, &mut Reader<'_>) -> Result<Vec<u8>, WireError> + 'd;
+/// Runs one call: `(method, steps, arguments) → the answer's bytes`; `steps` is `None` for a
+/// CALL and the count of a STEPS request (an integrator only).
+type Dispatch<'d> = dyn FnMut(u8, Option<u32>, &mut Reader<'_>) -> Result<Vec<u8>, WireError> + 'd;
+
+/// Steps `value` once (a CALL: the answer is the new value) or `count` times, each step from the
+/// last one's answer (STEPS: each step's value goes out in a STEP frame as soon as it is
+/// computed; the answer, the final RESULT, is empty).
+fn steps<T: Wire>(count: Option<u32>, mut value: T, mut step: impl FnMut(&mut T)) -> Vec<u8> {
+    let Some(count) = count else {
+        step(&mut value);
+        return encode(&value);
+    };
+    let mut out = Vec::new();
+    for _ in 0..count {
+        step(&mut value);
+        out.clear();
+        value.put(&mut out);
+        send_step(&out);
+    }
+    Vec::new()
+}
 
 /// The loop (module docs); `dispatch(method, arguments)` runs one call.
 fn serve(assignment: &str, dispatch: &mut Dispatch<'_>) -> ExitCode {
@@ -91,11 +110,27 @@ fn serve(assignment: &str, dispatch: &mut Dispatch<'_>) -> ExitCode {
         LAST_PANIC.with(|p| *p.borrow_mut() = Some(format!("{message}{location}")));
     }));
     while let Some(frame) = read_frame() {
-        let reply = match frame.as_slice() {
-            [to_program::CALL, m, arguments @ ..] => {
-                let m = *m;
+        let call = match frame.as_slice() {
+            [to_program::CALL, m, arguments @ ..] => Ok((*m, None, arguments)),
+            [to_program::STEPS, m, c0, c1, c2, c3, arguments @ ..] => {
+                if method::is_integrator(*m) {
+                    Ok((
+                        *m,
+                        Some(u32::from_le_bytes([*c0, *c1, *c2, *c3])),
+                        arguments,
+                    ))
+                } else {
+                    Err(format!(
+                        "method {m} is not an integrator: it cannot be stepped"
+                    ))
+                }
+            }
+            _ => Err("expected a call".to_string()),
+        };
+        let reply = match call {
+            Ok((m, count, arguments)) => {
                 let outcome = panic::catch_unwind(AssertUnwindSafe(|| {
-                    dispatch(m, &mut Reader::new(arguments))
+                    dispatch(m, count, &mut Reader::new(arguments))
                 }));
                 match outcome {
                     Ok(Ok(answer)) => {
@@ -119,9 +154,9 @@ fn serve(assignment: &str, dispatch: &mut Dispatch<'_>) -> ExitCode {
                     }
                 }
             }
-            _ => {
+            Err(why) => {
                 let mut reply = vec![to_grader::ERROR];
-                "expected a call".to_string().put(&mut reply);
+                why.put(&mut reply);
                 reply
             }
         };
@@ -132,7 +167,7 @@ fn serve(assignment: &str, dispatch: &mut Dispatch<'_>) -> ExitCode {
 
 /// Serves a rope homework to the grader (the `main` of a rope crate's program).
 pub fn serve_rope<H: RopeHomework>(homework: H) -> ExitCode {
-    serve("rope", &mut |m, r| {
+    serve("rope", &mut |m, count, r| {
         Ok(match m {
             method::ROPE_ROPE => {
                 let (start, end, nodes, node_mass, stiffness, pinned): (
@@ -154,39 +189,44 @@ pub fn serve_rope<H: RopeHomework>(homework: H) -> ExitCode {
                 encode(&homework.spring_forces(&rope))
             }
             method::ROPE_EXPLICIT_EULER => {
-                let (mut rope, dt, w): (Rope, f64, Vec<f64>) = args(r)?;
-                homework.explicit_euler(&mut rope, dt, &Physics::grader(w));
-                encode(&rope)
+                let (rope, dt, w): (Rope, f64, Vec<f64>) = args(r)?;
+                steps(count, rope, |rope| {
+                    homework.explicit_euler(rope, dt, &Physics::grader(w.clone()));
+                })
             }
             method::ROPE_SEMI_IMPLICIT_EULER => {
-                let (mut rope, dt, w): (Rope, f64, Vec<f64>) = args(r)?;
-                homework.semi_implicit_euler(&mut rope, dt, &Physics::grader(w));
-                encode(&rope)
+                let (rope, dt, w): (Rope, f64, Vec<f64>) = args(r)?;
+                steps(count, rope, |rope| {
+                    homework.semi_implicit_euler(rope, dt, &Physics::grader(w.clone()));
+                })
             }
             method::ROPE_VERLET => {
-                let (mut rope, dt, damping, w): (Rope, f64, f64, Vec<f64>) = args(r)?;
-                homework.verlet(&mut rope, dt, damping, &Physics::grader(w));
-                encode(&rope)
+                let (rope, dt, damping, w): (Rope, f64, f64, Vec<f64>) = args(r)?;
+                steps(count, rope, |rope| {
+                    homework.verlet(rope, dt, damping, &Physics::grader(w.clone()));
+                })
             }
             other => return Err(unknown(other, "rope")),
         })
     })
 }
 
-/// One step of an integrator on a state: `(State, dt, inverse_mass) → State`.
+/// One step (or `count`) of an integrator on a state: `(State, dt, inverse_mass) → State`.
 fn step(
+    count: Option<u32>,
     r: &mut Reader<'_>,
-    f: impl FnOnce(&mut State, f64, &Physics),
+    f: impl Fn(&mut State, f64, &Physics),
 ) -> Result<Vec<u8>, WireError> {
-    let (mut state, dt, w): (State, f64, Vec<f64>) = args(r)?;
-    f(&mut state, dt, &Physics::grader(w));
-    Ok(encode(&state))
+    let (state, dt, w): (State, f64, Vec<f64>) = args(r)?;
+    Ok(steps(count, state, |s| {
+        f(s, dt, &Physics::grader(w.clone()))
+    }))
 }
 
 /// Serves a jelly homework to the grader (the `main` of a jelly crate's program).
 pub fn serve_jelly<H: JellyHomework>(homework: H) -> ExitCode {
     let hw = &homework;
-    serve("jelly", &mut |m, r| {
+    serve("jelly", &mut |m, count, r| {
         Ok(match m {
             method::JELLY_SPRINGS => {
                 let counts: [usize; 3] = args(r)?;
@@ -214,10 +254,10 @@ pub fn serve_jelly<H: JellyHomework>(homework: H) -> ExitCode {
                 hw.bowl_collision(&bowl, &mut p, &c);
                 encode(&p)
             }
-            method::JELLY_EXPLICIT_EULER => step(r, |s, dt, p| hw.explicit_euler(s, dt, p))?,
-            method::JELLY_IMPLICIT_EULER => step(r, |s, dt, p| hw.implicit_euler(s, dt, p))?,
-            method::JELLY_MIDPOINT => step(r, |s, dt, p| hw.midpoint(s, dt, p))?,
-            method::JELLY_RK4 => step(r, |s, dt, p| hw.rk4(s, dt, p))?,
+            method::JELLY_EXPLICIT_EULER => step(count, r, |s, dt, p| hw.explicit_euler(s, dt, p))?,
+            method::JELLY_IMPLICIT_EULER => step(count, r, |s, dt, p| hw.implicit_euler(s, dt, p))?,
+            method::JELLY_MIDPOINT => step(count, r, |s, dt, p| hw.midpoint(s, dt, p))?,
+            method::JELLY_RK4 => step(count, r, |s, dt, p| hw.rk4(s, dt, p))?,
             other => return Err(unknown(other, "jelly")),
         })
     })
@@ -226,7 +266,7 @@ pub fn serve_jelly<H: JellyHomework>(homework: H) -> ExitCode {
 /// Serves a cloth homework to the grader (the `main` of a cloth crate's program).
 pub fn serve_cloth<H: ClothHomework>(homework: H) -> ExitCode {
     let hw = &homework;
-    serve("cloth", &mut |m, r| {
+    serve("cloth", &mut |m, count, r| {
         Ok(match m {
             method::CLOTH_SPRINGS => {
                 let n: usize = args(r)?;
@@ -249,10 +289,10 @@ pub fn serve_cloth<H: ClothHomework>(homework: H) -> ExitCode {
                 hw.sphere_collision(&mut sphere, radius, &mut particle, e);
                 encode(&(sphere, particle))
             }
-            method::CLOTH_EXPLICIT_EULER => step(r, |s, dt, p| hw.explicit_euler(s, dt, p))?,
-            method::CLOTH_IMPLICIT_EULER => step(r, |s, dt, p| hw.implicit_euler(s, dt, p))?,
-            method::CLOTH_MIDPOINT => step(r, |s, dt, p| hw.midpoint(s, dt, p))?,
-            method::CLOTH_RK4 => step(r, |s, dt, p| hw.rk4(s, dt, p))?,
+            method::CLOTH_EXPLICIT_EULER => step(count, r, |s, dt, p| hw.explicit_euler(s, dt, p))?,
+            method::CLOTH_IMPLICIT_EULER => step(count, r, |s, dt, p| hw.implicit_euler(s, dt, p))?,
+            method::CLOTH_MIDPOINT => step(count, r, |s, dt, p| hw.midpoint(s, dt, p))?,
+            method::CLOTH_RK4 => step(count, r, |s, dt, p| hw.rk4(s, dt, p))?,
             other => return Err(unknown(other, "cloth")),
         })
     })

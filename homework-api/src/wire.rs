@@ -7,6 +7,9 @@
 //!     CALL    = 0x02, method: u8, arguments                   one per call of a trait method
 //!     PHYSICS_REPLY = 0x03, 1, values: Vec<f64>               answer to a PHYSICS request
 //!                   | 0x03, 0, message: String                the request was refused
+//!     STEPS   = 0x04, method: u8, count: u32, arguments       an integrator `count` times, each
+//!                                                            step from the last one's answer
+//!                                                            (version 3 on)
 //!     end of input: the program exits
 //!
 //! program → grader, on the program's standard output:
@@ -17,14 +20,26 @@
 //!     PHYSICS = 0x84, what: u8, x: Vec<DVec3>, v: Vec<DVec3>  an integrator asks for a(x, v)
 //!                                                            (0), J_x (1) or J_v (2)
 //!     ERROR   = 0x85, message: String                         ends a call: the request was bad
+//!     STEP    = 0x86, the method's answer                     one per step of a STEPS request;
+//!                                                            after the last, an empty RESULT
+//!                                                            (a PANIC after k STEPs: step
+//!                                                            k + 1 panicked)
 //!
 //! values: u8; bool = u8 0/1; u64, f64 little-endian; usize as u64; DVec3 = 3 f64;
 //!         Vec<T> and String = u64 count, then the items (UTF-8 bytes); structs field by field;
 //!         tuples item by item
 //! ```
 //!
-//! One request, one reply: the grader sends a CALL and reads frames until RESULT, PANIC or
-//! ERROR, answering each PHYSICS request on the way. It writes nothing else meanwhile.
+//! One request, one reply: the grader sends a CALL (or STEPS) and reads frames until RESULT,
+//! PANIC or ERROR, answering each PHYSICS request on the way. It writes nothing else meanwhile.
+//!
+//! # Versions
+//!
+//! Both HELLOs carry [`VERSION`]. The program answers the grader's HELLO with its own version
+//! whatever the grader's is, and the grader talks only to a program of its own version: a
+//! program built against another copy of this crate is told which version it has and which the
+//! grader speaks, never misread. Version 3 added STEPS (many steps of an integrator in one
+//! request, for `springlab lesson N --homework`).
 //!
 //! # Why the token
 //!
@@ -48,7 +63,7 @@ use crate::{
 };
 
 /// Version of this protocol; the grader and the program must agree.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 
 /// The start of every frame the program writes.
 pub const MAGIC: [u8; 8] = [0xFF, b'S', b'P', b'L', b'A', b'B', 0xFE, 0x01];
@@ -67,6 +82,8 @@ pub mod to_program {
     pub const CALL: u8 = 0x02;
     /// The answer to a PHYSICS request.
     pub const PHYSICS_REPLY: u8 = 0x03;
+    /// Many steps of an integrator (version 3 on).
+    pub const STEPS: u8 = 0x04;
 }
 
 /// Kinds of frames from the program.
@@ -81,6 +98,8 @@ pub mod to_grader {
     pub const PHYSICS: u8 = 0x84;
     /// The request could not be served.
     pub const ERROR: u8 = 0x85;
+    /// The answer of one step of a STEPS request (version 3 on).
+    pub const STEP: u8 = 0x86;
 }
 
 /// What a PHYSICS request asks for.
@@ -147,6 +166,20 @@ pub mod method {
     pub const CLOTH_MIDPOINT: u8 = 28;
     /// `(State, dt, inverse_mass) → State`
     pub const CLOTH_RK4: u8 = 29;
+
+    /// The integrators: the methods a STEPS request may repeat (each answer is the next
+    /// step's first argument).
+    #[must_use]
+    pub fn is_integrator(m: u8) -> bool {
+        matches!(
+            m,
+            ROPE_EXPLICIT_EULER
+                | ROPE_SEMI_IMPLICIT_EULER
+                | ROPE_VERLET
+                | JELLY_EXPLICIT_EULER..=JELLY_RK4
+                | CLOTH_EXPLICIT_EULER..=CLOTH_RK4
+        )
+    }
 }
 
 /// A value that could not be read.
@@ -342,12 +375,18 @@ impl Wire for String {
     }
 }
 
+/// Appends `items` in the wire form of a `Vec<T>` (count, then the items) without copying
+/// them into a list first.
+pub fn put_slice<T: Wire>(items: &[T], out: &mut Vec<u8>) {
+    items.len().put(out);
+    for item in items {
+        item.put(out);
+    }
+}
+
 impl<T: Wire> Wire for Vec<T> {
     fn put(&self, out: &mut Vec<u8>) {
-        self.len().put(out);
-        for item in self {
-            item.put(out);
-        }
+        put_slice(self, out);
     }
     fn take(input: &mut Reader<'_>) -> Result<Vec<T>, WireError> {
         let n = usize::take(input)?;

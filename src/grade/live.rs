@@ -38,7 +38,7 @@ use std::time::Duration;
 
 use glam::DVec3;
 
-use super::remote::CallFailure;
+use super::remote::{CallFailure, Remote, jacobian_too_large, largest_jacobian_body};
 use super::{Assignment, ClothHomework, JellyHomework, Reference, RopeHomework};
 use crate::physics::{self, Method, Model};
 use crate::scene::Scene;
@@ -63,6 +63,9 @@ pub enum Homework {
     Jelly(Arc<dyn JellyHomework>),
     /// The cloth.
     Cloth(Arc<dyn ClothHomework>),
+    /// A student's program (any assignment): one trait call per step, or many steps per
+    /// request (`wire`'s STEPS) when the worker may run ahead.
+    Program(Remote),
 }
 
 impl std::fmt::Debug for Homework {
@@ -89,6 +92,7 @@ impl Homework {
             Homework::Rope(_) => Assignment::Rope,
             Homework::Jelly(_) => Assignment::Jelly,
             Homework::Cloth(_) => Assignment::Cloth,
+            Homework::Program(remote) => remote.assignment(),
         }
     }
 }
@@ -393,14 +397,18 @@ pub struct LiveOptions {
     pub frame_every: u64,
     /// Frames the queue holds before the worker waits.
     pub queue: usize,
+    /// Most steps a student's program computes in one request (`wire`'s STEPS), never past the
+    /// app's clock; 1: one call per step. The body is the same bit for bit either way.
+    pub ahead: u32,
 }
 
 impl Default for LiveOptions {
-    /// A frame every 16 steps, 8 frames queued.
+    /// A frame every 16 steps, 8 frames queued, up to 64 steps per request.
     fn default() -> LiveOptions {
         LiveOptions {
             frame_every: 16,
             queue: 8,
+            ahead: 64,
         }
     }
 }
@@ -541,12 +549,21 @@ fn work(
     tx: &SyncSender<Frame>,
 ) {
     let reference = Homework::reference(setup.assignment);
-    let mut theirs = Track::new(setup);
-    let mut yours = Some(Track::new(setup));
+    let mut failure: Option<String> = None;
+    let mut theirs = Track::new(setup, 1);
+    let mut yours = Some(Track::new(setup, options.ahead));
+    let n = setup.model.particle_count();
+    if setup.integrator == Integrator::ImplicitEuler && n > largest_jacobian_body() {
+        // Physics hands implicit Euler dense Jacobians: stated, shown, and not run.
+        yours = None;
+        failure = Some(format!(
+            "your implicit_euler() is not run on this body: {}",
+            jacobian_too_large(n)
+        ));
+    }
     let scales = body::Scales::of(setup);
     let mut vmax = scales.velocity;
     let mut parting: Option<Parting> = None;
-    let mut failure: Option<String> = None;
     let mut step = 0u64;
     let horizon = if setup.horizon == 0 {
         u64::MAX
@@ -578,11 +595,13 @@ fn work(
             thread::park_timeout(Duration::from_millis(20));
             continue;
         }
-        theirs.step(&reference, setup);
+        theirs.step(&reference, setup, 1);
+        // The student's program may run ahead up to the target (many steps per request).
+        let budget = target - step;
         step += 1;
         let mut event = false;
         if let Some(track) = yours.as_mut() {
-            let outcome = catch_unwind(AssertUnwindSafe(|| track.step(homework, setup)));
+            let outcome = catch_unwind(AssertUnwindSafe(|| track.step(homework, setup, budget)));
             let problem = match outcome {
                 Err(payload) => Some(describe_failure(
                     payload.as_ref(),

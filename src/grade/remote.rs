@@ -296,13 +296,22 @@ impl Session {
                     {
                         Ok(())
                     }
-                    Ok((version, assignment)) => {
+                    Ok((version, assignment)) if version != wire::VERSION => {
                         self.stop();
                         Err(CallFailure::NotStarted(format!(
-                            "the program serves the {assignment} homework with protocol \
-                             version {version}; the grader expected the {} homework, version {}",
-                            self.assignment.name(),
+                            "the program speaks version {version} of the grader's protocol \
+                             (its {assignment} homework was built against another copy of \
+                             springlab-homework); this springlab speaks version {}: update \
+                             the crate's springlab-homework and build it again",
                             wire::VERSION
+                        )))
+                    }
+                    Ok((_, assignment)) => {
+                        self.stop();
+                        Err(CallFailure::NotStarted(format!(
+                            "the program serves the {assignment} homework; the grader expected \
+                             the {} homework",
+                            self.assignment.name()
                         )))
                     }
                     Err(e) => {
@@ -421,14 +430,50 @@ impl Session {
         physics: Option<&Physics>,
         deadline: Instant,
     ) -> Result<Vec<u8>, CallFailure> {
-        if self.running.is_none() {
-            self.start(deadline)?;
-        }
         let mut payload = Vec::with_capacity(2 + arguments.len());
         payload.push(to_program::CALL);
         payload.push(m);
         payload.extend_from_slice(arguments);
-        self.send(&payload);
+        self.exchange(&payload, physics, deadline, None)
+    }
+
+    /// `count` steps of the integrator `method` in one request (STEPS), each from the last
+    /// one's answer (`wire`'s module docs): the answers of the steps that came, in order, and
+    /// why the rest did not. Each step has `limit` from the previous answer (or the request).
+    pub fn steps(
+        &mut self,
+        m: u8,
+        count: u32,
+        arguments: &[u8],
+        physics: Option<&Physics>,
+        limit: Duration,
+    ) -> (Vec<Vec<u8>>, Result<(), CallFailure>) {
+        let mut payload = Vec::with_capacity(6 + arguments.len());
+        payload.push(to_program::STEPS);
+        payload.push(m);
+        payload.extend_from_slice(&count.to_le_bytes());
+        payload.extend_from_slice(arguments);
+        let mut answers = Vec::new();
+        let deadline = Instant::now() + limit;
+        let done = self
+            .exchange(&payload, physics, deadline, Some((&mut answers, limit)))
+            .map(|_| ());
+        (answers, done)
+    }
+
+    /// Sends one request and reads until its answer (module docs); with `steps`, STEP frames
+    /// are collected there, each moving the deadline to `limit` after it.
+    fn exchange(
+        &mut self,
+        payload: &[u8],
+        physics: Option<&Physics>,
+        mut deadline: Instant,
+        mut steps: Option<(&mut Vec<Vec<u8>>, Duration)>,
+    ) -> Result<Vec<u8>, CallFailure> {
+        if self.running.is_none() {
+            self.start(deadline)?;
+        }
+        self.send(payload);
         loop {
             let Some(event) = self.next_event(deadline) else {
                 self.stop();
@@ -456,6 +501,12 @@ impl Session {
                 Some((&to_grader::PHYSICS, request)) => {
                     let reply = answer_physics(physics, request);
                     self.send(&reply);
+                }
+                Some((&to_grader::STEP, answer)) if steps.is_some() => {
+                    if let Some((answers, limit)) = steps.as_mut() {
+                        answers.push(answer.to_vec());
+                        deadline = Instant::now() + *limit;
+                    }
                 }
                 Some((&to_grader::ERROR, message)) => {
                     self.stop();
@@ -509,16 +560,58 @@ fn answer_physics(physics: Option<&Physics>, request: &[u8]) -> Vec<u8> {
             v.len()
         ));
     }
+    // A Jacobian is dense, (3n)² numbers: one that does not fit a frame is refused before it is
+    // computed, with the reason.
+    let size = 3 * n;
+    if what != physics_request::ACCELERATIONS && 8 * size * size + 16 > MAX_FRAME {
+        return refuse(jacobian_too_large(n));
+    }
     let x: Vec<DVec3> = x.into_iter().map(local_vec).collect();
     let v: Vec<DVec3> = v.into_iter().map(local_vec).collect();
-    let values: Vec<f64> = match what {
-        physics_request::ACCELERATIONS => super::system::flatten(&physics.accelerations(&x, &v)),
-        physics_request::JACOBIAN_X => physics.jacobian_x(&x, &v).as_row_major().to_vec(),
-        _ => physics.jacobian_v(&x, &v).as_row_major().to_vec(),
-    };
-    let mut reply = vec![to_program::PHYSICS_REPLY, 1];
-    values.put(&mut reply);
+    let mut reply = Vec::with_capacity(2 + 8 + 8 * size);
+    reply.extend_from_slice(&[to_program::PHYSICS_REPLY, 1]);
+    match what {
+        physics_request::ACCELERATIONS => {
+            // The numbers straight from the vectors: no list of them in between.
+            let a = physics.accelerations(&x, &v);
+            size.put(&mut reply);
+            for a_i in &a {
+                reply.extend_from_slice(&a_i.x.to_le_bytes());
+                reply.extend_from_slice(&a_i.y.to_le_bytes());
+                reply.extend_from_slice(&a_i.z.to_le_bytes());
+            }
+        }
+        physics_request::JACOBIAN_X => {
+            wire::put_slice(physics.jacobian_x(&x, &v).as_row_major(), &mut reply)
+        }
+        _ => wire::put_slice(physics.jacobian_v(&x, &v).as_row_major(), &mut reply),
+    }
     reply
+}
+
+/// Why a Jacobian of `n` particles is not sent: its size against the frame limit, and what a
+/// dense matrix of that size would cost the student's program.
+#[must_use]
+pub fn jacobian_too_large(n: usize) -> String {
+    let size = 3 * n;
+    format!(
+        "a Jacobian of {n} particles is a dense {size} × {size} matrix ({} MiB), more than \
+         the {} MiB a message between springlab and your program may hold; implicit Euler \
+         with Physics's dense Jacobians is for bodies of at most {} particles",
+        (8 * size * size) >> 20,
+        MAX_FRAME >> 20,
+        largest_jacobian_body()
+    )
+}
+
+/// The most particles whose dense Jacobian fits one frame.
+#[must_use]
+pub fn largest_jacobian_body() -> usize {
+    let mut n = 1;
+    while 8 * (3 * (n + 1)) * (3 * (n + 1)) + 16 <= MAX_FRAME {
+        n += 1;
+    }
+    n
 }
 
 #[cfg(test)]

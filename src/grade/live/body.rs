@@ -1,11 +1,15 @@
 //! One body of the comparison: stepped by a homework's integrator, measured (positions,
 //! velocities, energy), and the parting test of `live.rs`'s module docs.
 
-use glam::DVec3;
+use std::collections::VecDeque;
 
-use super::super::assignments::{Rope, State};
+use glam::DVec3;
+use springlab_homework::wire::{MAX_FRAME, method};
+
+use super::super::assignments::{ClothHomework, JellyHomework, Rope, RopeHomework, State};
+use super::super::remote::{CallFailure, Remote};
 use super::super::system::Physics;
-use super::{Homework, Integrator, Parting, Quantity, Setup};
+use super::{Assignment, Homework, Integrator, Parting, Quantity, Setup};
 use crate::physics::{self, collide};
 
 /// The body in the homework's own types.
@@ -15,14 +19,55 @@ enum Shape {
 }
 
 /// A body and the physics it is stepped with.
+///
+/// A student's program may step ahead: one request returns the body after each of up to
+/// `most` steps ([`super::LiveOptions::ahead`]) (`wire`'s STEPS), kept in `ahead` and taken one per step. The steps are
+/// the program's own, each from its last answer, as single calls would give them; only the
+/// scene's collision response comes between steps in this process. Where it changes the body
+/// (a contact), the steps computed past it are dropped, the next request starts from the
+/// changed body, and requests start again at one step, doubling while no contact interrupts
+/// them. So the body is bit for bit the one of single calls (`tests/homework_live.rs`).
 pub(super) struct Track {
     shape: Shape,
     physics: Physics,
+    ahead: VecDeque<Shape>,
+    /// Steps of the next request.
+    batch: u32,
+    /// Most steps of one request.
+    most: u32,
+    /// False when the program answers one call per step.
+    batching: bool,
+    /// Why the step after those in `ahead` did not come: raised at that step, as a single call
+    /// failing there would be.
+    failed: Option<CallFailure>,
+}
+
+/// The trait object of a homework (its program's, for a [`Homework::Program`]).
+enum Methods<'h> {
+    Rope(&'h dyn RopeHomework),
+    Jelly(&'h dyn JellyHomework),
+    Cloth(&'h dyn ClothHomework),
+}
+
+impl<'h> Methods<'h> {
+    fn of(homework: &'h Homework) -> Methods<'h> {
+        match homework {
+            Homework::Rope(h) => Methods::Rope(h.as_ref()),
+            Homework::Jelly(h) => Methods::Jelly(h.as_ref()),
+            Homework::Cloth(h) => Methods::Cloth(h.as_ref()),
+            Homework::Program(remote) => match remote.assignment() {
+                Assignment::Rope => Methods::Rope(remote),
+                Assignment::Jelly => Methods::Jelly(remote),
+                Assignment::Cloth => Methods::Cloth(remote),
+            },
+        }
+    }
 }
 
 impl Track {
-    /// The body at the step's start, in the types of `setup`'s assignment.
-    pub(super) fn new(setup: &Setup) -> Track {
+    /// The body at the step's start, in the types of `setup`'s assignment; a student's program
+    /// may compute up to `most` steps per request (1: single calls).
+    pub(super) fn new(setup: &Setup, most: u32) -> Track {
         let model = &setup.model;
         let x = &setup.start.x;
         let v = &setup.start.v;
@@ -49,25 +94,62 @@ impl Track {
         Track {
             shape,
             physics: Physics::from_model(model.clone()),
+            ahead: VecDeque::new(),
+            batch: most.clamp(1, 8),
+            most: most.max(1),
+            batching: most > 1,
+            failed: None,
         }
     }
 
-    /// One step of `setup.integrator` by `homework`, then the scene's collision response.
-    pub(super) fn step(&mut self, homework: &Homework, setup: &Setup) {
+    /// One step of `setup.integrator` by `homework`, then the scene's collision response;
+    /// a student's program may compute up to `budget` steps (this one included) in advance.
+    pub(super) fn step(&mut self, homework: &Homework, setup: &Setup, budget: u64) {
+        let ahead = match homework {
+            Homework::Program(remote) => self.next_ahead(remote, setup, budget),
+            _ => None,
+        };
+        match ahead {
+            Some(shape) => self.shape = shape,
+            None => self.call(homework, setup),
+        }
+        if let Shape::Lattice(state) = &mut self.shape
+            && !setup.model.colliders.is_empty()
+            && state.x.len() == setup.model.particle_count()
+            && state.v.len() == state.x.len()
+        {
+            let before = (!self.ahead.is_empty()).then(|| (state.x.clone(), state.v.clone()));
+            let mut s =
+                physics::State::new(std::mem::take(&mut state.x), std::mem::take(&mut state.v));
+            collide::resolve(&setup.model, &mut s, setup.dt);
+            state.x = s.x;
+            state.v = s.v;
+            if before.is_some_and(|(x, v)| state.x != x || state.v != v) {
+                // A contact: the steps computed from the body without it are not this body's
+                // (nor is a failure after them).
+                self.ahead.clear();
+                self.failed = None;
+                self.batch = 1;
+            }
+        }
+    }
+
+    /// One step as one call of the trait method.
+    fn call(&mut self, homework: &Homework, setup: &Setup) {
         let (dt, p) = (setup.dt, &self.physics);
-        match (&mut self.shape, homework) {
-            (Shape::Rope(rope), Homework::Rope(h)) => match setup.integrator {
+        match (&mut self.shape, Methods::of(homework)) {
+            (Shape::Rope(rope), Methods::Rope(h)) => match setup.integrator {
                 Integrator::ExplicitEuler => h.explicit_euler(rope, dt, p),
                 Integrator::SemiImplicitEuler => h.semi_implicit_euler(rope, dt, p),
                 _ => h.verlet(rope, dt, setup.damping, p),
             },
-            (Shape::Lattice(state), Homework::Jelly(h)) => match setup.integrator {
+            (Shape::Lattice(state), Methods::Jelly(h)) => match setup.integrator {
                 Integrator::ImplicitEuler => h.implicit_euler(state, dt, p),
                 Integrator::Midpoint => h.midpoint(state, dt, p),
                 Integrator::Rk4 => h.rk4(state, dt, p),
                 _ => h.explicit_euler(state, dt, p),
             },
-            (Shape::Lattice(state), Homework::Cloth(h)) => match setup.integrator {
+            (Shape::Lattice(state), Methods::Cloth(h)) => match setup.integrator {
                 Integrator::ImplicitEuler => h.implicit_euler(state, dt, p),
                 Integrator::Midpoint => h.midpoint(state, dt, p),
                 Integrator::Rk4 => h.rk4(state, dt, p),
@@ -79,16 +161,79 @@ impl Track {
                 setup.assignment.name()
             )),
         }
-        if let Shape::Lattice(state) = &mut self.shape
-            && !setup.model.colliders.is_empty()
-            && state.x.len() == setup.model.particle_count()
-            && state.v.len() == state.x.len()
+    }
+
+    /// Steps of one request that fit a frame: half the frame limit over the body's size.
+    fn most_steps(&self) -> u64 {
+        let bytes = match &self.shape {
+            Shape::Rope(r) => 16 + 64 * r.masses.len() + 40 * r.springs.len(),
+            Shape::Lattice(s) => 16 + 24 * (s.x.len() + s.v.len()),
+        };
+        ((MAX_FRAME / 2 / bytes.max(1)) as u64).clamp(1, u64::from(self.most))
+    }
+
+    /// The next step from the program's requests ([`Track`]'s docs), or `None` when this step
+    /// is a single call: the program may not run ahead (`budget` steps left to the target,
+    /// counting this one). A step that failed in a request fails here, at its own step.
+    fn next_ahead(&mut self, remote: &Remote, setup: &Setup, budget: u64) -> Option<Shape> {
+        if self.ahead.is_empty()
+            && let Some(failure) = self.failed.take()
         {
-            let mut s =
-                physics::State::new(std::mem::take(&mut state.x), std::mem::take(&mut state.v));
-            collide::resolve(&setup.model, &mut s, dt);
-            state.x = s.x;
-            state.v = s.v;
+            std::panic::resume_unwind(Box::new(failure));
+        }
+        if !self.batching || (budget <= 1 && self.ahead.is_empty()) {
+            return None;
+        }
+        if self.ahead.is_empty() {
+            let count = budget.min(u64::from(self.batch)).min(self.most_steps());
+            // At most `most`.
+            let count = u32::try_from(count).unwrap_or(1);
+            let (shapes, failed) = self.fetch(remote, setup, count);
+            self.ahead.extend(shapes);
+            self.failed = failed;
+            self.batch = (self.batch * 2).min(self.most);
+            if self.ahead.is_empty()
+                && let Some(failure) = self.failed.take()
+            {
+                std::panic::resume_unwind(Box::new(failure));
+            }
+        }
+        self.ahead.pop_front()
+    }
+
+    /// `count` steps of `setup.integrator` by the program, from the current body.
+    fn fetch(
+        &self,
+        remote: &Remote,
+        setup: &Setup,
+        count: u32,
+    ) -> (Vec<Shape>, Option<CallFailure>) {
+        let (dt, p) = (setup.dt, &self.physics);
+        match &self.shape {
+            Shape::Rope(rope) => {
+                let (m, damping) = match setup.integrator {
+                    Integrator::ExplicitEuler => (method::ROPE_EXPLICIT_EULER, None),
+                    Integrator::SemiImplicitEuler => (method::ROPE_SEMI_IMPLICIT_EULER, None),
+                    _ => (method::ROPE_VERLET, Some(setup.damping)),
+                };
+                let (ropes, failed) = remote.rope_steps(m, rope, dt, damping, p, count);
+                (ropes.into_iter().map(Shape::Rope).collect(), failed)
+            }
+            Shape::Lattice(state) => {
+                let jelly = setup.assignment == Assignment::Jelly;
+                let m = match (setup.integrator, jelly) {
+                    (Integrator::ImplicitEuler, true) => method::JELLY_IMPLICIT_EULER,
+                    (Integrator::Midpoint, true) => method::JELLY_MIDPOINT,
+                    (Integrator::Rk4, true) => method::JELLY_RK4,
+                    (_, true) => method::JELLY_EXPLICIT_EULER,
+                    (Integrator::ImplicitEuler, false) => method::CLOTH_IMPLICIT_EULER,
+                    (Integrator::Midpoint, false) => method::CLOTH_MIDPOINT,
+                    (Integrator::Rk4, false) => method::CLOTH_RK4,
+                    (_, false) => method::CLOTH_EXPLICIT_EULER,
+                };
+                let (states, failed) = remote.state_steps(m, state, dt, p, count);
+                (states.into_iter().map(Shape::Lattice).collect(), failed)
+            }
         }
     }
 

@@ -137,11 +137,7 @@ pub fn build_homework(
         ),
         options.call_limit,
     );
-    let homework = match assignment {
-        Assignment::Rope => Homework::Rope(Arc::new(remote.clone())),
-        Assignment::Jelly => Homework::Jelly(Arc::new(remote.clone())),
-        Assignment::Cloth => Homework::Cloth(Arc::new(remote.clone())),
-    };
+    let homework = Homework::Program(remote.clone());
     Ok(Built {
         assignment,
         homework,

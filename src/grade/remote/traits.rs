@@ -82,6 +82,90 @@ impl Remote {
         }
     }
 
+    /// The assignment its program serves.
+    #[must_use]
+    pub fn assignment(&self) -> super::super::Assignment {
+        self.session
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .assignment
+    }
+
+    /// `count` steps of a rope integrator in one request (`wire`'s STEPS), each from the last
+    /// one's answer, as `count` calls of the trait method would give them: the rope after each
+    /// step that came, and why the rest did not (the step after the last one failed).
+    /// `damping` is Verlet's γ (`None` for the Euler methods).
+    pub fn rope_steps(
+        &self,
+        m: u8,
+        rope: &Rope,
+        dt: f64,
+        damping: Option<f64>,
+        p: &Physics,
+        count: u32,
+    ) -> (Vec<Rope>, Option<CallFailure>) {
+        let w = Self::inverse_mass(p);
+        let arguments = match damping {
+            None => encode(&(api_rope(rope), dt, w)),
+            Some(g) => encode(&(api_rope(rope), dt, g, w)),
+        };
+        let (out, failure) = self.ask_steps::<api::Rope>(m, count, &arguments, p);
+        (out.iter().map(local_rope).collect(), failure)
+    }
+
+    /// `count` steps of a state integrator in one request, as [`Remote::rope_steps`].
+    pub fn state_steps(
+        &self,
+        m: u8,
+        state: &State,
+        dt: f64,
+        p: &Physics,
+        count: u32,
+    ) -> (Vec<State>, Option<CallFailure>) {
+        let arguments = encode(&(api_state(state), dt, Self::inverse_mass(p)));
+        let (out, failure) = self.ask_steps::<api::State>(m, count, &arguments, p);
+        (out.into_iter().map(local_state).collect(), failure)
+    }
+
+    fn ask_steps<R: Wire>(
+        &self,
+        m: u8,
+        count: u32,
+        arguments: &[u8],
+        p: &Physics,
+    ) -> (Vec<R>, Option<CallFailure>) {
+        let (answers, done) = self
+            .session
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .steps(m, count, arguments, Some(p), self.default_limit);
+        let mut values = Vec::with_capacity(answers.len());
+        for bytes in &answers {
+            match decode::<R>(bytes) {
+                Ok(v) => values.push(v),
+                Err(e) => {
+                    self.shut_down();
+                    return (
+                        values,
+                        Some(CallFailure::Malformed(format!("unreadable: {e}"))),
+                    );
+                }
+            }
+        }
+        let failure = match done {
+            Err(f) => Some(f),
+            Ok(()) if values.len() != count as usize => {
+                self.shut_down();
+                Some(CallFailure::Malformed(format!(
+                    "{} answers to {count} steps",
+                    values.len()
+                )))
+            }
+            Ok(()) => None,
+        };
+        (values, failure)
+    }
+
     fn inverse_mass(physics: &Physics) -> Vec<f64> {
         physics.inverse_mass().to_vec()
     }
