@@ -55,6 +55,8 @@ pub struct HomeworkView {
     seen_steps: u64,
     /// The comparison has not caught up with the run yet.
     behind: bool,
+    /// Steps the comparison's last frame is behind the lesson's simulation.
+    lag: u64,
     /// Build status: "building…", "reloaded", or the compiler's first error.
     status: String,
     /// Why there is no comparison on this step.
@@ -92,6 +94,7 @@ impl HomeworkView {
             key: None,
             seen_steps: 0,
             behind: false,
+            lag: 0,
             status: "building…".to_string(),
             idle: None,
             hint: Arc::new(Mutex::new(None)),
@@ -163,6 +166,10 @@ impl HomeworkView {
                 .last
                 .as_ref()
                 .map_or(sim.steps > 0, |f| f.step < sim.steps);
+            self.lag = self
+                .last
+                .as_ref()
+                .map_or(0, |f| sim.steps.saturating_sub(f.step));
         } else {
             self.behind = false;
         }
@@ -240,8 +247,15 @@ impl HomeworkView {
                 } else if let Some(p) = &f.parting {
                     format!("yours {}", p.describe())
                 } else {
+                    // Frames come every 16 steps: a larger lag means the comparison is
+                    // slower than the lesson.
+                    let lag = if self.lag > LiveOptions::default().frame_every {
+                        format!(", {} steps behind the lesson", self.lag)
+                    } else {
+                        String::new()
+                    };
                     format!(
-                        "no parting so far (t = {:.2} s, largest distance {:.1e} m)",
+                        "no parting so far (t = {:.2} s, largest distance {:.1e} m{lag})",
                         f.time, f.distance
                     )
                 };
