@@ -118,7 +118,8 @@ impl Track {
             && state.x.len() == setup.model.particle_count()
             && state.v.len() == state.x.len()
         {
-            let before = (!self.ahead.is_empty()).then(|| (state.x.clone(), state.v.clone()));
+            let speculative = !self.ahead.is_empty() || self.failed.is_some();
+            let before = speculative.then(|| (state.x.clone(), state.v.clone()));
             let mut s =
                 physics::State::new(std::mem::take(&mut state.x), std::mem::take(&mut state.v));
             collide::resolve(&setup.model, &mut s, setup.dt);
