@@ -266,6 +266,30 @@ fn the_rope_converges_at_second_order_to_the_continuum_and_the_study_says_where(
         at <= options.tolerance,
         "stops changing at {from} nodes, {at} m from the continuum"
     );
+    // The Richardson limit of the end's height at T (the three finest levels) is the
+    // continuum's within its stated uncertainty, at an observed order near 2, and the level
+    // from which the study says the answer is within X of that limit is within X of the
+    // continuum.
+    let l = report.limits[0].as_ref().expect("a limit");
+    assert_eq!(l.levels, [65, 129, 257]);
+    let truth = continuum_end(time);
+    assert!(
+        (l.limit - truth).abs() <= l.uncertainty.max(1e-9),
+        "limit {} ± {} against {truth}",
+        l.limit,
+        l.uncertainty
+    );
+    assert!((1.5..2.6).contains(&l.order), "order {}", l.order);
+    // (The limit is of the end's height at T, so that level is compared there.)
+    let from = report.within_limit_from.expect("within X of the limit");
+    for run in report.runs.iter().filter(|r| r.n >= from) {
+        let y = run.run.observation.as_ref().expect("observed").components[0].headline();
+        assert!(
+            (y - truth).abs() <= options.tolerance,
+            "{} nodes: {y} against {truth}",
+            run.n
+        );
+    }
     // The scene's own 3 nodes are not among the levels: no time-step check.
     assert!(report.time_step_check.is_none());
 }
@@ -290,8 +314,13 @@ fn study_resolution_prints_where_the_answer_stops_changing() {
     with_json.push("--json");
     let report = json(&with_json);
     let runs = report["runs"].as_array().expect("runs");
-    // Three levels, each with all kinds, without bend, without shear.
-    assert_eq!(runs.len(), 9);
+    // Three levels with all kinds; without bend and without shear up to the scene's own n = 7.
+    assert_eq!(runs.len(), 7);
+    assert!(
+        runs.iter()
+            .filter(|r| r["kinds"] != "all")
+            .all(|r| r["n"].as_i64() <= Some(7))
+    );
     let all: Vec<&Value> = runs.iter().filter(|r| r["kinds"] == "all").collect();
     assert_eq!(all.len(), 3);
     for r in runs {
@@ -333,9 +362,15 @@ fn study_resolution_prints_where_the_answer_stops_changing() {
         text.contains("tolerance X = 0.01 (metres for positions and lengths, seconds for times)")
     );
     assert!(
-        text.contains("stops changing from n = ") || text.contains("still changing: n = "),
+        text.contains("successive differences: from n = ") || text.contains("still changing: n = "),
         "{text}"
     );
+    assert!(
+        text.contains("stops changing from n = ")
+            || text.contains("not within X = 0.01 of the extrapolated limit"),
+        "{text}"
+    );
+    assert!(text.contains("settled at t = 0.3 s") || text.contains("not settled at t = 0.3 s"));
     assert!(text.contains("bend springs:") && text.contains("shear springs:"));
     assert!(text.contains("time step: halving dt at n = 7"));
 }
@@ -396,9 +431,30 @@ fn advise_recommends_a_verified_configuration_with_its_margin() {
     let over_run = verification["error"]["metres"].as_f64().expect("error");
     assert!(over_run + e_ref <= x, "{over_run} + {e_ref} > {x}");
     let at_t = c["error_at_t"]["metres"].as_f64().expect("error at T");
-    assert!(at_t <= over_run, "the run's worst instant includes T");
-    // The verification's run is the search's, with the energy accounting on: the same motion.
-    assert_eq!(c["error"], verification["error"]);
+    let own_run = c["error"]["metres"].as_f64().expect("error");
+    assert!(at_t <= own_run, "the run's worst instant includes T");
+    let check_at_t = verification["error_at_t"]["metres"]
+        .as_f64()
+        .expect("check at T");
+    assert!(
+        check_at_t <= over_run,
+        "the check's worst instant includes T"
+    );
+    // The verification is a run the search did not make: the same configuration at dt/2,
+    // within X of the reference too; its change from the candidate is the candidate's own
+    // time-step error, which the two errors' difference cannot exceed (triangle inequality).
+    let candidate_dt = c["dt"].as_f64().expect("dt");
+    assert_eq!(verification["dt"].as_f64(), Some(candidate_dt / 2.0));
+    assert_ne!(c["error"], verification["error"]);
+    let own = c["error"]["metres"].as_f64().expect("candidate error");
+    let change = verification["time_step_change"]["metres"]
+        .as_f64()
+        .expect("change");
+    assert!(change > 0.0, "dt/2 is another run");
+    assert!(
+        (own - over_run).abs() <= change * (1.0 + 1e-9),
+        "|{own} - {over_run}| > {change}"
+    );
 
     // The margin, measured by perturbation growth (not the theory advise used) and by the
     // stability study's theory column.

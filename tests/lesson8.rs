@@ -124,9 +124,10 @@ fn lesson_8_quotes_the_recorded_resolution_study() {
         let s = format!("{:.4} m", sag(level(&r, 25, kinds)));
         assert_quoted(&text, &s, what);
     }
-    // Both kinds needed: leaving either out changes the sag by more than X at every level.
+    // Both kinds needed: leaving either out changes the sag by more than X at every level up
+    // to the scene's own n = 25 (the study compares kinds there).
     for kinds in ["no-bend", "no-shear"] {
-        for n in levels.iter() {
+        for n in levels.iter().filter(|&&n| n <= 25) {
             let d = metres(&level(&r, *n, kinds)["change_kinds"]).expect("change of kinds");
             assert!(d > 0.01, "{kinds} at n = {n}: {d}");
         }

@@ -254,11 +254,14 @@ pub fn print(out: &mut impl Write, r: &AdviseReport) -> std::io::Result<()> {
         )?;
         writeln!(
             out,
-            "    accuracy: the same run as springlab run makes it: error at T {} {unit}, largest \
-             over the 20 instants {} {unit}, + reference {e_ref} ≤ X: {}",
+            "    time step: the same model and method at dt/2 = {:.4e} s: error at T {} {unit}, \
+             largest over the 20 instants {} {unit}, + reference {e_ref} ≤ X: {}; change from \
+             dt to dt/2 {} {unit}",
+            v.dt,
             error_text(Some(&v.error_at_t), has_time),
             error_text(Some(&v.error), has_time),
-            if v.accurate { "holds" } else { "fails" }
+            if v.accurate { "holds" } else { "fails" },
+            error_text(Some(&v.time_step_change), has_time)
         )?;
         writeln!(
             out,
@@ -273,7 +276,7 @@ pub fn print(out: &mut impl Write, r: &AdviseReport) -> std::io::Result<()> {
         )?;
         writeln!(
             out,
-            "    energy residual E + dissipated - E0 at T: {:.4e} J",
+            "    energy residual E + dissipated - E0 at T (the dt/2 run): {:.4e} J",
             v.energy_residual
         )?;
     }

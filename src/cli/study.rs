@@ -38,7 +38,7 @@ pub struct ResolutionArgs {
     /// (ropes).
     pub scene: String,
     /// Resolutions to run, comma separated, for example `4,6,8,10` (default: the scene's own
-    /// with three coarser and two finer, spacing ratio about √2; ropes: doubling).
+    /// with three coarser and one finer, spacing ratio about √2).
     #[arg(long = "n", value_name = "N,N,…", value_delimiter = ',')]
     pub levels: Option<Vec<i64>>,
     /// The method of every run (default rk4).

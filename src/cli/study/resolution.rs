@@ -119,6 +119,8 @@ pub fn print_resolution(out: &mut impl Write, r: &ResolutionReport) -> std::io::
     writeln!(out, "observable: {}", r.observable)?;
     writeln!(out, "time step: {}", r.time_step)?;
     writeln!(out, "stops changing: {}", r.definition)?;
+    writeln!(out, "limit: {}", r.limit_rule)?;
+    writeln!(out, "settling: {}", r.settling_rule)?;
     let has_time = r.components.iter().any(|c| c.1 == Unit::Second);
     let unit = if has_time { "m / s" } else { "m" };
     let heads: Vec<String> = r
@@ -142,10 +144,12 @@ pub fn print_resolution(out: &mut impl Write, r: &ResolutionReport) -> std::io::
     }
     writeln!(
         out,
-        "  {:>14} {:>14} {:>14}",
+        "  {:>14} {:>14} {:>14} {:>14} {:>9}",
         format!("Δ next ({unit})"),
         format!("Δ finest ({unit})"),
-        format!("Δ all kinds ({unit})")
+        format!("Δ all kinds ({unit})"),
+        format!("to limit ({unit})"),
+        "settled"
     )?;
     for run in &r.runs {
         write!(
@@ -172,22 +176,36 @@ pub fn print_resolution(out: &mut impl Write, r: &ResolutionReport) -> std::io::
                 }
             }
         }
+        let to_limit = match run.from_limit {
+            None => "—".to_string(),
+            Some([m, _]) if !has_time => format!("{m:.2e}"),
+            Some([m, s]) => format!("{m:.2e} / {s:.1e} s"),
+        };
+        let settled = match &run.settling {
+            None => "—".to_string(),
+            Some(s) if s.settled => "yes".to_string(),
+            Some(s) => format!("no {:.1e}", s.metres.max(s.seconds)),
+        };
         writeln!(
             out,
-            "  {:>14} {:>14} {:>14}",
+            "  {:>14} {:>14} {:>14} {:>14} {:>9}",
             difference_text(run.change_next.as_ref(), has_time),
             difference_text(run.change_finest.as_ref(), has_time),
-            difference_text(run.change_kinds.as_ref(), has_time)
+            difference_text(run.change_kinds.as_ref(), has_time),
+            to_limit,
+            settled
         )?;
     }
     writeln!(out)?;
+    print_limit(out, r)?;
     let all: Vec<&LevelRun> = r.runs.iter().filter(|x| x.kinds == Kinds::All).collect();
     let finest = all.last().map_or(0, |x| x.n);
     match r.converged_from {
         Some(n) => writeln!(
             out,
-            "stops changing from {} = {n}: every refinement from there changes the answer by at \
-             most {} (Δ next ≤ X up to the finest level, {} = {finest})",
+            "successive differences: from {} = {n} every refinement changes the answer by at \
+             most {} (Δ next ≤ X up to the finest level, {} = {finest}); this does not bound the \
+             distance to the limit",
             r.key, r.tolerance, r.key
         )?,
         None => {
@@ -267,6 +285,74 @@ pub fn print_resolution(out: &mut impl Write, r: &ResolutionReport) -> std::io::
             r.key,
             r.base,
             difference_text(Some(d), has_time)
+        )?;
+    }
+    Ok(())
+}
+
+/// The limit, where the answer stops changing against it, and whether it had settled.
+fn print_limit(out: &mut impl Write, r: &ResolutionReport) -> std::io::Result<()> {
+    for l in r.limits.iter().flatten() {
+        let previous = l.previous.map_or(String::new(), |p| {
+            format!(
+                "; one level coarser: order {:.2}, limit {:.4}",
+                p.order, p.limit
+            )
+        });
+        writeln!(
+            out,
+            "limit of {} ({} = {}, {}, {}): observed order {:.2}, extrapolated {:.4} ± {:.1e} {}{previous}",
+            l.name,
+            r.key,
+            l.levels[0],
+            l.levels[1],
+            l.levels[2],
+            l.order,
+            l.limit,
+            l.uncertainty,
+            l.unit.symbol()
+        )?;
+    }
+    if r.limits.iter().any(Option::is_none) || r.limits.is_empty() {
+        writeln!(
+            out,
+            "no extrapolated limit for every component (fewer than three levels, a diverged \
+             level, or differences that change sign)"
+        )?;
+    }
+    match r.within_limit_from {
+        Some(n) => writeln!(
+            out,
+            "stops changing from {} = {n}: every level from there is within X = {} of the \
+             extrapolated limit (|O - O_∞| + u ≤ X)",
+            r.key, r.tolerance
+        )?,
+        None => writeln!(
+            out,
+            "not within X = {} of the extrapolated limit at any level run: refine further (--n) \
+             or accept a larger tolerance",
+            r.tolerance
+        )?,
+    }
+    let unsettled: Vec<String> = r
+        .runs
+        .iter()
+        .filter(|x| x.kinds == Kinds::All)
+        .filter_map(|x| {
+            let s = x.settling.as_ref()?;
+            (!s.settled)
+                .then(|| format!("{} = {} moved {:.1e}", r.key, x.n, s.metres.max(s.seconds)))
+        })
+        .collect();
+    if r.settled {
+        writeln!(out, "settled at t = {} s at every level", r.time)?;
+    } else if !unsettled.is_empty() {
+        writeln!(
+            out,
+            "not settled at t = {} s ({} over the last fifth, more than X/10): the limit is the \
+             answer at T, not at rest; a later --time observes it nearer rest",
+            r.time,
+            unsettled.join(", ")
         )?;
     }
     Ok(())

@@ -50,7 +50,7 @@ fn command(plan: &Plan, c: &Candidate) -> String {
 }
 
 /// A verification's two runs, side by side on two cores where there are two (each the same
-/// whichever thread runs it): the candidate again with the energy accounting on, and the
+/// whichever thread runs it): the candidate at `dt/2` with the energy accounting on, and the
 /// confirmation of the whole scene at 1.5 × dt over the run's time.
 fn verify(
     scene: &Scene,
@@ -70,15 +70,13 @@ fn verify(
             stability::energy_scale(scene),
         )
     };
+    let half = || observe::measure_accounted(scene, method, dt / 2.0, 2 * steps);
     if crate::physics::pool::Pool::global().threads() < 2 {
-        return (
-            observe::measure_accounted(scene, method, dt, steps),
-            confirm(),
-        );
+        return (half(), confirm());
     }
     std::thread::scope(|scope| {
         let confirmation = scope.spawn(confirm);
-        let run = observe::measure_accounted(scene, method, dt, steps);
+        let run = half();
         let confirmation = confirmation
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
@@ -145,6 +143,8 @@ pub fn advise(plan: &Plan, progress: &mut dyn FnMut(&Stage)) -> Result<AdviseRep
     let mut best = f64::INFINITY;
     let mut work = 0.0;
     let mut left_out = Vec::new();
+    // The accepted runs' snapshots, by candidate index, for the verification's comparison.
+    let mut accepted_runs: Vec<(usize, Vec<observe::Observation>)> = Vec::new();
     if !plan.options.methods.contains(&Method::Xpbd) {
         left_out.push((
             Method::Xpbd,
@@ -284,6 +284,7 @@ pub fn advise(plan: &Plan, progress: &mut dyn FnMut(&Stage)) -> Result<AdviseRep
                 candidates.push(c);
                 if meets {
                     best = best.min(run.cost);
+                    accepted_runs.push((candidates.len() - 1, run.snapshots));
                     break;
                 }
                 if coarse {
@@ -342,12 +343,19 @@ pub fn advise(plan: &Plan, progress: &mut dyn FnMut(&Stage)) -> Result<AdviseRep
         let energy_residual = run.energy_residual.unwrap_or(f64::NAN);
         let error = observe::history_difference(&run.snapshots, &reference_run.snapshots, time);
         let error_at_t = run.difference(&reference_obs, time);
+        let own = accepted_runs
+            .iter()
+            .find(|(j, _)| *j == i)
+            .map_or(&[][..], |(_, s)| s.as_slice());
+        let time_step_change = observe::history_difference(&run.snapshots, own, time);
         let accurate = accepted(&error, &e_ref, x);
         let holds = accurate && confirmation.passed;
         verifications.push(Verification {
             candidate: i,
+            dt: c.dt / 2.0,
             error,
             error_at_t,
+            time_step_change,
             accurate,
             stability: confirmation,
             holds,
