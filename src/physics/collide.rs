@@ -78,7 +78,12 @@
 //! body could not pay (`O > K`: a body almost at rest whose springs push a particle in). Both are
 //! left out of the bound on purpose: the projection is always done in full, so no particle ever
 //! ends a step inside a collider. On the course scenes the ledger's `contacts` term stays ≥ 0
-//! (`tests/contact_energy.rs`); before the budget it reached −7.6 % of E₀ on `cube-plane`. The
+//! (`tests/contact_energy.rs`); before the budget it reached −7.6 % of E₀ on `cube-plane`.
+//! Implicit Euler's contacts inside its solve keep the bound too: a constraint impulse `J ≥ 0`
+//! never sends a particle away from the surface faster than the obstacle moves, so its work
+//! `J (v' - V)·N ≤ 0`, and what it leaves inside is this response's paid projection
+//! (`integrators/implicit_euler/contacts.rs`). Not yet bounded: a dynamic sphere's reaction in
+//! that solve (up to `J²/(2M)` per contact) and the sphere–particle separation below. The
 //! impact friction is the
 //! velocity-level Coulomb rule of Bridson, Fedkiw & Anderson (2002): the tangential velocity loses
 //! at most `k_f` times the normal velocity change, and never reverses. The resting threshold is

@@ -7,7 +7,7 @@
 use glam::DVec3;
 
 use super::contacts::{
-    MAX_CONTACT_PASSES, add_contacts, contact_impulses, has_contacts, release_pulling,
+    MAX_CONTACT_PASSES, RELEASE_PASSES, add_contacts, contact_impulses, has_contacts, release_pulling,
     start_contacts,
 };
 use super::solve::SolveStats;
@@ -112,10 +112,17 @@ pub(super) fn step(
         );
         lattice.copy_dv(dv);
         stats.record(iterations, residual, converged);
-        if !converged || !contacts || stats.passes >= MAX_CONTACT_PASSES {
+        if !converged || !contacts {
             break;
         }
         let released = release_pulling(constraints, |i| lattice.row_residual(i));
+        if stats.passes >= MAX_CONTACT_PASSES {
+            // After the last pass only release (`contacts::RELEASE_PASSES`).
+            if released && stats.passes < MAX_CONTACT_PASSES + RELEASE_PASSES {
+                continue;
+            }
+            break;
+        }
         if !(add_contacts(model, state, dt, dv, constraints, inside) || released) {
             break;
         }
