@@ -220,3 +220,46 @@ fn no_step_starts_with_the_camera_moving() {
         }
     }
 }
+
+/// The share (0–1) of a 350 × 200 image that `points` span across and down, and whether they
+/// are all inside it.
+fn extent(run: &LessonRun, points: &[DVec3]) -> (f64, f64, bool) {
+    let view = View::new(run.camera(), 350, 200);
+    let (mut lo, mut hi) = (
+        glam::DVec2::splat(f64::INFINITY),
+        glam::DVec2::splat(f64::NEG_INFINITY),
+    );
+    let mut inside = true;
+    for &p in points {
+        let Some(q) = view.project(p) else {
+            inside = false;
+            continue;
+        };
+        let q = glam::DVec2::new(q.x, q.y);
+        inside &= (0.0..=350.0).contains(&q.x) && (0.0..=200.0).contains(&q.y);
+        lo = lo.min(q);
+        hi = hi.max(q);
+    }
+    ((hi.x - lo.x) / 350.0, (hi.y - lo.y) / 200.0, inside)
+}
+
+/// Lesson 4, step 2 names its camera target (`camera = { body = 2 }`): the Verlet rope stays
+/// whole and large in the view while the semi-implicit rope stretches, and the other rope may
+/// leave it.
+#[test]
+fn lesson_4_step_2_frames_the_verlet_rope() {
+    let mut run = lesson_run("verlet", 1);
+    assert_eq!(run.step().camera_body, Some(2));
+    assert_eq!(run.sim().scene.bodies[1].label, "verlet rope");
+    run.handle_key(KeyCode::Char(' '));
+    for _ in 0..90 {
+        run.tick(1.0 / 30.0);
+    }
+    let verlet = run.sim().scene.bodies[1].state.x.clone();
+    let (w, h, inside) = extent(&run, &verlet);
+    assert!(inside, "the Verlet rope is whole in the view");
+    assert!(
+        w.max(h) > 0.5,
+        "the Verlet rope spans {w:.2} × {h:.2} of the view"
+    );
+}
