@@ -53,7 +53,6 @@ mod simulation_fused;
 mod study_convergence;
 mod study_stability;
 mod tui;
-mod tui_burst;
 mod tui_camera;
 mod tui_cli;
 mod tui_export;
