@@ -114,12 +114,28 @@ pub const HORIZON: f64 = 60.0;
 /// # Errors
 /// The message of the first limit exceeded.
 pub fn check_budget(scene: &Scene, dt: f64, horizon: f64, what: &str) -> Result<(), String> {
+    check_budget_at(scene, dt, horizon, 1.0, what)
+}
+
+/// As [`check_budget`] for a step that opens at `speed` simulated seconds per wall second
+/// (front matter `speed`, below 1 for a configuration slower than real time): the updates per
+/// wall second, the rate times `speed`, are what must fit.
+///
+/// # Errors
+/// As [`check_budget`].
+pub fn check_budget_at(
+    scene: &Scene,
+    dt: f64,
+    horizon: f64,
+    speed: f64,
+    what: &str,
+) -> Result<(), String> {
     let horizon = horizon.max(HORIZON);
     let steps = budget::steps_for(horizon, dt);
     budget::run(what.to_string(), scene, dt, steps)
         .check(&Limits::DEFAULT)
         .map_err(|e| e.to_string())?;
-    let rate = budget::updates_per_step(scene, None) / dt;
+    let rate = budget::updates_per_step(scene, None) / dt * speed;
     if rate > REAL_TIME_UPDATES {
         return Err(format!(
             "{what} needs about {} particle and spring updates per simulated second ({} \
@@ -199,6 +215,12 @@ pub enum Plot {
     WorkPrecision,
     /// The largest stretch of a spring, `max |L/L0 - 1|`, per body over time.
     Stretch,
+    /// The scene's observable (`study::observe`: a cloth's sag, a jelly's centroid height and
+    /// largest compression) over time, beside the recorded resolution study's value.
+    Observable,
+    /// The recorded resolution study of the step's scene: the observable against the
+    /// resolution, with every spring kind and without bend or shear springs.
+    Resolution,
 }
 
 impl Plot {
@@ -320,6 +342,12 @@ pub struct Step {
     pub predict: Option<Prediction>,
     /// What the step keeps back until its prediction is answered.
     pub hide: Hidden,
+    /// The body (1-based) the first view frames and the camera follows (`camera = { body = 2 }`);
+    /// `None`: every body.
+    pub camera_body: Option<usize>,
+    /// The speed the step opens at (simulated seconds per wall second; `None`: 1, or the
+    /// student's own after a step that set none).
+    pub speed: Option<f64>,
     /// The Markdown text.
     pub text: String,
     /// Where scene file paths are resolved from.

@@ -28,6 +28,7 @@ pub mod lesson_run;
 pub mod lesson_view;
 pub mod markdown;
 pub mod menu;
+pub mod observed_view;
 pub mod pane;
 pub mod plots;
 pub mod progress;
@@ -190,6 +191,8 @@ pub struct App {
     last_raster: Option<Instant>,
     /// Counts the lessons opened: a raster frame of an earlier one is never shown.
     opened: u64,
+    /// In the event loop: lessons compute off the drawing thread (see `LessonRun::set_deferred`).
+    deferred: bool,
     /// Raster images shown per second (measured by [`App::run`]).
     raster_fps: Option<f64>,
     /// What the student has done (in memory unless given a file).
@@ -233,6 +236,7 @@ impl App {
             last_raster: None,
             raster_fps: None,
             opened: 0,
+            deferred: false,
             progress: Progress::in_memory(),
             lessons_dir: None,
             homework: None,
@@ -500,7 +504,7 @@ impl App {
         };
         self.selected = index;
         let key = Progress::key(&lesson.source, &lesson.slug);
-        let mut run = LessonRun::new(lesson, 0)?;
+        let mut run = LessonRun::with_deferred(lesson, 0, self.deferred)?;
         if let Some(r) = self.progress.lesson(&key) {
             run.restore(&r.met, &r.visited, &r.answers);
         }
@@ -578,7 +582,7 @@ impl App {
 
     /// True while the lesson waits for background work.
     fn background_pending(&self) -> bool {
-        self.lesson().is_some_and(LessonRun::computing)
+        self.lesson().is_some_and(LessonRun::busy)
     }
 
     /// A key press, its background work left running.

@@ -7,7 +7,7 @@ use serde::Deserialize;
 
 use super::{
     Goal, GoalKind, Hidden, Keys, Lesson, LessonError, Plot, PredictOption, Prediction, Step,
-    TryItem, check_budget, check_omega_cost, default_settle_speed, numbers,
+    TryItem, check_budget_at, check_omega_cost, default_settle_speed, numbers,
 };
 use crate::physics::Method;
 use crate::scene;
@@ -37,6 +37,15 @@ struct StepToml {
     goal: Option<toml::Spanned<Goal>>,
     predict: Option<toml::Spanned<PredictToml>>,
     hide: Option<toml::Spanned<HideToml>>,
+    camera: Option<toml::Spanned<CameraToml>>,
+    speed: Option<toml::Spanned<f64>>,
+}
+
+/// `camera = { body = 2 }`: the body the step's first view frames and the camera follows.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraToml {
+    body: usize,
 }
 
 #[derive(Deserialize)]
@@ -288,7 +297,21 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
             let line = body_line(&lines, *start, offset);
             return Err(err(line, None, message));
         }
+        let camera = st.camera.map(|c| (at(c.span().start), c.into_inner().body));
+        let speed = match st.speed {
+            Some(v) if !(1.0 / 64.0..=64.0).contains(v.get_ref()) => {
+                let (l, c) = at(v.span().start);
+                return Err(err(
+                    l,
+                    Some(c),
+                    "speed: expected simulated seconds per wall second from 1/64 to 64".into(),
+                ));
+            }
+            v => v.map(toml::Spanned::into_inner),
+        };
         let step = Step {
+            speed,
+            camera_body: camera.map(|c| c.1),
             title: st.title,
             scene: st.scene,
             params,
@@ -306,10 +329,23 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
         let scene = step
             .build_scene()
             .map_err(|e| err(*start, None, format!("step \"{}\": {e}", step.title)))?;
-        check_budget(
+        if let Some(((l, c), body)) = camera
+            && !(1..=scene.bodies.len()).contains(&body)
+        {
+            return Err(err(
+                l,
+                Some(c),
+                format!(
+                    "camera: body = {body}: expected the number (from 1) of one of the scene's {} bodies",
+                    scene.bodies.len()
+                ),
+            ));
+        }
+        check_budget_at(
             &scene,
             scene.dt,
             step.horizon(),
+            step.speed.unwrap_or(1.0),
             &format!("step \"{}\"", step.title),
         )
         .map_err(|m| err(*start, None, m))?;

@@ -425,6 +425,21 @@ impl Observable {
         }
     }
 
+    /// What the observable reads at the simulation's present instant, for a run watched as it
+    /// goes (the lesson app samples it every few milliseconds of simulated time): the instant is
+    /// recorded as a step would record it (the largest compression and the contact time so far)
+    /// and the observation so far is returned. An end point's samples are not kept here.
+    pub fn watch(&mut self, sim: &Simulation) -> Observation {
+        for ((_, t), body) in self.trackers.iter_mut().zip(&sim.scene.bodies) {
+            if let Tracker::Last { samples, index } = t {
+                samples.clear();
+                samples.push(body.state.x[*index].to_array());
+            }
+        }
+        self.after_step(sim, 1, 1);
+        self.finish(sim)
+    }
+
     /// The observation at the end of a run.
     fn finish(&self, sim: &Simulation) -> Observation {
         let mut components = Vec::new();

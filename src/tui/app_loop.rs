@@ -3,7 +3,7 @@
 use std::time::{Duration, Instant};
 
 use ratatui::DefaultTerminal;
-use ratatui::crossterm::event::{self};
+use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
 use ratatui::layout::Rect;
 
 use super::raster::Encoder;
@@ -23,6 +23,11 @@ impl App {
         let mut dirty = true;
         if let Ok(size) = terminal.size() {
             self.resize(size.width, size.height);
+        }
+        // From here no key waits for a computation: new steps and exports go to other threads.
+        self.deferred = true;
+        if let Some(run) = self.lesson_mut() {
+            run.set_deferred(true);
         }
         while !self.quit {
             dirty |= self.poll_background();
@@ -151,13 +156,31 @@ impl App {
         Ok(dirty)
     }
 
-    /// Handles every event already waiting (a mouse drag sends many) before the next draw.
+    /// Handles every event already waiting (a mouse drag sends many) before the next draw. All
+    /// of them are read first: a Ctrl-C among them quits at once, whatever comes before it.
     fn drain_events(&mut self) -> anyhow::Result<bool> {
+        let mut waiting = Vec::new();
+        while event::poll(Duration::ZERO)? {
+            waiting.push(event::read()?);
+        }
+        if waiting.iter().any(is_ctrl_c) {
+            self.quit = true;
+            return Ok(true);
+        }
         let mut dirty = false;
-        while !self.quit && event::poll(Duration::ZERO)? {
-            let event = event::read()?;
-            dirty |= self.handle_event(&event);
+        for event in &waiting {
+            if self.quit {
+                break;
+            }
+            dirty |= self.handle_event(event);
         }
         Ok(dirty)
     }
+}
+
+/// Ctrl-C, which raw mode delivers as a key.
+fn is_ctrl_c(event: &Event) -> bool {
+    matches!(event, Event::Key(k) if k.modifiers.contains(KeyModifiers::CONTROL)
+        && matches!(k.code, KeyCode::Char('c' | 'C'))
+        && k.kind != KeyEventKind::Release)
 }

@@ -10,8 +10,12 @@ mod background;
 mod camera;
 mod clock;
 mod controls;
+mod deferred;
 mod goals;
+mod observed;
 mod reveal;
+
+pub use observed::Observed;
 
 use clock::Rates;
 
@@ -19,7 +23,7 @@ use super::pane::{DOTS, SpringFilter};
 use super::plots::{self, History, Oscillator, Studies};
 use crate::lesson::{GoalProgress, Lesson, Step};
 use crate::physics::{Method, SpringKind, State};
-use crate::render::{Camera, Projection};
+use crate::render::Camera;
 use crate::simulation::Simulation;
 
 /// Default cap on the steps taken in one frame.
@@ -183,7 +187,9 @@ pub struct LessonRun {
     /// Which methods the study charts show (by index into [`Method::ALL`]).
     shown: [bool; Method::COUNT],
     /// Per body: the linearised spectrum at the step's initial state (for the status line).
-    spectra: Vec<Option<crate::study::theory::Spectrum>>,
+    spectra: std::sync::Arc<background::Bodies>,
+    /// The limit's worker (in the event loop).
+    limits: background::Limits,
     /// The stability limit of the present methods, dampers and drag included.
     limit: Option<(Limit, f64)>,
     /// The spectra recomputed off the drawing thread after a change of the coefficients.
@@ -191,6 +197,19 @@ pub struct LessonRun {
     /// The limit waits to be recomputed (once for a burst of keys: see
     /// [`LessonRun::poll_background`]).
     limit_stale: bool,
+    /// In the event loop: a new step's numbers, studies and spectra and the exports are
+    /// computed off the drawing thread (`deferred.rs`); otherwise at once.
+    deferred: bool,
+    /// A new step's text numbers and study charts (when deferred).
+    step_work: deferred::StepWorker,
+    /// The `e` exports (when deferred).
+    exports: deferred::Exports,
+    /// A key changed what the spectra depend on since the last request.
+    spectra_wanted: bool,
+    /// The observable's readings (steps with the `observable` plot).
+    observed: Observed,
+    /// The speed was set by the step's front matter.
+    speed_from_step: bool,
 }
 
 impl LessonRun {
@@ -199,6 +218,16 @@ impl LessonRun {
     /// # Errors
     /// The step does not exist or its scene does not build (the message says which).
     pub fn new(lesson: Lesson, step: usize) -> Result<LessonRun, String> {
+        LessonRun::with_deferred(lesson, step, false)
+    }
+
+    /// As [`LessonRun::new`]; with `deferred` (the event loop) what a step computes beside its
+    /// scene (text numbers, study charts, spectra) and the exports are computed off the drawing
+    /// thread, and [`LessonRun::poll_background`] takes them when ready.
+    ///
+    /// # Errors
+    /// As [`LessonRun::new`].
+    pub fn with_deferred(lesson: Lesson, step: usize, deferred: bool) -> Result<LessonRun, String> {
         let sim = build(&lesson, step)?;
         let mut run = LessonRun {
             initial: Vec::new(),
@@ -238,10 +267,17 @@ impl LessonRun {
             revealed: None,
             progress_changed: false,
             shown: [true; Method::COUNT],
-            spectra: Vec::new(),
+            spectra: std::sync::Arc::new(Vec::new()),
+            limits: background::Limits::default(),
             limit: None,
             background: background::Spectra::default(),
             limit_stale: false,
+            deferred,
+            step_work: deferred::StepWorker::default(),
+            exports: deferred::Exports::default(),
+            spectra_wanted: false,
+            observed: Observed::default(),
+            speed_from_step: false,
         };
         let n = run.lesson.steps.len();
         run.met = vec![false; n];
@@ -304,13 +340,26 @@ impl LessonRun {
     fn start_step(&mut self) {
         self.restart_scene();
         let step = &self.lesson.steps[self.step];
-        self.studies = Studies::compute(&step.plots, &step.scene, &step.params);
-        self.text = crate::lesson::numbers::fill(
-            &step.text,
-            &step.scene,
-            &step.params,
-            Some(self.scene_at_start()),
-        );
+        if self.deferred {
+            self.text = deferred::placeholders_pending(&step.text);
+            self.studies = Studies::default();
+            let inputs = deferred::StepInputs {
+                text: step.text.clone(),
+                name: step.scene.clone(),
+                params: step.params.clone(),
+                plots: step.plots.clone(),
+                scene: self.scene_at_start(),
+            };
+            self.step_work.request(inputs);
+        } else {
+            self.studies = Studies::compute(&step.plots, &step.scene, &step.params);
+            self.text = crate::lesson::numbers::fill(
+                &step.text,
+                &step.scene,
+                &step.params,
+                Some(self.scene_at_start()),
+            );
+        }
         self.text_scroll = 0;
         self.hscroll = 0;
         self.revealed = None;
@@ -326,9 +375,16 @@ impl LessonRun {
     /// every method shown in the study charts, paused at `t = 0` (shared by a new step and `R`;
     /// the text, the studies and the prediction's answer stay).
     fn restart_scene(&mut self) {
+        // The step's own speed (front matter), or back to real time after a step that had one.
+        if let Some(speed) = self.lesson.steps[self.step].speed {
+            self.speed = speed;
+            self.speed_from_step = true;
+        } else if std::mem::take(&mut self.speed_from_step) {
+            self.speed = 1.0;
+        }
         self.initial = self.sim.states().cloned().collect();
         self.generation += 1;
-        self.home = Camera::for_scene(&self.sim.scene, self.aspect, Projection::default());
+        self.home = self.first_view(self.aspect);
         self.camera = self.home;
         self.follow = true;
         self.pan_drag = None;
@@ -338,10 +394,16 @@ impl LessonRun {
         self.drag = None;
         self.chooser = None;
         self.shown = [true; Method::COUNT];
-        // A new step waits for its spectra (its text's numbers need as much): the status line
-        // is right from the first frame.
-        self.spectra = background::compute(&self.bodies_at_start());
-        self.refresh_limit();
+        // Outside the event loop a new step waits for its spectra: the status line is right from
+        // the first frame. In it, the limit shows "computing…" until they arrive.
+        if self.deferred {
+            self.spectra = std::sync::Arc::new(Vec::new());
+            self.refresh_limit();
+            self.refresh_spectra();
+        } else {
+            self.spectra = std::sync::Arc::new(background::compute(&self.bodies_at_start()));
+            self.refresh_limit();
+        }
         self.restart_records();
     }
 
@@ -354,9 +416,17 @@ impl LessonRun {
     /// Asks the background worker for every body's spectrum (after a change of stiffness,
     /// damping, drag or pins); the limit follows when it arrives ([`LessonRun::poll_background`],
     /// [`LessonRun::settle`]).
+    /// Once per loop turn however many keys asked (the models are copied for the worker).
     fn refresh_spectra(&mut self) {
-        let bodies = self.bodies_at_start();
-        self.background.request(bodies);
+        self.spectra_wanted = true;
+    }
+
+    /// Sends the request [`LessonRun::refresh_spectra`] marked.
+    fn send_spectra_request(&mut self) {
+        if std::mem::take(&mut self.spectra_wanted) {
+            let bodies = self.bodies_at_start();
+            self.background.request(bodies);
+        }
     }
 
     /// Every body's model with its initial state.
@@ -375,21 +445,54 @@ impl LessonRun {
     /// theory's limit over every mode of the cloth takes tens of milliseconds); true when the
     /// limit changed.
     pub fn poll_background(&mut self) -> bool {
+        self.send_spectra_request();
         if let Some(spectra) = self.background.poll() {
-            self.spectra = spectra;
+            self.spectra = std::sync::Arc::new(spectra);
             self.limit_stale = true;
         }
-        self.refresh_stale_limit()
+        let mut changed = false;
+        if let Some(limit) = self.limits.poll() {
+            self.limit = limit;
+            self.version += 1;
+            changed = true;
+        }
+        if let Some(work) = self.step_work.poll() {
+            self.take_step_work(work);
+            changed = true;
+        }
+        if let Some(m) = self.exports.poll() {
+            self.message = Some(m);
+            changed = true;
+        }
+        self.refresh_stale_limit() || changed
+    }
+
+    /// Whether a new step's work and the exports go off the drawing thread (the event loop).
+    pub fn set_deferred(&mut self, on: bool) {
+        self.deferred = on;
+    }
+
+    fn take_step_work(&mut self, work: deferred::StepWork) {
+        self.text = work.text;
+        self.studies = work.studies;
+        self.version += 1;
     }
 
     /// Waits for the spectra of the newest change and the limit (the public key API and tests
     /// read an up-to-date limit after every key).
     pub fn settle(&mut self) {
+        if let Some(work) = self.step_work.settle() {
+            self.take_step_work(work);
+        }
+        self.send_spectra_request();
         if let Some(spectra) = self.background.settle() {
-            self.spectra = spectra;
+            self.spectra = std::sync::Arc::new(spectra);
             self.limit_stale = true;
         }
         self.refresh_stale_limit();
+        if let Some(limit) = self.limits.settle() {
+            self.limit = limit;
+        }
     }
 
     fn refresh_stale_limit(&mut self) -> bool {
@@ -404,39 +507,36 @@ impl LessonRun {
     /// True while the spectra of the newest change are being computed.
     #[must_use]
     pub fn computing(&self) -> bool {
-        self.background.pending()
+        self.spectra_wanted
+            || self.limit_stale
+            || self.background.pending()
+            || self.limits.pending()
     }
 
-    /// The limit of the present methods and method settings over the bodies' spectra.
+    /// True while anything is computed off the drawing thread (the limit, a new step's numbers
+    /// and studies, an export): the event loop then looks for results between inputs.
+    #[must_use]
+    pub fn busy(&self) -> bool {
+        self.computing() || self.step_work.pending() || self.exports.busy()
+    }
+
+    /// The limit of the present methods and method settings over the bodies' spectra: at once,
+    /// or in the event loop from the limit's worker (over every mode of the cloth it takes tens
+    /// of milliseconds, more on a loaded machine).
     fn refresh_limit(&mut self) {
-        use crate::study::theory;
-        let mut limit: Option<Limit> = None;
-        let mut omega = 0.0f64;
-        for (b, spectrum) in self.sim.scene.bodies.iter().zip(&self.spectra) {
-            let Some(spectrum) = spectrum else { continue };
-            omega = omega.max(spectrum.omega_max);
-            let l = theory::limit(b.method, &b.params, spectrum);
-            let this = match (l.stability, l.dt) {
-                ("conditional", Some(dt)) => Limit::Below(dt),
-                ("none", _) => Limit::Never,
-                ("unconditional", _) => Limit::Always,
-                _ => Limit::NotCovered,
-            };
-            // The most restrictive body decides.
-            let rank = |l: &Limit| match l {
-                Limit::Never => 0,
-                Limit::Below(_) => 1,
-                Limit::NotCovered => 2,
-                Limit::Always => 3,
-            };
-            limit = Some(match limit {
-                None => this,
-                Some(Limit::Below(a)) if matches!(this, Limit::Below(b) if b < a) => this,
-                Some(prev) if rank(&this) < rank(&prev) => this,
-                Some(prev) => prev,
-            });
+        let methods: Vec<_> = self
+            .sim
+            .scene
+            .bodies
+            .iter()
+            .map(|b| (b.method, b.params))
+            .collect();
+        if self.deferred {
+            self.limits
+                .request((methods, std::sync::Arc::clone(&self.spectra)));
+        } else {
+            self.limit = background::limit_of(&methods, &self.spectra);
         }
-        self.limit = limit.map(|l| (l, omega));
     }
 
     /// The stability limit of the present methods on this scene by the damped theory (dampers
@@ -458,6 +558,16 @@ impl LessonRun {
         }
         self.history = History::new(self.sim.dt(), self.oscillator.as_ref());
         self.history.record(&self.sim, self.oscillator.as_ref());
+        let watch = self.lesson.steps[self.step]
+            .plots
+            .contains(&crate::lesson::Plot::Observable);
+        self.observed = Observed::new(&self.sim, watch);
+    }
+
+    /// The observable's readings so far (empty unless the step plots it).
+    #[must_use]
+    pub fn observed(&self) -> &Observed {
+        &self.observed
     }
 
     /// The lesson.

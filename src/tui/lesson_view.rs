@@ -40,21 +40,47 @@ pub fn render(
     let (scene, plot_area) = split_right(&shown, right);
     let canvas = sim_view::render(run, theme, painter, scene, buf);
     if let Some(plot_area) = plot_area {
+        render_plots(run, &shown, theme, plot_area, buf);
+    }
+    status::render(run, fps, view, theme, status_area, buf);
+    render_hints(run, theme, hints, buf);
+    canvas
+}
+
+/// The step's plots side by side: lesson 8's from the run's readings and the recorded studies
+/// (`observed_view`), the others by `plots`.
+fn render_plots(run: &LessonRun, shown: &[Plot], theme: Theme, area: Rect, buf: &mut Buffer) {
+    let own = |p: &Plot| matches!(p, Plot::Observable | Plot::Resolution);
+    let (mine, others): (Vec<Plot>, Vec<Plot>) = shown.iter().partition(|p| own(p));
+    let count = shown.len().max(1) as u16;
+    let width = area.width / count;
+    let others_width = if mine.is_empty() {
+        area.width
+    } else {
+        width * others.len() as u16
+    };
+    if !others.is_empty() {
         plots::render(
-            &shown,
+            &others,
             run.history(),
             run.oscillator(),
             run.studies(),
             run.shown_methods(),
             run.sim().time(),
             theme,
-            plot_area,
+            Rect::new(area.x, area.y, others_width, area.height),
             buf,
         );
     }
-    status::render(run, fps, view, theme, status_area, buf);
-    render_hints(run, theme, hints, buf);
-    canvas
+    for (i, plot) in mine.iter().enumerate() {
+        let x = area.x + others_width + width * i as u16;
+        let w = if i + 1 == mine.len() {
+            area.x + area.width - x
+        } else {
+            width
+        };
+        super::observed_view::render(*plot, run, theme, Rect::new(x, area.y, w, area.height), buf);
+    }
 }
 
 /// Narrowest a plot is drawn (columns): below it the step's plots collapse to the first.

@@ -1,80 +1,130 @@
-//! The bodies' spectra (ω_max by power iteration and the damped theory's modes) computed off
-//! the drawing thread: a key that changes stiffness, damping, drag or pins asks for them, one
-//! worker thread computes the newest request when it is free (requests that came in between are
-//! skipped: the latest wins), and the run takes the result when it polls. On the cloth one
-//! computation takes about a third of a second; the keys, `q` and Ctrl-C are answered
-//! meanwhile. [`Spectra::settle`] waits for the newest result (tests, and the public key API,
-//! see `App::handle_key`), so what a test reads after a key is always up to date.
+//! Work computed off the drawing thread, the newest request winning: one worker thread per kind
+//! of work computes the newest request when it is free (requests that came in between are
+//! skipped) and the run takes the result when it polls. The bodies' spectra (ω_max by power
+//! iteration and the damped theory's modes: a key that changes stiffness, damping, drag or pins
+//! asks for them; on the cloth one computation takes about a third of a second) and, in the
+//! event loop, what a newly opened step computes (its text's numbers, its study charts, its
+//! spectra) go through it, so the keys, `q` and Ctrl-C are answered meanwhile.
+//! [`Latest::settle`] waits for the newest result (tests, and the public key API, see
+//! `App::handle_key`), so what a test reads after a key is always up to date.
 
 use std::sync::mpsc::{self, Receiver, Sender};
 use std::sync::{Arc, Condvar, Mutex, PoisonError};
 
-use crate::physics::{Model, State};
+use super::Limit;
+use crate::physics::{Method, MethodParams, Model, State};
 use crate::study::theory::{self, Spectrum};
 
 /// Per body: its spectrum at its initial state (`None` when no spring moves a free particle).
 pub type Bodies = Vec<Option<Spectrum>>;
 
-/// One request: its number and the bodies' models and initial states.
-type Request = (u64, Vec<(Model, State)>);
-
 /// What the worker and the run share.
-#[derive(Default)]
-struct Shared {
-    slot: Mutex<Slot>,
+struct Shared<Q> {
+    slot: Mutex<Slot<Q>>,
     /// Wakes the worker.
     wake: Condvar,
 }
 
 /// The worker's mailbox.
-#[derive(Default)]
-struct Slot {
-    /// The newest request not yet taken; `None` after it is taken.
-    request: Option<Request>,
+struct Slot<Q> {
+    /// The newest request not yet taken (its number and input); `None` after it is taken.
+    request: Option<(u64, Q)>,
     /// The run is gone: the worker ends.
     closed: bool,
 }
 
-/// The spectra's worker and the newest result asked for.
-pub struct Spectra {
-    shared: Arc<Shared>,
-    /// Results from the worker (request number, spectra).
-    results: Option<Receiver<(u64, Bodies)>>,
+/// A worker computing `work` on the newest request, and the newest result asked for.
+pub struct Latest<Q: Send + 'static, A: Send + 'static> {
+    shared: Arc<Shared<Q>>,
+    /// Results from the worker (request number, result).
+    results: Option<Receiver<(u64, A)>>,
     /// The number of the newest request.
     asked: u64,
     /// The number of the result held by the run.
     have: u64,
+    /// What the worker computes.
+    work: fn(Q) -> A,
+    /// The worker thread's name.
+    name: &'static str,
+}
+
+/// The spectra's worker.
+pub type Spectra = Latest<Vec<(Model, State)>, Bodies>;
+
+/// The methods and method settings of the bodies, and their spectra.
+pub type LimitInputs = (Vec<(Method, MethodParams)>, Arc<Bodies>);
+
+/// The limit's worker.
+pub type Limits = Latest<LimitInputs, Option<(Limit, f64)>>;
+
+impl Default for Limits {
+    fn default() -> Self {
+        Latest::new("springlab-limit", |(methods, spectra)| {
+            limit_of(&methods, &spectra)
+        })
+    }
+}
+
+/// The stability limit of the bodies' methods over their spectra, the most restrictive body
+/// deciding, and the largest ω_max (rad/s); `None` when no body has a spectrum.
+#[must_use]
+pub fn limit_of(
+    methods: &[(Method, MethodParams)],
+    spectra: &[Option<Spectrum>],
+) -> Option<(Limit, f64)> {
+    let mut limit: Option<Limit> = None;
+    let mut omega = 0.0f64;
+    for ((method, params), spectrum) in methods.iter().zip(spectra) {
+        let Some(spectrum) = spectrum else { continue };
+        omega = omega.max(spectrum.omega_max);
+        let l = theory::limit(*method, params, spectrum);
+        let this = match (l.stability, l.dt) {
+            ("conditional", Some(dt)) => Limit::Below(dt),
+            ("none", _) => Limit::Never,
+            ("unconditional", _) => Limit::Always,
+            _ => Limit::NotCovered,
+        };
+        // The most restrictive body decides.
+        let rank = |l: &Limit| match l {
+            Limit::Never => 0,
+            Limit::Below(_) => 1,
+            Limit::NotCovered => 2,
+            Limit::Always => 3,
+        };
+        limit = Some(match limit {
+            None => this,
+            Some(Limit::Below(a)) if matches!(this, Limit::Below(b) if b < a) => this,
+            Some(prev) if rank(&this) < rank(&prev) => this,
+            Some(prev) => prev,
+        });
+    }
+    limit.map(|l| (l, omega))
 }
 
 impl Default for Spectra {
     fn default() -> Self {
-        Spectra {
-            shared: Arc::new(Shared::default()),
-            results: None,
-            asked: 0,
-            have: 0,
-        }
+        Latest::new("springlab-spectra", |bodies| compute(&bodies))
     }
 }
 
-impl Clone for Spectra {
+impl<Q: Send + 'static, A: Send + 'static> Clone for Latest<Q, A> {
     /// A clone starts without a worker and without pending requests (a clone of a run has its
     /// own results from then on).
     fn clone(&self) -> Self {
-        Spectra::default()
+        Latest::new(self.name, self.work)
     }
 }
 
-impl std::fmt::Debug for Spectra {
+impl<Q: Send + 'static, A: Send + 'static> std::fmt::Debug for Latest<Q, A> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Spectra")
+        f.debug_struct(self.name)
             .field("asked", &self.asked)
             .field("have", &self.have)
             .finish_non_exhaustive()
     }
 }
 
-impl Drop for Spectra {
+impl<Q: Send + 'static, A: Send + 'static> Drop for Latest<Q, A> {
     fn drop(&mut self) {
         // The worker ends when its results cannot be delivered: drop the receiver, wake it.
         self.results = None;
@@ -102,16 +152,35 @@ pub fn compute(bodies: &[(Model, State)]) -> Bodies {
         .collect()
 }
 
-impl Spectra {
-    /// Asks for the spectra of `bodies`; an older request not yet started is dropped.
-    pub fn request(&mut self, bodies: Vec<(Model, State)>) {
+impl<Q: Send + 'static, A: Send + 'static> Latest<Q, A> {
+    /// A worker (started at the first request) named `name` that computes `work`.
+    pub fn new(name: &'static str, work: fn(Q) -> A) -> Self {
+        Latest {
+            shared: Arc::new(Shared {
+                slot: Mutex::new(Slot {
+                    request: None,
+                    closed: false,
+                }),
+                wake: Condvar::new(),
+            }),
+            results: None,
+            asked: 0,
+            have: 0,
+            work,
+            name,
+        }
+    }
+
+    /// Asks for `work` on `bodies`; an older request not yet started is dropped.
+    pub fn request(&mut self, bodies: Q) {
         self.asked += 1;
         if self.results.is_none() {
             let (send, receive) = mpsc::channel();
             let shared = Arc::clone(&self.shared);
+            let work = self.work;
             let spawned = std::thread::Builder::new()
-                .name("springlab-spectra".into())
-                .spawn(move || worker(&shared, &send));
+                .name(self.name.into())
+                .spawn(move || worker(&shared, &send, work));
             if spawned.is_err() {
                 // No thread: the run computes on demand ([`Spectra::settle`]).
                 self.shared
@@ -138,7 +207,7 @@ impl Spectra {
     }
 
     /// The newest result that arrived, if it is newer than the one held.
-    pub fn poll(&mut self) -> Option<Bodies> {
+    pub fn poll(&mut self) -> Option<A> {
         let mut newest = None;
         if let Some(rx) = &self.results {
             while let Ok((n, bodies)) = rx.try_recv() {
@@ -153,7 +222,7 @@ impl Spectra {
 
     /// Waits for the result of the newest request (computing it here when no worker runs or
     /// it is still waiting in the slot); `None` when nothing is pending.
-    pub fn settle(&mut self) -> Option<Bodies> {
+    pub fn settle(&mut self) -> Option<A> {
         if !self.pending() {
             return self.poll();
         }
@@ -169,7 +238,7 @@ impl Spectra {
             && n == self.asked
         {
             self.have = n;
-            return Some(compute(&bodies));
+            return Some((self.work)(bodies));
         }
         // The worker has it: wait for its answer.
         let mut newest = None;
@@ -189,7 +258,7 @@ impl Spectra {
 }
 
 /// The worker: takes the newest request, computes it, sends it back; ends when the run is gone.
-fn worker(shared: &Shared, results: &Sender<(u64, Bodies)>) {
+fn worker<Q, A>(shared: &Shared<Q>, results: &Sender<(u64, A)>, work: fn(Q) -> A) {
     loop {
         let request = {
             let mut slot = shared.slot.lock().unwrap_or_else(PoisonError::into_inner);
@@ -207,7 +276,7 @@ fn worker(shared: &Shared, results: &Sender<(u64, Bodies)>) {
             }
         };
         let (n, bodies) = request;
-        if results.send((n, compute(&bodies))).is_err() {
+        if results.send((n, work(bodies))).is_err() {
             return;
         }
     }

@@ -40,10 +40,27 @@ impl LessonRun {
         self.aspect = aspect;
         self.version += 1;
         let untouched = self.camera == self.home;
-        self.home = Camera::for_scene(&self.scene_at_start(), aspect, Projection::default());
+        self.home = self.first_view(aspect);
         if untouched {
             self.camera = self.home;
         }
+    }
+
+    /// The step's first view for a pane of aspect `aspect`: its scene at the start, or only the
+    /// body its front matter names (`camera = { body = 2 }`), framed.
+    pub(super) fn first_view(&self, aspect: f64) -> Camera {
+        let mut scene = self.scene_at_start();
+        if let Some(b) = self.target_body() {
+            let body = scene.bodies.swap_remove(b);
+            scene.bodies = vec![body];
+        }
+        Camera::for_scene(&scene, aspect, Projection::default())
+    }
+
+    /// The body (0-based) the camera frames and follows, when the step names one.
+    fn target_body(&self) -> Option<usize> {
+        let b = self.lesson.steps[self.step].camera_body?.checked_sub(1)?;
+        (b < self.sim.scene.bodies.len()).then_some(b)
     }
 
     /// The scene with the bodies' initial states.
@@ -69,7 +86,15 @@ impl LessonRun {
             return;
         }
         let mut points: Vec<DVec3> = Vec::new();
-        for body in &self.sim.scene.bodies {
+        let target = self.target_body();
+        for (_, body) in self
+            .sim
+            .scene
+            .bodies
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| target.is_none_or(|t| t == *i))
+        {
             points.extend(body.state.x.iter().copied());
             for s in &body.state.spheres {
                 points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::X));

@@ -11,7 +11,6 @@ use crate::physics::particles::pin_particle;
 use crate::render::camera::ZOOM_STEP;
 use crate::scene::lattice;
 use crate::simulation::Simulation;
-use crate::tui::export;
 
 use super::{
     COEFFICIENT_FACTOR, Chooser, DT_RANGE, Drag, FIRST_DAMPING, FIRST_DRAG_RATE,
@@ -564,19 +563,23 @@ impl LessonRun {
             self.step + 1,
             self.sim.steps
         ));
-        self.message = Some(
-            match export::export_png(
-                &self.sim,
-                self.generation,
-                &self.camera,
-                self.filter,
-                self.aspect,
-                &path,
-            ) {
-                Ok(p) => format!("wrote {}", p.display()),
-                Err(e) => e,
-            },
-        );
+        let job = super::deferred::Export {
+            sim: self.sim.clone(),
+            generation: self.generation,
+            camera: self.camera,
+            filter: self.filter,
+            aspect: self.aspect,
+            path,
+        };
+        if !self.deferred {
+            self.message = Some(job.write());
+            return;
+        }
+        let name = job.path.display().to_string();
+        self.message = Some(match self.exports.send(job) {
+            Ok(()) => format!("writing {name}…"),
+            Err(job) => job.write(),
+        });
     }
 
     /// Opens step `step` (0-based) of the lesson.

@@ -15,6 +15,7 @@ impl LessonRun {
                 .record_divergence(&self.sim, self.oscillator.as_ref());
         } else {
             self.history.record(&self.sim, self.oscillator.as_ref());
+            self.observed.record(&self.sim);
         }
         self.check_goal(diverged);
         if diverged {

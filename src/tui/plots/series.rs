@@ -35,6 +35,8 @@ pub(super) fn render_one(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
             render_exact(v, area, buf);
             return;
         }
+        // Drawn from the run's own records by the lesson screen (tui::observed_view).
+        Plot::Observable | Plot::Resolution => return,
         Plot::Energy if bodies > 1 => {
             // Eight distinct colours: a total and a kinetic energy per body, no two alike.
             let totals = [Color::Green, Color::Magenta, Color::Cyan, Color::LightRed];
