@@ -63,8 +63,9 @@ fn same_either_way_accounting(
         single.energy_residual().to_bits(),
         "{what}: energy residual"
     );
-    if accounting && single.diverged.is_none() {
-        // Dampers that dissipate: the comparison is not of zeros.
+    if accounting && single.diverged.is_none() && name != "cube-plane" {
+        // Dampers that work (the cube falls freely as one rigid body, its dampers idle): the
+        // comparison is not of zeros.
         assert!(
             single.dissipated().dampers_and_drag > 0.0,
             "{what}: nothing dissipated"
