@@ -91,7 +91,7 @@ median() { # WORKLOAD COLUMN
             printf "%.2f× (%.2f – %.2f)", m, r[1], r[NR] }'
 }
 table=$(
-    echo "springlab's steps/s over the C++ reference's, median of $rounds interleaved rounds (lowest – highest), checksums equal; $cpu, $cores cores, $simd; load $load_before → $load_after; ceiling $ceiling."
+    echo "springlab's steps/s over the C++ reference's (single-threaded), median of $rounds interleaved rounds (lowest – highest), checksums equal in every round; $cpu, $cores cores, $simd; load average $load_before → $load_after; ceiling $ceiling. The first column, one thread against one, compares the code; the second is springlab on all $cores threads against the reference's one."
     echo
     echo "| workload | 1 thread (\`SPRINGLAB_THREADS=1\`) | all $cores threads |"
     echo "| --- | --- | --- |"

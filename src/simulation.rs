@@ -283,17 +283,18 @@ impl Simulation {
         None
     }
 
-    /// Takes up to `n` steps, stopping at divergence: the same states, counts and divergence
-    /// as `n` calls of [`Simulation::step`], bit for bit.
+    /// Takes up to `n` steps, stopping at divergence: the same states, counts, divergence and
+    /// energy accounting as `n` calls of [`Simulation::step`], bit for bit.
     ///
-    /// Where nothing happens between two steps but the method itself (energy accounting off,
-    /// no collider, no sphere, no energy guard), the steps go to [`Method::steps`] in chunks of
-    /// [`CHUNK`]: the fused multi-step passes `springlab bench` times (the rope's pass in
-    /// structure-of-arrays form, the lattices' thread team). A chunk is kept when every body's
-    /// fastest particle ends it below a tenth of the divergence speed (at 100 m/s against
-    /// 1000 m/s, so no step inside it can have diverged: unstable growth does not turn back);
-    /// otherwise the states go back to the chunk's start and its steps are taken one by one,
-    /// each checked.
+    /// Where nothing happens between two steps but the method itself (no collider, no sphere,
+    /// no energy guard), the steps go to [`Method::steps`] in chunks of [`CHUNK`]: the fused
+    /// multi-step passes `springlab bench` times (the rope's pass in structure-of-arrays form,
+    /// the lattices' thread team). With energy accounting those passes also write the
+    /// dissipated power of every stage, and each step's share is added in step order, as
+    /// [`Simulation::step`] adds it. A chunk is kept when every body's fastest particle ends it
+    /// below a tenth of the divergence speed (at 100 m/s against 1000 m/s, so no step inside it
+    /// can have diverged: unstable growth does not turn back); otherwise the states go back to
+    /// the chunk's start and its steps are taken one by one, each checked.
     pub fn advance(&mut self, n: u64) {
         let mut left = n;
         while left > 0 && self.diverged.is_none() {
@@ -313,14 +314,10 @@ impl Simulation {
 
     /// True when a step is the method's step alone (see [`Simulation::advance`]).
     fn fusable(&self) -> bool {
-        !self.accounting
-            && self.scene.bodies.iter().all(|b| {
-                let declaration = b.method.declaration();
-                declaration.many.is_some()
-                    && !declaration.energy_guard
-                    && b.model.colliders.is_empty()
-                    && b.state.spheres.is_empty()
-            })
+        self.scene.bodies.iter().all(|b| {
+            let declaration = b.method.declaration();
+            !declaration.energy_guard && b.model.colliders.is_empty() && b.state.spheres.is_empty()
+        })
     }
 
     /// `chunk` steps of every body in one [`Method::steps`] call each; false, with every state
@@ -350,6 +347,14 @@ impl Simulation {
         }
         self.force_evals += evals;
         self.steps += chunk;
+        if self.accounting {
+            // Step by step, body by body: the order of the sums of `Simulation::step`.
+            for s in 0..chunk as usize {
+                for work in &self.work {
+                    self.dissipated = self.dissipated.plus(work.step_dissipated[s]);
+                }
+            }
+        }
         true
     }
 

@@ -142,6 +142,7 @@ fn step_pass<'a>(
         dynamics,
         update: TeamUpdate::SemiImplicitEuler { dt: 1e-4 },
         after,
+        power: None,
     }
 }
 

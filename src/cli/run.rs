@@ -15,6 +15,10 @@ use crate::physics::Method;
 use crate::scene::{self, Scene};
 use crate::simulation::{RunReport, Simulation};
 
+/// Most steps between two checks of Ctrl-C and two progress updates: four of
+/// [`crate::simulation::CHUNK`].
+const PIECE: u64 = 256;
+
 /// Options of `springlab run`.
 #[derive(Debug, Args)]
 pub struct RunArgs {
@@ -206,18 +210,24 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let mut progress = Progress::new(steps, &format!("run {}", args.scene));
     let mut csv_error = None;
-    for i in 0..steps {
-        if sim.diverged.is_some() {
-            break;
+    // The steps go to `Simulation::advance` (the fused multi-step passes where the scene
+    // allows them, the same numbers as single steps) in pieces of at most `PIECE` steps,
+    // ending at every CSV row.
+    let mut done = 0;
+    while done < steps && sim.diverged.is_none() {
+        // Ctrl-C: stop between pieces; the CSV's temporary file is removed when dropped.
+        interrupt::check()?;
+        progress.set(done);
+        let mut piece = (steps - done).min(PIECE);
+        if csv.is_some() {
+            piece = piece.min(args.csv_every - sim.steps % args.csv_every);
         }
-        if i % 256 == 0 {
-            // Ctrl-C: stop between steps; the CSV's temporary file is removed when dropped.
-            interrupt::check()?;
-            progress.set(i);
-        }
-        sim.step();
+        let before = sim.steps;
+        sim.advance(piece);
+        done += piece;
         if let Some((w, _)) = csv.as_mut()
             && csv_error.is_none()
+            && sim.steps > before
             && (sim.steps.is_multiple_of(args.csv_every) || sim.diverged.is_some())
             && let Err(e) = write_csv_row(w, &sim)
         {

@@ -145,11 +145,13 @@ impl Method {
 impl Method {
     /// `n` steps of [`Method::step`]; returns the force evaluations they took.
     ///
-    /// Semi-implicit Euler and RK4 on a lattice without energy accounting take them in one
-    /// call, the same numbers bit for bit: on a large lattice as one team of threads, without
-    /// handing each pass to the pool; semi-implicit Euler on a small lattice (a rope, no
-    /// projection) with the particles in the stencil's layout in between, without converting
-    /// the state at every step.
+    /// Semi-implicit Euler and RK4 on a lattice take them in one call, the same numbers bit
+    /// for bit: on a large lattice as one team of threads, without handing each pass to the
+    /// pool; semi-implicit Euler on a small lattice (a rope, no projection) with the particles
+    /// in the stencil's layout in between, without converting the state at every step. With
+    /// energy accounting ([`Workspace::account`]) the passes also write the dissipated power,
+    /// and [`Workspace::step_dissipated`] holds what each step dissipated, the same bits as
+    /// each [`Method::step`]'s [`Workspace::dissipated`].
     pub fn steps(
         self,
         model: &Model,
@@ -160,6 +162,7 @@ impl Method {
         n: u64,
     ) -> u64 {
         work.resize(model.particle_count(), model.springs.len());
+        work.step_dissipated.clear();
         let many = match self.declaration().many {
             Some(many) if n >= 2 => many(model, state, dt, work, n),
             _ => None,
@@ -168,8 +171,15 @@ impl Method {
             work.dissipated = Dissipated::default();
             return evals;
         }
+        work.step_dissipated.clear();
         (0..n)
-            .map(|_| self.step(model, state, dt, params, work))
+            .map(|_| {
+                let evals = self.step(model, state, dt, params, work);
+                if work.account {
+                    work.step_dissipated.push(work.dissipated);
+                }
+                evals
+            })
             .sum()
     }
 }
@@ -275,6 +285,12 @@ pub struct Workspace {
     pub dissipated: Dissipated,
     /// Scratch space of the dissipated power.
     pub(crate) power_f: PowerScratch,
+    /// With `account`: what each step of the last [`Method::steps`] dissipated, in order.
+    pub(crate) step_dissipated: Vec<Dissipated>,
+    /// Scratch of the many-step paths: each step's power `(dampers and drag, contact)` (W),
+    /// and the power slots of a team ([`Stencil::team_with_power`]).
+    pub(crate) step_powers: Vec<(f64, f64)>,
+    pub(crate) power_slots: Vec<f64>,
     /// When true, every method runs its textbook loops even on a lattice, where it otherwise
     /// fuses its stages into the stencil's passes (same numbers, bit for bit: the tests
     /// compare the two).
@@ -445,10 +461,10 @@ fn fused<'m>(model: &'m Model, work: &Workspace) -> Option<&'m Stencil> {
 }
 
 /// The stencil and its number of parts when a method's many steps can run as one team of
-/// threads ([`Stencil::team`]): a lattice with the fused passes wanted ([`fused`]), no energy
-/// accounting, and work for at least two threads.
+/// threads ([`Stencil::team`]): a lattice with the fused passes wanted ([`fused`]) and work for
+/// at least two threads.
 fn team<'m>(model: &'m Model, work: &Workspace) -> Option<(&'m Stencil, usize)> {
-    let stencil = fused(model, work).filter(|_| !work.account)?;
+    let stencil = fused(model, work)?;
     let parts = stencil.parallel_parts(crate::physics::pool::Pool::global().threads());
     (parts >= 2).then_some((stencil, parts))
 }
@@ -561,6 +577,31 @@ fn stage_then_step(
     *projected = true;
     state.history_valid = false;
     2
+}
+
+/// At most this many values of power slots in one team call (16 MiB); a many-step path with
+/// energy accounting runs its steps in batches of as many steps as fit
+/// ([`steps_per_team`]).
+const POWER_SLOT_VALUES: usize = 1 << 21;
+
+/// Steps per team call of a many-step path with `passes` passes per step: all `n` without
+/// accounting, else as many as [`POWER_SLOT_VALUES`] hold (at least one).
+fn steps_per_team(stencil: &Stencil, account: bool, passes: usize, n: u64) -> u64 {
+    if !account {
+        return n;
+    }
+    let fit = POWER_SLOT_VALUES / (passes * stencil.power_len()).max(1);
+    n.min(fit.max(1) as u64)
+}
+
+/// The power of slot `k` of a team's power buffer ([`Stencil::team_with_power`]).
+fn slot_power(stencil: &Stencil, slots: &[f64], k: usize) -> Power {
+    let len = stencil.power_len();
+    let (dampers_and_drag, contact) = Stencil::sum_power(&slots[k * len..(k + 1) * len]);
+    Power {
+        dampers_and_drag,
+        contact,
+    }
 }
 
 /// The projection as the stencil's per-tile hook.

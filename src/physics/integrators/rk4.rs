@@ -35,10 +35,10 @@
 //! Differentialgleichungen", Z. Math. Phys. 46 (1901); E. Hairer, S. P. Nørsett, G. Wanner,
 //! *Solving Ordinary Differential Equations I*, 2nd ed., Springer 1993, §II.1, Table 1.2.
 
-use crate::physics::energy::Power;
+use crate::physics::energy::{Dissipated, Power};
 use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, polynomial};
-use crate::physics::integrators::{explicit_step, Workspace, after, fused_pass, power_if, team};
+use crate::physics::integrators::{explicit_step, Workspace, after, fused_pass, power_if, slot_power, steps_per_team, team};
 use crate::physics::particles::State;
 use crate::physics::stencil::{Base, Output, Pass, Stencil, TeamUpdate, Update};
 
@@ -198,9 +198,11 @@ pub(super) fn step_fused(
 
 /// `n` steps in one call on a lattice large enough for several threads, the same numbers bit
 /// for bit as `n` calls of `step`: the four passes of `step_fused` for each step, all run by
-/// one team of threads ([`Stencil::team`]) instead of one pool job per pass. `None`, having done
-/// nothing, where that does not apply: no lattice, the textbook loop asked for, energy
-/// accounting, or one thread.
+/// one team of threads ([`Stencil::team_with_power`]) instead of one pool job per pass. With
+/// energy accounting each pass also writes the dissipated power of its stage, and
+/// `work.step_dissipated` receives `dt/6 (P1 + 2 P2 + 2 P3 + P4)` per step, as `step` adds it.
+/// `None`, having done nothing, where that does not apply: no lattice, the textbook loop asked
+/// for, or one thread.
 pub(super) fn steps(
     model: &Model,
     state: &mut State,
@@ -211,9 +213,12 @@ pub(super) fn steps(
     let (stencil, parts) = team(model, work)?;
     let (half, sixth) = (0.5 * dt, dt / 6.0);
     let dynamics = model.dynamics(true);
+    let account = work.account;
+    let batch = steps_per_team(stencil, account, 4, n);
     let after = after(&work.projection);
     // The buffers of `step_fused`, by index: the state (0, 1), x_2 and x_4 (2), x_3 (3),
-    // v_2, v_3, v_4 (4, 5, 6), k1v, k2v, k3v (7, 8, 9).
+    // v_2, v_3, v_4 (4, 5, 6), k1v, k2v, k3v (7, 8, 9). With accounting, pass j of step s
+    // of a batch writes its power into slot 4 s + j.
     let stage = |x, v, outs, h| Pass {
         x,
         v,
@@ -224,6 +229,7 @@ pub(super) fn steps(
             base: Some([0, 1]),
         },
         after: None,
+        power: None,
     };
     let passes = [
         stage(0, 1, [Some(2), Some(4), Some(7)], half),
@@ -240,9 +246,17 @@ pub(super) fn steps(
                 v: [4, 5],
             },
             after,
+            power: None,
         },
     ];
-    let Workspace { x_stage, k, kx, .. } = work;
+    let Workspace {
+        x_stage,
+        k,
+        kx,
+        power_slots,
+        step_dissipated,
+        ..
+    } = work;
     let [k1v, k2v, k3v, _] = k;
     let [x3, v2, v3, v4] = kx;
     let mut buffers = [
@@ -257,13 +271,40 @@ pub(super) fn steps(
         &mut k2v[..],
         &mut k3v[..],
     ];
-    stencil.team(parts, &mut buffers, &|crew| {
-        for _ in 0..n {
-            for pass in &passes {
-                crew.pass(pass);
+    let slots = if account {
+        4 * stencil.power_len() * batch as usize
+    } else {
+        0
+    };
+    power_slots.resize(slots, 0.0);
+    let mut done = 0;
+    while done < n {
+        let count = batch.min(n - done);
+        stencil.team_with_power(parts, &mut buffers, power_slots, &|crew| {
+            for s in 0..count as usize {
+                for (j, pass) in passes.iter().enumerate() {
+                    let mut pass = *pass;
+                    pass.power = account.then_some(4 * s + j);
+                    crew.pass(&pass);
+                }
+            }
+        });
+        if account {
+            for s in 0..count as usize {
+                let p = |j| slot_power(stencil, power_slots, 4 * s + j);
+                // D_{n+1} = D_n + dt/6 (P1 + 2 P2 + 2 P3 + P4), as `step_fused` adds it.
+                let power = Power::default()
+                    .plus(1.0, p(0))
+                    .plus(2.0, p(1))
+                    .plus(2.0, p(2))
+                    .plus(1.0, p(3));
+                let mut d = Dissipated::default();
+                d.add_power(sixth, power);
+                step_dissipated.push(d.summed());
             }
         }
-    });
+        done += count;
+    }
     work.projected = true;
     state.history_valid = false;
     Some(4 * n)

@@ -31,7 +31,8 @@
 
 use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, one_evaluation};
-use crate::physics::integrators::{explicit_step, Workspace, after, fused, one_pass_step, power_if, team};
+use crate::physics::energy::{Dissipated, Power};
+use crate::physics::integrators::{explicit_step, Workspace, after, fused, one_pass_step, power_if, slot_power, steps_per_team, team};
 use crate::physics::particles::State;
 use crate::physics::stencil::{Pass, Stencil, TeamUpdate, Update};
 
@@ -76,10 +77,12 @@ pub(super) fn step_fused(
 /// `n` steps in one call on a lattice, the same numbers bit for bit as `n` calls of `step`:
 /// on a small lattice (at most 256 particles, no colliders, no projection) the stencil keeps
 /// the particles in its own layout between the steps
-/// ([`Stencil::semi_implicit_euler_steps`]); on a lattice large enough for several threads they
-/// run all `n` steps as one team, alternating between the state and the stage buffers
-/// ([`Stencil::team`]). `None`, having done nothing, where neither applies: no lattice, the
-/// textbook loop asked for, energy accounting, or one thread.
+/// ([`Stencil::semi_implicit_euler_steps_with_power`]); on a lattice large enough for several
+/// threads they run all `n` steps as one team, alternating between the state and the stage
+/// buffers ([`Stencil::team_with_power`]). With energy accounting each step's pass also
+/// writes its dissipated power at `(x_n, v_n)`, and `work.step_dissipated` receives
+/// `dt P(x_n, v_n)` per step, as `step` adds it. `None`, having done nothing, where neither
+/// applies: no lattice, the textbook loop asked for, or one thread.
 pub(super) fn steps(
     model: &Model,
     state: &mut State,
@@ -87,17 +90,42 @@ pub(super) fn steps(
     work: &mut Workspace,
     n: u64,
 ) -> Option<u64> {
-    let stencil = fused(model, work).filter(|_| !work.account)?;
+    let stencil = fused(model, work)?;
     let dynamics = model.dynamics(true);
-    if work.projection.is_none()
-        && stencil.semi_implicit_euler_steps(&mut state.x, &mut state.v, &dynamics, dt, n)
-    {
-        state.history_valid = false;
-        return Some(n);
+    let account = work.account;
+    let per_step = |p: Power| {
+        // D_{n+1} = D_n + dt P(x_n, v_n), as `step` adds it.
+        let mut d = Dissipated::default();
+        d.add_power(dt, p);
+        d.summed()
+    };
+    if work.projection.is_none() {
+        work.step_powers.clear();
+        let powers = account.then_some(&mut work.step_powers);
+        if stencil.semi_implicit_euler_steps_with_power(
+            &mut state.x,
+            &mut state.v,
+            &dynamics,
+            dt,
+            n,
+            powers,
+        ) {
+            let dissipated = work.step_powers.iter().map(|&(dampers_and_drag, contact)| {
+                per_step(Power {
+                    dampers_and_drag,
+                    contact,
+                })
+            });
+            work.step_dissipated.extend(dissipated);
+            state.history_valid = false;
+            return Some(n);
+        }
     }
     let (stencil, parts) = team(model, work)?;
-    // Buffers 0, 1: the state; 2, 3: the stage. Step s reads one pair and writes the other.
-    let pass = |s: u64| {
+    let batch = steps_per_team(stencil, account, 1, n);
+    // Buffers 0, 1: the state; 2, 3: the stage. Step s reads one pair and writes the other;
+    // with accounting its power goes to slot s of the batch.
+    let pass = |s: u64, slot: usize| {
         let (from, to) = if s.is_multiple_of(2) { (0, 2) } else { (2, 0) };
         Pass {
             x: from,
@@ -106,23 +134,46 @@ pub(super) fn steps(
             dynamics,
             update: TeamUpdate::SemiImplicitEuler { dt },
             after: after(&work.projection),
+            power: account.then_some(slot),
         }
     };
-    let (x_new, v_new) = (&mut work.x_stage, &mut work.v_stage);
+    let Workspace {
+        x_stage,
+        v_stage,
+        power_slots,
+        step_dissipated,
+        ..
+    } = work;
+    let slots = if account {
+        stencil.power_len() * batch as usize
+    } else {
+        0
+    };
+    power_slots.resize(slots, 0.0);
     let mut buffers = [
         &mut state.x[..],
         &mut state.v[..],
-        &mut x_new[..],
-        &mut v_new[..],
+        &mut x_stage[..],
+        &mut v_stage[..],
     ];
-    stencil.team(parts, &mut buffers, &|crew| {
-        for s in 0..n {
-            crew.pass(&pass(s));
+    let mut done = 0;
+    while done < n {
+        let count = batch.min(n - done);
+        stencil.team_with_power(parts, &mut buffers, power_slots, &|crew| {
+            for s in done..done + count {
+                crew.pass(&pass(s, (s - done) as usize));
+            }
+        });
+        if account {
+            for k in 0..count as usize {
+                step_dissipated.push(per_step(slot_power(stencil, power_slots, k)));
+            }
         }
-    });
+        done += count;
+    }
     if !n.is_multiple_of(2) {
-        std::mem::swap(&mut state.x, x_new);
-        std::mem::swap(&mut state.v, v_new);
+        std::mem::swap(&mut state.x, x_stage);
+        std::mem::swap(&mut state.v, v_stage);
     }
     work.projected = true;
     state.history_valid = false;

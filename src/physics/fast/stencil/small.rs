@@ -20,8 +20,11 @@
 //! that offset). These are the operations of the streaming loop with
 //! [`Update::SemiImplicitEuler`], with the same kernels, in the same order, so the numbers are
 //! the same bit for bit as that many single steps (tested). Only for small lattices without
-//! colliders, dissipated-power accounting or per-step projections (see
-//! [`Stencil::semi_implicit_euler_steps`]).
+//! colliders or per-step projections (see [`Stencil::semi_implicit_euler_steps`]). With energy
+//! accounting ([`Stencil::semi_implicit_euler_steps_with_power`]) pass 1 also keeps each chunk's
+//! damper power and pass 2 adds the drag, into one step's power buffer as the streaming loop
+//! writes it, summed after each step (the same bits; the one-pass AVX-512 loop below does not
+//! compute power, so such calls take the two passes).
 //!
 //! # One pass per step (AVX-512, at most six offset groups)
 //!
@@ -89,6 +92,12 @@ pub(super) struct SmallScratch {
     plus: [Vec<f64>; 3],
     /// Per group: its springs' forces, after `δ` zeros (N), three components.
     forces: Vec<[Vec<f64>; 3]>,
+    /// `spring_power[c]`: the dampers' power of the springs starting in chunk `c` (W).
+    spring_power: Vec<f64>,
+    /// One step's power buffer, as [`Stencil::write`] fills it (W).
+    power: Vec<f64>,
+    /// Each step's `(dampers and drag, contact)` power (W), when asked.
+    powers: Vec<(f64, f64)>,
 }
 
 thread_local! {
@@ -114,6 +123,25 @@ impl Stencil {
         dt: f64,
         steps: u64,
     ) -> bool {
+        self.semi_implicit_euler_steps_with_power(x, v, dynamics, dt, steps, None)
+    }
+
+    /// [`Stencil::semi_implicit_euler_steps`], and, when `powers` is given, the dissipated
+    /// power at the start of each step appended to it: `(dampers and drag, contact)` (W), the
+    /// values [`Stencil::sum_power`] gives for the power buffer [`Stencil::write`] fills in the
+    /// same step (the same bits: the same chunk values, summed in the same order).
+    ///
+    /// # Panics
+    /// If a slice is shorter than the stencil's particle count.
+    pub fn semi_implicit_euler_steps_with_power(
+        &self,
+        x: &mut [DVec3],
+        v: &mut [DVec3],
+        dynamics: &Dynamics,
+        dt: f64,
+        steps: u64,
+        powers: Option<&mut Vec<(f64, f64)>>,
+    ) -> bool {
         let n = self.particles;
         if n > SMALL_PARTICLES || !dynamics.colliders.is_empty() {
             return false;
@@ -126,35 +154,57 @@ impl Stencil {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `with_kernel` and `Kernel::best` only choose `Avx512` on a CPU that supports
         // AVX-512F.
-        if self.kernel == Kernel::Avx512 && unsafe { fused_steps(self, dynamics, x, v, dt, steps) }
+        if powers.is_none()
+            && self.kernel == Kernel::Avx512
+            && unsafe { fused_steps(self, dynamics, x, v, dt, steps) }
         {
             return true;
         }
         SMALL.with(|s| {
             let s = &mut *s.borrow_mut();
             s.load(self, x, v);
-            match self.kernel {
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: `with_kernel` and `Kernel::best` only choose `Avx512` on a CPU that
-                // supports AVX-512F.
-                Kernel::Avx512 => unsafe { steps_avx512(self, s, dynamics, dt, steps) },
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: as above, AVX2.
-                Kernel::Avx2 => unsafe { steps_avx2(self, s, dynamics, dt, steps) },
-                _ => small_body::<Plain>(
-                    self,
-                    s,
-                    dynamics,
-                    dt,
-                    steps,
-                    #[inline(always)]
-                    #[allow(clippy::redundant_closure)]
-                    |g, first, w, i, p| springs_exact::<Plain>(g, first, w, i, p),
-                ),
+            match powers {
+                None => small_steps::<false>(self, s, dynamics, dt, steps),
+                Some(powers) => {
+                    s.power.clear();
+                    s.power.resize(self.power_len(), 0.0);
+                    s.powers = std::mem::take(powers);
+                    small_steps::<true>(self, s, dynamics, dt, steps);
+                    *powers = std::mem::take(&mut s.powers);
+                }
             }
             s.store(x, v);
         });
         true
+    }
+}
+
+/// `steps` steps of `small_body` with the kernel of the stencil's instruction set.
+fn small_steps<const POWER: bool>(
+    st: &Stencil,
+    s: &mut SmallScratch,
+    dynamics: &Dynamics,
+    dt: f64,
+    steps: u64,
+) {
+    match st.kernel {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `with_kernel` and `Kernel::best` only choose `Avx512` on a CPU that
+        // supports AVX-512F.
+        Kernel::Avx512 => unsafe { steps_avx512::<POWER>(st, s, dynamics, dt, steps) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as above, AVX2.
+        Kernel::Avx2 => unsafe { steps_avx2::<POWER>(st, s, dynamics, dt, steps) },
+        _ => small_body::<Plain, POWER>(
+            st,
+            s,
+            dynamics,
+            dt,
+            steps,
+            #[inline(always)]
+            #[allow(clippy::redundant_closure)]
+            |g, first, w, i, p| springs_exact::<Plain>(g, first, w, i, p),
+        ),
     }
 }
 
@@ -196,8 +246,14 @@ impl SmallScratch {
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn steps_avx512(st: &Stencil, s: &mut SmallScratch, d: &Dynamics, dt: f64, steps: u64) {
-    small_body::<Avx512>(
+fn steps_avx512<const POWER: bool>(
+    st: &Stencil,
+    s: &mut SmallScratch,
+    d: &Dynamics,
+    dt: f64,
+    steps: u64,
+) {
+    small_body::<Avx512, POWER>(
         st,
         s,
         d,
@@ -214,8 +270,14 @@ fn steps_avx512(st: &Stencil, s: &mut SmallScratch, d: &Dynamics, dt: f64, steps
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn steps_avx2(st: &Stencil, s: &mut SmallScratch, d: &Dynamics, dt: f64, steps: u64) {
-    small_body::<Avx2>(
+fn steps_avx2<const POWER: bool>(
+    st: &Stencil,
+    s: &mut SmallScratch,
+    d: &Dynamics,
+    dt: f64,
+    steps: u64,
+) {
+    small_body::<Avx2, POWER>(
         st,
         s,
         d,
@@ -228,9 +290,12 @@ fn steps_avx2(st: &Stencil, s: &mut SmallScratch, d: &Dynamics, dt: f64, steps: 
 }
 
 /// The steps of the module docs, with `springs` computing each chunk of springs (as in
-/// `range_body`, whose `i` is `p` here: the window starts at particle 0).
+/// `range_body`, whose `i` is `p` here: the window starts at particle 0); with `POWER`, each
+/// step's dissipated power too, chunk by chunk as `range_body` computes it (the dampers of the
+/// springs starting in the chunk, group by group, then the drag of its free particles; no
+/// contact: a small lattice here has no colliders), summed by [`Stencil::sum_power`].
 #[inline(always)]
-fn small_body<V: Lanes>(
+fn small_body<V: Lanes, const POWER: bool>(
     st: &Stencil,
     s: &mut SmallScratch,
     d: &Dynamics,
@@ -244,7 +309,14 @@ fn small_body<V: Lanes>(
         v: vs,
         plus,
         forces,
+        spring_power,
+        power: power_buffer,
+        powers,
     } = s;
+    if POWER {
+        spring_power.clear();
+        spring_power.resize(n.next_multiple_of(LANES), 0.0);
+    }
     let dt_lanes = V::splat(dt);
     for _ in 0..steps {
         // Pass 1: every spring once, into its group's array, and the sums `plus`.
@@ -256,19 +328,26 @@ fn small_body<V: Lanes>(
             for p in (0..n).step_by(LANES) {
                 let first = w.first_ends::<V>(p);
                 let mut sum = [V::zero(); 3];
+                let mut power = V::zero();
                 for (g, out) in st.groups.iter().zip(forces.iter_mut()) {
                     if p >= g.starts {
                         // The groups a chunk has are a prefix of the list.
                         break;
                     }
-                    let (f, _) = springs(g, &first, &w, p, p);
+                    let (f, pw) = springs(g, &first, &w, p, p);
                     for ((part, total), values) in f.into_iter().zip(&mut sum).zip(out) {
                         part.store(chunk_mut(values, g.delta + p));
                         *total = total.add(part);
                     }
+                    if POWER {
+                        power = power.add(pw);
+                    }
                 }
                 for (total, values) in sum.into_iter().zip(plus.iter_mut()) {
                     total.store(chunk_mut(values, p));
+                }
+                if POWER {
+                    power.store(chunk_mut(spring_power, p));
                 }
             }
         }
@@ -299,6 +378,22 @@ fn small_body<V: Lanes>(
             let m = load_padded::<V>(d.mass, q, count);
             let f = weight_drag_springs(m, d.gravity, d.drag, v, sum);
             let w = load_padded::<V>(d.inv_mass, q, count);
+            if POWER {
+                // As `passes::finish`: the drag c |v|² of the free particles added to the
+                // dampers; the contact power is zero.
+                let drag = if d.drag == 0.0 {
+                    V::zero()
+                } else {
+                    let free = V::zero().less_than(w);
+                    let v2 = v[0].mul(v[0]).add(v[1].mul(v[1])).add(v[2].mul(v[2]));
+                    V::splat(d.drag).mul(v2).select(free)
+                };
+                let (dampers, contact) = power_buffer[2 * q..2 * q + 2 * LANES].split_at_mut(LANES);
+                V::load(lanes(spring_power, q))
+                    .add(drag)
+                    .store(dampers.try_into().expect("a chunk"));
+                V::zero().store(contact.try_into().expect("a chunk"));
+            }
             let a = [f[0].mul(w), f[1].mul(w), f[2].mul(w)];
             let (x_new, v_new) = semi_implicit_euler(x, v, a, dt_lanes);
             // Past the last particle the window stays zero, as the streaming loop's.
@@ -309,6 +404,9 @@ fn small_body<V: Lanes>(
             for (new, values) in v_new.into_iter().zip(vs.iter_mut()) {
                 new.select(keep).store(chunk_mut(values, q));
             }
+        }
+        if POWER {
+            powers.push(Stencil::sum_power(power_buffer));
         }
     }
 }

@@ -22,6 +22,12 @@
 //! [`Stencil::write`] computes it with the same split, whichever thread runs it; so `n` steps in
 //! a team are bit for bit `n` single steps, for any number of parts and threads (tested).
 //!
+//! **Dissipated power.** A pass may name a slot of the team's power buffer
+//! ([`Stencil::team_with_power`], [`Pass::power`]): each part writes its piece of the slot as
+//! [`Stencil::write_in_parts`] cuts its power buffer, so [`Stencil::sum_power`] of the slot is
+//! the pass's power bit for bit. The slots are summed after the team, so they are never read
+//! while it runs (energy accounting in many steps at once, `Simulation::advance`).
+//!
 //! **Stealing.** Every thread of the team has a home part, which it claims first in every pass
 //! (so a part's particles stay in one core's cache from pass to pass). A thread that has
 //! finished its part and finds another part of the pass still unclaimed after a few
@@ -77,6 +83,10 @@ pub struct Pass<'a> {
     pub update: TeamUpdate,
     /// Applied to each tile's new positions and velocities.
     pub after: Option<After<'a>>,
+    /// Where the pass writes its dissipated power: slot `k` of the power buffer of
+    /// [`Stencil::team_with_power`] (values `k · power_len ..` of it, as [`Stencil::write`]
+    /// writes its power buffer, for [`Stencil::sum_power`]); `None` computes none.
+    pub power: Option<usize>,
 }
 
 /// [`Update`] with buffers named by index (see [`Pass`]).
@@ -137,6 +147,14 @@ struct Shared {
 #[derive(Default)]
 struct Padded(AtomicU64);
 
+/// The team's power buffer: a pointer and a length, valid while [`Stencil::team_with_power`]
+/// runs (it holds the exclusive borrow).
+#[derive(Clone, Copy)]
+struct SharedPower {
+    ptr: *mut f64,
+    len: usize,
+}
+
 /// The team's shared state: the stencil, the split, the buffers and the counters.
 struct Common<'b> {
     stencil: &'b Stencil,
@@ -147,6 +165,8 @@ struct Common<'b> {
     homes: usize,
     buffers: [Shared; MAX_BUFFERS],
     count: usize,
+    /// The power slots (each [`Stencil::power_len`] values).
+    power: SharedPower,
     /// `claimed[k]`: passes of part `k` some thread has taken.
     claimed: [Padded; MAX_PARTS],
     /// `done[k]`: passes of part `k` finished.
@@ -219,9 +239,26 @@ impl Common<'_> {
             after: pass.after,
         };
         output.check(n);
+        // The part's piece of the pass's power slot, as `Stencil::write_in_parts` cuts it:
+        // two values per particle from 2 q0, the last part to the end of the slot (padding).
+        let power: &mut [f64] = match pass.power {
+            Some(slot) => {
+                let len = self.stencil.power_len();
+                let end = if k + 1 == self.parts { len } else { 2 * q1 };
+                // SAFETY: as above; `Crew::pass` checked that the slot is inside the buffer,
+                // and the parts' pieces of a slot are disjoint.
+                unsafe {
+                    std::slice::from_raw_parts_mut(
+                        self.power.ptr.add(slot * len + 2 * q0),
+                        end - 2 * q0,
+                    )
+                }
+            }
+            None => &mut [],
+        };
         let mut part = Part {
             outs: pass.outs.map(piece),
-            power: &mut [],
+            power,
         };
         let (x, v) = (&read(pass.x)[..n], &read(pass.v)[..n]);
         SCRATCH.with(|scratch| {
@@ -272,6 +309,12 @@ impl Crew<'_> {
         for r in [pass.x, pass.v].into_iter().chain(pass.update.reads()) {
             assert!(r < c.count, "no buffer {r}");
             assert!(!outs.contains(&Some(r)), "a pass reads its own output {r}");
+        }
+        if let Some(slot) = pass.power {
+            assert!(
+                (slot + 1) * c.stencil.power_len() <= c.power.len,
+                "no power slot {slot}"
+            );
         }
         let s = self.passes.get();
         self.passes.set(s + 1);
@@ -338,6 +381,23 @@ impl Stencil {
     /// If there are more than [`MAX_BUFFERS`] buffers, one is shorter than the particle count,
     /// or `body` panics.
     pub fn team(&self, parts: usize, buffers: &mut [&mut [DVec3]], body: &(dyn Fn(&Crew) + Sync)) {
+        self.team_with_power(parts, buffers, &mut [], body);
+    }
+
+    /// [`Stencil::team`] with a power buffer of whole slots of [`Stencil::power_len`] values:
+    /// a pass with [`Pass::power`] `Some(k)` writes its dissipated power into slot `k`, the same
+    /// values [`Stencil::write`] writes into its power buffer (so [`Stencil::sum_power`] of a
+    /// slot is the pass's power, bit for bit).
+    ///
+    /// # Panics
+    /// As [`Stencil::team`]; also when a pass names a slot past the end of `power`.
+    pub fn team_with_power(
+        &self,
+        parts: usize,
+        buffers: &mut [&mut [DVec3]],
+        power: &mut [f64],
+        body: &(dyn Fn(&Crew) + Sync),
+    ) {
         let parts = parts.clamp(1, MAX_PARTS);
         assert!(buffers.len() <= MAX_BUFFERS, "too many buffers");
         assert!(
@@ -363,6 +423,10 @@ impl Stencil {
             homes,
             buffers: shared,
             count: buffers.len(),
+            power: SharedPower {
+                ptr: power.as_mut_ptr(),
+                len: power.len(),
+            },
             claimed: std::array::from_fn(|_| Padded::default()),
             done: std::array::from_fn(|_| Padded::default()),
             abort: AtomicBool::new(false),
