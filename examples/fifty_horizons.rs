@@ -2,7 +2,7 @@
 //! a run of the whole scene 50 horizons long at 95 % of that limit must not break (no
 //! divergence, no energy that keeps rising above ten times the scene's energy scale).
 //!
-//! `cargo run --release --example fifty_horizons -- cube-plane [--set key=value ...]`
+//! `cargo run --release --features harness --example fifty_horizons -- cube-plane [--set key=value ...]`
 use springlab::study::stability::{
     StabilityOptions, confirm_steps, energy_scale, load_scene, stability,
 };

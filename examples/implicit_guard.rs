@@ -10,7 +10,7 @@
 //!   each step's energy rises by about a joule that the next steps take out (see `simulation.rs`,
 //!   "Implicit Euler's energy guard").
 //!
-//! `cargo run --release --example implicit_guard [ROUNDS | --rest [SECONDS]]`
+//! `cargo run --release --features harness --example implicit_guard [ROUNDS | --rest [SECONDS]]`
 use std::time::Instant;
 
 use springlab::physics::Method;

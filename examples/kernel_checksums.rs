@@ -1,5 +1,5 @@
 //! Checksums of the lattice workloads with every stencil kernel this CPU has, and their largest
-//! relative deviation from the C++ reference: `cargo run --release --example kernel_checksums`.
+//! relative deviation from the C++ reference: `cargo run --release --features harness --example kernel_checksums`.
 use springlab::bench::{Run, Workload, setup};
 use springlab::physics::stencil::Kernel;
 

@@ -3,7 +3,7 @@
 //! the median, plus the main thread's CPU time (`CLOCK_THREAD_CPUTIME_ID`, Linux x86-64), which
 //! time slicing by other processes does not inflate.
 //!
-//! `cargo run --release --example perf_ab [workload ...] [--rounds N] [--ms M]`
+//! `cargo run --release --features harness --example perf_ab [workload ...] [--rounds N] [--ms M]`
 use std::time::Instant;
 
 use springlab::bench::{Run, Workload, setup};

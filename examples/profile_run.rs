@@ -1,4 +1,5 @@
 //! Steps one workload for profiling:
+//! `cargo build --release --features harness --example profile_run`, then
 //! `perf record target/release/examples/profile_run <workload> [steps]`.
 use springlab::bench::{Run, Workload};
 

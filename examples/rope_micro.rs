@@ -1,7 +1,7 @@
 //! CPU time per call of `accelerations` (stencil and spring list), per semi-implicit Euler
 //! step taken one at a time (`Method::step`) and per step of 1000 taken in one call
 //! (`Method::steps`, the bench's path) on the 64-node rope of `rope-se`:
-//! `cargo run --release --example rope_micro`. Then the same `Method::steps` on a 16×16 cloth
+//! `cargo run --release --features harness --example rope_micro`. Then the same `Method::steps` on a 16×16 cloth
 //! (256 particles, the largest "small" lattice; four offset groups, δ = 1, 15, 16, 17).
 use glam::DVec3;
 use springlab::bench::{Workload, setup};

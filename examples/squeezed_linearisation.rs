@@ -3,7 +3,7 @@
 //! perturbations of the step map linearised there (contacts excluded, as in the study's linear
 //! test) at each dt, beside the same at the initial state at rest.
 //!
-//! `cargo run --release --example squeezed_linearisation -- jelly-bowl rk4 2.5e-3 1.6425 \
+//! `cargo run --release --features harness --example squeezed_linearisation -- jelly-bowl rk4 2.5e-3 1.6425 \
 //!  2.45e-3,2.65e-3,2.75e-3,2.84e-3`
 //!
 //! A rate that is the same at every dt is the motion's own (the squeezed lattice is not an

@@ -3,7 +3,7 @@
 //! limit (against that theory), the damped theory at the scene's stiffest state, and the scene
 //! limit (the whole scene confirmed by runs, against the theory at rest).
 //!
-//! `cargo run --release --example stability_table [SCENE ...] > table.md`
+//! `cargo run --release --features harness --example stability_table [SCENE ...] > table.md`
 use springlab::study::stability::{StabilityOptions, load_scene, stability};
 use springlab::study::theory::TheoryLimit;
 

@@ -1,7 +1,7 @@
 //! Time per call of the stencil force loop alone: CPU time on one thread, and the best wall
 //! time over many calls with the work split into 1 and 2 parts (threads), for tuning.
 //!
-//! `cargo run --release --example stencil_micro [case]`, cases: cloth16, cloth24, cloth32 and
+//! `cargo run --release --features harness --example stencil_micro [case]`, cases: cloth16, cloth24, cloth32 and
 //! the lattice workloads.
 use std::time::Instant;
 

@@ -4,7 +4,8 @@
 //! <target>/springlab-grade/                      the grader's cache (root's, read by no sandbox)
 //!     api-<digest>/libspringlab_homework.rlib    the student API, compiled once per API and rustc
 //!     programs/<digest>                          every program built, by content
-//! <scratch>/  (springlab-grade-<pid>-<random> in the temporary directory, removed at the end)
+//! <scratch>/  (springlab-grade-<pid>-<random> in the temporary directory, removed at the end;
+//!              a killed grader's is removed by the next grader: `stale.rs`)
 //!     toolchain/     the rustc sysroot, hard links, when the sandbox user cannot reach the real one
 //!     api/           the compiled API (read-only for the sandbox)
 //!     sub-<n>/crate/src/        a copy of submission n's src/ (regular files only), the grader's
@@ -23,6 +24,7 @@
 
 mod rustc;
 mod source;
+mod stale;
 mod toolchain;
 
 use std::ffi::OsString;
@@ -158,11 +160,15 @@ impl Builder {
         })?;
         let _ = std::fs::remove_file(&probe);
         let tag: String = super::token::random_tag();
-        let scratch =
-            std::env::temp_dir().join(format!("springlab-grade-{}-{tag}", std::process::id()));
+        let temp = std::env::temp_dir();
+        let scratch = temp.join(format!("{}{}-{tag}", stale::PREFIX, std::process::id()));
         std::fs::create_dir(&scratch)
             .and_then(|()| set_mode(&scratch, 0o711))
             .map_err(|e| format!("cannot make the scratch folder {}: {e}", scratch.display()))?;
+        // What killed graders left behind (their copies of sources and toolchain) goes first.
+        if let Ok(meta) = std::fs::metadata(&scratch) {
+            stale::sweep(&temp, std::os::unix::fs::MetadataExt::uid(&meta));
+        }
         if let Some(uid) = sandbox.uid(0)
             && !reachable_by(&scratch, uid, 0)
         {
