@@ -421,7 +421,7 @@ impl App {
         }
         let picture = self
             .charts
-            .next(run, screen, self.theme, self.graphics.cell, now);
+            .due(run, screen, self.theme, self.graphics.cell, now);
         if self.submitted == Some(key) && picture.is_none() {
             return false;
         }

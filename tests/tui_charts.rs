@@ -281,3 +281,36 @@ fn the_plots_without_a_picture_stay_braille() {
         .collect();
     assert!(title.contains("E (J)"), "{title}");
 }
+
+#[test]
+fn lesson_7s_convergence_picture_names_each_method_with_its_fitted_order() {
+    let run = LessonRun::new(lesson("speed-accuracy"), 0).expect("lesson 7 opens");
+    let d = data(&run, Theme::LIGHT);
+    let area = Rect::new(0, 0, 60, 20);
+    let p = d
+        .picture(&[Plot::Convergence], area, (8, 16))
+        .expect("a picture");
+    let c = &p.charts[0].0;
+    assert_eq!(c.x_scale, springlab::render::Scale::Log);
+    // "4 RK4 3.97": the key, the label and the order fitted by the study.
+    let rk4 = c
+        .series
+        .iter()
+        .find(|s| s.name.starts_with("4 RK4 "))
+        .expect("RK4's entry");
+    let order: f64 = rk4.name["4 RK4 ".len()..].parse().expect("an order");
+    assert!((order - 4.0).abs() < 0.2, "RK4's fitted order {order}");
+    let ee = c
+        .series
+        .iter()
+        .find(|s| s.name.starts_with("1 EE "))
+        .expect("explicit Euler's entry");
+    let order: f64 = ee.name["1 EE ".len()..].parse().expect("an order");
+    assert!(
+        (order - 1.0).abs() < 0.2,
+        "explicit Euler's fitted order {order}"
+    );
+    // The errors are the study's, on log axes: every point positive.
+    assert!(rk4.points.iter().all(|&(dt, e)| dt > 0.0 && e > 0.0));
+    assert!(c.series.iter().any(|s| s.name == "slopes 1 2 4"));
+}

@@ -36,7 +36,7 @@ impl ChartFeed {
     /// The picture to send with the next job when the lesson screen fills `screen`: `None`
     /// when nothing changed, when the last one is younger than [`PICTURE_PERIOD`] and the run
     /// goes on, or when no plot is drawn as a picture.
-    pub fn next(
+    pub fn due(
         &mut self,
         run: &LessonRun,
         screen: Rect,

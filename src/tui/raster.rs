@@ -299,11 +299,15 @@ impl std::fmt::Debug for Frame {
     }
 }
 
+/// What the encoder thread sends back for a job: the scene's frame and, when the job carried
+/// one, the plots' picture.
+type Encoded2 = (Result<Frame, String>, Option<Result<PictureFrame, String>>);
+
 /// The encoder thread and what is in flight.
 #[derive(Debug)]
 pub struct Encoder {
     jobs: SyncSender<Job>,
-    frames: Receiver<(Result<Frame, String>, Option<Result<PictureFrame, String>>)>,
+    frames: Receiver<Encoded2>,
     /// A job waiting for the encoder to be free (only the newest is kept).
     pending: Option<Job>,
     busy: bool,

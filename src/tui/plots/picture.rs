@@ -171,11 +171,23 @@ fn time_chart(plot: Plot, v: &View, columns: usize) -> Chart {
         _ => "error against the exact solution",
     };
     let y_label = tp.title.trim_end_matches(':');
+    // A chart under ~440 px wide: the two long energy names without their remark, which
+    // goes into the title.
+    let narrow = columns < 220;
+    let title = if narrow && plot == Plot::Energy && v.history.labels.len() <= 1 {
+        "energy (+D flat if exact)"
+    } else {
+        title
+    };
     let mut chart = Chart::new(title, "time t (s)", y_label);
     chart.x_range = Some((0.0, t_end));
     for c in tp.curves {
         let (upper, lower) = envelope(v.history, c.q, t_end, columns);
-        let mut s = Series::line(c.name, upper).with_colour(colour(c.colour, bg));
+        let name = match c.name.split_once(" (") {
+            Some((short, _)) if narrow && plot == Plot::Energy && c.q >= 4 => short.to_string(),
+            _ => c.name,
+        };
+        let mut s = Series::line(name, upper).with_colour(colour(c.colour, bg));
         if !lower.is_empty() {
             // A min / max envelope: the band between the two, the line on its top.
             s = s.with_band(lower);
@@ -222,10 +234,11 @@ fn exact_chart(v: &View, columns: usize) -> Chart {
 fn study_chart(plot: Plot, v: &View) -> Chart {
     let bg = v.theme.background;
     let work = plot == Plot::WorkPrecision;
+    // Short legend entries (key, label, fitted order p), so that several share a row.
     let (title, x_label) = if work {
-        ("error vs work · grey: slopes 1 2 4", "force evaluations")
+        ("error vs work, order p", "force evaluations")
     } else {
-        ("error vs dt · grey: slopes 1 2 4", "time step dt (s)")
+        ("error vs dt, order p", "time step dt (s)")
     };
     let mut chart = Chart::new(title, x_label, "error (m)").log_log();
     let report = if work {
@@ -256,7 +269,7 @@ fn study_chart(plot: Plot, v: &View) -> Chart {
         let order = m
             .order
             .map_or_else(|| "—".to_string(), |o| format!("{o:.2}"));
-        let name = format!("{} {label} p = {order}", m.method.index() + 1);
+        let name = format!("{} {label} {order}", m.method.index() + 1);
         chart.series.push(
             Series::line(name, points)
                 .with_style(SeriesStyle::LineAndPoints)
@@ -279,7 +292,12 @@ fn study_chart(plot: Plot, v: &View) -> Chart {
             .filter(|&(_, y)| y >= lo.1)
             .collect();
         chart.series.push(Series {
-            name: String::new(),
+            // One legend entry for the three guides.
+            name: if p == 1.0 {
+                "slopes 1 2 4".into()
+            } else {
+                String::new()
+            },
             points: guide,
             style: SeriesStyle::Line,
             colour: Some(grey),
