@@ -19,6 +19,7 @@
 
 mod app_loop;
 mod app_view;
+pub mod chart_feed;
 pub mod export;
 pub mod graphics;
 pub mod halfblocks;
@@ -189,6 +190,8 @@ pub struct App {
     clear: bool,
     /// When the last raster job was sent.
     last_raster: Option<Instant>,
+    /// When the raster view last sent the plots as a picture.
+    charts: chart_feed::ChartFeed,
     /// Counts the lessons opened: a raster frame of an earlier one is never shown.
     opened: u64,
     /// In the event loop: lessons compute off the drawing thread (see `LessonRun::set_deferred`).
@@ -234,6 +237,7 @@ impl App {
             submitted: None,
             clear: false,
             last_raster: None,
+            charts: chart_feed::ChartFeed::default(),
             raster_fps: None,
             opened: 0,
             deferred: false,
@@ -409,13 +413,20 @@ impl App {
         {
             return false;
         }
-        let inner = lesson_view::scene_inner(run, Rect::new(0, 0, self.size.0, self.size.1));
+        let screen = Rect::new(0, 0, self.size.0, self.size.1);
+        let inner = lesson_view::scene_inner(run, screen);
         let key = (run.version(), inner);
-        if self.submitted == Some(key) || inner.width < 4 || inner.height < 2 {
+        let now = Instant::now();
+        if inner.width < 4
+            || inner.height < 2
+            || (run.is_running() && self.last_raster.is_some_and(|t| now - t < RASTER_FRAME))
+        {
             return false;
         }
-        let now = Instant::now();
-        if run.is_running() && self.last_raster.is_some_and(|t| now - t < RASTER_FRAME) {
+        let picture = self
+            .charts
+            .due(run, screen, self.theme, self.graphics.cell, now);
+        if self.submitted == Some(key) && picture.is_none() {
             return false;
         }
         self.last_raster = Some(now);
@@ -429,6 +440,7 @@ impl App {
             graphics: self.graphics,
             stamp: raster_stamp(self.opened, run.version()),
             full: !run.is_running(),
+            picture,
         });
         true
     }
@@ -514,6 +526,7 @@ impl App {
         self.clear = true;
         // A new run counts its versions from 0 again: forget the last lesson's frame.
         self.submitted = None;
+        self.charts.reset();
         self.opened += 1;
         if let Some(encoder) = &mut self.encoder {
             encoder.clear();
@@ -602,6 +615,7 @@ impl App {
             self.help = false;
             self.clear = true;
             self.submitted = None;
+            self.charts.reset();
             return;
         }
         if key.code == KeyCode::Char('?') && self.lesson().is_none_or(|r| r.chooser().is_none()) {
@@ -628,6 +642,7 @@ impl App {
                     };
                     self.clear = true;
                     self.submitted = None;
+                    self.charts.reset();
                     let note = if raster {
                         ""
                     } else {

@@ -56,6 +56,7 @@ mod study_convergence;
 mod study_stability;
 mod tui;
 mod tui_camera;
+mod tui_charts;
 mod tui_cli;
 mod tui_export;
 mod tui_raster;

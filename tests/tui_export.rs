@@ -1,5 +1,6 @@
 //! `e` in a lesson writes the scene pane's view as a PNG: same camera, same framing, at 1280
-//! pixels across and the pane's aspect ratio.
+//! pixels across and the pane's aspect ratio, the text overlay and the legend in bands above
+//! and below the picture (never over a body).
 
 use springlab::lesson;
 use springlab::tui::LessonRun;
@@ -23,6 +24,27 @@ fn read_png(path: &std::path::Path) -> (u32, u32, Vec<u8>) {
         other => panic!("unexpected PNG colour type {other:?}"),
     };
     (info.width, info.height, rgba)
+}
+
+/// The heights of the bands above and below an export of `run` at `size`.
+fn bands(run: &LessonRun, size: (u32, u32)) -> (u32, u32) {
+    use springlab::render::{Overlay, Renderer};
+    let r = Renderer::with_camera(
+        &run.sim().scene,
+        size.0,
+        size.1,
+        *run.camera(),
+        springlab::tui::raster::pane_style(run.spring_filter(), true),
+    );
+    r.caption_bands(&Overlay::of(run.sim()))
+}
+
+/// Rows `top .. top + height` of an RGBA image.
+fn crop_rows(img: &(u32, u32, Vec<u8>), top: u32, height: u32) -> (u32, u32, Vec<u8>) {
+    let w = img.0 as usize;
+    let start = top as usize * w * 4;
+    let end = start + height as usize * w * 4;
+    (img.0, height, img.2[start..end].to_vec())
 }
 
 /// The fraction of pixels (below the top fifth, where the export's text overlay sits) at which
@@ -86,9 +108,11 @@ fn export_writes_the_view_on_screen() {
     )
     .expect("export");
     assert_eq!(written, path);
-    let big = read_png(&path);
-    assert_eq!((big.0, big.1), export_size(2.0));
+    let whole = read_png(&path);
     assert_eq!(export_size(2.0), (1280, 640));
+    let (top, bottom) = bands(&run, export_size(2.0));
+    assert_eq!((whole.0, whole.1), (1280, 640 + top + bottom));
+    let big = crop_rows(&whole, top, 640);
     // The pane's own frame: a 160 × 80 image through the same camera.
     let draw = |camera: &springlab::render::Camera| {
         PaneRenderer::default().draw(
@@ -129,4 +153,49 @@ fn export_writes_the_view_on_screen() {
     )
     .expect_err("unwritable");
     assert!(err.starts_with("cannot write"), "{err}");
+}
+
+#[test]
+fn the_export_overlay_covers_no_body() {
+    // Lesson 1's rope: its pinned end sits in the top-left corner, where the overlay's box was.
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let rope = lesson::builtin()
+        .into_iter()
+        .flatten()
+        .find(|l| l.slug == "rope")
+        .expect("lesson 1");
+    let mut run = LessonRun::new(rope, 1).expect("step 2");
+    run.set_aspect(2.0);
+    let path = tmp.path().join("rope.png");
+    export_png(
+        run.sim(),
+        run.generation(),
+        run.camera(),
+        run.spring_filter(),
+        run.aspect(),
+        &path,
+    )
+    .expect("export");
+    let whole = read_png(&path);
+    let size = export_size(2.0);
+    let (top, bottom) = bands(&run, size);
+    assert!(top > 20 && bottom > 10, "bands {top} and {bottom} px");
+    // The picture between the bands is the pane's own frame, pixel for pixel: nothing of the
+    // overlay lies on it, so no body (whose projection is inside the picture) is covered.
+    let picture = crop_rows(&whole, top, size.1);
+    let pane = PaneRenderer::default().draw(
+        &run.sim().scene,
+        run.generation(),
+        run.camera(),
+        run.spring_filter(),
+        size,
+        None,
+    );
+    let same = springlab::tui::raster::to_image(&pane);
+    assert_eq!(picture.2, same.into_raw(), "the picture is untouched");
+    // The text is in the top band: dark pixels there.
+    let dark = (0..top as usize * whole.0 as usize)
+        .filter(|i| whole.2[4 * i] < 80 && whole.2[4 * i + 1] < 80)
+        .count();
+    assert!(dark > 200, "{dark} dark pixels of text above the picture");
 }

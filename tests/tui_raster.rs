@@ -213,14 +213,15 @@ fn kitty_transmits_the_exact_pixels_and_places_them_with_placeholders() {
         assert!(first.contains(&key), "{key} in {first:?}");
     }
     assert!(controls.last().expect("chunks").contains("m=0"));
-    // On exit the app deletes that image by its id.
+    // On exit the app deletes that image by its id (and the plots' picture, the next id).
     let id = first
         .iter()
         .find(|k| k.starts_with("i="))
         .expect("an image id");
+    let next: u32 = id[2..].parse::<u32>().expect("a number") + 1;
     assert_eq!(
         springlab::tui::raster::kitty_delete(false),
-        format!("\x1b_Ga=d,d=I,{id}\x1b\\")
+        format!("\x1b_Ga=d,d=I,{id}\x1b\\\x1b_Ga=d,d=I,i={next}\x1b\\")
     );
     let rgba = base64_decode(&payload);
     assert_eq!(rgba, known_image().into_raw(), "the pixels, bit for bit");
@@ -259,4 +260,66 @@ fn premultiplied_pixmaps_become_straight_alpha() {
     let image = to_image(&pixmap);
     assert_eq!(image.get_pixel(0, 0).0, [199, 100, 0, 128]);
     assert_eq!(image.get_pixel(1, 0).0, [10, 20, 30, 255]);
+}
+
+/// The rope of lesson 1 drawn in the raster pane at `w × h` pixels, with the renderer's
+/// default camera for that aspect.
+fn rope_pane(w: u32, h: u32) -> tiny_skia::Pixmap {
+    use springlab::render::{Camera, Projection};
+    use springlab::tui::pane::SpringFilter;
+    use springlab::tui::raster::PaneRenderer;
+    let scene = springlab::scene::load("rope", &[]).expect("the rope");
+    let camera = Camera::for_scene(&scene, f64::from(w) / f64::from(h), Projection::default());
+    PaneRenderer::default().draw(&scene, 0, &camera, SpringFilter::All, (w, h), None)
+}
+
+/// Coverage of colour `c` in pixel `p`: 1 for the colour itself, 0 for anything at least 120
+/// away in some channel, linear between (anti-aliased edges count in part).
+fn coverage(p: tiny_skia::PremultipliedColorU8, c: springlab::render::Colour) -> f64 {
+    let q = p.demultiply();
+    let d = [
+        (i32::from(q.red()) - i32::from(c.r)).abs(),
+        (i32::from(q.green()) - i32::from(c.g)).abs(),
+        (i32::from(q.blue()) - i32::from(c.b)).abs(),
+    ]
+    .into_iter()
+    .max()
+    .unwrap_or(0);
+    (1.0 - f64::from(d) / 120.0).max(0.0)
+}
+
+/// The rope's line width in pixels: per column crossed by the (near horizontal) rope the
+/// summed coverage of the struct-spring colour, the median over those columns.
+fn rope_width(p: &tiny_skia::Pixmap) -> f64 {
+    use springlab::render::colour::STRUCT;
+    let mut per_column: Vec<f64> = (0..p.width())
+        .map(|x| {
+            (0..p.height())
+                .map(|y| coverage(p.pixel(x, y).expect("pixel"), STRUCT))
+                .sum::<f64>()
+        })
+        .filter(|&s| s > 0.5)
+        .collect();
+    assert!(per_column.len() > 20, "the rope crosses the image");
+    per_column.sort_by(f64::total_cmp);
+    per_column[per_column.len() / 2]
+}
+
+#[test]
+fn the_rope_line_grows_with_the_pane_and_pins_are_marked() {
+    let small = rope_width(&rope_pane(420, 240));
+    let medium = rope_width(&rope_pane(560, 320));
+    let large = rope_width(&rope_pane(1120, 640));
+    // A typical raster pane (70 × 20 cells of 8 × 16 px): more than a hairline.
+    assert!(medium >= 2.0, "rope {medium:.2} px wide at 560 × 320");
+    assert!(small < medium && medium < large, "{small} {medium} {large}");
+    assert!(large > 1.6 * medium, "{medium} → {large}");
+    // Pinned particles: red squares; free ones: dark discs. Both there, told apart by colour.
+    use springlab::render::colour::{PARTICLE, PINNED};
+    let p = rope_pane(560, 320);
+    let pin: f64 = p.pixels().iter().map(|&q| coverage(q, PINNED)).sum();
+    let free: f64 = p.pixels().iter().map(|&q| coverage(q, PARTICLE)).sum();
+    // The marker is at least 5 × 5 px (a square of side ≥ 2 × 2.5 × line scale).
+    assert!(pin >= 25.0, "pin marker: {pin:.1} px");
+    assert!(free >= 9.0, "free particles: {free:.1} px");
 }

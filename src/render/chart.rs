@@ -148,6 +148,48 @@ pub struct Chart {
     pub x_range: Option<(f64, f64)>,
     /// Fixed y range `(lo, hi)` instead of one fitted to the data.
     pub y_range: Option<(f64, f64)>,
+    /// Background, text, grid and frame colours ([`Ink::LIGHT`] by default).
+    pub ink: Ink,
+}
+
+/// The colours of everything but the series: a chart on white paper or on a black terminal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Ink {
+    /// The image's background.
+    pub background: Colour,
+    /// Title, tick labels, axis labels and legend names.
+    pub text: Colour,
+    /// Grid lines at labelled ticks.
+    pub grid: Colour,
+    /// Grid lines at unlabelled (minor) ticks.
+    pub minor_grid: Colour,
+    /// The frame and the ticks.
+    pub axis: Colour,
+}
+
+impl Ink {
+    /// Dark text on white (the files the studies write).
+    pub const LIGHT: Ink = Ink {
+        background: Colour::rgb(255, 255, 255),
+        text: colour::TEXT,
+        grid: Colour::rgb(228, 231, 236),
+        minor_grid: Colour::rgb(242, 243, 246),
+        axis: Colour::rgb(70, 74, 82),
+    };
+    /// Light text on black (a dark terminal).
+    pub const DARK: Ink = Ink {
+        background: Colour::rgb(0, 0, 0),
+        text: Colour::rgb(225, 228, 234),
+        grid: Colour::rgb(52, 56, 64),
+        minor_grid: Colour::rgb(30, 32, 37),
+        axis: Colour::rgb(160, 165, 175),
+    };
+}
+
+impl Default for Ink {
+    fn default() -> Ink {
+        Ink::LIGHT
+    }
 }
 
 impl Chart {
@@ -209,6 +251,25 @@ pub fn save_png(chart: &Chart, path: &Path, width: u32, height: u32) -> Result<(
     export::save_png(&pixmap, path)
 }
 
+/// The plot rectangle of `chart` drawn at `width × height` (px): `(left, top, right, bottom)`,
+/// inside the title and legend rows above, the tick labels and axis labels below and left.
+#[must_use]
+pub fn plot_rect(chart: &Chart, width: u32, height: u32) -> (f32, f32, f32, f32) {
+    let m = Metrics::new(width as f32, height as f32, chart.ink);
+    let x_axis = make_axis(
+        data_range(chart, true, chart.x_scale),
+        chart.x_range,
+        chart.x_scale,
+    );
+    let y_axis = make_axis(
+        data_range(chart, false, chart.y_scale),
+        chart.y_range,
+        chart.y_scale,
+    );
+    let l = Layout::new(chart, &m, &x_axis, &y_axis);
+    (l.left, l.top, l.left + l.pw, l.top + l.ph)
+}
+
 /// Draws `chart` with the rasteriser settings `quality`: layout, title, grid with ticks and
 /// labels, the series clipped to the plot, the frame and the legend, in that order.
 ///
@@ -218,13 +279,13 @@ pub fn save_png(chart: &Chart, path: &Path, width: u32, height: u32) -> Result<(
 pub fn draw_with(chart: &Chart, width: u32, height: u32, quality: Quality) -> Pixmap {
     assert!(check_size(width, height).is_ok(), "chart size out of range");
     let mut pixmap = Pixmap::new(width, height).expect("size checked");
-    pixmap.fill(Colour::rgb(255, 255, 255).to_skia());
+    pixmap.fill(chart.ink.background.to_skia());
     let mut paint = Paint {
         anti_alias: quality.anti_alias,
         force_hq_pipeline: quality.force_hq_pipeline,
         ..Paint::default()
     };
-    let m = Metrics::new(width as f32, height as f32);
+    let m = Metrics::new(width as f32, height as f32, chart.ink);
     let x_axis = make_axis(
         data_range(chart, true, chart.x_scale),
         chart.x_range,
@@ -290,10 +351,12 @@ struct Metrics {
     pad: f32,
     /// Length of a major tick.
     tick: f32,
+    /// The colours.
+    ink: Ink,
 }
 
 impl Metrics {
-    fn new(w: f32, h: f32) -> Metrics {
+    fn new(w: f32, h: f32, ink: Ink) -> Metrics {
         let s = (w.min(h) / 480.0).max(0.5);
         let px = (h.min(w) / 32.0).clamp(10.0, 40.0).round();
         let title_px = (1.2 * px).round();
@@ -311,6 +374,7 @@ impl Metrics {
             t_descent,
             pad: 0.6 * px,
             tick: 0.4 * px,
+            ink,
         }
     }
 
@@ -415,10 +479,6 @@ impl Plot<'_> {
     }
 }
 
-const GRID: Colour = Colour::rgb(228, 231, 236);
-const MINOR_GRID: Colour = Colour::rgb(242, 243, 246);
-const AXIS_COLOUR: Colour = Colour::rgb(70, 74, 82);
-
 /// The colour of each series: its own, else the palette's in turn.
 fn series_colours(chart: &Chart) -> Vec<Colour> {
     chart
@@ -460,7 +520,7 @@ fn draw_title(pixmap: &mut Pixmap, chart: &Chart, m: &Metrics, layout: &Layout) 
             0.5 * (layout.left + layout.right),
             m.pad + m.t_ascent,
             m.title_px,
-            colour::TEXT,
+            m.ink.text,
             Align::Centre,
         );
     }
@@ -477,7 +537,7 @@ fn draw_x_ticks(pixmap: &mut Pixmap, paint: &mut Paint, m: &Metrics, plot: &Plot
         };
         let x = l.left + f as f32 * l.pw;
         let major = !t.label.is_empty() || axis.scale == Scale::Linear;
-        let g = if major { GRID } else { MINOR_GRID };
+        let g = if major { m.ink.grid } else { m.ink.minor_grid };
         stroke_line(pixmap, paint, pt(x, l.top), pt(x, l.bottom), m.s, g);
         let len = if major { m.tick } else { 0.5 * m.tick };
         stroke_line(
@@ -486,7 +546,7 @@ fn draw_x_ticks(pixmap: &mut Pixmap, paint: &mut Paint, m: &Metrics, plot: &Plot
             pt(x, l.bottom),
             pt(x, l.bottom + len),
             m.s,
-            AXIS_COLOUR,
+            m.ink.axis,
         );
         let half = 0.5 * text_width(&t.label, m.px);
         if !t.label.is_empty() && x - half >= last_x_label + 0.5 * m.px {
@@ -497,7 +557,7 @@ fn draw_x_ticks(pixmap: &mut Pixmap, paint: &mut Paint, m: &Metrics, plot: &Plot
                 x,
                 l.bottom + m.tick + m.ascent,
                 m.px,
-                colour::TEXT,
+                m.ink.text,
                 Align::Centre,
             );
         }
@@ -515,7 +575,7 @@ fn draw_y_ticks(pixmap: &mut Pixmap, paint: &mut Paint, m: &Metrics, plot: &Plot
         };
         let y = l.bottom - f as f32 * l.ph;
         let major = !t.label.is_empty() || axis.scale == Scale::Linear;
-        let g = if major { GRID } else { MINOR_GRID };
+        let g = if major { m.ink.grid } else { m.ink.minor_grid };
         stroke_line(pixmap, paint, pt(l.left, y), pt(l.right, y), m.s, g);
         let len = if major { m.tick } else { 0.5 * m.tick };
         stroke_line(
@@ -524,7 +584,7 @@ fn draw_y_ticks(pixmap: &mut Pixmap, paint: &mut Paint, m: &Metrics, plot: &Plot
             pt(l.left - len, y),
             pt(l.left, y),
             m.s,
-            AXIS_COLOUR,
+            m.ink.axis,
         );
         // Labels go upwards: the next one must end above this one's top.
         if !t.label.is_empty() && y + 0.5 * m.ascent <= last_y_label - 0.2 * m.px {
@@ -535,7 +595,7 @@ fn draw_y_ticks(pixmap: &mut Pixmap, paint: &mut Paint, m: &Metrics, plot: &Plot
                 l.left - m.tick - 0.3 * m.pad,
                 y + 0.35 * m.ascent,
                 m.px,
-                colour::TEXT,
+                m.ink.text,
                 Align::Right,
             );
         }
@@ -550,7 +610,7 @@ fn draw_axis_labels(pixmap: &mut Pixmap, chart: &Chart, m: &Metrics, layout: &La
             layout.left + 0.5 * layout.pw,
             m.h - m.pad - m.descent,
             m.px,
-            colour::TEXT,
+            m.ink.text,
             Align::Centre,
         );
     }
@@ -561,7 +621,7 @@ fn draw_axis_labels(pixmap: &mut Pixmap, chart: &Chart, m: &Metrics, layout: &La
             m.pad + m.ascent,
             layout.top + 0.5 * layout.ph,
             m.px,
-            colour::TEXT,
+            m.ink.text,
         );
     }
 }
@@ -569,7 +629,7 @@ fn draw_axis_labels(pixmap: &mut Pixmap, chart: &Chart, m: &Metrics, layout: &La
 /// The frame around the plot.
 fn draw_frame(pixmap: &mut Pixmap, paint: &mut Paint, m: &Metrics, layout: &Layout) {
     if let Some(rect) = Rect::from_xywh(layout.left, layout.top, layout.pw, layout.ph) {
-        paint.set_color(AXIS_COLOUR.to_skia());
+        paint.set_color(m.ink.axis.to_skia());
         let stroke = Stroke {
             width: m.s,
             ..Stroke::default()
@@ -626,7 +686,7 @@ fn draw_legend(
                 x + sample + 0.4 * px,
                 baseline,
                 px,
-                colour::TEXT,
+                m.ink.text,
                 Align::Left,
             );
             x += m.entry_width(series);

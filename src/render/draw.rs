@@ -455,7 +455,11 @@ impl Renderer {
                 colour = colour.with_alpha(110);
             }
             // Dense lattices: at most 1 px, which tiny-skia draws as a fast hairline.
-            let width = if many { width.min(1.0) * s } else { width * s };
+            let width = if many {
+                width.min(1.0) * s
+            } else {
+                width * s * self.style.line_weight
+            };
             occ.split_segment(x[a], x[b], |layer, wa, wb| {
                 let (ca, cb) = (view.to_camera(wa), view.to_camera(wb));
                 let Some((ca, cb)) = view.clip_segment(ca, cb) else {
@@ -499,7 +503,8 @@ impl Renderer {
             }
             let Some(q) = view.project(p) else { continue };
             let r = (geom.particle_radius * view.pixels_per_metre(q.depth)) as f32;
-            let r = r.clamp(1.2 * s, 5.0 * s);
+            let w = s * self.style.line_weight;
+            let r = r.clamp(1.2 * w, 5.0 * w);
             let c = point(q.x, q.y);
             items.push(Item {
                 layer: occ.layer(p),
@@ -508,7 +513,7 @@ impl Renderer {
                 shape: if pinned {
                     Shape::Pin {
                         c,
-                        r: r.max(2.5 * s),
+                        r: r.max(2.5 * w),
                     }
                 } else {
                     Shape::Disc {

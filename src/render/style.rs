@@ -100,6 +100,16 @@ pub struct Style {
     pub shadows: bool,
     /// Rasteriser settings.
     pub quality: Quality,
+    /// Extra thickness of the springs of bodies that are not dense lattices, of particle discs
+    /// and of pin markers (1: the files `springlab render` writes; the terminal's small panes
+    /// use [`Style::PANE_LINE_WEIGHT`], so a rope reads as a line and its pins as squares).
+    pub line_weight: f32,
+}
+
+impl Style {
+    /// The line weight of the terminal's scene pane: at the pane's typical 200–400 px height a
+    /// rope is 2–4 px wide (1 px at weight 1).
+    pub const PANE_LINE_WEIGHT: f32 = 2.5;
 }
 
 impl Default for Style {
@@ -117,6 +127,7 @@ impl Default for Style {
             overlay: true,
             shadows: true,
             quality: Quality::default(),
+            line_weight: 1.0,
         }
     }
 }

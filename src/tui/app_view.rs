@@ -35,6 +35,7 @@ impl Widget for &App {
                     buf,
                 );
                 self.canvas_area.set(canvas);
+                show_picture(self, run, area, buf);
                 super::homework_view::render(self, run, theme, canvas, buf);
             }
         }
@@ -47,6 +48,20 @@ impl Widget for &App {
 /// The stamp of a raster job: the lesson opened (`opened`, high bits) and the run's version.
 pub(super) fn raster_stamp(opened: u64, version: u64) -> u64 {
     (opened << 40) | (version & ((1 << 40) - 1))
+}
+
+/// In the raster view, the plots' picture over their braille drawing when it fits the screen
+/// as it is now (else the braille plots stay).
+fn show_picture(app: &App, run: &LessonRun, area: Rect, buf: &mut Buffer) {
+    if app.view != ViewMode::Raster || app.help {
+        return;
+    }
+    if let Some(p) = app.encoder.as_ref().and_then(Encoder::latest_picture)
+        && p.stamp >> 40 == app.opened
+        && super::chart_feed::area(run, area) == Some(p.area)
+    {
+        raster::show(&p.encoded, p.area, buf);
+    }
 }
 
 /// Draws the scene pane's content in the app's view.

@@ -2,7 +2,8 @@
 //!
 //! The file shows exactly what the pane shows: the same camera (so the same framing), at
 //! [`EXPORT_WIDTH`] pixels across and the pane's aspect ratio, with the text overlay (scene,
-//! method, dt, t, energy) in its top-left corner.
+//! method, dt, t, energy) in a band above the picture and the colour legend in a band below, so
+//! that neither covers a body.
 
 use std::path::{Path, PathBuf};
 

@@ -53,7 +53,10 @@ pub const LESSON_KEYS: &[(&str, &str)] = &[
     ),
     ("", "Predictions and charts"),
     ("1 – 6", "answer a prediction (before the run)"),
-    ("1 – 8", "show / hide a method in lesson 7's charts"),
+    (
+        "1 – 8 / x",
+        "show / hide a method in lesson 7's charts / x(t) vs exact: whole run",
+    ),
     (
         "+D",
         "energy plot: total + dissipated, flat for an exact method",

@@ -137,6 +137,23 @@ pub fn scene_inner(run: &LessonRun, area: Rect) -> Rect {
     ratatui::widgets::Block::bordered().inner(scene)
 }
 
+/// The plots shown and the plots' area when the lesson screen fills `area` (`None` without
+/// plots).
+#[must_use]
+pub fn plots_area(run: &LessonRun, area: Rect) -> Option<(Vec<Plot>, Rect)> {
+    let [_, body, _, _] = Layout::vertical([
+        Constraint::Length(1),
+        Constraint::Fill(1),
+        Constraint::Length(2),
+        Constraint::Length(1),
+    ])
+    .areas(area);
+    let [_, right] = columns(body);
+    let shown = shown_plots(run, right);
+    let (_, plot_area) = split_right(&shown, right);
+    plot_area.map(|a| (shown, a))
+}
+
 fn render_header(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
     let lesson = run.lesson();
     let bold = Style::new().add_modifier(Modifier::BOLD);

@@ -6,6 +6,7 @@
 
 mod axis;
 mod history;
+pub mod picture;
 mod series;
 mod study;
 
@@ -38,16 +39,7 @@ pub fn render(
     if plots.is_empty() || area.width == 0 {
         return;
     }
-    let count = plots.len() as u16;
-    let width = area.width / count;
-    for (i, plot) in plots.iter().enumerate() {
-        let i = i as u16;
-        let w = if i + 1 == count {
-            area.width - width * i
-        } else {
-            width
-        };
-        let rect = Rect::new(area.x + width * i, area.y, w, area.height);
+    for (plot, rect) in plots.iter().zip(picture::plot_rects(plots.len(), area)) {
         let view = View {
             history,
             oscillator,
@@ -57,6 +49,55 @@ pub fn render(
             theme,
         };
         render_one(*plot, &view, rect, buf);
+    }
+}
+
+/// What the plots draw from: the run's history, the oscillator, the studies, the methods shown
+/// (by index into [`Method::ALL`](crate::physics::Method::ALL)), the present time and the theme.
+#[derive(Clone, Copy)]
+pub struct Data<'a> {
+    /// The sampled run.
+    pub history: &'a History,
+    /// The oscillator and its exact motion, when the scene is one.
+    pub oscillator: Option<&'a Oscillator>,
+    /// Lesson 7's studies.
+    pub studies: &'a Studies,
+    /// The methods the study charts show.
+    pub shown: [bool; Method::COUNT],
+    /// Simulated time now (s).
+    pub now: f64,
+    /// The terminal's theme.
+    pub theme: Theme,
+}
+
+impl Data<'_> {
+    fn view(&self) -> View<'_> {
+        View {
+            history: self.history,
+            oscillator: self.oscillator,
+            studies: self.studies,
+            shown: self.shown,
+            now: self.now,
+            theme: self.theme,
+        }
+    }
+
+    /// The plots of `plots` in `area` that the raster view draws as a picture, `cell` pixels a
+    /// cell (see [`picture`]).
+    #[must_use]
+    pub fn picture(
+        &self,
+        plots: &[Plot],
+        area: Rect,
+        cell: (u16, u16),
+    ) -> Option<picture::Picture> {
+        picture::picture(plots, &self.view(), area, cell)
+    }
+
+    /// A number that changes when the picture of `plots` in `area` would.
+    #[must_use]
+    pub fn picture_key(&self, plots: &[Plot], area: Rect) -> u64 {
+        picture::key(plots, &self.view(), area)
     }
 }
 

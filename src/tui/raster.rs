@@ -7,6 +7,9 @@
 //! encoder:    PaneRenderer ──▶ Pixmap ──▶ image::RgbaImage ──ratatui-image──▶ sixel / kitty / iTerm2
 //!             ──Frame (channel)──▶ UI thread: drawn into the pane as one escape sequence
 //! ```
+//! A job may carry the plots as a picture ([`super::plots::picture`]): the encoder draws and
+//! encodes it after the scene, as a second image with its own cells (and kitty id).
+//!
 //! The encoder always takes the newest job and drops older ones, so the picture never lags the
 //! simulation by more than one frame; when drawing and encoding take longer than
 //! [`FRAME_BUDGET`], the next frames are drawn at a lower resolution and enlarged to the pane
@@ -28,6 +31,7 @@ use tiny_skia::Pixmap;
 
 use super::graphics::{Graphics, Protocol};
 use super::pane::SpringFilter;
+use super::plots::picture::Picture;
 use crate::physics::SpringKind;
 use crate::render::{Camera, KindToggles, MAX_SIDE, Renderer, Style};
 use crate::scene::Scene;
@@ -38,6 +42,9 @@ pub const FRAME_BUDGET: Duration = Duration::from_millis(33);
 
 /// The kitty image id of the pane (one image, replaced by every frame).
 const KITTY_ID: u32 = 0x0053_4c42;
+
+/// The kitty image id of the plots' picture.
+const KITTY_PLOTS_ID: u32 = KITTY_ID + 1;
 
 /// What decides a renderer's geometry: rebuilt when any of it changes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,6 +60,18 @@ struct Key {
 #[derive(Debug, Default)]
 pub struct PaneRenderer {
     cached: Option<(Key, Renderer)>,
+}
+
+/// The line weight of a `height` px high picture of the pane: [`Style::PANE_LINE_WEIGHT`] from
+/// 160 px up (the raster view, the export), 1 below (the half-block view's few pixels, where a
+/// 1 px line is already half a cell).
+#[must_use]
+pub fn pane_line_weight(height: u32) -> f32 {
+    if height >= 160 {
+        Style::PANE_LINE_WEIGHT
+    } else {
+        1.0
+    }
 }
 
 /// The style of the terminal's frames: springs by `filter`, no overlay unless `overlay`.
@@ -71,7 +90,9 @@ pub fn pane_style(filter: SpringFilter, overlay: bool) -> Style {
 impl PaneRenderer {
     /// Draws `scene` seen by `camera` on a `width × height` image (each side clamped to
     /// 1 … [`MAX_SIDE`]). `generation` names the scene's structure: the renderer's geometry
-    /// (surfaces, bowls) is rebuilt when it changes. Small images get thicker lines.
+    /// (surfaces, bowls) is rebuilt when it changes. Small images get thicker lines. With
+    /// `overlay` the image is taller: the overlay's bands above and below
+    /// ([`Renderer::draw_captioned`]).
     pub fn draw(
         &mut self,
         scene: &Scene,
@@ -94,7 +115,10 @@ impl PaneRenderer {
                 key.width,
                 key.height,
                 *camera,
-                pane_style(filter, overlay.is_some()),
+                Style {
+                    line_weight: pane_line_weight(key.height),
+                    ..pane_style(filter, overlay.is_some())
+                },
             );
             // A line at least ~1.2 px wide at any size.
             r.set_min_line_scale(0.6 * (120.0 / key.height as f32).clamp(0.3, 1.0));
@@ -103,7 +127,11 @@ impl PaneRenderer {
         let (_, r) = self.cached.as_mut().expect("set above");
         r.camera = *camera;
         r.refit_floors(scene);
-        r.draw(scene, overlay)
+        match overlay {
+            // The overlay in bands above and below the picture (the export), never on it.
+            Some(o) => r.draw_captioned(scene, o),
+            None => r.draw(scene, None),
+        }
     }
 }
 
@@ -128,6 +156,17 @@ pub fn encode(
     cells: Size,
     tmux_wrap: bool,
 ) -> Result<Encoded, String> {
+    encode_as(image, protocol, cells, tmux_wrap, KITTY_ID)
+}
+
+/// [`encode`] with the kitty image id `id`.
+fn encode_as(
+    image: RgbaImage,
+    protocol: Protocol,
+    cells: Size,
+    tmux_wrap: bool,
+    id: u32,
+) -> Result<Encoded, String> {
     match protocol {
         Protocol::Sixel => sixel(&image, cells, tmux_wrap).map(|data| {
             Encoded::Sixel(Sixel {
@@ -136,15 +175,9 @@ pub fn encode(
                 is_tmux: tmux_wrap,
             })
         }),
-        Protocol::Kitty => Kitty::new(
-            DynamicImage::ImageRgba8(image),
-            cells,
-            KITTY_ID,
-            tmux_wrap,
-            false,
-        )
-        .map(Encoded::Kitty)
-        .map_err(|e| e.to_string()),
+        Protocol::Kitty => Kitty::new(DynamicImage::ImageRgba8(image), cells, id, tmux_wrap, false)
+            .map(Encoded::Kitty)
+            .map_err(|e| e.to_string()),
         Protocol::Iterm2 => Iterm2::new(DynamicImage::ImageRgba8(image), cells, tmux_wrap)
             .map(Encoded::ITerm2)
             .map_err(|e| e.to_string()),
@@ -184,7 +217,14 @@ fn sixel(image: &RgbaImage, cells: Size, tmux_wrap: bool) -> Result<String, Stri
 /// on exit), wrapped for tmux when `tmux_wrap`.
 #[must_use]
 pub fn kitty_delete(tmux_wrap: bool) -> String {
-    super::graphics::wrap(&format!("\x1b_Ga=d,d=I,i={KITTY_ID}\x1b\\"), tmux_wrap)
+    let mut out = String::new();
+    for id in [KITTY_ID, KITTY_PLOTS_ID] {
+        out.push_str(&super::graphics::wrap(
+            &format!("\x1b_Ga=d,d=I,i={id}\x1b\\"),
+            tmux_wrap,
+        ));
+    }
+    out
 }
 
 /// Draws an encoded frame into `area` (its top-left corner; the frame covers its own cells).
@@ -211,6 +251,27 @@ pub struct Job {
     pub stamp: u64,
     /// Draw at full resolution whatever the last frames took (the simulation is paused).
     pub full: bool,
+    /// The plots to draw as a second image, when they changed.
+    pub picture: Option<Picture>,
+}
+
+/// The plots' picture, drawn and encoded.
+pub struct PictureFrame {
+    /// The encoded image.
+    pub encoded: Encoded,
+    /// The cells it covers.
+    pub area: Rect,
+    /// The stamp of the job that carried it.
+    pub stamp: u64,
+}
+
+impl std::fmt::Debug for PictureFrame {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PictureFrame")
+            .field("area", &self.area)
+            .field("stamp", &self.stamp)
+            .finish_non_exhaustive()
+    }
 }
 
 /// A drawn and encoded frame.
@@ -238,15 +299,21 @@ impl std::fmt::Debug for Frame {
     }
 }
 
+/// What the encoder thread sends back for a job: the scene's frame and, when the job carried
+/// one, the plots' picture.
+type Encoded2 = (Result<Frame, String>, Option<Result<PictureFrame, String>>);
+
 /// The encoder thread and what is in flight.
 #[derive(Debug)]
 pub struct Encoder {
     jobs: SyncSender<Job>,
-    frames: Receiver<Result<Frame, String>>,
+    frames: Receiver<Encoded2>,
     /// A job waiting for the encoder to be free (only the newest is kept).
     pending: Option<Job>,
     busy: bool,
     latest: Option<Frame>,
+    /// The newest picture of the plots.
+    latest_picture: Option<PictureFrame>,
     /// The last error, shown instead of a frame.
     error: Option<String>,
 }
@@ -268,13 +335,15 @@ impl Encoder {
                     let result = encode_job(&mut renderer, &job, scale);
                     let took = started.elapsed();
                     scale = next_scale(scale, took);
-                    let sent = frame_tx.send(result.map(|(encoded, used)| Frame {
+                    let picture = job.picture.as_ref().map(|p| encode_picture(p, &job));
+                    let frame = result.map(|(encoded, used)| Frame {
                         encoded,
                         cells: job.cells,
                         stamp: job.stamp,
                         took,
                         scale: used,
-                    }));
+                    });
+                    let sent = frame_tx.send((frame, picture));
                     if sent.is_err() {
                         break;
                     }
@@ -287,13 +356,18 @@ impl Encoder {
             pending: None,
             busy: false,
             latest: None,
+            latest_picture: None,
             error: None,
         })
     }
 
     /// Queues `job`: sent at once when the encoder is free, else kept (replacing an older one).
-    pub fn submit(&mut self, job: Job) {
+    pub fn submit(&mut self, mut job: Job) {
         if self.busy {
+            // A newer job without a picture keeps the waiting one's.
+            if job.picture.is_none() {
+                job.picture = self.pending.take().and_then(|p| p.picture);
+            }
             self.pending = Some(job);
         } else if self.jobs.try_send(job).is_ok() {
             self.busy = true;
@@ -303,7 +377,12 @@ impl Encoder {
     /// Takes a finished frame, if any, and sends the pending job; true when a frame arrived.
     pub fn poll(&mut self) -> bool {
         match self.frames.try_recv() {
-            Ok(result) => {
+            Ok((result, picture)) => {
+                match picture {
+                    Some(Ok(p)) => self.latest_picture = Some(p),
+                    Some(Err(e)) => self.error = Some(e),
+                    None => {}
+                }
                 match result {
                     Ok(frame) => {
                         self.latest = Some(frame);
@@ -347,6 +426,12 @@ impl Encoder {
         self.latest.as_ref()
     }
 
+    /// The newest picture of the plots.
+    #[must_use]
+    pub fn latest_picture(&self) -> Option<&PictureFrame> {
+        self.latest_picture.as_ref()
+    }
+
     /// The last encoding error, if the last frame failed.
     #[must_use]
     pub fn error(&self) -> Option<&str> {
@@ -356,6 +441,7 @@ impl Encoder {
     /// Forgets the newest frame (the pane changed size or the screen was left).
     pub fn clear(&mut self) {
         self.latest = None;
+        self.latest_picture = None;
     }
 }
 
@@ -395,6 +481,26 @@ fn encode_job(
     }
     let encoded = encode(image, protocol, job.cells, job.graphics.tmux_wrap)?;
     Ok((encoded, scale))
+}
+
+/// Draws and encodes the plots' `picture` of `job` at full resolution.
+fn encode_picture(picture: &Picture, job: &Job) -> Result<PictureFrame, String> {
+    let protocol = job.graphics.protocol.ok_or("no graphics protocol")?;
+    let cells = Size::new(picture.area.width, picture.area.height);
+    let (w, h) = pixel_size(cells, job.graphics.cell, 1.0);
+    let image = to_image(&super::plots::picture::draw(picture, w, h));
+    let encoded = encode_as(
+        image,
+        protocol,
+        cells,
+        job.graphics.tmux_wrap,
+        KITTY_PLOTS_ID,
+    )?;
+    Ok(PictureFrame {
+        encoded,
+        area: picture.area,
+        stamp: job.stamp,
+    })
 }
 
 /// The resolution of the next frame: 20 % lower after a frame over [`FRAME_BUDGET`], back up

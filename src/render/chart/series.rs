@@ -120,7 +120,7 @@ impl SeriesCanvas<'_, '_> {
                     width: 0.9 * self.m.s,
                     ..Stroke::default()
                 };
-                self.stroke(&path, Colour::rgb(255, 255, 255).to_skia(), &stroke);
+                self.stroke(&path, self.m.ink.background.to_skia(), &stroke);
             }
         }
     }

@@ -1,7 +1,8 @@
 //! The text overlay: the box of lines in the top-left corner and the colour legend in the
-//! bottom-left.
+//! bottom-left; or, captioned ([`Renderer::draw_captioned`]), the same in bands above and below
+//! the picture, where they cover none of it.
 
-use tiny_skia::{Paint, Pixmap};
+use tiny_skia::{Paint, Pixmap, PixmapPaint, Transform};
 
 use super::{Renderer, kind_index};
 use crate::physics::SpringKind;
@@ -9,8 +10,73 @@ use crate::render::colour::{self, Colour};
 use crate::render::paint::{fill_rect, point, stroke_line};
 use crate::render::style::{Colouring, Overlay};
 use crate::render::text::{Align, draw_text, text_width, vertical_metrics};
+use crate::scene::Scene;
 
 impl Renderer {
+    /// The heights (px) of the bands above and below the picture that
+    /// [`Renderer::draw_captioned`] adds: the overlay's text box and the colour legend, each
+    /// with its margin.
+    #[must_use]
+    pub fn caption_bands(&self, o: &Overlay) -> (u32, u32) {
+        let px = font_size(self.height);
+        let (ascent, descent) = vertical_metrics(px);
+        let line_h = (ascent + descent) * 1.15;
+        let pad = 0.5 * px;
+        let lines = self.overlay_lines(o, px).len() as f32;
+        let top = pad + line_h * lines + pad + pad;
+        let bottom = pad + line_h + pad + pad;
+        (top.ceil() as u32, bottom.ceil() as u32)
+    }
+
+    /// `scene` with the overlay `o` outside the picture: the text in a band above, the legend
+    /// in a band below (heights [`Renderer::caption_bands`]), the picture itself as
+    /// [`Renderer::draw`] draws it without an overlay, so no body is ever covered.
+    #[must_use]
+    pub fn draw_captioned(&self, scene: &Scene, o: &Overlay) -> Pixmap {
+        let picture = self.draw(scene, None);
+        let (top, bottom) = self.caption_bands(o);
+        let height = (self.height + top + bottom).min(crate::render::MAX_SIDE);
+        let mut out = Pixmap::new(self.width, height).expect("sides checked");
+        out.fill(colour::SKY_TOP.to_skia());
+        out.draw_pixmap(
+            0,
+            top as i32,
+            picture.as_ref(),
+            &PixmapPaint::default(),
+            Transform::identity(),
+            None,
+        );
+        // The kinds drawn as springs (bodies drawn as surfaces have none).
+        let mut kinds = [false; 3];
+        for (body, geom) in scene.bodies.iter().zip(&self.bodies) {
+            let surface = geom.lattice.is_some() && geom.particles == body.state.x.len();
+            if surface {
+                continue;
+            }
+            for spring in body.model.springs() {
+                if self.style.springs.shows(spring.kind) {
+                    kinds[kind_index(spring.kind)] = true;
+                }
+            }
+        }
+        let mut paint = Paint {
+            anti_alias: self.style.quality.anti_alias,
+            ..Paint::default()
+        };
+        self.draw_overlay(&mut out, &mut paint, o, kinds);
+        out
+    }
+
+    /// The overlay's lines, broken at their " · " separators where wider than the image.
+    fn overlay_lines(&self, o: &Overlay, px: f32) -> Vec<String> {
+        let pad = 0.5 * px;
+        let room = self.width as f32 - 4.0 * pad;
+        o.lines()
+            .iter()
+            .flat_map(|l| wrap(l, " · ", room, px))
+            .collect()
+    }
+
     /// The text box in the top-left corner and the colour legend in the bottom-left.
     pub(super) fn draw_overlay(
         &self,
@@ -23,13 +89,7 @@ impl Renderer {
         let (ascent, descent) = vertical_metrics(px);
         let line_h = (ascent + descent) * 1.15;
         let pad = 0.5 * px;
-        // Lines wider than the image break at their " · " separators.
-        let room = self.width as f32 - 4.0 * pad;
-        let lines: Vec<String> = o
-            .lines()
-            .iter()
-            .flat_map(|l| wrap(l, " · ", room, px))
-            .collect();
+        let lines = self.overlay_lines(o, px);
         let w = lines
             .iter()
             .map(|l| text_width(l, px))
@@ -55,8 +115,8 @@ impl Renderer {
                 Align::Left,
             );
         }
-        // Legend at the bottom left.
-        let h = self.height as f32;
+        // Legend at the bottom left (of the captioned picture, in its lower band).
+        let h = pixmap.height() as f32;
         match self.style.colouring {
             Colouring::ByKind => {
                 let entries: Vec<(&str, Colour)> = SpringKind::ALL

@@ -105,6 +105,7 @@ impl LessonRun {
             KeyCode::Char(c @ '1'..='4') => self.toggle_corner(c as usize - '1' as usize),
             KeyCode::Char('t') => self.filter = self.filter.next(),
             KeyCode::Char('e') => self.export(),
+            KeyCode::Char('x') => self.message = Some(self.history.toggle_full_exact()),
             KeyCode::Char('n') => self.go_to_step(self.step + 1),
             KeyCode::Char('p') => match self.step.checked_sub(1) {
                 Some(s) => self.go_to_step(s),

@@ -143,6 +143,9 @@ pub struct Sample {
     pub max_speed: f64,
     /// `|x_sim - x_exact|` for the oscillator (m); NaN otherwise.
     pub error: f64,
+    /// The oscillator's simulated position along its spring (m); NaN otherwise (the whole run
+    /// of the exact-vs-simulated plot's full-history mode).
+    pub position: f64,
     /// Per body: total energy (J), kinetic energy (J), largest speed (m/s), largest spring
     /// stretch `max |L/L0 - 1|`.
     pub bodies: Vec<[f64; 4]>,
@@ -161,6 +164,7 @@ impl Sample {
             self.residual,
             self.max_speed,
             self.error,
+            self.position,
         ];
         for b in &self.bodies {
             v.extend_from_slice(b);
@@ -172,8 +176,14 @@ impl Sample {
 /// Index of a per-body quantity in [`Sample::values`]: body `b`, quantity `q` (0 total, 1
 /// kinetic, 2 max speed, 3 stretch).
 pub(super) fn body_index(b: usize, q: usize) -> usize {
-    8 + 4 * b + q
+    SCALARS + 4 * b + q
 }
+
+/// Index of the oscillator's position in [`Sample::values`].
+pub(super) const POSITION: usize = 8;
+
+/// The quantities of a sample before the per-body ones.
+const SCALARS: usize = 9;
 
 /// A stretch of the run: the smallest and largest value of every quantity in it, and its last
 /// sample. Long runs merge neighbouring bins, so the plots draw a min / max envelope, never a
@@ -251,6 +261,8 @@ pub struct History {
     pub(super) recent_interval: f64,
     pub(super) recent_span: f64,
     pub(super) recent_next: f64,
+    /// The exact-vs-simulated plot shows the whole run instead of the last three periods.
+    pub full_exact: bool,
 }
 
 impl History {
@@ -272,6 +284,18 @@ impl History {
             recent_interval: period / 40.0,
             recent_span: 3.0 * period,
             recent_next: 0.0,
+            full_exact: false,
+        }
+    }
+
+    /// Switches the exact-vs-simulated plot between the whole run and the last three periods;
+    /// returns what it shows now (the status message of the `x` key).
+    pub fn toggle_full_exact(&mut self) -> String {
+        self.full_exact = !self.full_exact;
+        if self.full_exact {
+            "x(t) vs exact: the whole run (x: the last three periods)".into()
+        } else {
+            "x(t) vs exact: the last three periods (x: the whole run)".into()
         }
     }
 
@@ -370,6 +394,7 @@ pub(super) fn sample(sim: &Simulation, oscillator: Option<&Oscillator>, t: f64) 
         bodies.push([be.total, be.kinetic, speed, stretch]);
     }
     let error = oscillator.map_or(f64::NAN, |o| (o.position(sim) - o.exact(t)).abs());
+    let position = oscillator.map_or(f64::NAN, |o| o.position(sim));
     Sample {
         t,
         kinetic: e.kinetic,
@@ -384,6 +409,7 @@ pub(super) fn sample(sim: &Simulation, oscillator: Option<&Oscillator>, t: f64) 
         residual: sim.energy_residual(),
         max_speed,
         error,
+        position,
         bodies,
     }
 }

@@ -9,20 +9,16 @@ use crate::lesson::Plot;
 
 use super::View;
 use super::axis::{Points, Series, draw_chart, not_available};
-use super::history::{Bin, History, body_index};
+use super::history::{Bin, History, Oscillator, POSITION, body_index};
 use super::study::{render_stability, render_study};
 
 pub(super) fn render_one(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
     let theme = v.theme;
     let history = v.history;
-    let now = v.now;
-    let x_range = [0.0, now.max(1.0)];
+    let x_range = [0.0, v.now.max(1.0)];
     // Braille dots across the plotting area (borders and a y label of ~7 cells left out).
     let columns = usize::from(area.width.saturating_sub(9)) * 2;
-    let bodies = history.labels.len();
-    // (name, short, colour, quantity index)
-    let mut curves: Vec<(String, String, Color, usize)> = Vec::new();
-    let (title, nonneg) = match plot {
+    match plot {
         Plot::Stability => {
             render_stability(v.studies.stability.as_ref(), v.shown, theme, area, buf);
             return;
@@ -35,78 +31,27 @@ pub(super) fn render_one(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
             render_exact(v, area, buf);
             return;
         }
-        // Drawn from the run's own records by the lesson screen (tui::observed_view).
-        Plot::Observable | Plot::Resolution => return,
-        Plot::Energy if bodies > 1 => {
-            // Eight distinct colours: a total and a kinetic energy per body, no two alike.
-            let totals = [Color::Green, Color::Magenta, Color::Cyan, Color::LightRed];
-            let kinetic = [
-                Color::Yellow,
-                Color::LightBlue,
-                Color::LightMagenta,
-                Color::LightCyan,
-            ];
-            for (b, label) in history.labels.iter().enumerate() {
-                curves.push((
-                    format!("total {label}"),
-                    format!("E{}", b + 1),
-                    totals[b % totals.len()],
-                    body_index(b, 0),
-                ));
-            }
-            for (b, label) in history.labels.iter().enumerate() {
-                curves.push((
-                    format!("kin {label}"),
-                    format!("K{}", b + 1),
-                    kinetic[b % kinetic.len()],
-                    body_index(b, 1),
-                ));
-            }
-            ("E (J):", false)
-        }
-        Plot::Energy => {
-            for (name, short, color, q) in [
-                ("kinetic", "kin", Color::Yellow, 0),
-                ("gravity", "grav", Color::Blue, 1),
-                ("elastic", "el", Color::Green, 2),
-                ("total", "tot", Color::White, 3),
-                // The dissipated energy stacked on the total (flat at E0 for an exact
-                // integrator) and the method's own energy error.
-                ("total + dissipated", "+D", Color::LightBlue, 4),
-                ("residual E + D - E0", "res", Color::LightRed, 5),
-            ] {
-                curves.push((name.into(), short.into(), color, q));
-            }
-            ("E (J):", false)
-        }
-        Plot::Speed if bodies > 1 => {
-            curves.extend(per_body(history, 2));
-            ("max |v| (m/s):", true)
-        }
-        Plot::Speed => {
-            curves.push(("max |v|".into(), "|v|".into(), Color::Cyan, 6));
-            ("max |v| (m/s)", true)
-        }
-        Plot::Stretch => {
-            curves.extend(per_body(history, 3));
-            ("max |L/L0 - 1|:", true)
-        }
-        Plot::Error => {
-            curves.push(("error".into(), "err".into(), Color::LightRed, 7));
-            ("|x - x_exact| (m)", true)
-        }
+        _ => {}
+    }
+    let Some(TimePlot {
+        title,
+        nonneg,
+        curves,
+    }) = time_plot(plot, history)
+    else {
+        return;
     };
     let mut series = Vec::new();
-    for (name, short, color, q) in curves {
-        let (upper, lower) = envelope(history, q, x_range[1], columns);
-        let mut s = Series::new(&name, &short, color, upper);
+    for c in curves {
+        let (upper, lower) = envelope(history, c.q, x_range[1], columns);
+        let mut s = Series::new(&c.name, c.short, c.colour, upper);
         let envelope = !lower.is_empty();
         if envelope {
-            s.name = format!("{name} (min/max)");
+            s.name = format!("{} (min/max)", c.name);
         }
         series.push(s);
         if envelope {
-            let mut l = Series::new(&name, &short, color, lower);
+            let mut l = Series::new(&c.name, c.short, c.colour, lower);
             l.guide = true;
             series.push(l);
         }
@@ -124,6 +69,118 @@ pub(super) fn render_one(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
         buf,
     );
 }
+
+/// One curve of a time plot: its legend name, short name, colour and quantity
+/// ([`Sample`](super::Sample)'s order).
+pub(super) struct Curve {
+    pub(super) name: String,
+    pub(super) short: &'static str,
+    pub(super) colour: Color,
+    pub(super) q: usize,
+}
+
+/// A plot over time: its y title, whether its quantity is never negative, its curves.
+pub(super) struct TimePlot {
+    pub(super) title: &'static str,
+    pub(super) nonneg: bool,
+    pub(super) curves: Vec<Curve>,
+}
+
+/// The curves of `plot` when it is a plot over time of the history (energy, speed, stretch,
+/// error), else `None`.
+pub(super) fn time_plot(plot: Plot, history: &History) -> Option<TimePlot> {
+    let bodies = history.labels.len();
+    let curve = |name: String, short: &'static str, colour: Color, q: usize| Curve {
+        name,
+        short,
+        colour,
+        q,
+    };
+    let mut curves = Vec::new();
+    let (title, nonneg) = match plot {
+        Plot::Stability | Plot::Convergence | Plot::WorkPrecision | Plot::Exact => return None,
+        // Drawn from the run's own records by the lesson screen (tui::observed_view).
+        Plot::Observable | Plot::Resolution => return None,
+        Plot::Energy if bodies > 1 => {
+            // Eight distinct colours: a total and a kinetic energy per body, no two alike.
+            const TOTALS: [Color; 4] = [Color::Green, Color::Magenta, Color::Cyan, Color::LightRed];
+            const KINETIC: [Color; 4] = [
+                Color::Yellow,
+                Color::LightBlue,
+                Color::LightMagenta,
+                Color::LightCyan,
+            ];
+            const SHORT_E: [&str; 4] = ["E1", "E2", "E3", "E4"];
+            const SHORT_K: [&str; 4] = ["K1", "K2", "K3", "K4"];
+            for (b, label) in history.labels.iter().enumerate() {
+                curves.push(curve(
+                    format!("total {label}"),
+                    SHORT_E[b % 4],
+                    TOTALS[b % TOTALS.len()],
+                    body_index(b, 0),
+                ));
+            }
+            for (b, label) in history.labels.iter().enumerate() {
+                curves.push(curve(
+                    format!("kin {label}"),
+                    SHORT_K[b % 4],
+                    KINETIC[b % KINETIC.len()],
+                    body_index(b, 1),
+                ));
+            }
+            ("E (J):", false)
+        }
+        Plot::Energy => {
+            for (name, short, colour, q) in ENERGY {
+                curves.push(curve(name.into(), short, colour, q));
+            }
+            ("E (J):", false)
+        }
+        Plot::Speed if bodies > 1 => {
+            curves.extend(per_body(history, 2));
+            ("max |v| (m/s):", true)
+        }
+        Plot::Speed => {
+            curves.push(curve("max |v|".into(), "|v|", Color::Cyan, 6));
+            ("max |v| (m/s)", true)
+        }
+        Plot::Stretch => {
+            curves.extend(per_body(history, 3));
+            ("max |L/L0 - 1|:", true)
+        }
+        Plot::Error => {
+            curves.push(curve("error".into(), "err", Color::LightRed, 7));
+            ("|x - x_exact| (m)", true)
+        }
+    };
+    Some(TimePlot {
+        title,
+        nonneg,
+        curves,
+    })
+}
+
+/// The energy plot's curves of one body: (legend name, short name, colour, quantity). The
+/// dissipated energy stacked on the total is flat at E0 for an exact integrator; the residual
+/// is the method's own energy error.
+pub(super) const ENERGY: [(&str, &str, Color, usize); 6] = [
+    ("kinetic", "kin", Color::Yellow, 0),
+    ("gravity", "grav", Color::Blue, 1),
+    ("elastic", "el", Color::Green, 2),
+    ("total", "tot", Color::White, 3),
+    (
+        "+D = total + dissipated (flat if exact)",
+        "+D",
+        Color::LightBlue,
+        4,
+    ),
+    (
+        "res = E + D - E0 (method's error)",
+        "res",
+        Color::LightRed,
+        5,
+    ),
+];
 
 /// The curve of quantity `q` ([`Sample::values`] order) over the run, drawn into a chart
 /// `columns` braille dots wide: one point per bin while the bins fit, else per column its
@@ -184,6 +241,49 @@ pub(super) fn envelope(
     (upper, lower)
 }
 
+/// The exact-vs-simulated plot's data: its time range, the exact curve and the simulated
+/// points (upper and lower envelope in the full-history mode; the lower one empty otherwise).
+pub(super) struct ExactData {
+    pub(super) range: [f64; 2],
+    pub(super) exact: Points,
+    pub(super) simulated: Points,
+    pub(super) simulated_low: Points,
+}
+
+/// What the exact-vs-simulated plot shows for oscillator `o`: the last three periods (finely
+/// sampled) or, in the full-history mode, the whole run at `columns` points across.
+pub(super) fn exact_data(v: &View, o: &Oscillator, columns: usize) -> ExactData {
+    let history = v.history;
+    let (start, end, simulated, simulated_low) = if history.full_exact {
+        let end = v.now.max(history.recent_span);
+        let (upper, lower) = envelope(history, POSITION, end, columns);
+        (0.0, end, upper, lower)
+    } else {
+        let span = history.recent_span;
+        let start = (v.now - span).max(0.0);
+        let simulated = history
+            .recent
+            .iter()
+            .copied()
+            .filter(|(_, x)| x.is_finite())
+            .collect();
+        (start, start + span, simulated, Vec::new())
+    };
+    // The exact curve over the whole range, ahead of the simulation too: 800 points in the
+    // window (4 per braille column of the widest chart), 4000 over the whole run.
+    let n = if history.full_exact { 4000 } else { 800 };
+    let exact = (0..=n)
+        .map(|i| start + (end - start) * f64::from(i) / f64::from(n))
+        .map(|t| (t, o.exact(t)))
+        .collect();
+    ExactData {
+        range: [start, end],
+        exact,
+        simulated,
+        simulated_low,
+    }
+}
+
 pub(super) fn render_exact(v: &View, area: Rect, buf: &mut Buffer) {
     let theme = v.theme;
     let Some(o) = v.oscillator else {
@@ -196,54 +296,39 @@ pub(super) fn render_exact(v: &View, area: Rect, buf: &mut Buffer) {
         );
         return;
     };
-    let history = v.history;
-    let span = history.recent_span;
-    let start = (v.now - span).max(0.0);
-    let end = start + span;
-    let simulated: Vec<(f64, f64)> = history
-        .recent
-        .iter()
-        .copied()
-        .filter(|(_, x)| x.is_finite())
-        .collect();
-    // The exact curve over the whole window, ahead of the simulation too, at 4 points per
-    // braille column of the widest chart (200 columns).
-    let exact: Vec<(f64, f64)> = (0..=800)
-        .map(|i| start + span * f64::from(i) / 800.0)
-        .map(|t| (t, o.exact(t)))
-        .collect();
-    let series = vec![
-        Series::new("exact", "exact", Color::Yellow, exact),
-        Series::new("simulated", "sim", Color::Cyan, simulated),
+    let columns = usize::from(area.width.saturating_sub(9)) * 2;
+    let d = exact_data(v, o, columns);
+    let mut series = vec![
+        Series::new("exact", "exact", Color::Yellow, d.exact),
+        Series::new("simulated", "sim", Color::Cyan, d.simulated),
     ];
-    draw_chart(
-        "x (m):",
-        &series,
-        [start, end],
-        " s",
-        false,
-        true,
-        theme,
-        area,
-        buf,
-    );
+    if !d.simulated_low.is_empty() {
+        let mut low = Series::new("simulated", "sim", Color::Cyan, d.simulated_low);
+        low.guide = true;
+        series.push(low);
+    }
+    let title = if v.history.full_exact {
+        "x (m), whole run:"
+    } else {
+        "x (m):"
+    };
+    draw_chart(title, &series, d.range, " s", false, true, theme, area, buf);
 }
 
 /// One curve per body of the history's per-body quantity `q` (2: speed, 3: stretch), coloured
 /// in turn green, yellow, cyan, magenta.
-fn per_body(history: &History, q: usize) -> Vec<(String, String, Color, usize)> {
+fn per_body(history: &History, q: usize) -> Vec<Curve> {
     const COLOURS: [Color; 4] = [Color::Green, Color::Yellow, Color::Cyan, Color::Magenta];
+    const SHORT: [&str; 4] = ["1", "2", "3", "4"];
     history
         .labels
         .iter()
         .enumerate()
-        .map(|(b, label)| {
-            (
-                label.clone(),
-                format!("{}", b + 1),
-                COLOURS[b % 4],
-                body_index(b, q),
-            )
+        .map(|(b, label)| Curve {
+            name: label.clone(),
+            short: SHORT[b % 4],
+            colour: COLOURS[b % 4],
+            q: body_index(b, q),
         })
         .collect()
 }
