@@ -158,3 +158,84 @@ fn jelly_bowl_prints_a_usable_dt_and_it_is_usable_for_ten_seconds() {
         );
     }
 }
+
+/// `(method, class, linear dt, scene dt)` as the study printed them before it started from the
+/// damped theory's bracket and ran the methods on separate threads (recorded from that build's
+/// `study stability SCENE --json`).
+type Recorded = (Method, Stability, Option<f64>, Option<f64>);
+
+/// The study of `scene` (with `sets`) against `recorded`: the same classes, the linear limits
+/// within twice the bisection tolerance, the scene limits within 1 % (their bisection stops at
+/// 0.5 %).
+fn same_as_recorded(scene: &str, sets: &[String], recorded: &[Recorded]) {
+    let (scene, _) = stability::load_scene(scene, sets).expect("built-in scene");
+    let options = StabilityOptions {
+        methods: recorded.iter().map(|r| r.0).collect(),
+        ..StabilityOptions::default()
+    };
+    let r = stability::stability(&scene, &options, &mut |_, _| {}).expect("study");
+    for (m, (method, class, linear, limit)) in r.methods.iter().zip(recorded) {
+        assert_eq!(m.method, *method);
+        assert_eq!(m.stability, *class, "{method}");
+        let close = |a: Option<f64>, b: Option<f64>, tolerance: f64| match (a, b) {
+            (Some(a), Some(b)) => relative(a, b) <= tolerance,
+            (a, b) => a == b,
+        };
+        assert!(
+            close(m.linear_max_dt, *linear, 2e-3),
+            "{method}: linear {:?} against {linear:?}",
+            m.linear_max_dt
+        );
+        assert!(
+            close(m.max_stable_dt, *limit, 1e-2),
+            "{method}: scene {:?} against {limit:?}",
+            m.max_stable_dt
+        );
+    }
+}
+
+#[test]
+fn the_faster_search_finds_the_recorded_limits() {
+    use Method::*;
+    use Stability::{Conditional as C, None as N, Unconditional as U};
+    same_as_recorded(
+        "rope",
+        &[],
+        &[
+            (ExplicitEuler, N, None, None),
+            (
+                SemiImplicitEuler,
+                C,
+                Some(0.123_512_602),
+                Some(0.100_279_791),
+            ),
+            (Midpoint, N, None, None),
+            (Rk4, C, Some(0.174_806_410), Some(0.174_806_410)),
+            (ImplicitEuler, U, None, None),
+            (
+                PredictorCorrector,
+                C,
+                Some(0.061_803_399),
+                Some(0.061_803_399),
+            ),
+            (Verlet, C, None, Some(0.919_129_907)),
+            (VelocityVerlet, C, Some(0.123_512_602), Some(0.103_347_269)),
+        ],
+    );
+    same_as_recorded(
+        "cube-plane",
+        &["n=3".to_string()],
+        &[
+            (ExplicitEuler, C, Some(3.131_283e-3), Some(3.131_283e-3)),
+            (SemiImplicitEuler, C, Some(2.834_007e-3), Some(2.834_007e-3)),
+            (Rk4, C, Some(4.360_771e-3), Some(4.360_771e-3)),
+            (
+                PredictorCorrector,
+                C,
+                Some(1.565_641e-3),
+                Some(1.565_641e-3),
+            ),
+            (VelocityVerlet, C, Some(2.967_867e-3), Some(2.967_867e-3)),
+        ],
+    );
+}
