@@ -23,7 +23,7 @@ fn relative(a: f64, b: f64) -> f64 {
 
 #[test]
 fn a_hanging_pendulum_has_its_textbook_frequencies_and_dampings() {
-    let (m, k, d, g, l0) = (2.0, 300.0, 5.0, 9.8, 4.0);
+    let (m, k, d, g, l0): (f64, f64, f64, f64, f64) = (2.0, 300.0, 5.0, 9.8, 4.0);
     let sets = [
         "nodes=2".to_string(),
         format!("mass={m}"),
