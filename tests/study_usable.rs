@@ -186,8 +186,13 @@ fn same_as_recorded(scene: &str, sets: &[String], recorded: &[Recorded]) {
             "{method}: linear {:?} against {linear:?}",
             m.linear_max_dt
         );
+        // A scene limit well below the linear one is set by a nonlinear resonance (the undamped
+        // rope's swing, module docs of the study), not monotone in dt: the confirmation's path
+        // from a start 0.1 % away ends within a few per cent.
+        let resonance = matches!((linear, limit), (Some(l), Some(s)) if *s < 0.95 * l);
+        let tolerance = if resonance { 5e-2 } else { 1e-2 };
         assert!(
-            close(m.max_stable_dt, *limit, 1e-2),
+            close(m.max_stable_dt, *limit, tolerance),
             "{method}: scene {:?} against {limit:?}",
             m.max_stable_dt
         );
