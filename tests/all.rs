@@ -54,6 +54,7 @@ mod scene_files;
 mod simulation_fused;
 mod study_convergence;
 mod study_stability;
+mod study_usable;
 mod tui;
 mod tui_camera;
 mod tui_charts;

@@ -118,6 +118,10 @@ pub struct StabilityArgs {
     /// Report the linear limit without the confirmation runs (faster).
     #[arg(long)]
     pub no_confirm: bool,
+    /// Skip the usable dt (the largest dt whose energy error stays within 1 % of E0 over the
+    /// scene's duration; several runs of the whole scene per method).
+    #[arg(long)]
+    pub no_usable: bool,
     /// Set a scene parameter, for example `--set stiffness=500` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,

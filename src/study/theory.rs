@@ -68,6 +68,8 @@
 
 use serde::Serialize;
 
+pub mod equilibrium;
+
 use super::modes::stiffness_blocks;
 use crate::physics::{Method, MethodParams, Model, StabilityFunction, State};
 

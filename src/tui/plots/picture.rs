@@ -60,7 +60,7 @@ pub fn plot_rects(count: usize, area: Rect) -> Vec<Rect> {
         .collect()
 }
 
-/// True for the plots drawn as a picture (every one but the stability table).
+/// True for the plots drawn as a picture (all but the stability table and lesson 8's own).
 #[must_use]
 pub fn is_picture(plot: Plot) -> bool {
     // The stability table is text; lesson 8's observable and resolution plots are drawn from

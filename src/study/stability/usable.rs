@@ -1,0 +1,218 @@
+//! The usable time step (issue 26): stable is not the same as right. Near its stability limit a
+//! method can stay bounded while it creates about the whole scene's energy in high-frequency
+//! ringing that the dampers then absorb; a student who takes the scene limit as "the dt to use"
+//! gets a motion that is not to be trusted. The usable dt is the largest step whose energy error
+//! stays a small fraction of the scene's energy.
+//!
+//! # The criterion
+//!
+//! With the energy accounting of [`crate::simulation`] (dampers, drag, contacts and what the
+//! collision response removes, each measured with the method's own stages), the method's own
+//! energy error after `n` steps is the residual
+//!
+//! ```text
+//! r_n = E_n + D_n - E_0                                           (J)
+//! usable at dt  ⇔  max_{t_n ≤ H} |r_n| ≤ f |E_0|   and the run does not diverge
+//! ```
+//! where
+//! - `E_n`: the total energy (kinetic + gravitational + elastic) after step `n` (J)
+//! - `D_n`: the energy taken out by dampers, drag and contacts up to step `n` (J)
+//! - `E_0`: the energy at the start (J); when it is zero, the energy scale `S` of the
+//!   confirmation (`super::energy_scale`) stands in for `|E_0|`
+//! - `H`: the scene's own duration (s), the run a student makes
+//! - `f`: [`USABLE_FRACTION`] = 1 %
+//!
+//! The residual is checked every step on scenes under 2 000 springs, every
+//! [`super::CONFIRM_ENERGY_EVERY`] steps on larger ones (and after the last); a run stops as soon
+//! as it fails.
+//!
+//! # The search
+//!
+//! `|r|` is not monotone in `dt` (a resonance can spoil one step and spare a larger one), so a
+//! bisection on the criterion alone could stop anywhere. The rule:
+//! 1. start at the scene limit (the confirmed stable dt; for a method stable at every dt
+//!    probed, the largest dt probed) and go down a geometric grid of ratio √2
+//!    ([`USABLE_GRID`]) until a run passes, at most [`USABLE_MAX_STEPS_DOWN`] grid points
+//!    (a factor 2¹⁰ = 1024): none passing → no usable dt;
+//! 2. bisect (geometric mean) between that point and the failing grid point above it until they
+//!    are within [`USABLE_TOLERANCE`] = 5 % of each other;
+//! 3. verify at [`USABLE_MARGIN`] = 0.95 of the result: when that run fails, start again at
+//!    step 1 from below it (at most [`USABLE_ROUNDS`] times, then no usable dt).
+//!
+//! So the reported dt and 95 % of it both passed; every run is in the report.
+//!
+//! References: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,
+//! Springer 2006, §I.1 and §IX (energy error of non-symplectic and symplectic methods);
+//! T. Schlick, M. Mandziuk, R. D. Skeel, K. Srinivas, J. Comput. Phys. 140 (1998) (nonlinear
+//! resonances: why the error is not monotone in dt).
+
+use serde::Serialize;
+
+use super::CONFIRM_ENERGY_EVERY;
+use crate::physics::Method;
+use crate::scene::Scene;
+use crate::simulation::Simulation;
+
+/// The fraction `f` of `|E_0|` the residual may reach.
+pub const USABLE_FRACTION: f64 = 0.01;
+/// The ratio between the grid points of the downward search.
+pub const USABLE_GRID: f64 = std::f64::consts::SQRT_2;
+/// At most this many grid points below the start.
+pub const USABLE_MAX_STEPS_DOWN: u32 = 20;
+/// The bisection stops within this relative width.
+pub const USABLE_TOLERANCE: f64 = 0.05;
+/// The result must also pass at this fraction of itself.
+pub const USABLE_MARGIN: f64 = 0.95;
+/// Searched again at most this many times when the margin fails.
+pub const USABLE_ROUNDS: u32 = 3;
+
+/// One run of the usable-dt search.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct UsableRun {
+    /// Time step (s).
+    pub dt: f64,
+    /// Steps taken (fewer than planned when it failed early).
+    pub steps: u64,
+    /// The verdict.
+    pub passed: bool,
+    /// The largest `|E + D - E_0|` seen (J).
+    pub residual_max: f64,
+    /// Why it failed, or null.
+    pub reason: Option<String>,
+}
+
+/// The usable dt of one method (module docs).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Usable {
+    /// The largest dt found whose residual stays within `fraction` of `|E_0|` over `horizon`,
+    /// and so does 95 % of it (s); null when none was found.
+    pub dt: Option<f64>,
+    /// The horizon `H` of every run (s): the scene's duration.
+    pub horizon: f64,
+    /// The fraction `f`.
+    pub fraction: f64,
+    /// The allowed `|E + D - E_0|` (J): `f |E_0|` (or `f S` when `E_0 = 0`).
+    pub allowed: f64,
+    /// Every run, in the order taken.
+    pub runs: Vec<UsableRun>,
+}
+
+/// The residual allowed on `scene`: `f |E_0|`, or `f S` when `E_0` is zero (J).
+#[must_use]
+pub fn allowed_residual(scene: &Scene, scale: f64) -> f64 {
+    let e0 = Simulation::new(scene.clone()).energy_initial().abs();
+    USABLE_FRACTION * if e0 > 0.0 { e0 } else { scale }
+}
+
+/// One run of `scene` with `method` at `dt` (s) over `horizon` (s), stopped at the first
+/// `|residual| > allowed` (J) or divergence.
+#[must_use]
+pub fn usable_run(scene: &Scene, method: Method, dt: f64, horizon: f64, allowed: f64) -> UsableRun {
+    let mut scene = scene.clone();
+    scene.set_method(method);
+    let mut sim = Simulation::new(scene);
+    sim.set_dt(dt);
+    sim.set_accounting(true);
+    let steps = ((horizon / dt).round() as u64).max(1);
+    let every = if sim.scene.spring_count() < 2_000 {
+        1
+    } else {
+        CONFIRM_ENERGY_EVERY
+    };
+    let mut residual_max = 0.0f64;
+    let mut reason = None;
+    for k in 0..steps {
+        if let Some(d) = sim.step() {
+            reason = Some(format!("diverged at t = {:.4e} s: {}", d.time, d.reason));
+            break;
+        }
+        if k % every == 0 || k + 1 == steps {
+            let r = sim.energy_residual();
+            if r.is_nan() || r.abs() > allowed {
+                reason = Some(format!(
+                    "|E + D - E0| = {:.4e} J > {allowed:.4e} J at t = {:.4e} s",
+                    r.abs(),
+                    sim.time()
+                ));
+                residual_max = if r.is_nan() { f64::NAN } else { r.abs() };
+                break;
+            }
+            residual_max = residual_max.max(r.abs());
+        }
+    }
+    UsableRun {
+        dt,
+        steps: sim.steps,
+        passed: reason.is_none(),
+        residual_max,
+        reason,
+    }
+}
+
+/// The search of the module docs from `start` (s) down, with `run(dt)` the verdict of one run.
+/// Returns the usable dt, if any.
+pub fn search(start: f64, run: &mut dyn FnMut(f64) -> bool) -> Option<f64> {
+    let mut top = start;
+    // A failing dt above the grid's first point, when known.
+    let mut failed: Option<f64> = None;
+    for _ in 0..USABLE_ROUNDS {
+        let (mut passed, above) = down(top, failed, run)?;
+        if let Some(mut f) = above {
+            while f > passed * (1.0 + USABLE_TOLERANCE) {
+                let m = (passed * f).sqrt();
+                if run(m) {
+                    passed = m;
+                } else {
+                    f = m;
+                }
+            }
+        }
+        let check = USABLE_MARGIN * passed;
+        if run(check) {
+            return Some(passed);
+        }
+        failed = Some(check);
+        top = check / USABLE_GRID;
+    }
+    None
+}
+
+/// Step 1: the first passing point of the grid `top, top/√2, …`; with the failing point above
+/// it (`failed` when the first point passes).
+fn down(
+    top: f64,
+    failed: Option<f64>,
+    run: &mut dyn FnMut(f64) -> bool,
+) -> Option<(f64, Option<f64>)> {
+    let mut above = failed;
+    let mut dt = top;
+    for _ in 0..=USABLE_MAX_STEPS_DOWN {
+        if run(dt) {
+            return Some((dt, above));
+        }
+        above = Some(dt);
+        dt /= USABLE_GRID;
+    }
+    None
+}
+
+/// The usable dt of `method` on `scene` (module docs), searched down from `start` (s).
+#[must_use]
+pub fn usable(scene: &Scene, method: Method, start: f64, scale: f64) -> Usable {
+    let horizon = scene.duration;
+    let allowed = allowed_residual(scene, scale);
+    let mut runs = Vec::new();
+    let dt = search(start, &mut |dt| {
+        let r = usable_run(scene, method, dt, horizon, allowed);
+        let passed = r.passed;
+        runs.push(r);
+        passed
+    });
+    Usable {
+        dt,
+        horizon,
+        fraction: USABLE_FRACTION,
+        allowed,
+        runs,
+    }
+}
