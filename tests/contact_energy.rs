@@ -113,7 +113,7 @@ fn course_scenes_contacts_never_add_energy_under_every_explicit_method() {
         ("cube-tilted", "n=4", 2.0),
         ("cloth-spheres", "n=8", 0.5),
     ] {
-        for coefficients in coefficients(name).iter().copied() {
+        for &coefficients in coefficients(name) {
             let sets: Vec<&str> = [size]
                 .into_iter()
                 .chain(coefficients.iter().copied())
@@ -166,7 +166,7 @@ fn implicit_euler_contacts_never_add_energy_at_a_large_step() {
         ("cube-tilted", "n=6"),
         ("cube-plane", "n=6"),
     ] {
-        for coefficients in coefficients(name).iter().copied() {
+        for &coefficients in coefficients(name) {
             let sets: Vec<&str> = [size]
                 .into_iter()
                 .chain(coefficients.iter().copied())

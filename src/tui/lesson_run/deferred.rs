@@ -106,7 +106,7 @@ pub struct Exports {
 
 impl Exports {
     /// Queues `export`; gives it back when no thread could be started (the caller writes it).
-    pub fn send(&mut self, export: Export) -> Result<(), Export> {
+    pub fn send(&mut self, export: Export) -> Result<(), Box<Export>> {
         if self.jobs.is_none() {
             let (jobs, inbox) = mpsc::channel::<Export>();
             let (outbox, done) = mpsc::channel();
@@ -120,15 +120,15 @@ impl Exports {
                     }
                 });
             if spawned.is_err() {
-                return Err(export);
+                return Err(Box::new(export));
             }
             self.jobs = Some(jobs);
             self.done = Some(done);
         }
         let Some(jobs) = &self.jobs else {
-            return Err(export);
+            return Err(Box::new(export));
         };
-        jobs.send(export).map_err(|e| e.0)?;
+        jobs.send(export).map_err(|e| Box::new(e.0))?;
         self.waiting += 1;
         Ok(())
     }
