@@ -305,6 +305,16 @@ fn dense_eigenvalues(model: &Model, state: &State, free: &[usize]) -> Vec<f64> {
 /// rotations (Golub & Van Loan §8.5.3), ascending.
 #[must_use]
 pub fn jacobi_eigenvalues(a: &mut [f64], n: usize) -> Vec<f64> {
+    jacobi_rotate(a, n, None);
+    let mut values: Vec<f64> = (0..n).map(|i| a[i * n + i]).collect();
+    values.sort_by(f64::total_cmp);
+    values
+}
+
+/// Cyclic Jacobi rotations of the symmetric `n × n` matrix `a` (row-major) until it is diagonal
+/// (Golub & Van Loan §8.5.3); each rotation is also applied to the columns of `vectors` when
+/// given (start it at the identity to get the eigenvectors).
+pub(crate) fn jacobi_rotate(a: &mut [f64], n: usize, mut vectors: Option<&mut [f64]>) {
     for _sweep in 0..100 {
         let off: f64 = (0..n)
             .flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j)))
@@ -337,12 +347,16 @@ pub fn jacobi_eigenvalues(a: &mut [f64], n: usize) -> Vec<f64> {
                     a[p * n + k] = c * apk - s * aqk;
                     a[q * n + k] = s * apk + c * aqk;
                 }
+                if let Some(v) = vectors.as_deref_mut() {
+                    for k in 0..n {
+                        let (vkp, vkq) = (v[k * n + p], v[k * n + q]);
+                        v[k * n + p] = c * vkp - s * vkq;
+                        v[k * n + q] = s * vkp + c * vkq;
+                    }
+                }
             }
         }
     }
-    let mut values: Vec<f64> = (0..n).map(|i| a[i * n + i]).collect();
-    values.sort_by(f64::total_cmp);
-    values
 }
 
 /// Schur–Cohn: both roots of `r² - t r + d` within the unit circle (to rounding).
