@@ -256,18 +256,24 @@ pub fn save_png(chart: &Chart, path: &Path, width: u32, height: u32) -> Result<(
 #[must_use]
 pub fn plot_rect(chart: &Chart, width: u32, height: u32) -> (f32, f32, f32, f32) {
     let m = Metrics::new(width as f32, height as f32, chart.ink);
-    let x_axis = make_axis(
+    let (x_axis, y_axis) = axes(chart);
+    let l = Layout::new(chart, &m, &x_axis, &y_axis);
+    (l.left, l.top, l.left + l.pw, l.top + l.ph)
+}
+
+/// The x and y axes of `chart`: its data ranges (or the ranges it sets) on its scales.
+fn axes(chart: &Chart) -> (Axis, Axis) {
+    let x = make_axis(
         data_range(chart, true, chart.x_scale),
         chart.x_range,
         chart.x_scale,
     );
-    let y_axis = make_axis(
+    let y = make_axis(
         data_range(chart, false, chart.y_scale),
         chart.y_range,
         chart.y_scale,
     );
-    let l = Layout::new(chart, &m, &x_axis, &y_axis);
-    (l.left, l.top, l.left + l.pw, l.top + l.ph)
+    (x, y)
 }
 
 /// Draws `chart` with the rasteriser settings `quality`: layout, title, grid with ticks and
@@ -286,16 +292,7 @@ pub fn draw_with(chart: &Chart, width: u32, height: u32, quality: Quality) -> Pi
         ..Paint::default()
     };
     let m = Metrics::new(width as f32, height as f32, chart.ink);
-    let x_axis = make_axis(
-        data_range(chart, true, chart.x_scale),
-        chart.x_range,
-        chart.x_scale,
-    );
-    let y_axis = make_axis(
-        data_range(chart, false, chart.y_scale),
-        chart.y_range,
-        chart.y_scale,
-    );
+    let (x_axis, y_axis) = axes(chart);
     let layout = Layout::new(chart, &m, &x_axis, &y_axis);
     let plot = Plot {
         layout: &layout,

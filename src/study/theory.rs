@@ -274,18 +274,7 @@ fn dense_eigenvalues(model: &Model, state: &State, free: &[usize]) -> Vec<f64> {
     let mut a = vec![0.0; n * n];
     let blocks = stiffness_blocks(model, &state.x);
     for (s, k) in model.springs().iter().zip(&blocks) {
-        let (ia, ib) = (index[s.a as usize], index[s.b as usize]);
-        let cols = [k.x_axis, k.y_axis, k.z_axis];
-        for (p, q, sign) in [(ia, ia, 1.0), (ib, ib, 1.0), (ia, ib, -1.0), (ib, ia, -1.0)] {
-            if p == usize::MAX || q == usize::MAX {
-                continue;
-            }
-            for (c, col) in cols.iter().enumerate() {
-                for r in 0..3 {
-                    a[(3 * p + r) * n + 3 * q + c] += sign * col[r];
-                }
-            }
-        }
+        add_spring_block(&mut a, n, index[s.a as usize], index[s.b as usize], k);
     }
     // Scale: A_ij / √(m_i m_j).
     for (p, &i) in free.iter().enumerate() {
@@ -299,6 +288,23 @@ fn dense_eigenvalues(model: &Model, state: &State, free: &[usize]) -> Vec<f64> {
         }
     }
     jacobi_eigenvalues(&mut a, n)
+}
+
+/// Adds a spring's 3×3 stiffness block `k` between the free particles `ia` and `ib` (row index
+/// in the free set; `usize::MAX` for a pinned end) to the dense `n × n` matrix `a`: `+k` on
+/// both diagonal blocks, `-k` on both off-diagonal ones.
+pub(crate) fn add_spring_block(a: &mut [f64], n: usize, ia: usize, ib: usize, k: &glam::DMat3) {
+    let cols = [k.x_axis, k.y_axis, k.z_axis];
+    for (p, q, sign) in [(ia, ia, 1.0), (ib, ib, 1.0), (ia, ib, -1.0), (ib, ia, -1.0)] {
+        if p == usize::MAX || q == usize::MAX {
+            continue;
+        }
+        for (c, col) in cols.iter().enumerate() {
+            for r in 0..3 {
+                a[(3 * p + r) * n + 3 * q + c] += sign * col[r];
+            }
+        }
+    }
 }
 
 /// The eigenvalues of the symmetric `n × n` matrix `a` (row-major, destroyed) by cyclic Jacobi

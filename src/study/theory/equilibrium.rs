@@ -199,18 +199,7 @@ fn assemble(
     let mut a = vec![0.0; m * m];
     for (j, (s, k)) in model.springs().iter().zip(blocks).enumerate() {
         let k = other(j, k).unwrap_or(*k);
-        let (ia, ib) = (index[s.a as usize], index[s.b as usize]);
-        let cols = [k.x_axis, k.y_axis, k.z_axis];
-        for (p, q, sign) in [(ia, ia, 1.0), (ib, ib, 1.0), (ia, ib, -1.0), (ib, ia, -1.0)] {
-            if p == usize::MAX || q == usize::MAX {
-                continue;
-            }
-            for (c, col) in cols.iter().enumerate() {
-                for r in 0..3 {
-                    a[(3 * p + r) * m + 3 * q + c] += sign * col[r];
-                }
-            }
-        }
+        super::add_spring_block(&mut a, m, index[s.a as usize], index[s.b as usize], &k);
     }
     a
 }
