@@ -518,7 +518,7 @@ fn may_respond(colliders: &[Collider], epsilon: f64, x: DVec3) -> bool {
     colliders.iter().any(|c| {
         c.may_touch(x, epsilon)
             && c.contact(x)
-                .is_some_and(|contact| !(contact.phi >= epsilon))
+                .is_some_and(|contact| contact.phi < epsilon || contact.phi.is_nan())
     })
 }
 
