@@ -58,11 +58,15 @@
 //! elastic energy a projection after the step would: on `cloth-spheres` at dt = 0.005 s the
 //! guard halves none of the 600 steps of 3 s (`examples/implicit_guard.rs`).
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use glam::DVec3;
 use serde::Serialize;
 
+use crate::physics::collide::Collider;
 use crate::physics::energy::energy_change;
-use crate::physics::integrators::{guard_energy, guard_start_energy};
+use crate::physics::integrators::{Projection, guard_energy, guard_start_energy};
 use crate::physics::{
     Dissipated, Divergence, Energy, Method, SolveStats, State, Workspace, collide, diverge, energy,
 };
@@ -101,6 +105,10 @@ pub struct Simulation {
     solver: SolverTally,
     /// Implicit Euler's energy guard on (module docs).
     guard: bool,
+    /// Chunks [`Simulation::advance`] takes step by step before it tries a fused one again,
+    /// and the fused chunks given up in a row.
+    fused_wait: u32,
+    fused_misses: u32,
 }
 
 /// Running totals of implicit Euler's solves.
@@ -144,6 +152,8 @@ impl Simulation {
             dissipated: Dissipated::default(),
             solver: SolverTally::default(),
             guard: true,
+            fused_wait: 0,
+            fused_misses: 0,
         };
         sim.rebase_energy();
         sim
@@ -286,10 +296,16 @@ impl Simulation {
     /// Takes up to `n` steps, stopping at divergence: the same states, counts, divergence and
     /// energy accounting as `n` calls of [`Simulation::step`], bit for bit.
     ///
-    /// Where nothing happens between two steps but the method itself (no collider, no sphere,
-    /// no energy guard), the steps go to [`Method::steps`] in chunks of [`CHUNK`]: the fused
-    /// multi-step passes `springlab bench` times (the rope's pass in structure-of-arrays form,
-    /// the lattices' thread team). With energy accounting those passes also write the
+    /// Where nothing happens between two steps but the method itself (no sphere, no energy
+    /// guard, no collision response), the steps go to [`Method::steps`] in chunks of
+    /// [`CHUNK`]: the fused multi-step passes `springlab bench` times (the rope's pass in
+    /// structure-of-arrays form, the lattices' thread team). Colliders act inside the passes
+    /// (their contact force); their response after a step acts only on a particle within the
+    /// contact distance `ε` of a collider (`φ < ε`), so a chunk with colliders is tried only when
+    /// no free particle is that close at its start, and kept only when no particle came that
+    /// close at the end of any of its steps (each step's new positions are watched inside the
+    /// last pass, [`Workspace::projection`]); then every response would have done nothing, and
+    /// the chunk is the single steps bit for bit. With energy accounting those passes also write the
     /// dissipated power of every stage, and each step's share is added in step order, as
     /// [`Simulation::step`] adds it. A chunk is kept when every body's fastest particle ends it
     /// below a tenth of the divergence speed (at 100 m/s against 1000 m/s, so no step inside it
@@ -299,9 +315,18 @@ impl Simulation {
         let mut left = n;
         while left > 0 && self.diverged.is_none() {
             let chunk = left.min(CHUNK);
-            if chunk >= 2 && self.fusable() && self.fused_chunk(chunk) {
-                left -= chunk;
-                continue;
+            if self.fused_wait > 0 {
+                self.fused_wait -= 1;
+            } else if chunk >= 2 && self.fusable() {
+                if self.fused_chunk(chunk) {
+                    self.fused_misses = 0;
+                    left -= chunk;
+                    continue;
+                }
+                // Taken again step by step: wait 2, 4, … 64 chunks before the next try, so
+                // that a body that keeps touching costs at most a few per cent more.
+                self.fused_misses = (self.fused_misses + 1).min(6);
+                self.fused_wait = 1 << self.fused_misses;
             }
             for _ in 0..chunk {
                 if self.step().is_some() {
@@ -312,11 +337,19 @@ impl Simulation {
         }
     }
 
-    /// True when a step is the method's step alone (see [`Simulation::advance`]).
+    /// True when a step may be the method's step alone (see [`Simulation::advance`]): no
+    /// energy guard, no sphere, and no free particle within reach of a collision response now.
     fn fusable(&self) -> bool {
-        self.scene.bodies.iter().all(|b| {
+        self.scene.bodies.iter().zip(&self.work).all(|(b, work)| {
             let declaration = b.method.declaration();
-            !declaration.energy_guard && b.model.colliders.is_empty() && b.state.spheres.is_empty()
+            let colliders = &b.model.colliders;
+            !declaration.energy_guard
+                && b.state.spheres.is_empty()
+                && (colliders.is_empty()
+                    || (work.projection.is_none()
+                        && !b.state.x.iter().zip(&b.model.inv_mass).any(|(&x, &w)| {
+                            w != 0.0 && may_respond(colliders, b.model.contact.epsilon, x)
+                        })))
         })
     }
 
@@ -325,7 +358,12 @@ impl Simulation {
     fn fused_chunk(&mut self, chunk: u64) -> bool {
         let saved: Vec<State> = self.scene.bodies.iter().map(|b| b.state.clone()).collect();
         let mut evals = 0;
+        // Raised when a step ends with a particle within reach of a collision response.
+        let touched = Arc::new(AtomicBool::new(false));
         for (body, work) in self.scene.bodies.iter_mut().zip(&mut self.work) {
+            if !body.model.colliders.is_empty() {
+                work.projection = Some(watch(&body.model, Arc::clone(&touched)));
+            }
             evals += body.method.steps(
                 &body.model,
                 &mut body.state,
@@ -334,12 +372,13 @@ impl Simulation {
                 work,
                 chunk,
             );
+            work.projection = None;
         }
         let calm = self.scene.bodies.iter().all(|b| {
             let speed = diverge::max_speed(&b.state);
             speed * speed < 0.01 * diverge::MAX_SPEED_SQUARED
         });
-        if !calm {
+        if !calm || touched.load(Ordering::Relaxed) {
             for (body, state) in self.scene.bodies.iter_mut().zip(saved) {
                 body.state = state;
             }
@@ -470,6 +509,30 @@ impl Simulation {
             halved_steps: t.halved_steps,
         }
     }
+}
+
+/// True when a particle at `x` (m) is where the collision response after a step could act on
+/// it: within the contact distance `epsilon` (m) of a collider, `φ < ε` (NaN included), as
+/// [`collide::resolve`] tests it. Otherwise the response leaves the particle as it is.
+fn may_respond(colliders: &[Collider], epsilon: f64, x: DVec3) -> bool {
+    colliders.iter().any(|c| {
+        c.may_touch(x, epsilon)
+            && c.contact(x)
+                .is_some_and(|contact| contact.phi < epsilon || contact.phi.is_nan())
+    })
+}
+
+/// A step-end rule that changes nothing and raises `touched` when a particle ends the step
+/// within reach of a collision response of `model`'s colliders ([`may_respond`]; pinned
+/// particles too, which is only more cautious).
+fn watch(model: &crate::physics::Model, touched: Arc<AtomicBool>) -> Projection {
+    let colliders = model.colliders.clone();
+    let epsilon = model.contact.epsilon;
+    Projection(Arc::new(move |x: &mut [DVec3], _v: &mut [DVec3]| {
+        if x.iter().any(|&p| may_respond(&colliders, epsilon, p)) {
+            touched.store(true, Ordering::Relaxed);
+        }
+    }))
 }
 
 /// What one body's step did.
