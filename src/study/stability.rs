@@ -95,6 +95,8 @@
 //! in Molecular Dynamics Simulations", J. Comput. Phys. 140 (1998); E. Hairer, G. Wanner,
 //! *Solving Ordinary Differential Equations II*, 2nd ed., Springer 1996, §IV.2.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+
 use glam::DVec3;
 use serde::Serialize;
 
@@ -327,6 +329,35 @@ pub fn stability(
     options: &StabilityOptions,
     progress: &mut dyn FnMut(Method, &Probe),
 ) -> Result<StabilityReport, StudyError> {
+    stability_with(scene, options, progress, &mut |_| {})
+}
+
+/// Counts a job out of [`Context::busy`] when it ends.
+struct Leave<'a>(&'a AtomicUsize);
+
+impl Drop for Leave<'_> {
+    fn drop(&mut self) {
+        self.0.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
+/// One job of [`stability_with`]: a method's search, or the stiffest state.
+enum Job {
+    Method(Box<MethodLimit>),
+    Stiffest((StiffestState, usize, theory::Spectrum)),
+}
+
+/// [`stability`], also calling `started` as each method's search starts (on the calling
+/// thread, while the others run: a terminal's progress).
+///
+/// # Errors
+/// As [`stability`].
+pub fn stability_with(
+    scene: &Scene,
+    options: &StabilityOptions,
+    progress: &mut dyn FnMut(Method, &Probe),
+    started: &mut dyn FnMut(Method),
+) -> Result<StabilityReport, StudyError> {
     let horizon = options.horizon;
     if !(horizon > 0.0 && horizon.is_finite()) {
         return Err(StudyError::Horizon(horizon));
@@ -375,30 +406,61 @@ pub fn stability(
             .zip(&estimates)
             .map(|(b, e)| Linearisation::new(&b.model, &b.state, e.omega.max(omega * 1e-9)))
             .collect(),
+        busy: AtomicUsize::new(0),
+        threads: crate::physics::pool::Pool::global().threads(),
     };
-    let (stiffest_state, stiffest_body, stiffest_spectrum) =
-        stiffest_state(scene, horizon, (stiffest, omega));
     let hanging = spectrum_at_equilibrium(&body.model, &body.state);
     // The methods are independent: one job each, spread over the cores (the results do not
-    // depend on the thread that computes them); the probes are reported after each job.
+    // depend on the thread that computes them); the probes are reported after each job. The
+    // stiffest state (one run of the scene, a power iteration every 5 ms, a chain of warm
+    // starts that cannot be split) is one more job beside them, started first: only the
+    // report needs it.
+    let count = options.methods.len();
     let job = |i: usize| {
-        let m = options.methods[i];
+        context.busy.fetch_add(1, Ordering::SeqCst);
+        let _done = Leave(&context.busy);
+        let Some(&m) = options.methods.get(i) else {
+            return Job::Stiffest(stiffest_state(scene, horizon, (stiffest, omega)));
+        };
         let damped = theory::limit(m, &body.params, &spectrum);
-        let at_stiffest = theory::limit(m, &scene.bodies[stiffest_body].params, &stiffest_spectrum);
         let at_equilibrium = hanging
             .as_ref()
             .ok()
             .map(|(spectrum, _)| theory::limit(m, &body.params, spectrum));
         let mut limit = context.search(m, damped, at_equilibrium.as_ref());
-        limit.stiffest_theory_dt = at_stiffest.dt;
-        limit.stiffest_theory = at_stiffest;
         limit.equilibrium_theory = at_equilibrium;
-        limit
+        Job::Method(Box::new(limit))
     };
-    let threads = crate::physics::pool::Pool::global().threads();
-    let weight = |i: usize| (options.methods[i].declaration().evaluations)(&body.params);
-    let methods: Vec<MethodLimit> =
-        crate::physics::pool::independent(options.methods.len(), threads, weight, job, |_| {});
+    let threads = context.threads;
+    let weight = |i: usize| match options.methods.get(i) {
+        Some(m) => (m.declaration().evaluations)(&body.params),
+        None => f64::INFINITY,
+    };
+    let mut jobs = crate::physics::pool::independent(count + 1, threads, weight, job, |i| {
+        if let Some(&m) = options.methods.get(i) {
+            started(m);
+        }
+    });
+    let Some(Job::Stiffest((stiffest_state, stiffest_body, stiffest_spectrum))) = jobs.pop() else {
+        unreachable!("the last job is the stiffest state")
+    };
+    let methods: Vec<MethodLimit> = jobs
+        .into_iter()
+        .filter_map(|j| match j {
+            Job::Method(limit) => Some(*limit),
+            Job::Stiffest(_) => None,
+        })
+        .map(|mut limit| {
+            let at_stiffest = theory::limit(
+                limit.method,
+                &scene.bodies[stiffest_body].params,
+                &stiffest_spectrum,
+            );
+            limit.stiffest_theory_dt = at_stiffest.dt;
+            limit.stiffest_theory = at_stiffest;
+            limit
+        })
+        .collect();
     for m in &methods {
         for p in &m.probes {
             progress(m.method, p);
@@ -467,6 +529,9 @@ struct Context<'a> {
     confirm: bool,
     usable: bool,
     linear: Vec<Linearisation>,
+    /// The study's jobs running now, and the cores they may use.
+    busy: AtomicUsize,
+    threads: usize,
 }
 
 impl Context<'_> {
@@ -537,7 +602,13 @@ impl Context<'_> {
                 Stability::Conditional => result.max_stable_dt,
                 Stability::Unconditional => Some(DT_OMEGA_CEILING / self.omega),
             };
-            result.usable = start.map(|dt| usable::usable(self.scene, method, dt, self.scale));
+            // A helper computes this search's likely next runs while a core is free (the
+            // other methods' searches have ended): the same runs and result.
+            let helpers = usize::from(self.threads > 1);
+            let idle = || self.busy.load(Ordering::SeqCst) < self.threads;
+            result.usable = start.map(|dt| {
+                usable::usable_ahead(self.scene, method, dt, self.scale, helpers, &idle)
+            });
         }
         result
     }
