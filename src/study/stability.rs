@@ -432,8 +432,22 @@ pub fn stability_with(
         Job::Method(Box::new(limit))
     };
     let threads = context.threads;
+    // Longest first, so that no long search starts last (the order changes no result): the
+    // work of a step, times, with the usable dt searched, its steps: the energy error of an
+    // order-p method grows as dt^p, so a usable dt for a 1 % error lies about 100^(1/p) below
+    // the stable one (measured on jelly-bowl: explicit Euler's search takes ten times the steps
+    // of semi-implicit Euler's). The stiffest state, one chain, starts first.
     let weight = |i: usize| match options.methods.get(i) {
-        Some(m) => (m.declaration().evaluations)(&body.params),
+        Some(m) => {
+            let d = m.declaration();
+            let usable = options.usable && !matches!(d.oscillator, OscillatorLimit::Unconditional);
+            let steps = if usable {
+                100f64.powf(1.0 / f64::from(d.order.max(1)))
+            } else {
+                1.0
+            };
+            (d.evaluations)(&body.params) * steps
+        }
         None => f64::INFINITY,
     };
     let mut jobs = crate::physics::pool::independent(count + 1, threads, weight, job, |i| {
@@ -606,9 +620,8 @@ impl Context<'_> {
             // other methods' searches have ended): the same runs and result.
             let helpers = usize::from(self.threads > 1);
             let idle = || self.busy.load(Ordering::SeqCst) < self.threads;
-            result.usable = start.map(|dt| {
-                usable::usable_ahead(self.scene, method, dt, self.scale, helpers, &idle)
-            });
+            result.usable = start
+                .map(|dt| usable::usable_ahead(self.scene, method, dt, self.scale, helpers, &idle));
         }
         result
     }

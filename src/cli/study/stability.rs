@@ -86,16 +86,11 @@ pub(super) fn run_stability(args: &StabilityArgs) -> anyhow::Result<()> {
     // Each method's search runs on a core of its own; the bar counts the searches started (the
     // probes are reported only when all have ended).
     let mut begun = 0;
-    let result = stability::stability_with(
-        &scene,
-        &options,
-        &mut |_, _| {},
-        &mut |m| {
-            progress.label(format!("study stability {}: {m} started", args.scene));
-            progress.set(begun);
-            begun += 1;
-        },
-    );
+    let result = stability::stability_with(&scene, &options, &mut |_, _| {}, &mut |m| {
+        progress.label(format!("study stability {}: {m} started", args.scene));
+        progress.set(begun);
+        begun += 1;
+    });
     progress.finish();
     let mut report = result?;
     report.sets = sets;

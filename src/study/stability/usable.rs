@@ -51,10 +51,10 @@ use serde::Serialize;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::CONFIRM_ENERGY_EVERY;
-use crate::study::ahead::with_helpers_when;
 use crate::physics::Method;
 use crate::scene::Scene;
 use crate::simulation::Simulation;
+use crate::study::ahead::with_helpers_when;
 
 /// The fraction `f` of `|E_0|` the residual may reach.
 pub const USABLE_FRACTION: f64 = 0.01;
@@ -140,27 +140,35 @@ pub fn usable_run_unless(
     };
     let mut residual_max = 0.0f64;
     let mut reason = None;
-    for k in 0..steps {
-        if k % CANCEL_EVERY == 0 && cancel.load(Ordering::Relaxed) {
-            return None;
+    // The steps between two looks at the residual go to `Simulation::advance` (the fused
+    // multi-step path where the scene allows it; the same bits as one step at a time).
+    let mut taken = 0;
+    let mut looked = 0;
+    while taken < steps {
+        if taken >= looked + CANCEL_EVERY {
+            looked = taken;
+            if cancel.load(Ordering::Relaxed) {
+                return None;
+            }
         }
-        if let Some(d) = sim.step() {
+        let k = super::confirm::next_check(taken, every, steps);
+        sim.advance(k + 1 - taken);
+        taken = k + 1;
+        if let Some(d) = &sim.diverged {
             reason = Some(format!("diverged at t = {:.4e} s: {}", d.time, d.reason));
             break;
         }
-        if k % every == 0 || k + 1 == steps {
-            let r = sim.energy_residual();
-            if r.is_nan() || r.abs() > allowed {
-                reason = Some(format!(
-                    "|E + D - E0| = {:.4e} J > {allowed:.4e} J at t = {:.4e} s",
-                    r.abs(),
-                    sim.time()
-                ));
-                residual_max = if r.is_nan() { f64::NAN } else { r.abs() };
-                break;
-            }
-            residual_max = residual_max.max(r.abs());
+        let r = sim.energy_residual();
+        if r.is_nan() || r.abs() > allowed {
+            reason = Some(format!(
+                "|E + D - E0| = {:.4e} J > {allowed:.4e} J at t = {:.4e} s",
+                r.abs(),
+                sim.time()
+            ));
+            residual_max = if r.is_nan() { f64::NAN } else { r.abs() };
+            break;
         }
+        residual_max = residual_max.max(r.abs());
     }
     Some(UsableRun {
         dt,
@@ -256,7 +264,14 @@ pub fn usable_ahead(
     let allowed = allowed_residual(scene, scale);
     let mut runs = Vec::new();
     let compute = |bits: &u64, cancel: &AtomicBool| {
-        usable_run_unless(scene, method, f64::from_bits(*bits), horizon, allowed, cancel)
+        usable_run_unless(
+            scene,
+            method,
+            f64::from_bits(*bits),
+            horizon,
+            allowed,
+            cancel,
+        )
     };
     let dt = with_helpers_when(helpers, &compute, idle, |ahead| {
         search(start, &mut |dt, next| {
