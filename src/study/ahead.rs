@@ -25,6 +25,7 @@
 
 use std::collections::{HashMap, HashSet};
 use std::hash::Hash;
+use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 
@@ -140,7 +141,11 @@ impl<K: Clone + Eq + Hash + Send, R: Clone + Send> Ahead<'_, K, R> {
                     .unwrap_or_else(PoisonError::into_inner);
             };
             drop(memo);
-            let result = (self.compute)(&key, &cancel);
+            // A guess that panics is dropped like a cancelled one: the search, asking for it,
+            // computes it itself and meets the same panic on its own thread.
+            let result = catch_unwind(AssertUnwindSafe(|| (self.compute)(&key, &cancel)))
+                .ok()
+                .flatten();
             let mut memo = self.lock();
             memo.running.remove(&key);
             if let Some(r) = result {

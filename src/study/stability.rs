@@ -101,6 +101,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 use super::StudyError;
+use super::ahead;
 use super::linear::{self, Linearisation};
 use super::modes::omega_max;
 use super::theory::equilibrium::spectrum_at_equilibrium;
@@ -113,8 +114,8 @@ mod report;
 mod stiffest;
 pub mod usable;
 
+use confirm::{below, confirm_step_count, confirm_unless};
 pub use confirm::{confirm_run, confirm_steps};
-use confirm::{confirm_step_count, confirm_with_omega};
 pub use report::{
     Confirmation, MethodLimit, Probe, StabilityOptions, StabilityReport, StiffestState,
 };
@@ -503,37 +504,6 @@ pub fn stability_with(
     })
 }
 
-/// Below a failed `z`: lower it by 5 % three times, then halve, until a run passes (none below
-/// the floor); then bisect to [`CONFIRM_TOLERANCE`]. `failed` ends as the smallest failing `z`.
-fn below(run: &mut dyn FnMut(f64) -> bool, failed: &mut f64) -> Option<f64> {
-    let mut tries = 0;
-    let mut passed = loop {
-        // 5 % steps first (contacts and large motions usually cost a few per cent), then halve.
-        tries += 1;
-        let z = if tries <= 3 {
-            *failed * 0.95
-        } else {
-            *failed / 2.0
-        };
-        if z < DT_OMEGA_FLOOR {
-            return None;
-        }
-        if run(z) {
-            break z;
-        }
-        *failed = z;
-    };
-    while *failed > passed * (1.0 + CONFIRM_TOLERANCE) {
-        let z = (passed * *failed).sqrt();
-        if run(z) {
-            passed = z;
-        } else {
-            *failed = z;
-        }
-    }
-    Some(passed)
-}
-
 /// What every probe of one study shares.
 struct Context<'a> {
     scene: &'a Scene,
@@ -719,31 +689,45 @@ impl Context<'_> {
         linear: Stability,
         result: &mut MethodLimit,
     ) -> (Stability, Option<f64>) {
-        let mut run = |z: f64| {
-            let c = self.confirmation(method, z / self.omega);
-            let passed = c.passed;
-            result.confirmations.push(c);
-            passed
+        // A helper confirms the likely next dt ahead while a core is free (the other
+        // methods' searches have ended): the same runs and result.
+        let compute = |bits: &u64, cancel: &ahead::Cancel| {
+            let dt = f64::from_bits(*bits) / self.omega;
+            let steps = confirm_step_count(dt, self.horizon);
+            confirm_unless(
+                self.scene, method, dt, steps, self.scale, self.omega, cancel,
+            )
         };
-        let mut failed = candidate;
-        let mut passed = if run(candidate) {
-            candidate
-        } else {
-            let Some(z) = below(&mut run, &mut failed) else {
-                return (Stability::None, None);
+        let helpers = usize::from(self.threads > 1);
+        let idle = || self.busy.load(Ordering::SeqCst) < self.threads;
+        let searched = ahead::with_helpers_when(helpers, &compute, &idle, |ahead| {
+            let mut run = |z: f64, next: &[f64]| {
+                ahead.hint(next.iter().map(|z| z.to_bits()).collect());
+                let c = ahead.get(&z.to_bits());
+                let passed = c.passed;
+                result.confirmations.push(c);
+                passed
             };
-            z
-        };
-        for _ in 0..CONFIRM_ROUNDS {
-            if run(CONFIRM_MARGIN * passed) {
-                break;
+            let mut failed = candidate;
+            let first = CONFIRM_MARGIN * candidate;
+            let mut passed = if run(candidate, &[first]) {
+                candidate
+            } else {
+                below(&mut run, &mut failed)?
+            };
+            for _ in 0..CONFIRM_ROUNDS {
+                let check = CONFIRM_MARGIN * passed;
+                if run(check, &[check * 0.95]) {
+                    break;
+                }
+                failed = check;
+                passed = below(&mut run, &mut failed)?;
             }
-            failed = CONFIRM_MARGIN * passed;
-            let Some(z) = below(&mut run, &mut failed) else {
-                return (Stability::None, None);
-            };
-            passed = z;
-        }
+            Some(passed)
+        });
+        let Some(passed) = searched else {
+            return (Stability::None, None);
+        };
         if passed == candidate && linear == Stability::Unconditional {
             return (Stability::Unconditional, None);
         }
@@ -778,11 +762,5 @@ impl Context<'_> {
             rho: g.rho,
             stopped: g.stopped,
         }
-    }
-
-    /// One confirmation run of the whole scene with `method` at `dt` (s).
-    fn confirmation(&self, method: Method, dt: f64) -> Confirmation {
-        let steps = confirm_step_count(dt, self.horizon);
-        confirm_with_omega(self.scene, method, dt, steps, self.scale, self.omega)
     }
 }
