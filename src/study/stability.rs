@@ -74,7 +74,9 @@
 //! # The search
 //!
 //! For each method, with `z = dt·ω_max` (the methods are independent and run on separate
-//! threads, [`crate::physics::pool::independent`]; their probes are reported when each ends):
+//! threads, [`crate::physics::pool::independent`], the longest first; their probes are reported
+//! when each ends; once a core is free, a helper computes the confirmation and usable-dt
+//! searches' likely next runs ahead, [`super::ahead`], which changes no run and no result):
 //! 1. probe `z = 100`: linearly stable there → linearly **unconditional**;
 //! 2. when the damped theory gives a limit `z_t`, bracket it: probe `z_t (1 - 10⁻³)`; stable →
 //!    probe `10⁻³` higher (at most three times) until one fails: that bracket is the result
