@@ -15,6 +15,7 @@
 //! Every study is deterministic: the same scene and options give the same numbers, run to run.
 
 pub mod advise;
+pub mod ahead;
 pub mod convergence;
 pub mod linear;
 pub mod modes;

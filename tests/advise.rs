@@ -592,3 +592,55 @@ fn bad_input_is_refused_with_what_was_expected() {
     let e = stderr_of_failure(&["study", "resolution", "rope", "--method", "leapfrog"]);
     assert!(e.contains("unknown method `leapfrog`"), "{e}");
 }
+
+/// `value` without its `wall_seconds` fields (timings differ between any two runs).
+fn without_wall(value: &mut Value) {
+    match value {
+        Value::Object(map) => {
+            map.remove("wall_seconds");
+            map.values_mut().for_each(without_wall);
+        }
+        Value::Array(items) => items.iter_mut().for_each(without_wall),
+        _ => {}
+    }
+}
+
+#[test]
+fn advise_on_one_thread_and_two_takes_the_same_decisions() {
+    // With two threads the next halvings and the reference chain's next run are computed
+    // ahead; the search must take the same decisions and report the same numbers.
+    let args = [
+        "advise",
+        "jelly-bowl",
+        "--tolerance",
+        "0.05",
+        "--time",
+        "2",
+        "--set",
+        "n=4",
+        "--methods",
+        "semi-implicit-euler,midpoint,rk4",
+        "--json",
+    ];
+    let run = |threads: &str| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_springlab"))
+            .args(args)
+            .env("SPRINGLAB_THREADS", threads)
+            .output()
+            .expect("run springlab");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let mut v: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+        without_wall(&mut v);
+        v
+    };
+    let one = run("1");
+    assert_eq!(one, run("2"), "one thread and two differ");
+    assert!(
+        one["candidates"].as_array().expect("candidates").len() >= 3,
+        "{one}"
+    );
+}

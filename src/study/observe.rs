@@ -567,17 +567,38 @@ pub fn cost(scene: &Scene, steps: u64, force_evals: u64, cg_iterations: u64) -> 
 /// components (energy accounting off: it does not change the motion).
 #[must_use]
 pub fn measure(scene: &Scene, method: Method, dt: f64, steps: u64) -> Measurement {
-    run(scene, method, dt, steps, false)
+    run(scene, method, dt, steps, false, None).unwrap_or_else(|| unreachable!("not cancelled"))
+}
+
+/// [`measure`], given up (`None`) at the first sample instant after `cancel` becomes true: a
+/// run computed ahead that the search no longer wants ([`super::ahead`]).
+#[must_use]
+pub fn measure_unless(
+    scene: &Scene,
+    method: Method,
+    dt: f64,
+    steps: u64,
+    cancel: &std::sync::atomic::AtomicBool,
+) -> Option<Measurement> {
+    run(scene, method, dt, steps, false, Some(cancel))
 }
 
 /// [`measure`] with the energy accounting on, as `springlab run` runs: the same motion, and
 /// the energy residual at the end.
 #[must_use]
 pub fn measure_accounted(scene: &Scene, method: Method, dt: f64, steps: u64) -> Measurement {
-    run(scene, method, dt, steps, true)
+    run(scene, method, dt, steps, true, None).unwrap_or_else(|| unreachable!("not cancelled"))
 }
 
-fn run(scene: &Scene, method: Method, dt: f64, steps: u64, accounting: bool) -> Measurement {
+fn run(
+    scene: &Scene,
+    method: Method,
+    dt: f64,
+    steps: u64,
+    accounting: bool,
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+) -> Option<Measurement> {
+    let cancelled = || cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed));
     let mut scene = scene.clone();
     scene.set_method(method);
     let mut observable = Observable::of(&scene);
@@ -595,6 +616,9 @@ fn run(scene: &Scene, method: Method, dt: f64, steps: u64, accounting: bool) -> 
             observable.after_step(&sim, k, steps);
             if k.is_multiple_of(sample_every) {
                 snapshots.push(observable.finish(&sim));
+                if cancelled() {
+                    return None;
+                }
             }
         }
     } else {
@@ -613,6 +637,9 @@ fn run(scene: &Scene, method: Method, dt: f64, steps: u64, accounting: bool) -> 
             if k.is_multiple_of(sample_every) {
                 snapshots.push(observable.finish(&sim));
             }
+            if cancelled() {
+                return None;
+            }
         }
     }
     let wall_seconds = start.elapsed().as_secs_f64();
@@ -624,7 +651,7 @@ fn run(scene: &Scene, method: Method, dt: f64, steps: u64, accounting: bool) -> 
             d.time, d.step, d.reason
         )
     });
-    Measurement {
+    Some(Measurement {
         method,
         dt,
         steps: sim.steps,
@@ -640,7 +667,7 @@ fn run(scene: &Scene, method: Method, dt: f64, steps: u64, accounting: bool) -> 
         },
         diverged,
         energy_residual: accounting.then(|| sim.energy_residual()),
-    }
+    })
 }
 
 /// The largest difference of two runs over their sample instants: snapshot `k` of each

@@ -74,7 +74,9 @@
 //! # The search
 //!
 //! For each method, with `z = dt·ω_max` (the methods are independent and run on separate
-//! threads, [`crate::physics::pool::independent`]; their probes are reported when each ends):
+//! threads, [`crate::physics::pool::independent`], the longest first; their probes are reported
+//! when each ends; once a core is free, a helper computes the confirmation and usable-dt
+//! searches' likely next runs ahead, [`super::ahead`], which changes no run and no result):
 //! 1. probe `z = 100`: linearly stable there → linearly **unconditional**;
 //! 2. when the damped theory gives a limit `z_t`, bracket it: probe `z_t (1 - 10⁻³)`; stable →
 //!    probe `10⁻³` higher (at most three times) until one fails: that bracket is the result
@@ -95,10 +97,13 @@
 //! in Molecular Dynamics Simulations", J. Comput. Phys. 140 (1998); E. Hairer, G. Wanner,
 //! *Solving Ordinary Differential Equations II*, 2nd ed., Springer 1996, §IV.2.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+
 use glam::DVec3;
 use serde::Serialize;
 
 use super::StudyError;
+use super::ahead;
 use super::linear::{self, Linearisation};
 use super::modes::omega_max;
 use super::theory::equilibrium::spectrum_at_equilibrium;
@@ -111,8 +116,8 @@ mod report;
 mod stiffest;
 pub mod usable;
 
+use confirm::{below, confirm_step_count, confirm_unless};
 pub use confirm::{confirm_run, confirm_steps};
-use confirm::{confirm_step_count, confirm_with_omega};
 pub use report::{
     Confirmation, MethodLimit, Probe, StabilityOptions, StabilityReport, StiffestState,
 };
@@ -327,6 +332,35 @@ pub fn stability(
     options: &StabilityOptions,
     progress: &mut dyn FnMut(Method, &Probe),
 ) -> Result<StabilityReport, StudyError> {
+    stability_with(scene, options, progress, &mut |_| {})
+}
+
+/// Counts a job out of [`Context::busy`] when it ends.
+struct Leave<'a>(&'a AtomicUsize);
+
+impl Drop for Leave<'_> {
+    fn drop(&mut self) {
+        self.0.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
+/// One job of [`stability_with`]: a method's search, or the stiffest state.
+enum Job {
+    Method(Box<MethodLimit>),
+    Stiffest((StiffestState, usize, theory::Spectrum)),
+}
+
+/// [`stability`], also calling `started` as each method's search starts (on the calling
+/// thread, while the others run: a terminal's progress).
+///
+/// # Errors
+/// As [`stability`].
+pub fn stability_with(
+    scene: &Scene,
+    options: &StabilityOptions,
+    progress: &mut dyn FnMut(Method, &Probe),
+    started: &mut dyn FnMut(Method),
+) -> Result<StabilityReport, StudyError> {
     let horizon = options.horizon;
     if !(horizon > 0.0 && horizon.is_finite()) {
         return Err(StudyError::Horizon(horizon));
@@ -375,30 +409,75 @@ pub fn stability(
             .zip(&estimates)
             .map(|(b, e)| Linearisation::new(&b.model, &b.state, e.omega.max(omega * 1e-9)))
             .collect(),
+        busy: AtomicUsize::new(0),
+        threads: crate::physics::pool::Pool::global().threads(),
     };
-    let (stiffest_state, stiffest_body, stiffest_spectrum) =
-        stiffest_state(scene, horizon, (stiffest, omega));
     let hanging = spectrum_at_equilibrium(&body.model, &body.state);
     // The methods are independent: one job each, spread over the cores (the results do not
-    // depend on the thread that computes them); the probes are reported after each job.
+    // depend on the thread that computes them); the probes are reported after each job. The
+    // stiffest state (one run of the scene, a power iteration every 5 ms, a chain of warm
+    // starts that cannot be split) is one more job beside them, started first: only the
+    // report needs it.
+    let count = options.methods.len();
     let job = |i: usize| {
-        let m = options.methods[i];
+        context.busy.fetch_add(1, Ordering::SeqCst);
+        let _done = Leave(&context.busy);
+        let Some(&m) = options.methods.get(i) else {
+            return Job::Stiffest(stiffest_state(scene, horizon, (stiffest, omega)));
+        };
         let damped = theory::limit(m, &body.params, &spectrum);
-        let at_stiffest = theory::limit(m, &scene.bodies[stiffest_body].params, &stiffest_spectrum);
         let at_equilibrium = hanging
             .as_ref()
             .ok()
             .map(|(spectrum, _)| theory::limit(m, &body.params, spectrum));
         let mut limit = context.search(m, damped, at_equilibrium.as_ref());
-        limit.stiffest_theory_dt = at_stiffest.dt;
-        limit.stiffest_theory = at_stiffest;
         limit.equilibrium_theory = at_equilibrium;
-        limit
+        Job::Method(Box::new(limit))
     };
-    let threads = crate::physics::pool::Pool::global().threads();
-    let weight = |i: usize| (options.methods[i].declaration().evaluations)(&body.params);
-    let methods: Vec<MethodLimit> =
-        crate::physics::pool::independent(options.methods.len(), threads, weight, job, |_| {});
+    let threads = context.threads;
+    // Longest first, so that no long search starts last (the order changes no result): the
+    // work of a step, times, with the usable dt searched, its steps: the energy error of an
+    // order-p method grows as dt^p, so a usable dt for a 1 % error lies about 100^(1/p) below
+    // the stable one (measured on jelly-bowl: explicit Euler's search takes ten times the steps
+    // of semi-implicit Euler's). The stiffest state, one chain, starts first.
+    let weight = |i: usize| match options.methods.get(i) {
+        Some(m) => {
+            let d = m.declaration();
+            let usable = options.usable && !matches!(d.oscillator, OscillatorLimit::Unconditional);
+            let steps = if usable {
+                100f64.powf(1.0 / f64::from(d.order.max(1)))
+            } else {
+                1.0
+            };
+            (d.evaluations)(&body.params) * steps
+        }
+        None => f64::INFINITY,
+    };
+    let mut jobs = crate::physics::pool::independent(count + 1, threads, weight, job, |i| {
+        if let Some(&m) = options.methods.get(i) {
+            started(m);
+        }
+    });
+    let Some(Job::Stiffest((stiffest_state, stiffest_body, stiffest_spectrum))) = jobs.pop() else {
+        unreachable!("the last job is the stiffest state")
+    };
+    let methods: Vec<MethodLimit> = jobs
+        .into_iter()
+        .filter_map(|j| match j {
+            Job::Method(limit) => Some(*limit),
+            Job::Stiffest(_) => None,
+        })
+        .map(|mut limit| {
+            let at_stiffest = theory::limit(
+                limit.method,
+                &scene.bodies[stiffest_body].params,
+                &stiffest_spectrum,
+            );
+            limit.stiffest_theory_dt = at_stiffest.dt;
+            limit.stiffest_theory = at_stiffest;
+            limit
+        })
+        .collect();
     for m in &methods {
         for p in &m.probes {
             progress(m.method, p);
@@ -427,37 +506,6 @@ pub fn stability(
     })
 }
 
-/// Below a failed `z`: lower it by 5 % three times, then halve, until a run passes (none below
-/// the floor); then bisect to [`CONFIRM_TOLERANCE`]. `failed` ends as the smallest failing `z`.
-fn below(run: &mut dyn FnMut(f64) -> bool, failed: &mut f64) -> Option<f64> {
-    let mut tries = 0;
-    let mut passed = loop {
-        // 5 % steps first (contacts and large motions usually cost a few per cent), then halve.
-        tries += 1;
-        let z = if tries <= 3 {
-            *failed * 0.95
-        } else {
-            *failed / 2.0
-        };
-        if z < DT_OMEGA_FLOOR {
-            return None;
-        }
-        if run(z) {
-            break z;
-        }
-        *failed = z;
-    };
-    while *failed > passed * (1.0 + CONFIRM_TOLERANCE) {
-        let z = (passed * *failed).sqrt();
-        if run(z) {
-            passed = z;
-        } else {
-            *failed = z;
-        }
-    }
-    Some(passed)
-}
-
 /// What every probe of one study shares.
 struct Context<'a> {
     scene: &'a Scene,
@@ -467,6 +515,9 @@ struct Context<'a> {
     confirm: bool,
     usable: bool,
     linear: Vec<Linearisation>,
+    /// The study's jobs running now, and the cores they may use.
+    busy: AtomicUsize,
+    threads: usize,
 }
 
 impl Context<'_> {
@@ -537,7 +588,12 @@ impl Context<'_> {
                 Stability::Conditional => result.max_stable_dt,
                 Stability::Unconditional => Some(DT_OMEGA_CEILING / self.omega),
             };
-            result.usable = start.map(|dt| usable::usable(self.scene, method, dt, self.scale));
+            // A helper computes this search's likely next runs while a core is free (the
+            // other methods' searches have ended): the same runs and result.
+            let helpers = usize::from(self.threads > 1);
+            let idle = || self.busy.load(Ordering::SeqCst) < self.threads;
+            result.usable = start
+                .map(|dt| usable::usable_ahead(self.scene, method, dt, self.scale, helpers, &idle));
         }
         result
     }
@@ -635,31 +691,45 @@ impl Context<'_> {
         linear: Stability,
         result: &mut MethodLimit,
     ) -> (Stability, Option<f64>) {
-        let mut run = |z: f64| {
-            let c = self.confirmation(method, z / self.omega);
-            let passed = c.passed;
-            result.confirmations.push(c);
-            passed
+        // A helper confirms the likely next dt ahead while a core is free (the other
+        // methods' searches have ended): the same runs and result.
+        let compute = |bits: &u64, cancel: &ahead::Cancel| {
+            let dt = f64::from_bits(*bits) / self.omega;
+            let steps = confirm_step_count(dt, self.horizon);
+            confirm_unless(
+                self.scene, method, dt, steps, self.scale, self.omega, cancel,
+            )
         };
-        let mut failed = candidate;
-        let mut passed = if run(candidate) {
-            candidate
-        } else {
-            let Some(z) = below(&mut run, &mut failed) else {
-                return (Stability::None, None);
+        let helpers = usize::from(self.threads > 1);
+        let idle = || self.busy.load(Ordering::SeqCst) < self.threads;
+        let searched = ahead::with_helpers_when(helpers, &compute, &idle, |ahead| {
+            let mut run = |z: f64, next: &[f64]| {
+                ahead.hint(next.iter().map(|z| z.to_bits()).collect());
+                let c = ahead.get(&z.to_bits());
+                let passed = c.passed;
+                result.confirmations.push(c);
+                passed
             };
-            z
-        };
-        for _ in 0..CONFIRM_ROUNDS {
-            if run(CONFIRM_MARGIN * passed) {
-                break;
+            let mut failed = candidate;
+            let first = CONFIRM_MARGIN * candidate;
+            let mut passed = if run(candidate, &[first]) {
+                candidate
+            } else {
+                below(&mut run, &mut failed)?
+            };
+            for _ in 0..CONFIRM_ROUNDS {
+                let check = CONFIRM_MARGIN * passed;
+                if run(check, &[check * 0.95]) {
+                    break;
+                }
+                failed = check;
+                passed = below(&mut run, &mut failed)?;
             }
-            failed = CONFIRM_MARGIN * passed;
-            let Some(z) = below(&mut run, &mut failed) else {
-                return (Stability::None, None);
-            };
-            passed = z;
-        }
+            Some(passed)
+        });
+        let Some(passed) = searched else {
+            return (Stability::None, None);
+        };
         if passed == candidate && linear == Stability::Unconditional {
             return (Stability::Unconditional, None);
         }
@@ -694,11 +764,5 @@ impl Context<'_> {
             rho: g.rho,
             stopped: g.stopped,
         }
-    }
-
-    /// One confirmation run of the whole scene with `method` at `dt` (s).
-    fn confirmation(&self, method: Method, dt: f64) -> Confirmation {
-        let steps = confirm_step_count(dt, self.horizon);
-        confirm_with_omega(self.scene, method, dt, steps, self.scale, self.omega)
     }
 }

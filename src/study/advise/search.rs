@@ -1,6 +1,7 @@
 //! The search: candidates in order of cost, the reference run, the verifications and the report.
 
 use super::*;
+use crate::study::ahead;
 
 /// Methods by cost per step, cheapest first (ties in teaching order).
 fn search_order(methods: &[Method]) -> Vec<Method> {
@@ -84,11 +85,33 @@ fn verify(
     })
 }
 
+/// A run of the search: (model index, method, steps); its `dt` is `T / steps`.
+type RunKey = (usize, Method, u64);
+
 /// Runs the plan (module docs). `progress` is called before every run.
+///
+/// The search is sequential (each run decides the next), but its next run is usually the next
+/// halving of `dt`: with more than one thread, helpers compute the hinted runs ahead
+/// ([`super::super::ahead`]); the search takes the same decisions and reports the same numbers.
 ///
 /// # Errors
 /// A confirmed stability study that fails (for methods the theory does not cover).
 pub fn advise(plan: &Plan, progress: &mut dyn FnMut(&Stage)) -> Result<AdviseReport, StudyError> {
+    let compute = |&(model, method, steps): &RunKey, cancel: &ahead::Cancel| {
+        let scene = &plan.models[model].scene;
+        observe::measure_unless(scene, method, plan.time / steps as f64, steps, cancel)
+    };
+    let threads = crate::physics::pool::Pool::global().threads();
+    let helpers = if threads < 2 { 0 } else { threads };
+    ahead::with_helpers(helpers, &compute, |runs| search(plan, progress, runs))
+}
+
+/// [`advise`] with its runs from `runs`.
+fn search(
+    plan: &Plan,
+    progress: &mut dyn FnMut(&Stage),
+    runs: &ahead::Ahead<'_, RunKey, Measurement>,
+) -> Result<AdviseReport, StudyError> {
     let start = Instant::now();
     let time = plan.time;
     let x = plan.options.tolerance;
@@ -102,7 +125,13 @@ pub fn advise(plan: &Plan, progress: &mut dyn FnMut(&Stage)) -> Result<AdviseRep
         let steps = plan.reference_steps << k;
         let dt = time / steps as f64;
         progress(&Stage::Reference(dt));
-        let run = observe::measure(&reference_model.scene, Method::Rk4, dt, steps);
+        runs.hint(if k < REFERENCE_HALVINGS {
+            vec![(plan.reference, Method::Rk4, steps << 1)]
+        } else {
+            Vec::new()
+        });
+        let run = runs.get(&(plan.reference, Method::Rk4, steps));
+        debug_assert_eq!(run.dt, dt);
         let change = chain_runs
             .last()
             .map(|prev| observe::history_difference(&run.snapshots, &prev.snapshots, time));
@@ -244,7 +273,9 @@ pub fn advise(plan: &Plan, progress: &mut dyn FnMut(&Stage)) -> Result<AdviseRep
                             method,
                             dt,
                         });
-                        let r = observe::measure(&model.scene, method, dt, steps);
+                        let next = (k < MAX_HALVINGS).then_some((index, method, steps << 1));
+                        runs.hint(next.into_iter().collect());
+                        let r = runs.get(&(index, method, steps));
                         work += r.cost;
                         r
                     }

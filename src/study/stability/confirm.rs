@@ -1,11 +1,14 @@
 //! The confirmation run of the stability study (module docs of `stability`, "Confirmation"):
 //! the whole scene at a `dt`, judged by its energy.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use glam::DVec3;
 
 use super::{
     CONFIRM_ENERGY_EVERY, CONFIRM_ENERGY_SCALES, CONFIRM_EXPLOSION_SCALES, CONFIRM_GROWTH,
-    CONFIRM_HORIZONS, CONFIRM_MAX_STEPS, CONFIRM_MIN_STEPS, Confirmation,
+    CONFIRM_HORIZONS, CONFIRM_MARGIN, CONFIRM_MAX_STEPS, CONFIRM_MIN_STEPS, CONFIRM_TOLERANCE,
+    Confirmation, DT_OMEGA_FLOOR,
 };
 use crate::physics::Method;
 use crate::scene::Scene;
@@ -59,6 +62,22 @@ pub(super) fn confirm_with_omega(
     scale: f64,
     omega: f64,
 ) -> Confirmation {
+    let never = AtomicBool::new(false);
+    confirm_unless(scene, method, dt, steps, scale, omega, &never)
+        .unwrap_or_else(|| unreachable!("not cancelled"))
+}
+
+/// [`confirm_with_omega`], given up (`None`) soon after `cancel` becomes true: a run computed
+/// ahead that the search no longer wants ([`crate::study::ahead`]).
+pub(super) fn confirm_unless(
+    scene: &Scene,
+    method: Method,
+    dt: f64,
+    steps: u64,
+    scale: f64,
+    omega: f64,
+    cancel: &AtomicBool,
+) -> Option<Confirmation> {
     {
         let mut scene = scene.clone();
         scene.set_method(method);
@@ -85,12 +104,29 @@ pub(super) fn confirm_with_omega(
         let mut quarters = [f64::NEG_INFINITY; 4];
         let mut lowest = [f64::INFINITY; 4];
         let mut reason = None;
-        for k in 0..steps {
-            if let Some(d) = sim.step() {
+        // The steps between two looks at the energy go to `Simulation::advance` (the fused
+        // multi-step path where the scene allows it; the same bits as one step at a time).
+        let mut taken = 0;
+        let mut looked = 0;
+        while taken < steps {
+            if taken >= looked + CANCEL_EVERY {
+                looked = taken;
+                if cancel.load(Ordering::Relaxed) {
+                    return None;
+                }
+            }
+            let k = match level {
+                Some(_) if taken >= looked + CANCEL_EVERY => taken,
+                Some(_) => next_check(taken, every, steps),
+                None => (taken + CANCEL_EVERY).min(steps) - 1,
+            };
+            sim.advance(k + 1 - taken);
+            taken = k + 1;
+            if let Some(d) = &sim.diverged {
                 reason = Some(format!("diverged at t = {:.4e} s: {}", d.time, d.reason));
                 break;
             }
-            if level.is_some() && (k % every == 0 || k + 1 == steps) {
+            if level.is_some() {
                 let r = sim.energy().total - e0;
                 let q = (4 * k / steps) as usize;
                 quarters[q] = quarters[q].max(r);
@@ -124,7 +160,7 @@ pub(super) fn confirm_with_omega(
             }
         }
         let allowed = level;
-        Confirmation {
+        Some(Confirmation {
             dt,
             dt_omega: dt * omega,
             steps: sim.steps,
@@ -132,6 +168,59 @@ pub(super) fn confirm_with_omega(
             reason,
             rise_max: allowed.map(|_| residual_max),
             rise_allowed: allowed,
+        })
+    }
+}
+
+/// A cancelled run stops within this many steps.
+const CANCEL_EVERY: u64 = 64;
+
+/// The first step index `k ≥ taken` (0-based) after which a run of `steps` steps that looks
+/// every `every` steps looks: `k` a multiple of `every`, or the last step.
+pub(super) fn next_check(taken: u64, every: u64, steps: u64) -> u64 {
+    taken.next_multiple_of(every).min(steps - 1)
+}
+
+/// The next run once a bisection step leaves `[passed, failed]`: its midpoint, or, within
+/// [`CONFIRM_TOLERANCE`], the check at [`CONFIRM_MARGIN`] of `passed` (the same operations as
+/// [`below`] and the search, so the same bits: a run computed ahead is the one asked for).
+fn after(passed: f64, failed: f64) -> f64 {
+    if failed > passed * (1.0 + CONFIRM_TOLERANCE) {
+        (passed * failed).sqrt()
+    } else {
+        CONFIRM_MARGIN * passed
+    }
+}
+
+/// Below a failed `z`: lower it by 5 % three times, then halve, until a run passes (none below
+/// the floor); then bisect to [`CONFIRM_TOLERANCE`]. `failed` ends as the smallest failing `z`.
+/// `run(z, next)` confirms `z`; `next` lists the runs that may follow it, either verdict.
+pub(super) fn below(run: &mut dyn FnMut(f64, &[f64]) -> bool, failed: &mut f64) -> Option<f64> {
+    let mut tries = 0;
+    let mut passed = loop {
+        // 5 % steps first (contacts and large motions usually cost a few per cent), then halve.
+        tries += 1;
+        let z = if tries <= 3 {
+            *failed * 0.95
+        } else {
+            *failed / 2.0
+        };
+        if z < DT_OMEGA_FLOOR {
+            return None;
+        }
+        let lower = if tries < 3 { z * 0.95 } else { z / 2.0 };
+        if run(z, &[lower, after(z, *failed)]) {
+            break z;
+        }
+        *failed = z;
+    };
+    while *failed > passed * (1.0 + CONFIRM_TOLERANCE) {
+        let z = (passed * *failed).sqrt();
+        if run(z, &[after(z, *failed), after(passed, z)]) {
+            passed = z;
+        } else {
+            *failed = z;
         }
     }
+    Some(passed)
 }

@@ -48,10 +48,13 @@
 
 use serde::Serialize;
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use super::CONFIRM_ENERGY_EVERY;
 use crate::physics::Method;
 use crate::scene::Scene;
 use crate::simulation::Simulation;
+use crate::study::ahead::with_helpers_when;
 
 /// The fraction `f` of `|E_0|` the residual may reach.
 pub const USABLE_FRACTION: f64 = 0.01;
@@ -108,6 +111,22 @@ pub fn allowed_residual(scene: &Scene, scale: f64) -> f64 {
 /// `|residual| > allowed` (J) or divergence.
 #[must_use]
 pub fn usable_run(scene: &Scene, method: Method, dt: f64, horizon: f64, allowed: f64) -> UsableRun {
+    let never = AtomicBool::new(false);
+    usable_run_unless(scene, method, dt, horizon, allowed, &never)
+        .unwrap_or_else(|| unreachable!("not cancelled"))
+}
+
+/// [`usable_run`], given up (`None`) soon after `cancel` becomes true: a run computed ahead
+/// that the search no longer wants ([`crate::study::ahead`]).
+#[must_use]
+pub fn usable_run_unless(
+    scene: &Scene,
+    method: Method,
+    dt: f64,
+    horizon: f64,
+    allowed: f64,
+    cancel: &AtomicBool,
+) -> Option<UsableRun> {
     let mut scene = scene.clone();
     scene.set_method(method);
     let mut sim = Simulation::new(scene);
@@ -121,37 +140,62 @@ pub fn usable_run(scene: &Scene, method: Method, dt: f64, horizon: f64, allowed:
     };
     let mut residual_max = 0.0f64;
     let mut reason = None;
-    for k in 0..steps {
-        if let Some(d) = sim.step() {
+    // The steps between two looks at the residual go to `Simulation::advance` (the fused
+    // multi-step path where the scene allows it; the same bits as one step at a time).
+    let mut taken = 0;
+    let mut looked = 0;
+    while taken < steps {
+        if taken >= looked + CANCEL_EVERY {
+            looked = taken;
+            if cancel.load(Ordering::Relaxed) {
+                return None;
+            }
+        }
+        let k = super::confirm::next_check(taken, every, steps);
+        sim.advance(k + 1 - taken);
+        taken = k + 1;
+        if let Some(d) = &sim.diverged {
             reason = Some(format!("diverged at t = {:.4e} s: {}", d.time, d.reason));
             break;
         }
-        if k % every == 0 || k + 1 == steps {
-            let r = sim.energy_residual();
-            if r.is_nan() || r.abs() > allowed {
-                reason = Some(format!(
-                    "|E + D - E0| = {:.4e} J > {allowed:.4e} J at t = {:.4e} s",
-                    r.abs(),
-                    sim.time()
-                ));
-                residual_max = if r.is_nan() { f64::NAN } else { r.abs() };
-                break;
-            }
-            residual_max = residual_max.max(r.abs());
+        let r = sim.energy_residual();
+        if r.is_nan() || r.abs() > allowed {
+            reason = Some(format!(
+                "|E + D - E0| = {:.4e} J > {allowed:.4e} J at t = {:.4e} s",
+                r.abs(),
+                sim.time()
+            ));
+            residual_max = if r.is_nan() { f64::NAN } else { r.abs() };
+            break;
         }
+        residual_max = residual_max.max(r.abs());
     }
-    UsableRun {
+    Some(UsableRun {
         dt,
         steps: sim.steps,
         passed: reason.is_none(),
         residual_max,
         reason,
+    })
+}
+
+/// A cancelled run stops within this many steps.
+const CANCEL_EVERY: u64 = 64;
+
+/// The next run of the bisection after `[passed, failed]`: its midpoint, or the check at 95 %
+/// once they are within the tolerance (the same operations as [`search`], so the same bits).
+fn after(passed: f64, failed: f64) -> f64 {
+    if failed > passed * (1.0 + USABLE_TOLERANCE) {
+        (passed * failed).sqrt()
+    } else {
+        USABLE_MARGIN * passed
     }
 }
 
-/// The search of the module docs from `start` (s) down, with `run(dt)` the verdict of one run.
-/// Returns the usable dt, if any.
-pub fn search(start: f64, run: &mut dyn FnMut(f64) -> bool) -> Option<f64> {
+/// The search of the module docs from `start` (s) down, with `run(dt, next)` the verdict of
+/// one run; `next` lists the runs that may follow it (whichever its verdict), for a caller that
+/// computes them ahead. Returns the usable dt, if any.
+pub fn search(start: f64, run: &mut dyn FnMut(f64, &[f64]) -> bool) -> Option<f64> {
     let mut top = start;
     // A failing dt above the grid's first point, when known.
     let mut failed: Option<f64> = None;
@@ -160,7 +204,7 @@ pub fn search(start: f64, run: &mut dyn FnMut(f64) -> bool) -> Option<f64> {
         if let Some(mut f) = above {
             while f > passed * (1.0 + USABLE_TOLERANCE) {
                 let m = (passed * f).sqrt();
-                if run(m) {
+                if run(m, &[after(m, f), after(passed, m)]) {
                     passed = m;
                 } else {
                     f = m;
@@ -168,7 +212,7 @@ pub fn search(start: f64, run: &mut dyn FnMut(f64) -> bool) -> Option<f64> {
             }
         }
         let check = USABLE_MARGIN * passed;
-        if run(check) {
+        if run(check, &[check / USABLE_GRID]) {
             return Some(passed);
         }
         failed = Some(check);
@@ -182,16 +226,19 @@ pub fn search(start: f64, run: &mut dyn FnMut(f64) -> bool) -> Option<f64> {
 fn down(
     top: f64,
     failed: Option<f64>,
-    run: &mut dyn FnMut(f64) -> bool,
+    run: &mut dyn FnMut(f64, &[f64]) -> bool,
 ) -> Option<(f64, Option<f64>)> {
     let mut above = failed;
     let mut dt = top;
     for _ in 0..=USABLE_MAX_STEPS_DOWN {
-        if run(dt) {
+        // Most grid points fail (and stop early): the next two are the likely next runs.
+        let next = dt / USABLE_GRID;
+        let passes = run(dt, &[next, next / USABLE_GRID]);
+        if passes {
             return Some((dt, above));
         }
         above = Some(dt);
-        dt /= USABLE_GRID;
+        dt = next;
     }
     None
 }
@@ -199,14 +246,41 @@ fn down(
 /// The usable dt of `method` on `scene` (module docs), searched down from `start` (s).
 #[must_use]
 pub fn usable(scene: &Scene, method: Method, start: f64, scale: f64) -> Usable {
+    usable_ahead(scene, method, start, scale, 0, &|| false)
+}
+
+/// [`usable`] with `helpers` threads computing its likely next runs ahead while `idle()` says
+/// a core is free ([`crate::study::ahead`]): the same runs, verdicts and result.
+#[must_use]
+pub fn usable_ahead(
+    scene: &Scene,
+    method: Method,
+    start: f64,
+    scale: f64,
+    helpers: usize,
+    idle: &(dyn Fn() -> bool + Sync),
+) -> Usable {
     let horizon = scene.duration;
     let allowed = allowed_residual(scene, scale);
     let mut runs = Vec::new();
-    let dt = search(start, &mut |dt| {
-        let r = usable_run(scene, method, dt, horizon, allowed);
-        let passed = r.passed;
-        runs.push(r);
-        passed
+    let compute = |bits: &u64, cancel: &AtomicBool| {
+        usable_run_unless(
+            scene,
+            method,
+            f64::from_bits(*bits),
+            horizon,
+            allowed,
+            cancel,
+        )
+    };
+    let dt = with_helpers_when(helpers, &compute, idle, |ahead| {
+        search(start, &mut |dt, next| {
+            ahead.hint(next.iter().map(|d| d.to_bits()).collect());
+            let r = ahead.get(&dt.to_bits());
+            let passed = r.passed;
+            runs.push(r);
+            passed
+        })
     });
     Usable {
         dt,
