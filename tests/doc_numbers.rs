@@ -414,8 +414,12 @@ fn numbers_in(text: &str) -> Vec<(usize, String)> {
         // Numbers shown in code beside the text: this block's inline code and the code blocks
         // next to it.
         let mut shown = BTreeSet::new();
-        for k in b.saturating_sub(1)..=(b + 1).min(blocks.len() - 1) {
-            let (code, lines) = &blocks[k];
+        for (k, (code, lines)) in blocks
+            .iter()
+            .enumerate()
+            .take(b + 2)
+            .skip(b.saturating_sub(1))
+        {
             if k != b && !code {
                 continue;
             }
