@@ -23,6 +23,7 @@ mod cli_scene_files;
 mod collide;
 mod contact_energy;
 mod course_scenes;
+mod doc_numbers;
 mod grade_boundary;
 mod grade_cli;
 mod grade_mistakes;
