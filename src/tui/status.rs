@@ -124,9 +124,8 @@ pub fn render(
             _ => None,
         };
         let mut stable = None;
-        let (text, style) = match limit {
-            Limit::Below(max) if usable.is_some() => {
-                let u = usable.unwrap_or(*max);
+        let (text, style) = match (limit, usable) {
+            (Limit::Below(max), Some(u)) => {
                 // Over the usable dt the run is stable but its energy is off by more than
                 // 1 %: yellow; over the stable limit too, red as below.
                 let (mark, style) = if dt >= *max {
@@ -144,7 +143,7 @@ pub fn render(
                 stable = Some(raw(2, format!("stable below {} s", precise(*max))));
                 (format!("{mark}limit {} s (usable)", precise(u)), style)
             }
-            Limit::Below(max) => {
+            (Limit::Below(max), None) => {
                 let ratio = dt / max;
                 let style = if ratio >= 1.0 {
                     theme.fg(Color::LightRed).add_modifier(Modifier::BOLD)
@@ -156,12 +155,12 @@ pub fn render(
                 let mark = if ratio >= 1.0 { "✗ over " } else { "" };
                 (format!("{mark}limit {} s", precise(*max)), style)
             }
-            Limit::Never => (
+            (Limit::Never, _) => (
                 "unstable at every dt".to_string(),
                 theme.fg(Color::LightRed).add_modifier(Modifier::BOLD),
             ),
-            Limit::Always => ("stable at any dt".to_string(), Style::default()),
-            Limit::NotCovered => ("limit: no theory".to_string(), theme.dim()),
+            (Limit::Always, _) => ("stable at any dt".to_string(), Style::default()),
+            (Limit::NotCovered, _) => ("limit: no theory".to_string(), theme.dim()),
         };
         let (text, style) = if run.computing() {
             ("limit: computing…".to_string(), theme.dim())

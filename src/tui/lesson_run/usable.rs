@@ -99,7 +99,8 @@ fn run_cost(scene: &Scene, dt: f64) -> f64 {
 /// True when the search's first run, at `start` (s), would pass [`SEARCH_BUDGET`] alone.
 #[must_use]
 pub fn too_large(scene: &Scene, start: f64) -> bool {
-    !(run_cost(scene, start) <= SEARCH_BUDGET)
+    let cost = run_cost(scene, start);
+    cost.is_nan() || cost > SEARCH_BUDGET
 }
 
 /// What a search depends on: every body's method, method settings, masses, springs, drag and
