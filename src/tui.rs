@@ -208,6 +208,8 @@ pub struct App {
     homework_dir: Option<std::path::PathBuf>,
     /// Where the attached crate is built.
     homework_options: crate::grade::live::BuildOptions,
+    /// The builder of every attach (made on the first build thread: `H` starts no process).
+    homework_builder: crate::grade::live::LazyBuilder,
 }
 
 impl App {
@@ -246,6 +248,7 @@ impl App {
             homework: None,
             homework_dir: None,
             homework_options: crate::grade::live::BuildOptions::default(),
+            homework_builder: crate::grade::live::LazyBuilder::default(),
         }
     }
 

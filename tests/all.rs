@@ -57,6 +57,7 @@ mod study_convergence;
 mod study_stability;
 mod study_usable;
 mod tui;
+mod tui_burst;
 mod tui_camera;
 mod tui_charts;
 mod tui_cli;
@@ -64,6 +65,7 @@ mod tui_export;
 mod tui_raster;
 mod tui_signals;
 mod tui_theme;
+mod tui_usable;
 
 /// Every `tests/*.rs` file is a module of this binary or a `[[test]]` target of its own.
 #[test]

@@ -692,7 +692,8 @@ fn status_line_shows_the_damped_limit() {
         panic!("conditional: {limit:?}")
     };
     assert!((dt - 0.2).abs() < 1e-3, "{dt}");
-    assert!(screen_text(&app, 120, 40).contains("limit 0.2 s"));
+    // Shown beside the usable dt, which is lower here (tests/tui_usable.rs).
+    assert!(screen_text(&app, 120, 40).contains("stable below 0.2 s"));
     keys(&mut app, "1++++");
     assert!(screen_text(&app, 120, 40).contains("✗ over limit"));
     // Explicit Euler without damping: unstable at every dt; with the damper, a limit.

@@ -48,7 +48,9 @@ mod build;
 mod watch;
 
 use body::{Measure, Track};
-pub use build::{BuildOptions, Built, build_homework, builder, first_error, grader_hint};
+pub use build::{
+    BuildOptions, Built, LazyBuilder, build_homework, builder, first_error, grader_hint,
+};
 pub use watch::{Reload, Watcher};
 
 /// Relative tolerance `τ` of the parting test (module docs).

@@ -156,25 +156,70 @@ impl App {
         Ok(dirty)
     }
 
-    /// Handles every event already waiting (a mouse drag sends many) before the next draw. All
-    /// of them are read first: a Ctrl-C among them quits at once, whatever comes before it.
+    /// Handles every event already waiting (a mouse drag sends many, a paste or a fast typist
+    /// hundreds) before the next draw. All of them are read first: a Ctrl-C among them quits at
+    /// once, whatever comes before it.
     fn drain_events(&mut self) -> anyhow::Result<bool> {
         let mut waiting = Vec::new();
-        while event::poll(Duration::ZERO)? {
+        while event::poll(WAITING)? {
             waiting.push(event::read()?);
         }
         if waiting.iter().any(is_ctrl_c) {
             self.quit = true;
             return Ok(true);
         }
+        // Keys come faster than they can be handled only in a paste or a burst: past the
+        // budget, only the keys that leave are handled, so that `q` is answered at once
+        // whatever came before it; the status line says how many were dropped.
+        let started = Instant::now();
+        let mut dropped = 0usize;
         let mut dirty = false;
         for event in &waiting {
             if self.quit {
                 break;
             }
+            if started.elapsed() > KEY_BUDGET && !leaves(event) {
+                dropped += 1;
+                continue;
+            }
             dirty |= self.handle_event(event);
         }
+        if dropped > 0 {
+            let note =
+                format!("{dropped} keys dropped: they came faster than the app could follow them");
+            match self.lesson_mut() {
+                Some(run) => run.set_message(note),
+                None => self.menu_message = Some(note),
+            }
+            dirty = true;
+        }
         Ok(dirty)
+    }
+}
+
+/// How long [`App::drain_events`] asks whether another event waits. Not zero: with the poll(2)
+/// input source (`use-dev-tty`, see Cargo.toml) crossterm 0.29's `poll(Duration::ZERO)` never
+/// looks at the events it has already read and parsed (its loop runs only while time is left:
+/// crossterm issue 839), so a burst read in one go came out one event per loop turn, each
+/// followed by a whole draw (a picture of the scene on the cloth: tens of milliseconds), and 2,000
+/// keys then `q` took seconds. With time left, waiting events come back at once; only the last
+/// poll waits, for at most this long.
+const WAITING: Duration = Duration::from_millis(1);
+
+/// How long the events read in one go are handled before only the keys that leave are (issue
+/// 27: `q` answered within 100 ms, whatever the queue). A typist or a held key sends one or two
+/// keys per loop turn, far below it; a paste of thousands of keys passes it (on a 2-core machine
+/// loaded ten times over, 2,000 random keys on the cloth took about 0.15 s of the drawing
+/// thread's CPU and so over a second).
+const KEY_BUDGET: Duration = Duration::from_millis(50);
+
+/// `q`, Esc (they close an overlay, leave the lesson, leave the app) and a resize, which are
+/// never dropped.
+fn leaves(event: &Event) -> bool {
+    match event {
+        Event::Key(k) => matches!(k.code, KeyCode::Char('q') | KeyCode::Esc),
+        Event::Resize(..) => true,
+        _ => false,
     }
 }
 

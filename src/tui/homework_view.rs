@@ -25,9 +25,9 @@ use ratatui::widgets::{Axis, Chart, Clear, Dataset, GraphType, Paragraph, Widget
 use super::lesson_run::LessonRun;
 use super::pane::dot_view;
 use super::{App, Screen, Theme};
-use crate::grade::build::Builder;
 use crate::grade::live::{
-    self, BuildOptions, Built, Frame, Integrator, Live, LiveOptions, Reload, Setup, Watcher,
+    self, BuildOptions, Built, Frame, Integrator, LazyBuilder, Live, LiveOptions, Reload, Setup,
+    Watcher,
 };
 use crate::physics::Method;
 
@@ -78,13 +78,17 @@ impl std::fmt::Debug for HomeworkView {
 }
 
 impl HomeworkView {
-    /// Starts building and watching the crate in `dir` (in the background).
+    /// Starts building and watching the crate in `dir` (in the background: the builder too,
+    /// made once per app by the first build thread that needs it, `builder`).
     ///
     /// # Errors
-    /// The build cache cannot be made, or the folder cannot be watched.
-    pub fn attach(dir: &Path, options: BuildOptions) -> Result<HomeworkView, String> {
-        let builder: Arc<Builder> = live::builder(&options)?;
-        let watcher = Watcher::start(dir, builder, options)?;
+    /// The folder cannot be watched.
+    pub fn attach(
+        dir: &Path,
+        builder: LazyBuilder,
+        options: BuildOptions,
+    ) -> Result<HomeworkView, String> {
+        let watcher = Watcher::start_lazy(dir, builder, options)?;
         Ok(HomeworkView {
             dir: dir.to_path_buf(),
             watcher: Some(watcher),
@@ -205,6 +209,7 @@ impl HomeworkView {
                     let _ = thread::Builder::new()
                         .name("homework-hint".to_string())
                         .spawn(move || {
+                            super::lesson_run::lower_priority();
                             let hint = live::grader_hint(&built, integrator);
                             if let Ok(mut s) = slot.lock() {
                                 *s = Some(hint);
@@ -291,8 +296,13 @@ impl App {
     pub fn with_homework_options(mut self, dir: Option<PathBuf>, options: BuildOptions) -> App {
         self.homework_dir = dir.clone();
         self.homework_options = options;
+        self.homework_builder = LazyBuilder::default();
         if let Some(dir) = dir {
-            match HomeworkView::attach(&dir, self.homework_options.clone()) {
+            match HomeworkView::attach(
+                &dir,
+                self.homework_builder.clone(),
+                self.homework_options.clone(),
+            ) {
                 Ok(view) => self.homework = Some(view),
                 Err(e) => self.menu_message = Some(e),
             }
@@ -310,7 +320,11 @@ impl App {
                 .homework_dir
                 .clone()
                 .unwrap_or_else(|| PathBuf::from("."));
-            match HomeworkView::attach(&dir, self.homework_options.clone()) {
+            match HomeworkView::attach(
+                &dir,
+                self.homework_builder.clone(),
+                self.homework_options.clone(),
+            ) {
                 Ok(view) => {
                     self.homework = Some(view);
                     format!("homework {}: building…", dir.display())

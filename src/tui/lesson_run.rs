@@ -14,8 +14,11 @@ mod deferred;
 mod goals;
 mod observed;
 mod reveal;
+mod usable;
 
+pub use background::lower_priority;
 pub use observed::Observed;
+pub use usable::UsableDt;
 
 use clock::Rates;
 
@@ -192,6 +195,8 @@ pub struct LessonRun {
     limits: background::Limits,
     /// The stability limit of the present methods, dampers and drag included.
     limit: Option<(Limit, f64)>,
+    /// The usable dt below it (`usable.rs`).
+    usable: usable::State,
     /// The spectra recomputed off the drawing thread after a change of the coefficients.
     background: background::Spectra,
     /// The limit waits to be recomputed (once for a burst of keys: see
@@ -270,6 +275,7 @@ impl LessonRun {
             spectra: std::sync::Arc::new(Vec::new()),
             limits: background::Limits::default(),
             limit: None,
+            usable: usable::State::default(),
             background: background::Spectra::default(),
             limit_stale: false,
             deferred,
@@ -285,47 +291,6 @@ impl LessonRun {
         run.answers = vec![None; n];
         run.start_step();
         Ok(run)
-    }
-
-    /// Restores what the student did before (met goals, visited steps, predictions), for
-    /// example from the progress file; lengths that do not match the lesson are cut or padded.
-    pub fn restore(&mut self, met: &[bool], visited: &[bool], answers: &[Option<usize>]) {
-        let n = self.lesson.steps.len();
-        for i in 0..n {
-            self.met[i] |= met.get(i).copied().unwrap_or(false);
-            self.visited[i] |= visited.get(i).copied().unwrap_or(false);
-            if self.answers[i].is_none() {
-                self.answers[i] = answers.get(i).copied().flatten().filter(|&a| {
-                    self.lesson.steps[i]
-                        .predict
-                        .as_ref()
-                        .is_some_and(|p| a < p.options.len())
-                });
-            }
-        }
-    }
-
-    /// Per step: its goal was met.
-    #[must_use]
-    pub fn met_goals(&self) -> &[bool] {
-        &self.met
-    }
-
-    /// Per step: the student opened it.
-    #[must_use]
-    pub fn visited_steps(&self) -> &[bool] {
-        &self.visited
-    }
-
-    /// Per step: the option predicted (0-based).
-    #[must_use]
-    pub fn answers(&self) -> &[Option<usize>] {
-        &self.answers
-    }
-
-    /// True once since the last call when met goals, visits or answers changed.
-    pub fn take_progress_changed(&mut self) -> bool {
-        std::mem::take(&mut self.progress_changed)
     }
 
     /// Replaces the step's scene with `scene` (a scene built in code, for tests and tools), paused
@@ -453,9 +418,11 @@ impl LessonRun {
         let mut changed = false;
         if let Some(limit) = self.limits.poll() {
             self.limit = limit;
+            self.limit_changed();
             self.version += 1;
             changed = true;
         }
+        changed |= self.usable.poll();
         if let Some(work) = self.step_work.poll() {
             self.take_step_work(work);
             changed = true;
@@ -492,7 +459,9 @@ impl LessonRun {
         self.refresh_stale_limit();
         if let Some(limit) = self.limits.settle() {
             self.limit = limit;
+            self.limit_changed();
         }
+        self.usable.settle();
     }
 
     fn refresh_stale_limit(&mut self) -> bool {
@@ -511,6 +480,7 @@ impl LessonRun {
             || self.limit_stale
             || self.background.pending()
             || self.limits.pending()
+            || self.usable.pending()
     }
 
     /// True while anything is computed off the drawing thread (the limit, a new step's numbers
@@ -536,6 +506,7 @@ impl LessonRun {
                 .request((methods, std::sync::Arc::clone(&self.spectra)));
         } else {
             self.limit = background::limit_of(&methods, &self.spectra);
+            self.limit_changed();
         }
     }
 

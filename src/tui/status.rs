@@ -12,7 +12,12 @@
 //! `ω` is the stiffest mode ω_max (power iteration, as the stability study); beside it the
 //! present method's largest stable dt on this scene by the damped theory
 //! ([`crate::study::theory`]: dampers and drag included, the bodies' initial state), yellow
-//! above 80 % of it and red with ✗ beyond; "unstable at every dt" (explicit Euler or midpoint
+//! above 80 % of it and red with ✗ beyond. Where the usable dt (the energy within 1 % of E₀
+//! over the scene's duration: `lesson_run/usable.rs`, searched in the app on small scenes) is
+//! lower, the limit shown is that one, `limit … s (usable)`, yellow with "over" beyond it,
+//! and `stable below … s` follows as a field of its own, kept before the view (red ✗ beyond
+//! that);
+//! "unstable at every dt" (explicit Euler or midpoint
 //! with nothing damping), "stable at any dt", or "limit: no theory" (projection, XPBD). Then
 //! the drag c, Verlet's γ and projection passes when they apply. Times are simulated times;
 //! the real-time factor, steps per second and frames per second are measured (a dash until
@@ -111,10 +116,34 @@ pub fn render(
     // dt against the method's limit on this scene: the damped theory (dampers and drag
     // included) of the bodies at their initial state.
     if let Some((limit, omega)) = run.limit() {
-        use super::lesson_run::Limit;
+        use super::lesson_run::{Limit, UsableDt};
+        use crate::study::stability::usable::USABLE_TOLERANCE;
         first.push(raw(4, format!("dt·ω {}", number(dt * omega))));
-        let (text, style) = match limit {
-            Limit::Below(max) => {
+        let usable = match (limit, run.usable_dt()) {
+            (Limit::Below(max), Some(UsableDt::Below(u))) if u < *max => Some(u),
+            _ => None,
+        };
+        let mut stable = None;
+        let (text, style) = match (limit, usable) {
+            (Limit::Below(max), Some(u)) => {
+                // Over the usable dt the run is stable but its energy is off by more than
+                // 1 %: yellow; over the stable limit too, red as below.
+                let (mark, style) = if dt >= *max {
+                    (
+                        "✗ over ",
+                        theme.fg(Color::LightRed).add_modifier(Modifier::BOLD),
+                    )
+                } else if dt > u * (1.0 + USABLE_TOLERANCE) {
+                    // The search brackets the usable dt within its tolerance: a dt inside
+                    // that bracket is not judged.
+                    ("over ", theme.fg(Color::Yellow))
+                } else {
+                    ("", Style::default())
+                };
+                stable = Some(raw(2, format!("stable below {} s", precise(*max))));
+                (format!("{mark}limit {} s (usable)", precise(u)), style)
+            }
+            (Limit::Below(max), None) => {
                 let ratio = dt / max;
                 let style = if ratio >= 1.0 {
                     theme.fg(Color::LightRed).add_modifier(Modifier::BOLD)
@@ -126,12 +155,12 @@ pub fn render(
                 let mark = if ratio >= 1.0 { "✗ over " } else { "" };
                 (format!("{mark}limit {} s", precise(*max)), style)
             }
-            Limit::Never => (
+            (Limit::Never, _) => (
                 "unstable at every dt".to_string(),
                 theme.fg(Color::LightRed).add_modifier(Modifier::BOLD),
             ),
-            Limit::Always => ("stable at any dt".to_string(), Style::default()),
-            Limit::NotCovered => ("limit: no theory".to_string(), theme.dim()),
+            (Limit::Always, _) => ("stable at any dt".to_string(), Style::default()),
+            (Limit::NotCovered, _) => ("limit: no theory".to_string(), theme.dim()),
         };
         let (text, style) = if run.computing() {
             ("limit: computing…".to_string(), theme.dim())
@@ -139,6 +168,7 @@ pub fn render(
             (text, style)
         };
         first.push((1, vec![Span::styled(text, style)]));
+        first.extend(stable);
     }
     if let Some(c) = run.uniform_drag().filter(|c| *c > 0.0) {
         first.push(raw(4, format!("c {} N·s/m", number(c))));

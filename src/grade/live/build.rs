@@ -2,7 +2,7 @@
 //! build, cache by content, a [`Remote`] session), and the grader's hint for one integrator.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
 use super::super::build::{self, BuildFailure, Builder};
@@ -65,6 +65,30 @@ pub fn builder(options: &BuildOptions) -> Result<Arc<Builder>, String> {
         ..ExternalOptions::default()
     };
     external::builder(&external).map_err(|e| e.to_string())
+}
+
+/// The session's [`Builder`], made by [`builder`] the first time a build thread asks for it and
+/// shared from then on (clones share it). Making one probes the sandbox (it starts processes)
+/// and the cache folder: tens of milliseconds on a loaded machine, so the app's `H` asks for it
+/// on the build thread, never on the drawing thread, and only once however often it is pressed.
+#[derive(Clone, Debug, Default)]
+pub struct LazyBuilder(Arc<OnceLock<Result<Arc<Builder>, String>>>);
+
+impl LazyBuilder {
+    /// A builder already made.
+    #[must_use]
+    pub fn made(builder: Arc<Builder>) -> LazyBuilder {
+        LazyBuilder(Arc::new(OnceLock::from(Ok(builder))))
+    }
+
+    /// The builder, made now with `options` when no clone made it before (waiting while
+    /// another thread makes it).
+    ///
+    /// # Errors
+    /// As [`builder`] (the first attempt's sentence, kept).
+    pub fn get(&self, options: &BuildOptions) -> Result<Arc<Builder>, String> {
+        self.0.get_or_init(|| builder(options)).clone()
+    }
 }
 
 /// The first compiler error of `output`: from the first line starting with `error` up to

@@ -13,7 +13,7 @@ use std::time::Duration;
 use notify::{RecursiveMode, Watcher as _};
 
 use super::super::build::Builder;
-use super::build::{BuildOptions, Built, build_homework};
+use super::build::{BuildOptions, Built, LazyBuilder, build_homework};
 
 /// What the watcher reports.
 #[derive(Debug)]
@@ -60,6 +60,20 @@ impl Watcher {
         builder: Arc<Builder>,
         options: BuildOptions,
     ) -> Result<Watcher, String> {
+        Watcher::start_lazy(dir, LazyBuilder::made(builder), options)
+    }
+
+    /// As [`Watcher::start`], the builder made (or taken from an earlier attach) on the build
+    /// thread: nothing here starts a process. A builder that cannot be made is the first
+    /// [`Reload::Failed`].
+    ///
+    /// # Errors
+    /// A sentence when the folder cannot be watched.
+    pub fn start_lazy(
+        dir: &Path,
+        builder: LazyBuilder,
+        options: BuildOptions,
+    ) -> Result<Watcher, String> {
         let (changes_tx, changes) = mpsc::channel::<()>();
         let mut watcher =
             notify::recommended_watcher(move |event: notify::Result<notify::Event>| {
@@ -86,7 +100,21 @@ impl Watcher {
         let dir = dir.to_path_buf();
         thread::Builder::new()
             .name("homework-build".to_string())
-            .spawn(move || rebuild_loop(&dir, &builder, &options, &changes, &tx))
+            .spawn(move || {
+                // Below the app's drawing thread (nice 10, as the app's other workers): a
+                // build must not slow the answer to a key.
+                #[cfg(target_os = "linux")]
+                let _ = rustix::process::setpriority_process(Some(rustix::thread::gettid()), 10);
+                if tx.send(Reload::Building).is_err() {
+                    return;
+                }
+                match builder.get(&options) {
+                    Ok(builder) => rebuild_loop(&dir, &builder, &options, &changes, &tx),
+                    Err(why) => {
+                        let _ = tx.send(Reload::Failed(why));
+                    }
+                }
+            })
             .map_err(|e| format!("cannot start the build thread: {e}"))?;
         Ok(Watcher {
             _watcher: watcher,
@@ -115,9 +143,6 @@ fn rebuild_loop(
     tx: &Sender<Reload>,
 ) {
     loop {
-        if tx.send(Reload::Building).is_err() {
-            return;
-        }
         let report = match build_homework(dir, builder, options) {
             Ok(built) => Reload::Reloaded(Box::new(built)),
             Err(why) => Reload::Failed(why),
@@ -135,6 +160,9 @@ fn rebuild_loop(
                 Err(RecvTimeoutError::Timeout) => break,
                 Err(RecvTimeoutError::Disconnected) => return,
             }
+        }
+        if tx.send(Reload::Building).is_err() {
+            return;
         }
     }
 }

@@ -257,8 +257,23 @@ impl<Q: Send + 'static, A: Send + 'static> Latest<Q, A> {
     }
 }
 
+/// The nice value of the app's worker threads (0 is the drawing thread's, 19 the lowest).
+pub const WORKER_NICE: i32 = 10;
+
+/// Lowers the calling thread's priority to [`WORKER_NICE`] (on Linux the nice value belongs to
+/// the thread). The workers compute what the screen shows next (spectra, a step's numbers,
+/// exports): on a loaded machine they must not take the CPU from the drawing thread, which
+/// answers the keys (`q` among them). Where the system refuses, nothing changes.
+pub fn lower_priority() {
+    #[cfg(target_os = "linux")]
+    {
+        let _ = rustix::process::setpriority_process(Some(rustix::thread::gettid()), WORKER_NICE);
+    }
+}
+
 /// The worker: takes the newest request, computes it, sends it back; ends when the run is gone.
 fn worker<Q, A>(shared: &Shared<Q>, results: &Sender<(u64, A)>, work: fn(Q) -> A) {
+    lower_priority();
     loop {
         let request = {
             let mut slot = shared.slot.lock().unwrap_or_else(PoisonError::into_inner);

@@ -113,6 +113,7 @@ impl Exports {
             let spawned = std::thread::Builder::new()
                 .name("springlab-export".into())
                 .spawn(move || {
+                    super::background::lower_priority();
                     for job in inbox {
                         if outbox.send(job.write()).is_err() {
                             return;

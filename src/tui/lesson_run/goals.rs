@@ -1,4 +1,5 @@
-//! After each step: the history, the goal's verdict and the prediction's reveal.
+//! After each step: the history, the goal's verdict and the prediction's reveal; what the
+//! student did (met goals, visited steps, predictions) as the progress file keeps it.
 
 use crate::lesson::GoalKind;
 use crate::physics::diverge;
@@ -121,5 +122,49 @@ impl LessonRun {
             p.answer + 1,
             right.text
         ));
+    }
+}
+
+/// What the student did, as the progress file keeps it.
+impl LessonRun {
+    /// Restores what the student did before (met goals, visited steps, predictions), for
+    /// example from the progress file; lengths that do not match the lesson are cut or padded.
+    pub fn restore(&mut self, met: &[bool], visited: &[bool], answers: &[Option<usize>]) {
+        let n = self.lesson.steps.len();
+        for i in 0..n {
+            self.met[i] |= met.get(i).copied().unwrap_or(false);
+            self.visited[i] |= visited.get(i).copied().unwrap_or(false);
+            if self.answers[i].is_none() {
+                self.answers[i] = answers.get(i).copied().flatten().filter(|&a| {
+                    self.lesson.steps[i]
+                        .predict
+                        .as_ref()
+                        .is_some_and(|p| a < p.options.len())
+                });
+            }
+        }
+    }
+
+    /// Per step: its goal was met.
+    #[must_use]
+    pub fn met_goals(&self) -> &[bool] {
+        &self.met
+    }
+
+    /// Per step: the student opened it.
+    #[must_use]
+    pub fn visited_steps(&self) -> &[bool] {
+        &self.visited
+    }
+
+    /// Per step: the option predicted (0-based).
+    #[must_use]
+    pub fn answers(&self) -> &[Option<usize>] {
+        &self.answers
+    }
+
+    /// True once since the last call when met goals, visits or answers changed.
+    pub fn take_progress_changed(&mut self) -> bool {
+        std::mem::take(&mut self.progress_changed)
     }
 }
