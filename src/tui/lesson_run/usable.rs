@@ -71,7 +71,7 @@ pub fn search(scene: &Scene, start: f64) -> UsableDt {
     let mut over = false;
     let mut smallest: Option<f64> = None;
     for method in methods {
-        let found = usable::search(start, &mut |dt| {
+        let found = usable::search(start, &mut |dt, _next| {
             let cost = run_cost(scene, dt);
             if over || spent + cost > SEARCH_BUDGET {
                 over = true;
