@@ -425,8 +425,18 @@ pub const ENTRIES: &[Entry] = &[
     ),
     (
         "docs/lesson-app.md",
-        &["1", "2000", "7"],
-        "history: crossterm's read size and a measurement of the open input problem the page describes",
+        &["1", "2000"],
+        "history: crossterm's read size and the burst the page describes",
+    ),
+    (
+        "docs/lesson-app.md",
+        &["10^7"],
+        "code src/tui/lesson_run/usable.rs `pub const SEARCH_BUDGET: f64 = 2.0e7;`",
+    ),
+    (
+        "docs/lesson-app.md",
+        &["50"],
+        "code src/tui/app_loop.rs `const KEY_BUDGET: Duration = Duration::from_millis(50);`",
     ),
     (
         "docs/lesson-app.md",
