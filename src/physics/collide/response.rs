@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 
-use super::budget::{above_rounding, energy_rise, take_kinetic_with_spheres};
+use super::budget::take_kinetic_with_spheres;
 use super::{Bodies, Collider, Contact, ContactParams, DynamicSphere, World, step_spheres};
 
 /// Velocity response and positional projection of every free particle against the model's
@@ -16,15 +16,14 @@ pub fn resolve<'a, 'b>(model: impl Into<World<'a>>, state: impl Into<Bodies<'b>>
 /// [`resolve`], recording in `log` (when given) every particle it changes.
 ///
 /// The energy budget of the module docs: each particle pays its projection from its own kinetic
-/// energy first; what that leaves (what it could not pay, and the springs between two moved
-/// particles) is measured exactly and the whole body pays it at the end (`budget`).
+/// energy first; what it cannot pay the whole body pays at the end ([`take_kinetic`]).
 pub fn resolve_logged<'a, 'b>(
     model: impl Into<World<'a>>,
     state: impl Into<Bodies<'b>>,
     dt: f64,
     mut log: Option<&mut Changes>,
 ) {
-    let (model, mut state) = (model.into(), state.into());
+    let (model, state) = (model.into(), state.into());
     if model.colliders.is_empty() {
         return;
     }
@@ -34,51 +33,56 @@ pub fn resolve_logged<'a, 'b>(
     // Where every particle was before the responses: each particle's springs are measured
     // against these, so that no particle's answer depends on the order (module docs).
     let before: Vec<DVec3> = state.x[..n].to_vec();
-    OWN.with(|own| {
-        let own = &mut *own.borrow_mut();
-        own.clear();
-        for i in 0..n {
-            let w = model.inv_mass[i];
-            if w == 0.0 {
-                continue;
-            }
-            let (x_old, v_old) = (state.x[i], state.v[i]);
-            let (mut x, mut v) = (x_old, v_old);
-            let mut touched = false;
-            for collider in model.colliders {
-                // The rise of potential energy per kg from `from` to `to` (J/kg): gravity, and
-                // the springs at i (neighbours where they were) where they gain; a release is
-                // not paid back.
-                let rise = |from: DVec3, to: DVec3| {
-                    let elastic =
-                        model.elastic_at(&before, i, to) - model.elastic_at(&before, i, from);
-                    -gravity.dot(to - from) + w * elastic.max(0.0)
-                };
-                touched |= respond(collider, 0.0, params, &rise, &mut x, &mut v).is_some();
-            }
-            if touched {
-                state.x[i] = x;
-                state.v[i] = v;
-                keep_verlet_history(state.history_valid, &mut state.x_prev[i], x, v, dt);
-                own.record(i, x_old, v_old);
-                if let Some(log) = log.as_deref_mut() {
-                    log.record(i, x_old, v_old);
-                }
+    let mut owed = 0.0;
+    for i in 0..n {
+        let w = model.inv_mass[i];
+        if w == 0.0 {
+            continue;
+        }
+        let (x_old, v_old) = (state.x[i], state.v[i]);
+        let (mut x, mut v) = (x_old, v_old);
+        let mut touched = false;
+        for collider in model.colliders {
+            // The rise of potential energy per kg from `from` to `to` (J/kg): gravity, and the
+            // springs at i (neighbours where they were) where they gain; a release is not paid
+            // back.
+            let rise = |from: DVec3, to: DVec3| {
+                let elastic = model.elastic_at(&before, i, to) - model.elastic_at(&before, i, from);
+                -gravity.dot(to - from) + w * elastic.max(0.0)
+            };
+            if let Some(debt) = respond(collider, 0.0, params, &rise, &mut x, &mut v) {
+                touched = true;
+                owed += debt / w;
             }
         }
-        // What the particles' own budgets left (their debts and the springs between two moved
-        // particles), exactly, paid by the whole body (`budget`).
-        own.finish(n);
-        let (rise, size) = energy_rise(&model, state.x, state.v, None, own);
-        if above_rounding(rise, size) {
-            pay(model, &mut state, rise, dt, log);
+        if touched {
+            state.x[i] = x;
+            state.v[i] = v;
+            keep_verlet_history(state.history_valid, &mut state.x_prev[i], x, v, dt);
+            if let Some(log) = log.as_deref_mut() {
+                log.record(i, x_old, v_old);
+            }
         }
-    });
-}
-
-thread_local! {
-    /// The particles one call of [`resolve_logged`] changed (reused, so steps do not allocate).
-    static OWN: std::cell::RefCell<Changes> = std::cell::RefCell::new(Changes::default());
+    }
+    if owed > 0.0 {
+        // Every particle's velocity changes: record them all (the records made above come first
+        // and are the ones kept).
+        if let Some(log) = log {
+            for i in (0..n).filter(|&i| model.inv_mass[i] != 0.0) {
+                log.record(i, state.x[i], state.v[i]);
+            }
+        }
+        take_kinetic(model.inv_mass, &mut state.v[..n], owed);
+        for i in (0..n).filter(|&i| model.inv_mass[i] != 0.0) {
+            keep_verlet_history(
+                state.history_valid,
+                &mut state.x_prev[i],
+                state.x[i],
+                state.v[i],
+                dt,
+            );
+        }
+    }
 }
 
 /// The body pays `amount` J from its kinetic energy ([`take_kinetic_with_spheres`]); every

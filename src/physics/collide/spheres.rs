@@ -193,6 +193,10 @@ pub fn collide_spheres_logged<'a, 'b>(
                                 model.elastic_at(&before, i, x_old + dx)
                                     - model.elastic_at(&before, i, x_old)
                             };
+                            if ws == 0.0 {
+                                // A kinematic sphere is driven: its pushes are not paid.
+                                return 0.0;
+                            }
                             lift(dx_s, ws) + lift(dx, w) + elastic.max(0.0)
                         };
                         let touched = impulse_pair(
@@ -317,7 +321,17 @@ fn impulse_pair(
     *b.x += dx_b;
     // v_rel = (v_b - v_a)·d̂ < 0: approaching; s² = v_rel² - 2 ΔU (w_a + w_b) at contact.
     let v_rel = (*b.v - *a.v).dot(d);
-    let mut s2 = v_rel * v_rel - 2.0 * rise(dx_a, dx_b) * w;
+    let climb = rise(dx_a, dx_b);
+    if climb == 0.0 {
+        // Nothing to pay: the textbook impulse J = -(1 + e) v_rel / (w_a + w_b).
+        if v_rel < 0.0 {
+            let j = -(1.0 + e) * v_rel / w;
+            *a.v -= (a.w * j) * d;
+            *b.v += (b.w * j) * d;
+        }
+        return Some(0.0);
+    }
+    let mut s2 = v_rel * v_rel - 2.0 * climb * w;
     let mut debt = 0.0;
     if s2 < 0.0 {
         // ½ μ s² < 0: the relative normal motion cannot pay the separation; the rest is owed.

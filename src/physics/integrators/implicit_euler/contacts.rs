@@ -375,7 +375,9 @@ fn sphere_kinetic(s: &crate::physics::collide::DynamicSphere) -> f64 {
 /// (`collide::take_kinetic_with_spheres`, the velocity scaling of Su, Sheth & Fedkiw 2013), so
 /// that the contacts never add energy. Returns what it took (J, ≥ 0).
 pub(super) fn pay_reactions(model: &Model, state: &mut State, removed: f64) -> f64 {
-    if removed >= 0.0 {
+    // Only a dynamic sphere's reaction is paid (with colliders alone `removed` exists only when
+    // accounting, and accounting must not change the motion).
+    if removed >= 0.0 || state.spheres.iter().all(|s| s.kinematic) {
         return 0.0;
     }
     take_kinetic_with_spheres(&model.inv_mass, &mut state.v, &mut state.spheres, -removed)
