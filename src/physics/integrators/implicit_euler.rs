@@ -172,18 +172,14 @@ fn newton_step(
     };
     let (stats, removed) = contacts::solve(&system, state, params, warm, *account, scratch);
     *last_solve = stats;
+    if *account && let Some(removed) = removed {
+        dissipated.contacts += removed;
+    }
 
     let dv = &cg[0];
     warm::remember((last_dv, last_dt), (before_dv, before_dt), dv, dt);
     // v_{n+1} = v_n + Δv, x_{n+1} = x_n + dt v_{n+1}.
     advance(model, state, dt, dv);
-    if let Some(removed) = removed {
-        // What a sphere's reaction added, paid from the kinetic energy (`contacts`).
-        let removed = removed + contacts::pay_reactions(model, state, removed);
-        if *account {
-            dissipated.contacts += removed;
-        }
-    }
     // D_{n+1} = D_n + dt P(x_{n+1}, v_{n+1}): backward Euler on D' = P too, when accounting.
     dissipated.add_power(dt, power_if(*account, model, &state.x, &state.v, power_f));
     1

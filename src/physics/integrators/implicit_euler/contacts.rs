@@ -31,7 +31,7 @@ use glam::DVec3;
 
 use super::Constraint;
 use super::solve::{SolveStats, System};
-use crate::physics::collide::{Contact, take_kinetic_with_spheres};
+use crate::physics::collide::Contact;
 use crate::physics::forces::Model;
 use crate::physics::integrators::MethodParams;
 use crate::physics::particles::State;
@@ -366,19 +366,4 @@ fn sphere_kinetic(s: &crate::physics::collide::DynamicSphere) -> f64 {
     } else {
         0.5 * s.mass * s.velocity.length_squared()
     }
-}
-
-/// Pays, after the step's update, what the contacts inside the solve added: `removed` (J) from
-/// [`contact_impulses`], negative when a dynamic sphere's reaction gained the pair more than
-/// the constraint impulses removed (up to `J²/(2M)` per contact, module docs). The gain is
-/// taken out of the kinetic energy of the free particles and the dynamic spheres by one factor
-/// (`collide::take_kinetic_with_spheres`, the velocity scaling of Su, Sheth & Fedkiw 2013), so
-/// that the contacts never add energy. Returns what it took (J, ≥ 0).
-pub(super) fn pay_reactions(model: &Model, state: &mut State, removed: f64) -> f64 {
-    // Only a dynamic sphere's reaction is paid (with colliders alone `removed` exists only when
-    // accounting, and accounting must not change the motion).
-    if removed >= 0.0 || state.spheres.iter().all(|s| s.kinematic) {
-        return 0.0;
-    }
-    take_kinetic_with_spheres(&model.inv_mass, &mut state.v, &mut state.spheres, -removed)
 }

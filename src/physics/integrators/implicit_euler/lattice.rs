@@ -7,8 +7,8 @@
 use glam::DVec3;
 
 use super::contacts::{
-    MAX_CONTACT_PASSES, RELEASE_PASSES, add_contacts, contact_impulses, has_contacts, pay_reactions,
-    release_pulling, start_contacts,
+    MAX_CONTACT_PASSES, RELEASE_PASSES, add_contacts, contact_impulses, has_contacts, release_pulling,
+    start_contacts,
 };
 use super::solve::SolveStats;
 use crate::physics::energy::Power;
@@ -129,12 +129,14 @@ pub(super) fn step(
     }
     stats.constrained = constraints.len() as u32;
     *last_solve = stats;
-    let mut removed = None;
     if !constraints.is_empty() && (*account || constraints.iter().any(|c| c.sphere.is_some())) {
         // The constraint impulses (A Δv - b)·N and the spheres' reactions, as in the textbook
         // step.
         let impulse = |i| lattice.row_residual(i);
-        removed = Some(contact_impulses(state, constraints, dv, impulse));
+        let removed = contact_impulses(state, constraints, dv, impulse);
+        if *account {
+            dissipated.contacts += removed;
+        }
     }
     super::warm::remember((last_dv, last_dt), (before_dv, before_dt), dv, dt);
     // D_{n+1} = D_n + dt P(x_{n+1}, v_{n+1}), when accounting: the dampers' and the drag's power
@@ -150,13 +152,6 @@ pub(super) fn step(
         &mut state.v,
     );
     state.history_valid = false;
-    if let Some(removed) = removed {
-        // What a sphere's reaction added, paid from the kinetic energy (`contacts`).
-        let removed = removed + pay_reactions(model, state, removed);
-        if *account {
-            dissipated.contacts += removed;
-        }
-    }
     let power = if lattice_power {
         Power {
             dampers_and_drag,
