@@ -57,14 +57,12 @@
 //! v_N' = s       if already moving away
 //! v_T' = max(0, 1 - k_f (v_N' - v_N) / |v_T|) v_T   friction of the impact
 //! v'   = v_T' + v_N' N
-//! after all particles:  v_j ← √(1 - min(ΔE, K)/K) v_j  for every free particle j,  if ΔE > 0
+//! after all particles:  v_j ← √(max(0, 1 - O/K)) v_j  for every free particle j,  O = Σ o
 //! ```
 //! where `g` is gravity (m/s²), `m` the particle's mass (kg), `E_s,i(p)` the elastic energy (J)
 //! of the springs at particle `i` with `i` at `p` and every neighbour where it was before the
 //! responses (so that the answer does not depend on the order of the particles), `K` the body's
-//! kinetic energy (J), `o` (J) what a particle owes and `ΔE` (J) the exact rise of the total
-//! energy over the particles the responses changed (what they owe, and the springs between two
-//! particles that both moved, which each particle's own estimate cannot see; `budget.rs`).
+//! kinetic energy (J) and `o`, `O` (J) what a particle and all of them owe ([`take_kinetic`]).
 //! Without penetration `Δu = 0` and `s = |v_N|`: this is the course's `v' = -k_r v_N + v_T`.
 //! With penetration, the integrator has let the particle fall `|φ|` below the surface and gain
 //! the kinetic energy of that fall; moving it back without taking that energy away would make
@@ -73,19 +71,21 @@
 //! lost in the contact. For `k_r ≤ 1`
 //!
 //! ```text
-//! E' - E = ΔE - min(ΔE, K)  ≤  max(0, ΔE - K)
+//! E' - E = Σ_i m (Δu_true,i - Δu_i) - Σ_i (1 - k_r²) ½ m s_i² - friction - resting + C  ≤  C
 //! ```
-//! exactly (up to rounding): the body pays the whole rise, unless it has less kinetic energy
-//! than that (a body almost at rest whose springs push a particle in); the projection is always
-//! done in full, so no particle ever ends a step inside a collider. On the course scenes the
-//! ledger's `contacts` term stays ≥ 0 (`tests/contact_energy.rs`); before the budget it reached
-//! −7.6 % of E₀ on `cube-plane`.
+//! where `Δu_true` is `Δu` without the `max(0, ·)` and `C` (J) is the energy of the springs
+//! between two particles that both moved (each was measured with the other held) plus what the
+//! body could not pay (`O > K`: a body almost at rest whose springs push a particle in). Both are
+//! left out of the bound on purpose: the projection is always done in full, so no particle ever
+//! ends a step inside a collider. On the course scenes the ledger's `contacts` term stays ≥ 0
+//! (`tests/contact_energy.rs`); before the budget it reached −7.6 % of E₀ on `cube-plane`.
 //! Implicit Euler's contacts inside its solve keep the bound too: a constraint impulse `J ≥ 0`
 //! never sends a particle away from the surface faster than the obstacle moves, so its work
 //! `J (v' - V)·N ≤ 0`, and what it leaves inside is this response's paid projection
-//! (`integrators/implicit_euler/contacts.rs`); a dynamic sphere's reaction in that solve (up to
-//! `J²/(2M)` per contact) is paid the same way after the update, as far as the kinetic energy
-//! goes. XPBD holds its contacts in every substep (`integrators/xpbd.rs`). The
+//! (`integrators/implicit_euler/contacts.rs`). Not yet bounded: a dynamic sphere's reaction in
+//! that solve (up to `J²/(2M)` per contact; `cloth-spheres` at dt = 0.04 s still ends with a
+//! negative `contacts` term). XPBD holds its contacts in every substep (`integrators/xpbd.rs`).
+//! The
 //! impact friction is the
 //! velocity-level Coulomb rule of Bridson, Fedkiw & Anderson (2002): the tangential velocity loses
 //! at most `k_f` times the normal velocity change, and never reverses. The resting threshold is
