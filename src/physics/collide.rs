@@ -83,7 +83,9 @@
 //! never sends a particle away from the surface faster than the obstacle moves, so its work
 //! `J (v' - V)·N ≤ 0`, and what it leaves inside is this response's paid projection
 //! (`integrators/implicit_euler/contacts.rs`). Not yet bounded: a dynamic sphere's reaction in
-//! that solve (up to `J²/(2M)` per contact) and the sphere–particle separation below. The
+//! that solve (up to `J²/(2M)` per contact; `cloth-spheres` at dt = 0.04 s still ends with a
+//! negative `contacts` term). XPBD holds its contacts in every substep (`integrators/xpbd.rs`).
+//! The
 //! impact friction is the
 //! velocity-level Coulomb rule of Bridson, Fedkiw & Anderson (2002): the tangential velocity loses
 //! at most `k_f` times the normal velocity change, and never reverses. The resting threshold is
@@ -104,17 +106,25 @@
 //! ```text
 //! d̂    = (x_b - x_a) / |x_b - x_a|                      from body a to body b
 //! v_rel = (v_b - v_a)·d̂                                 < 0: approaching
-//! J     = -(1 + e) v_rel / (w_a + w_b)                  (N·s)
-//! v_a  -= w_a J d̂,   v_b += w_b J d̂
 //! p     = r_a + r_b - |x_b - x_a|                       penetration (m), r = 0 for a particle
 //! x_a  -= w_a / (w_a + w_b) p d̂,   x_b += w_b / (w_a + w_b) p d̂
+//! ΔU    = -g·(m_a Δx_a + m_b Δx_b) + max(0, E_s(x_b') - E_s(x_b))   what the separation adds (J)
+//! s²    = v_rel² - 2 (w_a + w_b) ΔU                    relative normal speed² after it
+//! v_rel' = e s  if approaching,  s  if separating;  s² < 0: v_rel' = 0, the rest owed
+//! J     = (v_rel' - v_rel) / (w_a + w_b)               (N·s)
+//! v_a  -= w_a J d̂,   v_b += w_b J d̂
 //! ```
-//! where `w = 1/m` (1/kg) is zero for a kinematic sphere and a pinned particle, and `e` is the
-//! restitution (sphere–particle 0, sphere–sphere 0.8 in the course). The impulse conserves
-//! momentum (`m_a Δv_a + m_b Δv_b = -J d̂ + J d̂ = 0`) and loses `½ μ (1 - e²) v_rel²` of kinetic
-//! energy with `μ = 1/(w_a + w_b)`; the separation keeps the centre of mass where it was
-//! (`m_a Δx_a + m_b Δx_b = 0`), so the gravitational energy too. The course reference pushes the
-//! bodies apart by only 0.15 of the penetration; here the whole penetration is removed at once.
+//! where `w = 1/m` (1/kg) is zero for a kinematic sphere and a pinned particle, `e` the
+//! restitution (sphere–particle 0, sphere–sphere 0.8 in the course), `g` gravity (m/s²) and
+//! `E_s` (J) the springs at the particle `b` with its neighbours held. The separation is paid
+//! like a collider's projection (Su, Sheth & Fedkiw 2013): from the pair's relative normal
+//! kinetic energy `½ μ v_rel²`, `μ = 1/(w_a + w_b)`, and what that cannot pay the system pays
+//! from its kinetic energy after all pairs (`budget.rs`; not with a kinematic sphere, which is
+//! driven from outside and may do work). Without a climb (`ΔU = 0`) this is the textbook
+//! impulse `J = -(1 + e) v_rel μ`: momentum is conserved (`m_a Δv_a + m_b Δv_b = 0`), the
+//! kinetic energy falls by `½ μ (1 - e²) v_rel²`, and the separation keeps the centre of mass
+//! where it was (`m_a Δx_a + m_b Δx_b = 0`). The course reference pushes the bodies apart by
+//! only 0.15 of the penetration; here the whole penetration is removed at once.
 //!
 //! References: NYCU Computer Animation HW1 (2021–2024), `docs/course.md` §2–3; D. Baraff, "An
 //! Introduction to Physically Based Modeling: Rigid Body Simulation II — Nonpenetration
@@ -131,18 +141,21 @@ use glam::DVec3;
 
 use super::springs::Spring;
 
+mod budget;
 mod force;
 mod geometry;
 mod response;
 mod spheres;
 
+pub use budget::take_kinetic_with_spheres;
+use budget::{above_rounding, energy_rise};
 pub(crate) use force::contact_force;
 pub use force::{ContactParams, contact_forces, contact_power};
 pub(crate) use geometry::Broad;
 use geometry::distance_and_direction;
 pub use geometry::{Collider, Contact};
 pub use response::{Changes, after_step, resolve, resolve_logged, spheres_energy, take_kinetic};
-use response::{keep_verlet_history, respond};
+use response::{keep_verlet_history, pay, respond};
 pub use spheres::{
     DynamicSphere, advance_spheres, collide_spheres, collide_spheres_logged, step_spheres,
 };

@@ -3,6 +3,7 @@
 
 use glam::DVec3;
 
+use super::budget::take_kinetic_with_spheres;
 use super::{Bodies, Collider, Contact, ContactParams, DynamicSphere, World, step_spheres};
 
 /// Velocity response and positional projection of every free particle against the model's
@@ -84,15 +85,33 @@ pub fn resolve_logged<'a, 'b>(
     }
 }
 
-/// `Σ ½ m |v|²` over the free particles (J), `m = 1/w` from the inverse masses `inv_mass`
-/// (1/kg).
-fn kinetic_energy(inv_mass: &[f64], v: &[DVec3]) -> f64 {
-    inv_mass
-        .iter()
-        .zip(v)
-        .filter(|(w, _)| **w != 0.0)
-        .map(|(w, v)| 0.5 * v.length_squared() / w)
-        .sum()
+/// The body pays `amount` J from its kinetic energy ([`take_kinetic_with_spheres`]); every
+/// free particle's velocity changes, so `log` records them all (the records made before come
+/// first and are the ones kept) and Verlet's history follows.
+pub(super) fn pay(
+    world: World,
+    state: &mut Bodies,
+    amount: f64,
+    dt: f64,
+    log: Option<&mut Changes>,
+) {
+    let n = state.x.len().min(world.particle_count());
+    let free = || (0..n).filter(|&i| world.inv_mass[i] != 0.0);
+    if let Some(log) = log {
+        for i in free() {
+            log.record(i, state.x[i], state.v[i]);
+        }
+    }
+    take_kinetic_with_spheres(world.inv_mass, &mut state.v[..n], state.spheres, amount);
+    for i in free() {
+        keep_verlet_history(
+            state.history_valid,
+            &mut state.x_prev[i],
+            state.x[i],
+            state.v[i],
+            dt,
+        );
+    }
 }
 
 /// Takes `amount` joules (at most all there is) out of the kinetic energy of the free particles
@@ -107,18 +126,7 @@ fn kinetic_energy(inv_mass: &[f64], v: &[DVec3]) -> f64 {
 /// (the direction of every velocity and their ratios); it is the body's payment for a contact
 /// correction that raised its potential energy (module docs, "energy budget").
 pub fn take_kinetic(inv_mass: &[f64], v: &mut [DVec3], amount: f64) -> f64 {
-    let kinetic = kinetic_energy(inv_mass, v);
-    if amount <= 0.0 || kinetic <= 0.0 {
-        return 0.0;
-    }
-    let taken = amount.min(kinetic);
-    let factor = (1.0 - taken / kinetic).max(0.0).sqrt();
-    for (w, v) in inv_mass.iter().zip(v.iter_mut()) {
-        if *w != 0.0 {
-            *v *= factor;
-        }
-    }
-    taken
+    take_kinetic_with_spheres(inv_mass, v, &mut [], amount)
 }
 
 /// What a collision response changed, for the energy it removed without a pass over the whole

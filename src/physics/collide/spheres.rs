@@ -101,10 +101,15 @@ pub fn collide_spheres_logged<'a, 'b>(
     if state.spheres.is_empty() {
         return;
     }
+    let spheres_before = spheres_energy(model.gravity, state.spheres);
     if let Some(log) = log.as_deref_mut() {
-        log.spheres_before += spheres_energy(model.gravity, state.spheres);
+        log.spheres_before += spheres_before;
     }
     let params = model.contact;
+    let gravity = model.gravity;
+    // The potential energy (J) that moving a body of inverse mass `w` (1/kg) by `dx` (m) adds
+    // under gravity (a kinematic sphere or a pinned particle does not move).
+    let lift = move |dx: DVec3, w: f64| if w == 0.0 { 0.0 } else { -gravity.dot(dx) / w };
     let Bodies {
         x,
         v,
@@ -131,14 +136,14 @@ pub fn collide_spheres_logged<'a, 'b>(
                 },
                 reach,
                 params.sphere_sphere_restitution,
+                &|dx_a, dx_b| lift(dx_a, wa) + lift(dx_b, wb),
             );
         }
     }
     for s in spheres.iter_mut().filter(|s| !s.kinematic) {
         for collider in model.colliders {
             // A sphere has no springs: its climb is paid from its own motion (what that cannot
-            // pay is not owed: a sphere is a body of its own).
-            let gravity = model.gravity;
+            // pay, the system pays at the end).
             let rise = |from: DVec3, to: DVec3| -gravity.dot(to - from);
             respond(
                 collider,
@@ -153,49 +158,95 @@ pub fn collide_spheres_logged<'a, 'b>(
     // Broad phase by bounds: the box of every chunk of `BOX` particles, grown when a particle
     // is pushed, so that a sphere skips the chunks it cannot reach.
     let n = x.len().min(model.particle_count());
-    BOXES.with(|boxes| {
-        let boxes = &mut *boxes.borrow_mut();
-        boxes.clear();
-        boxes.extend(x[..n].chunks(BOX).map(Aabb::of));
-        for s in spheres.iter_mut() {
-            let ws = s.inv_mass();
-            // A particle at |x - c|² ≥ r² (with a margin against rounding) does not touch and
-            // needs no square root.
-            let reach2 = s.radius * s.radius * (1.0 + 1e-9);
-            for (chunk, bounds) in boxes.iter_mut().enumerate() {
-                if bounds.distance_squared(s.center) >= reach2 {
-                    continue;
-                }
-                for i in chunk * BOX..((chunk + 1) * BOX).min(n) {
-                    if (x[i] - s.center).length_squared() >= reach2 {
+    // Where every particle was before the separations: a particle's springs are measured
+    // against these (as in `resolve`), so that no answer depends on the order.
+    let before: Vec<DVec3> = x[..n].to_vec();
+    OWN.with(|own| {
+        let own = &mut *own.borrow_mut();
+        own.clear();
+        own.spheres_before = spheres_before;
+        BOXES.with(|boxes| {
+            let boxes = &mut *boxes.borrow_mut();
+            boxes.clear();
+            boxes.extend(x[..n].chunks(BOX).map(Aabb::of));
+            for s in spheres.iter_mut() {
+                let ws = s.inv_mass();
+                // A particle at |x - c|² ≥ r² (with a margin against rounding) does not touch and
+                // needs no square root.
+                let reach2 = s.radius * s.radius * (1.0 + 1e-9);
+                for (chunk, bounds) in boxes.iter_mut().enumerate() {
+                    if bounds.distance_squared(s.center) >= reach2 {
                         continue;
                     }
-                    let (x_old, v_old) = (x[i], v[i]);
-                    let touched = impulse_pair(
-                        Side {
-                            x: &mut s.center,
-                            v: &mut s.velocity,
-                            w: ws,
-                        },
-                        Side {
-                            x: &mut x[i],
-                            v: &mut v[i],
-                            w: model.inv_mass[i],
-                        },
-                        s.radius,
-                        params.sphere_particle_restitution,
-                    );
-                    if touched {
-                        bounds.include(x[i]);
-                        keep_verlet_history(history_valid, &mut x_prev[i], x[i], v[i], dt);
-                        if let Some(log) = log.as_deref_mut() {
-                            log.record(i, x_old, v_old);
+                    for i in chunk * BOX..((chunk + 1) * BOX).min(n) {
+                        if (x[i] - s.center).length_squared() >= reach2 {
+                            continue;
+                        }
+                        let (x_old, v_old) = (x[i], v[i]);
+                        let w = model.inv_mass[i];
+                        // The separation's potential energy (J): gravity on both, and the
+                        // springs at i (neighbours where they were) where they gain.
+                        let rise = |dx_s: DVec3, dx: DVec3| {
+                            let elastic = if w == 0.0 {
+                                0.0
+                            } else {
+                                model.elastic_at(&before, i, x_old + dx)
+                                    - model.elastic_at(&before, i, x_old)
+                            };
+                            if ws == 0.0 {
+                                // A kinematic sphere is driven: its pushes are not paid.
+                                return 0.0;
+                            }
+                            lift(dx_s, ws) + lift(dx, w) + elastic.max(0.0)
+                        };
+                        let touched = impulse_pair(
+                            Side {
+                                x: &mut s.center,
+                                v: &mut s.velocity,
+                                w: ws,
+                            },
+                            Side {
+                                x: &mut x[i],
+                                v: &mut v[i],
+                                w,
+                            },
+                            s.radius,
+                            params.sphere_particle_restitution,
+                            &rise,
+                        );
+                        if touched.is_some() {
+                            bounds.include(x[i]);
+                            keep_verlet_history(history_valid, &mut x_prev[i], x[i], v[i], dt);
+                            own.record(i, x_old, v_old);
+                            if let Some(log) = log.as_deref_mut() {
+                                log.record(i, x_old, v_old);
+                            }
                         }
                     }
                 }
             }
+        });
+        // What the pairs could not pay, and the springs between two separated particles,
+        // exactly; the system pays it from its kinetic energy (`budget`). Not with a kinematic
+        // sphere: driven from outside, it may do work on the cloth.
+        own.finish(n);
+        let (rise, size) = energy_rise(&model, x, v, Some(spheres), own);
+        if above_rounding(rise, size) && spheres.iter().all(|s| !s.kinematic) {
+            let mut bodies = Bodies {
+                x,
+                v,
+                x_prev,
+                history_valid,
+                spheres,
+            };
+            pay(model, &mut bodies, rise, dt, log);
         }
     });
+}
+
+thread_local! {
+    /// The particles one call of [`collide_spheres_logged`] changed (reused).
+    static OWN: std::cell::RefCell<Changes> = std::cell::RefCell::new(Changes::default());
 }
 
 /// Particles per box of the sphere–particle broad phase.
@@ -248,24 +299,50 @@ struct Side<'a> {
 }
 
 /// Impulse and separation of two bodies whose centres should stay `reach` (m) apart, with
-/// restitution `e` (module docs). Returns whether they touched.
-fn impulse_pair(a: Side<'_>, b: Side<'_>, reach: f64, e: f64) -> bool {
+/// restitution `e`, the separation paid from the pair's relative normal motion (module docs at
+/// the top of this file). `rise(Δx_a, Δx_b)` is the potential energy (J) that the two moves
+/// add. Returns `None` when they do not touch, else what the pair could not pay (J).
+fn impulse_pair(
+    a: Side<'_>,
+    b: Side<'_>,
+    reach: f64,
+    e: f64,
+    rise: &dyn Fn(DVec3, DVec3) -> f64,
+) -> Option<f64> {
     let w = a.w + b.w;
     let (distance, d) = distance_and_direction(*b.x - *a.x);
     if distance >= reach || w == 0.0 {
-        return false;
-    }
-    // v_rel = (v_b - v_a)·d̂ < 0: approaching.
-    let v_rel = (*b.v - *a.v).dot(d);
-    if v_rel < 0.0 {
-        // J = -(1 + e) v_rel / (w_a + w_b), equal and opposite on the two bodies.
-        let j = -(1.0 + e) * v_rel / w;
-        *a.v -= (a.w * j) * d;
-        *b.v += (b.w * j) * d;
+        return None;
     }
     // Separate by the penetration p, shared in proportion to the inverse masses.
     let p = reach - distance;
-    *a.x -= (a.w / w * p) * d;
-    *b.x += (b.w / w * p) * d;
-    true
+    let (dx_a, dx_b) = (-(a.w / w * p) * d, (b.w / w * p) * d);
+    *a.x += dx_a;
+    *b.x += dx_b;
+    // v_rel = (v_b - v_a)·d̂ < 0: approaching; s² = v_rel² - 2 ΔU (w_a + w_b) at contact.
+    let v_rel = (*b.v - *a.v).dot(d);
+    let climb = rise(dx_a, dx_b);
+    if climb == 0.0 {
+        // Nothing to pay: the textbook impulse J = -(1 + e) v_rel / (w_a + w_b).
+        if v_rel < 0.0 {
+            let j = -(1.0 + e) * v_rel / w;
+            *a.v -= (a.w * j) * d;
+            *b.v += (b.w * j) * d;
+        }
+        return Some(0.0);
+    }
+    let mut s2 = v_rel * v_rel - 2.0 * climb * w;
+    let mut debt = 0.0;
+    if s2 < 0.0 {
+        // ½ μ s² < 0: the relative normal motion cannot pay the separation; the rest is owed.
+        debt = -0.5 * s2 / w;
+        s2 = 0.0;
+    }
+    let s = s2.sqrt();
+    let v_rel_new = if v_rel < 0.0 { e * s } else { s };
+    // J = μ (v_rel' - v_rel), equal and opposite on the two bodies.
+    let j = (v_rel_new - v_rel) / w;
+    *a.v -= (a.w * j) * d;
+    *b.v += (b.w * j) * d;
+    Some(debt)
 }

@@ -9,6 +9,7 @@
 //!     x     += h v                         predict
 //!     λ      = 0
 //!     repeat `iterations` times: solve every spring as a compliant constraint (α = 1/k, β = k_d)
+//!     x     += Δ N   for a particle inside a collider (below)
 //!     v      = (x - x_prev) / h
 //! ```
 //! where
@@ -21,6 +22,27 @@
 //!
 //! The constraint solve is [`xpbd_solve`].
 //!
+//! **Contacts in the substeps** (Macklin et al. 2019, §3: collisions are constraints of every
+//! substep). A particle that the substep carries inside a collider is a contact constraint of
+//! zero compliance against an obstacle of infinite mass: it is moved back along the normal, but
+//! never so far that it ends the substep moving out of the surface:
+//!
+//! ```text
+//! φ, N  = signed distance and normal at x          (φ < 0: inside)
+//! Δ     = min(-φ, max(0, (x_prev - x)·N))          the lift (m)
+//! x    += Δ N
+//! W     = (m Δ / h) (x - x_prev)·N / h  ≤ 0        the work of the impulse m Δ N / h (J)
+//! ```
+//! where `m` is the particle's mass (kg). A particle resting on the surface is held there with
+//! `v·N = 0` (the impulse does no work), one arriving loses its normal speed (`W < 0`), and one
+//! that started the substep inside is lifted only to its starting depth: the rest of the way out
+//! is the collision response after the step, whose climb is paid from kinetic energy
+//! (`crate::physics::collide`), as with implicit Euler's landing cap. The bounce (restitution)
+//! and the impact friction are that response's too. Without contacts in the substeps, gravity
+//! pulls a resting particle `g h²` into the surface every substep and the response puts it back:
+//! on `cube-plane` at the course step the ledger's `contacts` term fell by 11 kJ between
+//! t = 1.5 s and 2.5 s, to −6.0 kJ.
+//!
 //! Springs are not forces here but constraints with compliance `α = 1/k` (m/N); as `α → 0` a spring
 //! becomes a rigid rod, and nothing becomes unstable: the solve is a projection. The error is
 //! O(h): first order, with the first-order error showing as extra damping. Many small substeps
@@ -32,6 +54,9 @@
 //! Constrained Dynamics", Motion in Games 2016, §3–4; M. Macklin, K. Storey, M. Lu, P. Terdiman,
 //! N. Chentanez, S. Jeschke, M. Müller, "Small Steps in Physics Simulation", SCA 2019, §3.
 
+use glam::DVec3;
+
+use crate::physics::collide::Contact;
 use crate::physics::constraints::xpbd_solve;
 use crate::physics::forces::Model;
 use crate::physics::integrators::declaration::{
@@ -94,6 +119,10 @@ fn step(
         for _ in 0..params.iterations.max(1) {
             xpbd_solve(model, &mut state.x, x_start, lambda, h);
         }
+        let work = contacts(model, &mut state.x, x_start, h);
+        if *account {
+            dissipated.contacts -= work;
+        }
         let inv_h = 1.0 / h;
         for i in 0..state.x.len() {
             state.v[i] = (state.x[i] - x_start[i]) * inv_h;
@@ -103,4 +132,38 @@ fn step(
     }
     state.history_valid = false;
     u64::from(substeps)
+}
+
+/// The contact constraints of a substep of `h` seconds (module docs): every free particle
+/// inside a collider at `x` is lifted along the normal by `Δ = min(-φ, max(0, (x_start - x)·N))`
+/// (m). Returns the work the contact impulses do (J, ≤ 0).
+fn contacts(model: &Model, x: &mut [DVec3], x_start: &[DVec3], h: f64) -> f64 {
+    if model.colliders.is_empty() {
+        return 0.0;
+    }
+    let mut work = 0.0;
+    for (i, (x, &start)) in x.iter_mut().zip(x_start).enumerate() {
+        if model.inv_mass[i] == 0.0 {
+            continue;
+        }
+        for collider in &model.colliders {
+            if !collider.may_touch(*x, 0.0) {
+                continue;
+            }
+            let Some(Contact { phi, normal }) = collider.contact(*x) else {
+                continue;
+            };
+            if phi >= 0.0 {
+                continue;
+            }
+            let lift = (-phi).min((start - *x).dot(normal).max(0.0));
+            if lift <= 0.0 {
+                continue;
+            }
+            *x += lift * normal;
+            // W = J·v_end with J = m Δ N / h and v_end = (x - x_start) / h.
+            work += model.mass[i] * lift * (*x - start).dot(normal) / (h * h);
+        }
+    }
+    work
 }
