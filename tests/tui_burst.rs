@@ -23,26 +23,10 @@ use std::time::{Duration, Instant};
 
 use nix::pty::{Winsize, openpty};
 
-use crate::common::Rng;
+use crate::common::{Rng, find, wait_for};
 
 const MOUSE_ON: &[u8] = b"\x1b[?1000h";
 const CURSOR_QUERY: &[u8] = b"\x1b[6n";
-
-fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
-    hay.windows(needle.len()).position(|w| w == needle)
-}
-
-/// Waits until `ready()` holds; a hang guard, not a timing assertion.
-fn wait_for(what: &str, mut ready: impl FnMut() -> bool) {
-    let start = Instant::now();
-    while !ready() {
-        assert!(
-            start.elapsed() < Duration::from_secs(300),
-            "never happened: {what}"
-        );
-        std::thread::sleep(Duration::from_millis(10));
-    }
-}
 
 /// Every key of the lesson screen (docs/lesson-app.md's table) except those that leave it (`q`,
 /// Esc, Ctrl-C), as the bytes a terminal sends.
