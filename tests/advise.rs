@@ -623,17 +623,7 @@ fn advise_on_one_thread_and_two_takes_the_same_decisions() {
         "--json",
     ];
     let run = |threads: &str| {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_springlab"))
-            .args(args)
-            .env("SPRINGLAB_THREADS", threads)
-            .output()
-            .expect("run springlab");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let mut v: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+        let mut v = common::json_on_threads(&args, threads);
         without_wall(&mut v);
         v
     };

@@ -662,21 +662,6 @@ fn velocity_verlet_rope_limit_is_two_over_omega_max() {
     );
 }
 
-/// `springlab args…` with `SPRINGLAB_THREADS=threads`: its JSON.
-fn json_on_threads(args: &[&str], threads: &str) -> Value {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_springlab"))
-        .args(args)
-        .env("SPRINGLAB_THREADS", threads)
-        .output()
-        .expect("run springlab");
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("one JSON object")
-}
-
 #[test]
 fn one_thread_and_two_give_the_same_study() {
     // The searches run on separate cores, the stiffest state beside them, and the usable-dt
@@ -692,8 +677,8 @@ fn one_thread_and_two_give_the_same_study() {
         "semi-implicit-euler,midpoint",
         "--json",
     ];
-    let one = json_on_threads(&args, "1");
-    let two = json_on_threads(&args, "2");
+    let one = common::json_on_threads(&args, "1");
+    let two = common::json_on_threads(&args, "2");
     assert_eq!(one, two, "one thread and two differ");
     // The usable search ran (and ran ahead of itself on two threads): every run is reported.
     for m in one["methods"].as_array().expect("methods") {

@@ -78,3 +78,18 @@ pub fn wait_for(what: &str, mut ready: impl FnMut() -> bool) {
         std::thread::sleep(std::time::Duration::from_millis(10));
     }
 }
+
+/// `springlab args…` with `SPRINGLAB_THREADS=threads`: its JSON.
+pub fn json_on_threads(args: &[&str], threads: &str) -> serde_json::Value {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_springlab"))
+        .args(args)
+        .env("SPRINGLAB_THREADS", threads)
+        .output()
+        .expect("run springlab");
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
