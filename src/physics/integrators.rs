@@ -276,6 +276,9 @@ pub struct Workspace {
     /// Implicit Euler: the particles that a solve's `Δv` carries inside a sphere (the contact
     /// search's candidates).
     pub(crate) inside: Vec<usize>,
+    /// Implicit Euler: the rows of the dynamic spheres that the step's contacts tie into the
+    /// solve.
+    pub(crate) sphere_rows: crate::physics::fast::implicit_constraint::SphereRows,
     /// When true, every step also integrates the dissipated power with the method's own stages
     /// (energy accounting, [`crate::physics::energy::dissipated_power`]); costs about one more
     /// pass over the springs per stage, and one more force evaluation with colliders.

@@ -61,7 +61,7 @@
 
 use glam::DVec3;
 
-use super::implicit_constraint::Constraint;
+use super::implicit_constraint::{Constraint, Rows, SphereRows};
 #[cfg(target_arch = "x86_64")]
 use crate::physics::lanes::{Avx2, Avx512};
 use crate::physics::lanes::{
@@ -214,8 +214,9 @@ impl Lattice {
 
     /// Preconditioned conjugate gradients, as the textbook's `System::solve`: writes Δv,
     /// starting from `start` when given, else from the last solve's Δv when `warm`, else from
-    /// zero, with the constrained particles' normal components prescribed. Returns the
-    /// iterations, the final relative residual and whether it reached `tolerance`.
+    /// zero, with the constrained particles' normal components prescribed and the touched
+    /// dynamic spheres' rows solved with them (`spheres`). Returns the iterations, the final
+    /// relative residual and whether it reached `tolerance`.
     pub(crate) fn solve(
         &mut self,
         constraints: &[Constraint],
@@ -223,6 +224,7 @@ impl Lattice {
         max_iterations: u32,
         warm: bool,
         start: Option<&[DVec3]>,
+        spheres: &mut SphereRows,
     ) -> (u32, f64, bool) {
         if let Some(start) = start {
             for (i, s) in start.iter().enumerate().take(self.n) {
@@ -234,7 +236,26 @@ impl Lattice {
         let warm = warm || start.is_some();
         // `assemble` recorded the stencil's kernel.
         let kernel = self.kernel.unwrap_or(Kernel::Portable);
-        solve_on(kernel, self, constraints, tolerance, max_iterations, warm)
+        solve_on(
+            kernel,
+            self,
+            constraints,
+            tolerance,
+            max_iterations,
+            warm,
+            spheres,
+        )
+    }
+
+    /// The inverse diagonal block of particle `i` (1/kg), the preconditioner's.
+    pub(crate) fn diag_inv_block(&self, i: usize) -> glam::DMat3 {
+        let k = self.front + i;
+        let d = |e: usize| self.diag_inv[e][k];
+        glam::DMat3::from_cols(
+            DVec3::new(d(0), d(1), d(2)),
+            DVec3::new(d(1), d(3), d(4)),
+            DVec3::new(d(2), d(4), d(5)),
+        )
     }
 
     /// The springs' elastic energy `Σ ½ k (|x_{p+δ} - x_p| - L0)²` (J) at `x` (m): the spring

@@ -145,6 +145,7 @@ fn newton_step(
         last_solve,
         constraints,
         inside,
+        sphere_rows,
         account,
         dissipated,
         power_f,
@@ -169,6 +170,7 @@ fn newton_step(
         cg,
         constraints,
         inside,
+        spheres: sphere_rows,
     };
     let (stats, removed) = contacts::solve(&system, state, params, warm, *account, scratch);
     *last_solve = stats;

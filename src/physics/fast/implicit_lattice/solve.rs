@@ -265,7 +265,27 @@ pub(super) fn filter(front: usize, constraints: &[Constraint], v: &mut Soa) {
     }
 }
 
-/// The textbook's preconditioned conjugate gradients on the lattice system.
+/// A structure-of-arrays vector seen as rows (particle `i` at `front + i`), for the sphere rows
+/// of the solve ([`SphereRows`]).
+struct SoaRows<'a>(usize, &'a mut Soa);
+
+impl Rows for SoaRows<'_> {
+    fn add_row(&mut self, i: usize, d: DVec3) {
+        let k = self.0 + i;
+        self.1[0][k] += d.x;
+        self.1[1][k] += d.y;
+        self.1[2][k] += d.z;
+    }
+}
+
+/// Row `i` of a structure-of-arrays vector.
+fn soa_row(front: usize, a: &Soa, i: usize) -> DVec3 {
+    let k = front + i;
+    DVec3::new(a[0][k], a[1][k], a[2][k])
+}
+
+/// The textbook's preconditioned conjugate gradients on the lattice system, the touched
+/// dynamic spheres' rows with it ([`SphereRows`]).
 #[inline(always)]
 fn solve_body<V: Lanes>(
     sys: &mut Lattice,
@@ -273,6 +293,7 @@ fn solve_body<V: Lanes>(
     tolerance: f64,
     max_iterations: u32,
     warm: bool,
+    spheres: &mut SphereRows,
 ) -> (u32, f64, bool) {
     let (front, n) = (sys.front, sys.n);
     let chunks = || {
@@ -298,9 +319,10 @@ fn solve_body<V: Lanes>(
             let k = front + c.i;
             let n = c.normal;
             let along = dv[0][k] * n.x + dv[1][k] * n.y + dv[2][k] * n.z;
-            dv[0][k] += (c.dv_n - along) * n.x;
-            dv[1][k] += (c.dv_n - along) * n.y;
-            dv[2][k] += (c.dv_n - along) * n.z;
+            let target = spheres.target(c);
+            dv[0][k] += (target - along) * n.x;
+            dv[1][k] += (target - along) * n.y;
+            dv[2][k] += (target - along) * n.z;
         }
         // r = S (b - A z_0), pinned rows zero; |b|² over the free particles.
         let _ = apply::<V>(sys, &dv, &mut ap);
@@ -323,8 +345,10 @@ fn solve_body<V: Lanes>(
             b2.store(&mut values);
             values.iter().sum::<f64>()
         };
+        let (b_spheres, r_spheres) = spheres.first_residual(constraints, |i| soa_row(front, &r, i));
+        let b_norm2 = b_norm2 + b_spheres;
         filter(front, constraints, &mut r);
-        if warm && dot::<V>(sys, &r, &r) >= b_norm2 {
+        if warm && dot::<V>(sys, &r, &r) + r_spheres >= b_norm2 {
             warm = false;
             continue;
         }
@@ -335,22 +359,41 @@ fn solve_body<V: Lanes>(
         let tol2 = (tolerance * tolerance * b_norm2).max(f64::MIN_POSITIVE);
         precondition::<V>(sys, &r, &mut p);
         filter(front, constraints, &mut p);
-        let mut rz = dot::<V>(sys, &r, &p);
-        let mut r_norm2 = dot::<V>(sys, &r, &r);
+        let mut rz = dot::<V>(sys, &r, &p) + spheres.first_direction();
+        let mut r_norm2 = dot::<V>(sys, &r, &r) + spheres.first_residual_norm2();
+        let tied = spheres.any();
         let mut iterations = 0;
         while r_norm2 > tol2 && iterations < max_iterations {
             // p ⊥ N at the constrained particles, so pᵀ S A p = pᵀ A p: the product's own sum.
-            let p_ap = apply::<V>(sys, &p, &mut ap);
+            // With spheres in the solve, T p first (the tied particles' normal parts from the
+            // spheres' directions), and the spheres' rows of Tᵀ A T p gathered before the filter.
+            let mut p_ap;
+            if tied {
+                spheres.expand(constraints, &mut SoaRows(front, &mut p));
+                p_ap = apply::<V>(sys, &p, &mut ap);
+                p_ap += spheres.gather(constraints, |i| soa_row(front, &ap, i));
+                filter(front, constraints, &mut p);
+            } else {
+                p_ap = apply::<V>(sys, &p, &mut ap);
+            }
             filter(front, constraints, &mut ap);
             if p_ap.is_nan() || p_ap <= 0.0 {
                 break;
             }
             // One pass: Δv += α p, r -= α S A p, |r|², z = P⁻¹ r and r·z (r = S r, so
             // r·S z = r·z: the filter of z can follow).
-            let (r2, rz_new) = descend::<V>(sys, rz / p_ap, [&mut dv, &mut r, &mut z], &p, &ap);
+            let alpha = rz / p_ap;
+            let (mut r2, mut rz_new) = descend::<V>(sys, alpha, [&mut dv, &mut r, &mut z], &p, &ap);
+            if tied {
+                let (rr_s, rz_s) =
+                    spheres.descend(alpha, constraints, &mut SoaRows(front, &mut dv));
+                r2 += rr_s;
+                rz_new += rz_s;
+            }
             r_norm2 = r2;
             filter(front, constraints, &mut z);
             redirect::<V>(sys, rz_new / rz, &z, &mut p);
+            spheres.redirect(rz_new / rz);
             rz = rz_new;
             iterations += 1;
         }
@@ -373,6 +416,7 @@ on_kernel!(
         constraints: &[Constraint],
         tolerance: f64,
         max_iterations: u32,
-        warm: bool
+        warm: bool,
+        spheres: &mut SphereRows
     ) -> (u32, f64, bool)
 );

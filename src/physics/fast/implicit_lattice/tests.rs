@@ -155,7 +155,14 @@ fn the_solve_leaves_the_residual_it_reports_on_every_kernel() {
         let (mut sys, stencil) = assembled();
         let stencil = stencil.with_kernel(kernel);
         sys.kernel = Some(stencil.kernel());
-        let (iterations, residual, converged) = sys.solve(&[], 1e-10, 1000, false, None);
+        let (iterations, residual, converged) = sys.solve(
+            &[],
+            1e-10,
+            1000,
+            false,
+            None,
+            &mut crate::physics::fast::implicit_constraint::SphereRows::default(),
+        );
         assert!(converged && residual <= 1e-10, "{kernel:?}: {residual}");
         assert!((10..1000).contains(&iterations), "{kernel:?}: {iterations}");
         // The residual row by row (each particle's own row of A, as the module docs write

@@ -31,6 +31,7 @@ use glam::DVec3;
 
 use super::Constraint;
 use super::solve::{SolveStats, System};
+use crate::physics::fast::implicit_constraint::SphereRows;
 use crate::physics::collide::Contact;
 use crate::physics::forces::Model;
 use crate::physics::integrators::MethodParams;
@@ -56,6 +57,12 @@ pub(super) struct Scratch<'a> {
     pub(super) cg: &'a mut [Vec<DVec3>; 4],
     pub(super) constraints: &'a mut Vec<Constraint>,
     pub(super) inside: &'a mut Vec<usize>,
+    pub(super) spheres: &'a mut SphereRows,
+}
+
+/// Each sphere's mass (kg) when it is dynamic, `None` when kinematic.
+pub(super) fn dynamic(state: &State) -> impl ExactSizeIterator<Item = Option<f64>> + '_ {
+    state.spheres.iter().map(|s| (!s.kinematic).then_some(s.mass))
 }
 
 /// Solves `system` with the contacts inside the solve (module docs): from the warm start's
@@ -76,21 +83,25 @@ pub(super) fn solve(
         cg,
         constraints,
         inside,
+        spheres,
     } = scratch;
     let contacts = has_contacts(model, state);
+    spheres.begin_step(dynamic(state), model.gravity, dt, warm);
     if warm && contacts {
-        start_contacts(model, state, dt, &cg[0], constraints, inside);
+        start_contacts(model, state, dt, &cg[0], constraints, inside, spheres);
     } else {
         constraints.clear();
     }
     let mut stats = SolveStats::default();
     loop {
+        spheres.prepare(dynamic(state), constraints, |i| system.diag_inv[i]);
         // Later passes start from the previous pass's Δv (it changed only near contacts).
         let (iterations, residual, converged) = system.solve(
             constraints,
             (params.cg_tolerance, params.cg_max_iterations),
             cg,
             warm || stats.passes > 0,
+            spheres,
         );
         stats.record(iterations, residual, converged);
         if !converged || !contacts {
@@ -109,20 +120,25 @@ pub(super) fn solve(
             }
             break;
         }
-        if !(add_contacts(model, state, dt, dv, constraints, inside) || released) {
+        if !(add_contacts(model, state, dt, dv, constraints, inside, spheres) || released) {
             break;
         }
     }
     stats.constrained = constraints.len() as u32;
+    spheres.remember(dt);
     let mut removed = None;
     if !constraints.is_empty() && (account || constraints.iter().any(|c| c.sphere.is_some())) {
         // The constraint impulses J = (A Δv - b)·N (N·s) do the work J (v_{n+1}·N) on the
         // particles; minus that is what the contacts inside the solve removed (J).
         let [dv, _, _, ap] = &mut *cg;
         system.apply(dv, ap);
-        removed = Some(contact_impulses(state, constraints, dv, |i| {
-            ap[i] - system.rhs[i]
-        }));
+        removed = Some(contact_impulses(
+            state,
+            constraints,
+            dv,
+            dt * model.gravity,
+            |i| ap[i] - system.rhs[i],
+        ));
     }
     (stats, removed)
 }
@@ -138,10 +154,11 @@ pub(super) fn add_contacts(
     dv: &[DVec3],
     constraints: &mut Vec<Constraint>,
     inside: &mut Vec<usize>,
+    spheres: &SphereRows,
 ) -> bool {
     // Deeper than this (m) counts as inside: rounding of a landing exactly on the surface is not.
     const DEPTH: f64 = 1e-12;
-    let ends = sphere_ends(model, state, dt);
+    let ends = sphere_ends(state, dt, spheres);
     // Without colliders, only the particles that the test of `nearest_contact` finds inside a
     // sphere, taken eight at a time first.
     let candidates: &mut dyn Iterator<Item = usize> = if model.colliders.is_empty() {
@@ -163,12 +180,12 @@ pub(super) fn add_contacts(
         else {
             continue;
         };
-        let (target, capped) =
-            landing(v, contact, obstacle_velocity(state, sphere), dt);
+        let obstacle = obstacle_velocity(state, sphere, spheres);
+        let (target, capped) = landing(v, contact, obstacle, dt);
         let constraint = Constraint {
             i,
             normal: contact.normal,
-            dv_n: target - state.v[i].dot(contact.normal),
+            dv_n: prescribed(state, i, contact.normal, target, sphere, spheres),
             sphere,
         };
         match constraints.binary_search_by_key(&i, |c| c.i) {
@@ -193,10 +210,11 @@ pub(super) fn start_contacts(
     dv: &[DVec3],
     constraints: &mut Vec<Constraint>,
     inside: &mut Vec<usize>,
+    spheres: &SphereRows,
 ) {
-    carry_over(model, state, dt, dv, constraints);
+    carry_over(model, state, dt, dv, constraints, spheres);
     if model.colliders.is_empty() {
-        add_contacts(model, state, dt, dv, constraints, inside);
+        add_contacts(model, state, dt, dv, constraints, inside, spheres);
     }
 }
 
@@ -211,19 +229,21 @@ fn carry_over(
     dt: f64,
     dv: &[DVec3],
     constraints: &mut Vec<Constraint>,
+    spheres: &SphereRows,
 ) {
-    let ends = sphere_ends(model, state, dt);
+    let ends = sphere_ends(state, dt, spheres);
     constraints.retain_mut(|c| {
         let v = state.v[c.i] + dv[c.i];
         let x = state.x[c.i] + dt * v;
         let Some((contact, sphere)) = nearest_contact(model, &ends, x, false) else {
             return false;
         };
-        let (target, _) = landing(v, contact, obstacle_velocity(state, sphere), dt);
+        let obstacle = obstacle_velocity(state, sphere, spheres);
+        let (target, _) = landing(v, contact, obstacle, dt);
         *c = Constraint {
             i: c.i,
             normal: contact.normal,
-            dv_n: target - state.v[c.i].dot(contact.normal),
+            dv_n: prescribed(state, c.i, contact.normal, target, sphere, spheres),
             sphere,
         };
         true
@@ -256,29 +276,39 @@ fn landing(v: DVec3, contact: Contact, obstacle: DVec3, dt: f64) -> (f64, bool) 
     if land > cap { (cap, true) } else { (land, false) }
 }
 
-/// The velocity (m/s) of the obstacle a contact is with, for the cap of [`landing`]: zero for
-/// a collider, a sphere's velocity before this step's gravity and reaction. (A dynamic sphere's
-/// reaction `-J N` is applied after the solve; its kinetic energy changes by
-/// `-J N·V + J²/(2M)`, so with the particle's `v_{n+1}·N ≤ V·N` the pair's work is at most
-/// `J²/(2M)`, `M` its mass in kg.)
-fn obstacle_velocity(state: &State, sphere: Option<usize>) -> DVec3 {
-    sphere.map_or(DVec3::ZERO, |k| state.spheres[k].velocity)
+/// The velocity (m/s) of the obstacle a contact is with at the end of the step, for the cap of
+/// [`landing`]: zero for a collider, a kinematic sphere's own, a dynamic sphere's `V + ΔV`
+/// with the solve's current estimate of its change (`spheres`; `g dt` before it is in the
+/// solve).
+fn obstacle_velocity(state: &State, sphere: Option<usize>, spheres: &SphereRows) -> DVec3 {
+    sphere.map_or(DVec3::ZERO, |k| state.spheres[k].velocity + spheres.dv[k])
 }
 
-/// Where each sphere ends this step (`collide::advance_spheres`: gravity, then the move), and
-/// its radius (m).
-fn sphere_ends(model: &Model, state: &State, dt: f64) -> Vec<(DVec3, f64)> {
+/// The constraint's `dv_n` (m/s) for the prescribed normal velocity `target` (m/s) of particle
+/// `i` along `normal`: `target - v_n·N`, less the part `ΔV·N` that a dynamic sphere's row
+/// adds in the solve (`SphereRows::target`), so that the particle keeps the relative normal
+/// velocity `target - (V + ΔV)·N` to the sphere whatever the solve makes of `ΔV`.
+fn prescribed(
+    state: &State,
+    i: usize,
+    normal: DVec3,
+    target: f64,
+    sphere: Option<usize>,
+    spheres: &SphereRows,
+) -> f64 {
+    let tied = sphere.map_or(0.0, |k| spheres.dv[k].dot(normal));
+    target - state.v[i].dot(normal) - tied
+}
+
+/// Where each sphere ends this step, `c + dt (V + ΔV)` (as `collide::advance_spheres` moves
+/// it, with the solve's current estimate `ΔV` of its velocity change: `g dt` before any
+/// reaction, zero for a kinematic sphere), and its radius (m).
+fn sphere_ends(state: &State, dt: f64, spheres: &SphereRows) -> Vec<(DVec3, f64)> {
     state
         .spheres
         .iter()
-        .map(|s| {
-            let velocity = if s.kinematic {
-                s.velocity
-            } else {
-                s.velocity + dt * model.gravity
-            };
-            (s.center + dt * velocity, s.radius)
-        })
+        .zip(&spheres.dv)
+        .map(|(s, dv)| (s.center + dt * (s.velocity + *dv), s.radius))
         .collect()
 }
 
@@ -329,22 +359,28 @@ pub(super) fn has_contacts(model: &Model, state: &State) -> bool {
 /// The constraint impulses of a solve and what they did (module docs, "Contacts with
 /// spheres"): `impulse(i)` is `(A Δv - b)_i` (N·s) of the constrained particle `i`; its part
 /// along the normal, `J_i = (A Δv - b)_i·N_i`, acts on the particle, and `-J_i N_i` on the
-/// dynamic sphere it touches (a kinematic one takes nothing):
+/// dynamic sphere it touches (a kinematic one takes nothing), so momentum is kept exactly:
 ///
 /// ```text
-/// V_s ← V_s - Σ_{i on s} J_i N_i / M_s
-/// removed = -Σ_i J_i (v_n + Δv)_i·N_i  -  Σ_s ½ M_s (|V_s'|² - |V_s|²)
+/// P_s  = Σ_{i on s} J_i N_i,    V_s' = V_s - P_s / M_s
+/// removed = -Σ_i J_i (v_n + Δv)_i·N_i  +  Σ_s P_s·(V_s' + g dt)
 /// ```
-/// where `V_s` (m/s) and `M_s` (kg) are the sphere's velocity and mass. Returns `removed` (J):
-/// the energy the contacts inside the solve took out (the work of the impulses on the
-/// particles and the spheres' change of kinetic energy, negated).
+/// where `V_s` (m/s) and `M_s` (kg) are the sphere's velocity and mass and `g dt` (`fall`, m/s)
+/// the velocity its weight adds after the solve (`collide::advance_spheres`), so that
+/// `V_s' + g dt` is its velocity at the end of the step. Each impulse's work is judged at the
+/// end-of-step velocity of the body it acts on, as backward Euler moves every body with it
+/// (`J v_{n+1}` is the force `J/dt` times the step's displacement `dt v_{n+1}`): a sphere at rest
+/// on the cloth, `P = M g dt`, does no work. With the particle tied to the sphere in the solve
+/// (`(v_n + Δv)·N = (V' + g dt)·N + u`, `SphereRows`), `removed = -Σ_i J_i u_i ≥ 0`. Returns
+/// `removed` (J): the energy the contacts inside the solve took out.
 pub(super) fn contact_impulses(
     state: &mut State,
     constraints: &[Constraint],
     dv: &[DVec3],
+    fall: DVec3,
     impulse: impl Fn(usize) -> DVec3,
 ) -> f64 {
-    let before: f64 = state.spheres.iter().map(sphere_kinetic).sum();
+    let before: Vec<DVec3> = state.spheres.iter().map(|s| s.velocity).collect();
     let mut removed = 0.0;
     for c in constraints {
         let j = impulse(c.i).dot(c.normal);
@@ -355,15 +391,10 @@ pub(super) fn contact_impulses(
             s.velocity -= (j / s.mass) * c.normal;
         }
     }
-    let after: f64 = state.spheres.iter().map(sphere_kinetic).sum();
-    removed - (after - before)
-}
-
-/// A dynamic sphere's kinetic energy (J); a kinematic one's is not counted.
-fn sphere_kinetic(s: &crate::physics::collide::DynamicSphere) -> f64 {
-    if s.kinematic {
-        0.0
-    } else {
-        0.5 * s.mass * s.velocity.length_squared()
+    for (s, v) in state.spheres.iter().zip(before) {
+        if !s.kinematic {
+            removed += s.mass * (v - s.velocity).dot(s.velocity + fall);
+        }
     }
+    removed
 }

@@ -7,8 +7,8 @@
 use glam::DVec3;
 
 use super::contacts::{
-    MAX_CONTACT_PASSES, RELEASE_PASSES, add_contacts, contact_impulses, has_contacts, release_pulling,
-    start_contacts,
+    MAX_CONTACT_PASSES, RELEASE_PASSES, add_contacts, contact_impulses, dynamic, has_contacts,
+    release_pulling, start_contacts,
 };
 use super::solve::SolveStats;
 use crate::physics::energy::Power;
@@ -61,6 +61,7 @@ pub(super) fn step(
         last_solve,
         constraints,
         inside,
+        sphere_rows: spheres,
         account,
         dissipated,
         power_f,
@@ -95,13 +96,15 @@ pub(super) fn step(
     *start_elastic = Some(lattice.start_elastic());
     let contacts = has_contacts(model, state);
     let dv = &mut cg[0];
+    spheres.begin_step(dynamic(state), model.gravity, dt, warm);
     if warm && contacts {
-        start_contacts(model, state, dt, dv, constraints, inside);
+        start_contacts(model, state, dt, dv, constraints, inside, spheres);
     } else {
         constraints.clear();
     }
     let mut stats = SolveStats::default();
     loop {
+        spheres.prepare(dynamic(state), constraints, |i| lattice.diag_inv_block(i));
         let start = (warm && stats.passes == 0).then_some(&dv[..]);
         let (iterations, residual, converged) = lattice.solve(
             constraints,
@@ -109,6 +112,7 @@ pub(super) fn step(
             params.cg_max_iterations,
             stats.passes > 0,
             start,
+            spheres,
         );
         lattice.copy_dv(dv);
         stats.record(iterations, residual, converged);
@@ -123,17 +127,18 @@ pub(super) fn step(
             }
             break;
         }
-        if !(add_contacts(model, state, dt, dv, constraints, inside) || released) {
+        if !(add_contacts(model, state, dt, dv, constraints, inside, spheres) || released) {
             break;
         }
     }
     stats.constrained = constraints.len() as u32;
+    spheres.remember(dt);
     *last_solve = stats;
     if !constraints.is_empty() && (*account || constraints.iter().any(|c| c.sphere.is_some())) {
         // The constraint impulses (A Δv - b)·N and the spheres' reactions, as in the textbook
         // step.
         let impulse = |i| lattice.row_residual(i);
-        let removed = contact_impulses(state, constraints, dv, impulse);
+        let removed = contact_impulses(state, constraints, dv, dt * model.gravity, impulse);
         if *account {
             dissipated.contacts += removed;
         }

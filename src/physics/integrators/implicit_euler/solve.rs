@@ -13,6 +13,7 @@ use glam::{DMat3, DVec3};
 use serde::Serialize;
 
 use super::Constraint;
+use crate::physics::fast::implicit_constraint::SphereRows;
 use crate::physics::forces::Model;
 
 /// How the last linear solve went.
@@ -103,15 +104,17 @@ impl System<'_> {
     }
 
     /// Preconditioned conjugate gradients on `A Δv = b` with pinned rows filtered and the
-    /// constrained particles' normal components prescribed (Shewchuk §B3; Baraff & Witkin §5.3).
-    /// Writes `Δv` into `cg[0]`; returns the iterations, the final relative residual and whether
-    /// it reached the tolerance.
+    /// constrained particles' normal components prescribed (Shewchuk §B3; Baraff & Witkin §5.3),
+    /// the touched dynamic spheres' velocities solved with them (`spheres`, the rows of
+    /// [`SphereRows`]). Writes `Δv` into `cg[0]`; returns the iterations, the final relative
+    /// residual and whether it reached the tolerance.
     pub(super) fn solve(
         &self,
         constraints: &[Constraint],
         (tolerance, max_iterations): (f64, u32),
         cg: &mut [Vec<DVec3>; 4],
         warm: bool,
+        spheres: &mut SphereRows,
     ) -> (u32, f64, bool) {
         let n = self.rhs.len();
         let [dv, r, p, ap] = cg;
@@ -131,7 +134,7 @@ impl System<'_> {
             }
             for c in constraints {
                 let along = dv[c.i].dot(c.normal);
-                dv[c.i] += (c.dv_n - along) * c.normal;
+                dv[c.i] += (spheres.target(c) - along) * c.normal;
             }
             // r = S (b - A z), pinned rows zero.
             self.apply(dv, ap);
@@ -149,8 +152,11 @@ impl System<'_> {
                     DVec3::ZERO
                 };
             }
+            let (b_spheres, r_spheres) = spheres.first_residual(constraints, |i| r[i]);
+            b_norm2 += b_spheres;
             filter(r);
-            if warm && r.iter().map(|r| r.length_squared()).sum::<f64>() >= b_norm2 {
+            let r_norm2 = r.iter().map(|r| r.length_squared()).sum::<f64>() + r_spheres;
+            if warm && r_norm2 >= b_norm2 {
                 warm = false;
                 continue;
             }
@@ -171,12 +177,19 @@ impl System<'_> {
         for i in 0..n {
             rz += r[i].dot(p[i]);
         }
+        rz += spheres.first_direction();
         let mut r_norm2: f64 = r.iter().map(|r| r.length_squared()).sum();
+        r_norm2 += spheres.first_residual_norm2();
         let mut iterations = 0;
         while r_norm2 > tol2 && iterations < max_iterations {
+            // T p (the tied particles' normal parts from the spheres), A T p, then Tᵀ: the
+            // spheres' rows gathered and the constrained normal parts filtered out.
+            spheres.expand(constraints, &mut p[..]);
             self.apply(p, ap);
+            let mut p_ap: f64 = p.iter().zip(ap.iter()).map(|(p, q)| p.dot(*q)).sum();
+            p_ap += spheres.gather(constraints, |i| ap[i]);
+            filter(p);
             filter(ap);
-            let p_ap: f64 = p.iter().zip(ap.iter()).map(|(p, q)| p.dot(*q)).sum();
             if p_ap.is_nan() || p_ap <= 0.0 {
                 break;
             }
@@ -187,17 +200,21 @@ impl System<'_> {
                 r[i] -= alpha * ap[i];
                 r_norm2 += r[i].length_squared();
             }
+            let (rr_spheres, rz_spheres) = spheres.descend(alpha, constraints, &mut dv[..]);
+            r_norm2 += rr_spheres;
             // z = S P⁻¹ r
             for i in 0..n {
                 ap[i] = self.diag_inv[i] * r[i];
             }
             filter(ap);
-            let rz_new: f64 = r.iter().zip(ap.iter()).map(|(r, z)| r.dot(*z)).sum();
+            let rz_new: f64 =
+                r.iter().zip(ap.iter()).map(|(r, z)| r.dot(*z)).sum::<f64>() + rz_spheres;
             let beta = rz_new / rz;
             rz = rz_new;
             for i in 0..n {
                 p[i] = ap[i] + beta * p[i];
             }
+            spheres.redirect(beta);
             iterations += 1;
         }
         let residual = if b_norm2 > 0.0 {
