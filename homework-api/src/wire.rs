@@ -383,7 +383,7 @@ impl Wire for String {
 /// Appends `items` in the wire form of a `Vec<T>` (count, then the items) without copying
 /// them into a list first.
 pub fn put_slice<T: Wire>(items: &[T], out: &mut Vec<u8>) {
-    out.reserve(8 + items.len() * size_of::<T>());
+    out.reserve(8 + std::mem::size_of_val(items));
     items.len().put(out);
     for item in items {
         item.put(out);
