@@ -350,16 +350,21 @@ impl Wire for f64 {
 
 impl Wire for DVec3 {
     fn put(&self, out: &mut Vec<u8>) {
-        self.x.put(out);
-        self.y.put(out);
-        self.z.put(out);
+        let mut b = [0u8; 24];
+        b[..8].copy_from_slice(&self.x.to_le_bytes());
+        b[8..16].copy_from_slice(&self.y.to_le_bytes());
+        b[16..].copy_from_slice(&self.z.to_le_bytes());
+        out.extend_from_slice(&b);
     }
     fn take(input: &mut Reader<'_>) -> Result<DVec3, WireError> {
-        Ok(DVec3::new(
-            f64::take(input)?,
-            f64::take(input)?,
-            f64::take(input)?,
-        ))
+        // One length check for the three numbers (a body's lists are thousands of vectors).
+        let b = input.bytes(24)?;
+        let f = |i: usize| {
+            let mut a = [0u8; 8];
+            a.copy_from_slice(&b[8 * i..8 * i + 8]);
+            f64::from_le_bytes(a)
+        };
+        Ok(DVec3::new(f(0), f(1), f(2)))
     }
 }
 
@@ -378,6 +383,7 @@ impl Wire for String {
 /// Appends `items` in the wire form of a `Vec<T>` (count, then the items) without copying
 /// them into a list first.
 pub fn put_slice<T: Wire>(items: &[T], out: &mut Vec<u8>) {
+    out.reserve(8 + std::mem::size_of_val(items));
     items.len().put(out);
     for item in items {
         item.put(out);

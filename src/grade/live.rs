@@ -452,7 +452,13 @@ impl Live {
         let worker_setup = setup.clone();
         let handle = thread::Builder::new()
             .name("homework-live".to_string())
-            .spawn(move || work(&homework, &worker_setup, options, &worker_shared, &tx))
+            .spawn(move || {
+                // Both sides' physics on this thread alone: the pool's workers stay with the
+                // lesson's own simulation (pool::alone).
+                physics::pool::alone(|| {
+                    work(&homework, &worker_setup, options, &worker_shared, &tx);
+                });
+            })
             .ok();
         if let Ok(mut w) = shared.worker.lock() {
             *w = handle.map(|h| h.thread().clone());

@@ -57,14 +57,30 @@ fn step_xv(
         state.x_prev = prev.to_vec();
         state.history_valid = true;
     }
-    method.step(
-        physics.model(),
-        &mut state,
-        dt,
-        params,
-        &mut Workspace::new(),
+    // The explicit methods' workspace is scratch only, written before it is read: one per
+    // thread serves every step (the live comparison takes thousands a second). The others keep
+    // something between steps (Verlet's rods, implicit Euler's contact set): a fresh one each.
+    let scratch_only = matches!(
+        method,
+        Method::ExplicitEuler | Method::SemiImplicitEuler | Method::Midpoint | Method::Rk4
     );
+    if scratch_only {
+        SCRATCH.with(|w| method.step(physics.model(), &mut state, dt, params, &mut w.borrow_mut()));
+    } else {
+        method.step(
+            physics.model(),
+            &mut state,
+            dt,
+            params,
+            &mut Workspace::new(),
+        );
+    }
     Some(state)
+}
+
+thread_local! {
+    /// The explicit methods' workspace (see [`step_xv`]).
+    static SCRATCH: std::cell::RefCell<Workspace> = std::cell::RefCell::new(Workspace::new());
 }
 
 fn step_state(method: Method, state: &mut State, dt: f64, physics: &Physics) {

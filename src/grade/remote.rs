@@ -18,14 +18,16 @@
 //!   the next call starts a new program
 //! ```
 //!
-//! Three threads per program move bytes: one writes requests to its stdin (so that a program
-//! that stops reading can never block the grader), one reads its stdout and cuts out the frames
+//! The thread that makes the call writes the program's stdin and reads its stdout itself, each
+//! with the call's deadline (`poll`; the stdin pipe does not block, so a program that stops
+//! reading holds the grader only until the deadline), and cuts out of the stdout the frames
 //! that carry this session's token (everything else is the student's printing, counted and
-//! dropped), one keeps the last 16 KiB of its stderr for the crash report.
+//! dropped): a request and its reply cost one wake-up each way, no thread in between. One
+//! thread per program keeps the last 16 KiB of its stderr for the crash report.
 //!
 //! Files: this one holds the session (start, call, stop); `remote/process.rs` starts and ends
 //! the program (token, working directory, limits, reaping, what its end means);
-//! `remote/frames.rs` cuts the replies out of its stdout; `remote/convert.rs` converts between
+//! `remote/frames.rs` writes its stdin and cuts the replies out of its stdout; `remote/convert.rs` converts between
 //! the grader's types and the API crate's; `remote/traits.rs` implements the homework traits
 //! with calls.
 //!
@@ -33,11 +35,10 @@
 //! anywhere else (files, its stdout) cannot reach the report: the grader writes the report
 //! itself, after the last program has been killed.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex, mpsc};
+use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
@@ -56,7 +57,7 @@ mod process;
 mod traits;
 
 use convert::*;
-use frames::read_replies;
+use frames::Pipes;
 use process::*;
 pub use traits::Remote;
 
@@ -103,7 +104,7 @@ pub enum CallFailure {
     NotStarted(String),
 }
 
-/// What the reader thread hands over.
+/// What the program's stdout brings.
 #[derive(Debug, PartialEq)]
 enum Event {
     Frame(Vec<u8>),
@@ -114,8 +115,8 @@ enum Event {
 /// A running program.
 struct Running {
     child: Child,
-    to_child: mpsc::Sender<Vec<u8>>,
-    from_child: mpsc::Receiver<Event>,
+    /// Its standard input and output (`None` when the sandbox gave none).
+    pipes: Option<Pipes>,
     stderr: Arc<Mutex<Vec<u8>>>,
     stderr_thread: Option<thread::JoinHandle<()>>,
     workdir: PathBuf,
@@ -244,34 +245,18 @@ impl Session {
         let token = super::token::random_token();
         let mut pattern = MAGIC.to_vec();
         pattern.extend_from_slice(&token);
-        let (event_tx, from_child) = mpsc::channel();
-        let (to_child, request_rx) = mpsc::channel::<Vec<u8>>();
+        let pipes = match (child.stdin.take(), child.stdout.take()) {
+            (Some(stdin), Some(stdout)) => Some(Pipes::new(stdin, stdout, pattern)),
+            _ => None,
+        };
         let stderr = Arc::new(Mutex::new(Vec::new()));
-        if let Some(mut stdin) = child.stdin.take() {
-            thread::spawn(move || {
-                for frame in request_rx {
-                    if stdin
-                        .write_all(&frame)
-                        .and_then(|()| stdin.flush())
-                        .is_err()
-                    {
-                        break;
-                    }
-                }
-            });
-        }
-        if let Some(out) = child.stdout.take() {
-            let stray = Arc::clone(&self.stray);
-            thread::spawn(move || read_replies(out, pattern, &event_tx, &stray));
-        }
         let stderr_thread = child.stderr.take().map(|err| {
             let tail = Arc::clone(&stderr);
             thread::spawn(move || keep_stderr(err, &tail))
         });
         self.running = Some(Running {
             child,
-            to_child,
-            from_child,
+            pipes,
             stderr,
             stderr_thread,
             workdir,
@@ -280,7 +265,7 @@ impl Session {
         let mut hello = vec![to_program::HELLO];
         wire::VERSION.put(&mut hello);
         token.put(&mut hello);
-        self.send(&hello);
+        self.send(&hello, deadline);
         match self.next_event(deadline) {
             Some(Event::Frame(frame)) => {
                 let greeting = (|| {
@@ -341,21 +326,21 @@ impl Session {
         }
     }
 
-    fn send(&self, payload: &[u8]) {
-        if let Some(run) = &self.running {
-            // A program that is gone is noticed by the reader.
-            let _ = run.to_child.send(request_frame(payload));
+    /// Sends one frame by `deadline`; a program that is gone, or does not read, is noticed by
+    /// the next [`Session::next_event`].
+    fn send(&mut self, payload: &[u8], deadline: Instant) {
+        if let Some(pipes) = self.running.as_mut().and_then(|r| r.pipes.as_mut()) {
+            let _ = pipes.write(&request_frame(payload), deadline);
         }
     }
 
     /// The next event, or `None` at the deadline.
-    fn next_event(&self, deadline: Instant) -> Option<Event> {
-        let run = self.running.as_ref()?;
-        let wait = deadline.saturating_duration_since(Instant::now());
-        match run.from_child.recv_timeout(wait) {
-            Ok(event) => Some(event),
-            Err(mpsc::RecvTimeoutError::Disconnected) => Some(Event::Closed),
-            Err(mpsc::RecvTimeoutError::Timeout) => None,
+    fn next_event(&mut self, deadline: Instant) -> Option<Event> {
+        let stray = &self.stray;
+        let run = self.running.as_mut()?;
+        match run.pipes.as_mut() {
+            Some(pipes) => pipes.next(deadline, stray),
+            None => Some(Event::Closed),
         }
     }
 
@@ -473,7 +458,7 @@ impl Session {
         if self.running.is_none() {
             self.start(deadline)?;
         }
-        self.send(payload);
+        self.send(payload, deadline);
         loop {
             let Some(event) = self.next_event(deadline) else {
                 self.stop();
@@ -500,7 +485,7 @@ impl Session {
                 }
                 Some((&to_grader::PHYSICS, request)) => {
                     let reply = answer_physics(physics, request);
-                    self.send(&reply);
+                    self.send(&reply, deadline);
                 }
                 Some((&to_grader::STEP, answer)) if steps.is_some() => {
                     if let Some((answers, limit)) = steps.as_mut() {

@@ -366,8 +366,31 @@ pub const ENTRIES: &[Entry] = &[
     ),
     (
         "docs/homework-live.md",
-        &["1000", "1", "482", "16", "68"],
+        &["1000", "482", "16", "68"],
         "test tests/homework_live.rs implicit_euler_on_the_thousand_particle_jelly_is_refused_with_its_reason: 1000 particles at dt = 1 ms, the message size",
+    ),
+    (
+        "docs/homework-live.md",
+        &["5.5"],
+        "label: lesson.step of the bench's jelly (benches/homework_live.rs)",
+    ),
+    (
+        "docs/homework-live.md",
+        &["24"],
+        "label: the bytes of a vector on the wire, three f64 (homework-api/src/wire.rs)",
+    ),
+    (
+        "docs/homework-live.md",
+        &["12876"],
+        "here course_md_values_are_the_scenes_defaults: the springs of the course's 10³ cube (cube-plane)",
+    ),
+    (
+        "docs/homework-live.md",
+        &[
+            "11", "0.003", "0.004", "0.005", "0.019", "0.011", "0.59", "1.04", "0.80", "0.86",
+            "1.48", "1.28", "1.53", "2.59", "2.34",
+        ],
+        "timing: CPU seconds per simulated second printed by `cargo bench --bench homework_live`, and the load average while it ran",
     ),
     // docs/implicit-euler.md: why the solve is built as it is.
     (

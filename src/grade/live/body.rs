@@ -1,6 +1,7 @@
 //! One body of the comparison: stepped by a homework's integrator, measured (positions,
 //! velocities, energy), and the parting test of `live.rs`'s module docs.
 
+use std::borrow::Cow;
 use std::collections::VecDeque;
 
 use glam::DVec3;
@@ -264,18 +265,18 @@ impl Track {
         ))
     }
 
-    /// Positions (m).
-    pub(super) fn positions(&self) -> Vec<DVec3> {
+    /// Positions (m): a lattice's own list, a rope's gathered.
+    pub(super) fn positions(&self) -> Cow<'_, [DVec3]> {
         match &self.shape {
-            Shape::Rope(r) => r.masses.iter().map(|m| m.position).collect(),
-            Shape::Lattice(s) => s.x.clone(),
+            Shape::Rope(r) => Cow::Owned(r.masses.iter().map(|m| m.position).collect()),
+            Shape::Lattice(s) => Cow::Borrowed(&s.x),
         }
     }
 
-    fn raw_velocities(&self) -> Vec<DVec3> {
+    fn raw_velocities(&self) -> Cow<'_, [DVec3]> {
         match &self.shape {
-            Shape::Rope(r) => r.masses.iter().map(|m| m.velocity).collect(),
-            Shape::Lattice(s) => s.v.clone(),
+            Shape::Rope(r) => Cow::Owned(r.masses.iter().map(|m| m.velocity).collect()),
+            Shape::Lattice(s) => Cow::Borrowed(&s.v),
         }
     }
 
@@ -287,7 +288,7 @@ impl Track {
                 .iter()
                 .map(|m| (m.position - m.last_position) / setup.dt)
                 .collect(),
-            _ => self.raw_velocities(),
+            _ => self.raw_velocities().into_owned(),
         }
     }
 
@@ -298,16 +299,26 @@ impl Track {
             .map(|v| v.length())
             .fold(0.0, f64::max)
     }
+}
 
-    /// Total energy (J): kinetic, gravity and elastic, under the body's model.
-    pub(super) fn energy(&self, setup: &Setup) -> f64 {
-        let x = self.positions();
-        let v = self.velocities(setup);
-        if x.len() != setup.model.particle_count() || v.len() != x.len() {
-            return f64::NAN;
-        }
-        physics::energy::energy(&setup.model, &physics::State::new(x, v)).total
+/// Total energy (J) of positions `x` and velocities `v`: kinetic, gravity and elastic, under
+/// the body's model (the lists are lent to a state and given back).
+fn energy(setup: &Setup, x: &mut Vec<DVec3>, v: &mut Vec<DVec3>) -> f64 {
+    if x.len() != setup.model.particle_count() || v.len() != x.len() {
+        return f64::NAN;
     }
+    // No history: the energy reads positions and velocities only.
+    let state = physics::State {
+        x: std::mem::take(x),
+        v: std::mem::take(v),
+        x_prev: Vec::new(),
+        history_valid: false,
+        spheres: Vec::new(),
+    };
+    let e = physics::energy::energy(&setup.model, &state).total;
+    *x = state.x;
+    *v = state.v;
+    e
 }
 
 fn largest_difference(a: &[DVec3], b: &[DVec3]) -> f64 {
@@ -365,11 +376,10 @@ pub(super) struct Measure {
 
 impl Measure {
     pub(super) fn of(track: &Track, setup: &Setup) -> Measure {
-        Measure {
-            x: track.positions(),
-            v: track.velocities(setup),
-            energy: track.energy(setup),
-        }
+        let mut x = track.positions().into_owned();
+        let mut v = track.velocities(setup);
+        let energy = energy(setup, &mut x, &mut v);
+        Measure { x, v, energy }
     }
 
     /// Positions (m).

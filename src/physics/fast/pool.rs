@@ -40,6 +40,7 @@
 //! Kaufmann 2020, §7 (spin locks and contention) and §8.4 (condition variables and the lost
 //! wake-up problem); the Rust standard library documentation of `std::thread::park`.
 
+use std::cell::Cell;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, OnceLock, TryLockError};
@@ -160,9 +161,13 @@ impl Pool {
         })
     }
 
-    /// Number of threads offered to callers, the caller included (see [`Pool::set_threads`]).
+    /// Number of threads offered to callers, the caller included (see [`Pool::set_threads`]);
+    /// 1 inside [`alone`].
     #[must_use]
     pub fn threads(&self) -> usize {
+        if ALONE.with(Cell::get) {
+            return 1;
+        }
         self.active.load(Ordering::Relaxed)
     }
 
@@ -182,7 +187,7 @@ impl Pool {
     /// If a part panics (after all parts have finished).
     pub fn run(&self, parts: usize, job: &(dyn Fn(usize) + Sync)) {
         let sequential = || (0..parts).for_each(job);
-        if parts <= 1 || self.workers.is_empty() {
+        if parts <= 1 || self.workers.is_empty() || ALONE.with(Cell::get) {
             return sequential();
         }
         let _guard = match self.submit.try_lock() {
@@ -222,6 +227,27 @@ impl Pool {
             panic!("a worker thread panicked");
         }
     }
+}
+
+thread_local! {
+    /// Set inside [`alone`]: this thread's jobs run on this thread only.
+    static ALONE: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Runs `f` with every job this thread gives the pool run on this thread alone, and
+/// [`Pool::threads`] answering 1 here, so passes are split as for one thread. For work that runs
+/// beside a simulation using the pool (`springlab lesson N --homework`'s comparison): no worker
+/// is woken, none spins after each of its small jobs on a core the simulation and the student's
+/// program need. The results are the same bit for bit (module docs).
+pub fn alone<R>(f: impl FnOnce() -> R) -> R {
+    struct Restore(bool);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            ALONE.with(|a| a.set(self.0));
+        }
+    }
+    let _restore = Restore(ALONE.with(|a| a.replace(true)));
+    f()
 }
 
 /// Runs `job(0)`, …, `job(count - 1)` on up to `threads` scoped threads and returns their
