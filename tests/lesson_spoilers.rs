@@ -21,7 +21,11 @@ fn draw(app: &App, width: u16, height: u16) -> String {
         .backend()
         .to_string()
         .lines()
-        .map(|l| l.trim_matches('"').to_string())
+        .map(|l| {
+            // Each row is quoted: one quote off each end (a row's own quotes stay).
+            let l = l.strip_prefix('"').unwrap_or(l);
+            l.strip_suffix('"').unwrap_or(l).to_string()
+        })
         .collect();
     let column = usize::from(if width < 100 {
         width / 2

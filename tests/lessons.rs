@@ -236,6 +236,18 @@ fn malformed_lessons_name_the_file_and_line() {
             ),
             "predict: option 1: expected `keys` (on the option or the prediction)",
         ),
+        (
+            step("camera = { body = 2 }"),
+            "bad.md:10:10: camera: body = 2: expected the number (from 1) of one of the scene's 1 bodies",
+        ),
+        (
+            step("camera = { body = 0 }"),
+            "bad.md:10:10: camera: body = 0: expected the number (from 1)",
+        ),
+        (
+            step("camera = { rope = 1 }"),
+            "bad.md:10:12: unknown field `rope`, expected `body`",
+        ),
     ];
     for (text, expected) in cases.into_iter().chain(more) {
         let message = error_of(&text);

@@ -220,3 +220,171 @@ fn no_step_starts_with_the_camera_moving() {
         }
     }
 }
+
+/// The box of the particles of `body` (every body when `None`) in a `w × h` image of `camera`:
+/// `(x_min, y_min, x_max, y_max)` in pixels; `None` when one is behind the eye.
+fn projected_box(
+    run: &LessonRun,
+    camera: &springlab::render::Camera,
+    body: Option<usize>,
+    (w, h): (u32, u32),
+) -> Option<(f64, f64, f64, f64)> {
+    let view = View::new(camera, w, h);
+    let mut b = (
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for (i, scene_body) in run.sim().scene.bodies.iter().enumerate() {
+        if body.is_some_and(|k| k != i) {
+            continue;
+        }
+        for p in &scene_body.state.x {
+            let q = view.project(*p)?;
+            let (x, y) = (f64::from(q.x), f64::from(q.y));
+            b = (b.0.min(x), b.1.min(y), b.2.max(x), b.3.max(y));
+        }
+    }
+    Some(b)
+}
+
+/// Lesson 4, step 2 is about the Verlet rope's stretch; its front matter names it
+/// (`camera = { body = 2 }`). The semi-implicit rope beside it stretches many times its length
+/// and, framed with it, the Verlet rope would be a short line at the pins.
+#[test]
+fn lesson_4_step_2_frames_the_verlet_rope() {
+    let verlet = |target: bool| {
+        let mut l = lesson::builtin()
+            .into_iter()
+            .flatten()
+            .find(|l| l.slug == "verlet")
+            .expect("lesson 4");
+        assert_eq!(l.steps[1].camera_body, Some(2));
+        if !target {
+            l.steps[1].camera_body = None;
+        }
+        let mut run = LessonRun::new(l, 1).expect("step 2");
+        run.set_aspect(1.75);
+        run.handle_key(KeyCode::Char(' '));
+        run
+    };
+    let (mut framed, mut whole) = (verlet(true), verlet(false));
+    assert_eq!(
+        framed.sim().scene.bodies[1].method,
+        springlab::physics::Method::Verlet
+    );
+    let (w, h) = (350, 200);
+    // The share of the pane the Verlet rope spans: its box's width over the pane's width or its
+    // height over the pane's height, whichever is larger; the largest over the run (the rope
+    // hanging straight down).
+    let share =
+        |b: (f64, f64, f64, f64)| ((b.2 - b.0) / f64::from(w)).max((b.3 - b.1) / f64::from(h));
+    let (mut framed_most, mut whole_most) = (0.0f64, 0.0f64);
+    for _ in 0..180 {
+        framed.tick(1.0 / 30.0);
+        whole.tick(1.0 / 30.0);
+        let b = projected_box(&framed, framed.camera(), Some(1), (w, h)).expect("in front");
+        let t = framed.sim().time();
+        assert!(
+            b.0 >= 0.0 && b.1 >= 0.0 && b.2 <= f64::from(w) && b.3 <= f64::from(h),
+            "t = {t:.2} s: the Verlet rope leaves the pane: {b:?}"
+        );
+        framed_most = framed_most.max(share(b));
+        let o = projected_box(&whole, whole.camera(), Some(1), (w, h)).expect("in front");
+        whole_most = whole_most.max(share(o));
+    }
+    assert!((framed.sim().time() - 6.0).abs() < 1e-9);
+    assert!(
+        framed_most >= 0.75,
+        "the Verlet rope spans at most {:.0} % of the pane",
+        100.0 * framed_most
+    );
+    // Framing both ropes, the Verlet rope is a short line by the pins.
+    assert!(
+        whole_most < 0.5,
+        "framed with the stretching rope, the Verlet rope still spans {:.0} %",
+        100.0 * whole_most
+    );
+}
+
+/// Lesson 5, step 4: following keeps the sliding cube whole in the pane at 4 s and 6 s, away
+/// from its edges and at a fifth of its height or more, and so does the `e` export (read back from its
+/// pixels: the cube is the only red in the picture).
+#[test]
+fn the_sliding_cube_stays_whole_in_the_pane_and_the_export() {
+    let mut run = lesson_run("jelly", 3);
+    let (w, h) = (350, 200);
+    run.handle_key(KeyCode::Char(' '));
+    let tmp = tempfile::tempdir().expect("temp dir");
+    for (frames, at) in [(120, 4.0), (60, 6.0)] {
+        for _ in 0..frames {
+            run.tick(1.0 / 30.0);
+        }
+        assert!(
+            (run.sim().time() - at).abs() < 1e-6,
+            "t = {}",
+            run.sim().time()
+        );
+        let b = projected_box(&run, run.camera(), None, (w, h)).expect("in front");
+        // Whole, with a margin of a twentieth of the pane on every side.
+        let (mx, my) = (0.05 * f64::from(w), 0.05 * f64::from(h));
+        assert!(
+            b.0 >= mx && b.1 >= my && b.2 <= f64::from(w) - mx && b.3 <= f64::from(h) - my,
+            "t = {at} s: the cube is not whole in the pane: {b:?}"
+        );
+        assert!(
+            (b.3 - b.1) / f64::from(h) >= 0.2,
+            "t = {at} s: the cube is {:.0} % of the pane's height",
+            100.0 * (b.3 - b.1) / f64::from(h)
+        );
+        // The export: the picture between its caption bands.
+        let path = tmp.path().join(format!("cube-{at}.png"));
+        springlab::tui::export::export_png(
+            run.sim(),
+            run.generation(),
+            run.camera(),
+            run.spring_filter(),
+            run.aspect(),
+            &path,
+        )
+        .expect("export");
+        let (iw, ih, rgba) = crate::tui_export::read_png(&path);
+        let size = springlab::tui::export::export_size(run.aspect());
+        let (top, bottom) = crate::tui_export::bands(&run, size);
+        assert_eq!((iw, ih), (size.0, size.1 + top + bottom));
+        let mut red = (u32::MAX, u32::MAX, 0, 0);
+        let mut count = 0u64;
+        for y in top..top + size.1 {
+            for x in 0..iw {
+                let i = ((y * iw + x) * 4) as usize;
+                let (r, g, bl) = (
+                    i32::from(rgba[i]),
+                    i32::from(rgba[i + 1]),
+                    i32::from(rgba[i + 2]),
+                );
+                if r > g + 60 && r > bl + 60 {
+                    red = (
+                        red.0.min(x),
+                        red.1.min(y - top),
+                        red.2.max(x),
+                        red.3.max(y - top),
+                    );
+                    count += 1;
+                }
+            }
+        }
+        assert!(count > 0, "t = {at} s: no cube in the export");
+        let (ex, ey) = (size.0 / 40, size.1 / 40);
+        assert!(
+            red.0 >= ex && red.1 >= ey && red.2 < size.0 - ex && red.3 < size.1 - ey,
+            "t = {at} s: the cube touches the export's edge: {red:?} in {size:?}"
+        );
+        assert!(
+            f64::from(red.3 - red.1) / f64::from(size.1) >= 0.2,
+            "t = {at} s: the cube is {} of {} rows of the export",
+            red.3 - red.1,
+            size.1
+        );
+    }
+}

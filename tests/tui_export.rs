@@ -7,7 +7,7 @@ use springlab::tui::LessonRun;
 use springlab::tui::export::{export_png, export_size};
 use springlab::tui::raster::PaneRenderer;
 
-fn read_png(path: &std::path::Path) -> (u32, u32, Vec<u8>) {
+pub(crate) fn read_png(path: &std::path::Path) -> (u32, u32, Vec<u8>) {
     let decoder = png::Decoder::new(std::io::BufReader::new(
         std::fs::File::open(path).expect("png"),
     ));
@@ -26,8 +26,8 @@ fn read_png(path: &std::path::Path) -> (u32, u32, Vec<u8>) {
     (info.width, info.height, rgba)
 }
 
-/// The heights of the bands above and below an export of `run` at `size`.
-fn bands(run: &LessonRun, size: (u32, u32)) -> (u32, u32) {
+/// The heights of the bands above and below an export of `run` at `size` (pixels).
+pub(crate) fn bands(run: &LessonRun, size: (u32, u32)) -> (u32, u32) {
     use springlab::render::{Overlay, Renderer};
     let r = Renderer::with_camera(
         &run.sim().scene,

@@ -1,8 +1,8 @@
 //! Every step fits the README's smallest terminal, 80 × 24: the try list (every item's keys)
 //! and the goal are in the text column, before and after a prediction's answer, and the status lines
 //! hold whole fields only (each field of the 80-column line is a field of the same line drawn
-//! 240 columns wide: none is cut in the middle of a number). Two prediction steps are kept as
-//! snapshots to look at.
+//! 240 columns wide: none is cut in the middle of a number). Every step's screen is kept in a
+//! snapshot, one file per lesson, to look at.
 
 use ratatui::Terminal;
 use ratatui::backend::TestBackend;
@@ -20,7 +20,11 @@ fn draw(app: &App, width: u16, height: u16) -> Vec<String> {
         .backend()
         .to_string()
         .lines()
-        .map(|l| l.trim_matches('"').to_string())
+        .map(|l| {
+            // Each row is quoted: one quote off each end (a row's own quotes stay).
+            let l = l.strip_prefix('"').unwrap_or(l);
+            l.strip_suffix('"').unwrap_or(l).to_string()
+        })
         .collect()
 }
 
@@ -81,6 +85,42 @@ fn check(app: &App, at: &str) {
             );
         }
     }
+    // The scene pane's border titles (its top and bottom rows, the first of the right column
+    // to hold a corner) hold whole fields only, as the status line does.
+    let titles = |rows: &[String], from: usize| -> Vec<String> {
+        let mut found = Vec::new();
+        let right: Vec<String> = rows
+            .iter()
+            .map(|r| r.chars().skip(from).collect())
+            .collect();
+        let Some((t, column)) = right
+            .iter()
+            .enumerate()
+            .find_map(|(i, r)| r.chars().position(|c| c == '┌').map(|c| (i, c)))
+        else {
+            return found;
+        };
+        let bottom = right[t..]
+            .iter()
+            .find(|r| r.chars().nth(column) == Some('└'));
+        for r in std::iter::once(&right[t]).chain(bottom) {
+            for segment in r.split(['┌', '└', '┐', '┘']) {
+                let t = segment.trim_matches(|c: char| c == '─' || c == ' ' || c == '│');
+                if !t.is_empty() && !t.starts_with('│') {
+                    found.extend(fields(t));
+                }
+            }
+        }
+        found
+    };
+    let whole = titles(&wide, 0);
+    for f in titles(&small, 40) {
+        assert!(
+            whole.contains(&f),
+            "{at}: pane title \"{f}\" is cut (whole: {whole:?})\n{}",
+            small.join("\n")
+        );
+    }
     for row in [21, 22] {
         let all = fields(&wide[row]);
         for f in fields(&small[row]) {
@@ -99,29 +139,44 @@ fn lessons() -> Vec<Lesson> {
         .collect()
 }
 
+/// Every step of every lesson as a student meets it at 80 × 24 (and a prediction step again
+/// after its answer) is checked, and kept in one snapshot per lesson to look at.
 #[test]
 fn every_step_fits_80x24_with_its_try_list_goal_and_whole_status_fields() {
     let mut app = app();
+    let mut screens = 0;
     for (li, l) in lessons().iter().enumerate() {
         app.open_lesson(li).expect("opens");
+        let mut lesson_screens = Vec::new();
         for si in 0..l.steps.len() {
             if si > 0 {
                 key(&mut app, 'n');
             }
             let at = format!("lesson {} step {}", l.number, si + 1);
             check(&app, &at);
+            lesson_screens.push(format!("── {at} ──\n{}", draw(&app, 80, 24).join("\n")));
             if app.lesson().expect("open").awaiting_prediction() {
                 key(&mut app, '1');
-                check(&app, &format!("{at} after the answer"));
-                if (l.number, si + 1) == (7, 2) || (l.number, si + 1) == (5, 6) {
-                    insta::assert_snapshot!(
-                        format!("lesson_{}_step_{}_80x24", l.number, si + 1),
-                        draw(&app, 80, 24).join("\n")
-                    );
-                }
+                let at = format!("{at} after the answer");
+                check(&app, &at);
+                lesson_screens.push(format!("── {at} ──\n{}", draw(&app, 80, 24).join("\n")));
             }
         }
+        screens += l.steps.len();
+        insta::assert_snapshot!(
+            format!("lesson_{}_80x24", l.number),
+            lesson_screens.join("\n")
+        );
     }
+    // Every `+++ step` of the lesson files, none left out.
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("lessons");
+    let mut marked = 0;
+    for entry in std::fs::read_dir(dir).expect("lessons/") {
+        let text = std::fs::read_to_string(entry.expect("entry").path()).expect("a lesson file");
+        marked += text.lines().filter(|l| l.trim_end() == "+++ step").count();
+    }
+    assert_eq!(screens, marked);
+    assert!(screens >= 34, "{screens} steps");
 }
 
 /// dt and its limit print with enough digits to compare them.

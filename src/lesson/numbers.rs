@@ -437,10 +437,15 @@ fn value(p: &Placeholder, cx: &Context) -> String {
             for s in &cx.sets {
                 let _ = params.set_text(s);
             }
-            params
-                .iter()
-                .find(|(k, _)| *k == key)
-                .map_or_else(|| UNKNOWN.into(), |(_, v)| v.to_string())
+            params.iter().find(|(k, _)| *k == key).map_or_else(
+                || UNKNOWN.into(),
+                // A real number to four significant digits (lesson 8's mass per particle
+                // is 625/81 kg), everything else as written.
+                |(_, v)| match v {
+                    scene::params::Value::Number(x) => format(*x),
+                    other => other.to_string(),
+                },
+            )
         }
         "particles" | "springs" => {
             let Some(scene) = &cx.scene else {

@@ -75,6 +75,13 @@ pub const FOLLOW_ZONE: f64 = 0.95;
 /// Following moves the eye back at most this many times the step's initial distance.
 pub const FOLLOW_MAX_ZOOM_OUT: f64 = 10.0;
 
+/// Once following has had to move the view for bodies free of pins (a cube sliding down a
+/// slope), the camera tracks them: its target approaches their centroid, led by their mean
+/// velocity, at this rate (1/s of simulated time), so a body keeps to the middle of the pane
+/// at its first size instead of riding along the pane's edge. Pinned bodies (a rope, a hung
+/// cloth) swing about their pins: the view never tracks them, it only widens.
+pub const TRACK_RATE: f64 = 4.0;
+
 /// Aspect ratio (width / height, in pixels) of the scene pane before the app reports it: the
 /// pane of a 120 × 40 terminal.
 pub const DEFAULT_ASPECT: f64 = 1.75;
@@ -147,6 +154,8 @@ pub struct LessonRun {
     home: Camera,
     /// The camera keeps the bodies in view.
     follow: bool,
+    /// The camera tracks the followed bodies (see [`TRACK_RATE`]).
+    tracking: bool,
     /// Width / height of the scene pane in pixels.
     aspect: f64,
     /// Changes whenever the scene's structure (bodies, springs) may have changed.
@@ -239,6 +248,7 @@ impl LessonRun {
             camera: Camera::default(),
             home: Camera::default(),
             follow: true,
+            tracking: false,
             aspect: DEFAULT_ASPECT,
             generation: 0,
             pan_drag: None,
@@ -352,6 +362,7 @@ impl LessonRun {
         self.home = self.first_view(self.aspect);
         self.camera = self.home;
         self.follow = true;
+        self.tracking = false;
         self.pan_drag = None;
         self.oscillator = Oscillator::detect(&self.sim.scene);
         self.cloth = find_cloth(&self.sim);

@@ -329,12 +329,18 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
         Constraint::Length(if tail.is_empty() { 0 } else { tail_height + 1 }),
     ])
     .areas(area);
-    let held = if run.text_held_back() {
-        "\n\n*The rest of this step's text follows your prediction.*"
+    // Plain text: the Markdown subset shown here has no italics (`*…*` would show its stars).
+    let shown = if run.text_held_back() {
+        run.shown_text().trim_end()
     } else {
-        ""
+        run.shown_text()
     };
-    let marked = markdown::render_marked(&format!("{}{held}", run.shown_text()), width, theme);
+    let held = match (run.text_held_back(), shown.is_empty()) {
+        (false, _) => "",
+        (true, true) => "(The rest of this step's text follows your prediction.)",
+        (true, false) => "\n\n(The rest of this step's text follows your prediction.)",
+    };
+    let marked = markdown::render_marked(&format!("{shown}{held}"), width, theme);
     let total = marked.len() as u16;
     // When the text does not fit, its last row holds the scroll hint (never over the text).
     let overflow = total > text_area.height;

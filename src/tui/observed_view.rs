@@ -11,13 +11,13 @@ use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::style::Color;
 use ratatui::symbols::Marker;
-use ratatui::text::{Line, Span};
+use ratatui::text::Span;
 use ratatui::widgets::{Axis, Block, Chart, Dataset, GraphType, Widget};
 use serde_json::Value;
 
 use super::Theme;
 use super::lesson_run::LessonRun;
-use super::plots::number;
+use super::plots::{fit_title, number};
 use crate::lesson::{Plot, Step};
 
 /// The recorded `study resolution cloth-sphere`.
@@ -189,13 +189,15 @@ fn render_observable(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer
                 .unwrap_or_default()
         })
         .collect();
-    let mut title = vec![Span::styled("observable ", theme.fg(Color::Cyan))];
+    let mut title = vec![Span::styled("observable", theme.fg(Color::Cyan))];
     if let Some((t, values)) = observed.latest() {
-        for (name, v) in observed.names.iter().zip(values) {
-            title.push(Span::raw(format!("{name} {} · ", number(*v))));
+        for (i, (name, v)) in observed.names.iter().zip(values).enumerate() {
+            let sep = if i == 0 { " " } else { " · " };
+            title.push(Span::raw(format!("{sep}{name} {}", number(*v))));
         }
-        title.push(Span::styled(format!("t {} s", number(*t)), theme.dim()));
+        title.push(Span::styled(format!(" · t {} s", number(*t)), theme.dim()));
     }
+    let title = fit_title(title, area.width);
     let mut datasets = Vec::new();
     for (i, (curve, name)) in curves.iter().zip(&observed.names).enumerate() {
         datasets.push(
@@ -226,7 +228,7 @@ fn render_observable(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer
             .flat_map(|c| c.iter().map(|p| p.1)),
     );
     let chart = Chart::new(datasets)
-        .block(Block::bordered().title(Line::from(title)))
+        .block(Block::bordered().title(title))
         .x_axis(
             Axis::default()
                 .title(Span::styled("t (s)", theme.dim()))
@@ -256,17 +258,21 @@ fn render_resolution(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer
     }
     let x = bounds(levels.iter().flat_map(|l| l.1.iter().map(|p| p.0)));
     let y = bounds(levels.iter().flat_map(|l| l.1.iter().map(|p| p.1)));
-    let title = Line::from(vec![
-        Span::styled("resolution ", theme.fg(Color::Cyan)),
-        Span::raw(format!(
-            "sag at {} s (m) against n, recorded study",
-            number(resolution_time())
-        )),
-        Span::styled(
-            here.map_or(String::new(), |n| format!(" · this step n = {n}")),
-            theme.dim(),
-        ),
-    ]);
+    let title = fit_title(
+        vec![
+            Span::styled("resolution", theme.fg(Color::Cyan)),
+            Span::raw(format!(
+                " sag (m) at {} s against n",
+                number(resolution_time())
+            )),
+            Span::raw(" · recorded study"),
+            Span::styled(
+                here.map_or(String::new(), |n| format!(" · this step n = {n}")),
+                theme.dim(),
+            ),
+        ],
+        area.width,
+    );
     let chart = Chart::new(datasets)
         .block(Block::bordered().title(title))
         .x_axis(

@@ -18,7 +18,7 @@ use crate::lesson::Plot;
 use crate::physics::Method;
 use series::render_one;
 
-pub use axis::number;
+pub use axis::{fit_title, number};
 pub use history::{Bin, History, Oscillator, Sample};
 pub use study::Studies;
 

@@ -55,6 +55,20 @@ const MAX_POINTS: usize = 400;
 /// Scenes with at most this many particles mark each one with a dot a cell wide.
 const MAX_MARKED: usize = 64;
 
+/// The fields (text, priority: the lowest goes first) joined by ` · ` with a space either side,
+/// without the lowest-priority fields that do not fit in `room` columns.
+fn fit_fields(mut fields: Vec<(String, u8)>, room: usize) -> String {
+    let join = |fields: &[(String, u8)]| {
+        let texts: Vec<&str> = fields.iter().map(|(t, _)| t.as_str()).collect();
+        format!(" {} ", texts.join(" · "))
+    };
+    while fields.len() > 1 && join(&fields).chars().count() > room {
+        let lowest = (0..fields.len()).min_by_key(|&i| fields[i].1).unwrap_or(0);
+        fields.remove(lowest);
+    }
+    join(&fields)
+}
+
 /// Draws the pane of `run` into `area`: its border and titles, then the scene by `painter`
 /// (or the divergence message); returns the pane's inner area.
 pub fn render(
@@ -68,17 +82,22 @@ pub fn render(
     let camera = run.camera();
     let (orbit, elevation) = camera.angles_degrees();
     let plural = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
-    let title = format!(
-        " {} · {} · {} ",
-        sim.scene.name,
-        plural(sim.scene.particle_count(), "particle"),
-        plural(sim.scene.spring_count(), "spring")
+    // The border's titles keep whole fields only: the least needed go first on a narrow pane.
+    let room = usize::from(area.width.saturating_sub(2));
+    let title = fit_fields(
+        vec![
+            (sim.scene.name.clone(), 3),
+            (plural(sim.scene.particle_count(), "particle"), 2),
+            (plural(sim.scene.spring_count(), "spring"), 1),
+        ],
+        room,
     );
-    let bottom = format!(
-        " view {orbit}°/{elevation}°{} · springs: {} (t) ",
-        if run.follows() { " · follow" } else { "" },
-        run.spring_filter().name()
-    );
+    let mut bottom = vec![(format!("view {orbit}°/{elevation}°"), 0)];
+    if run.follows() {
+        bottom.push(("follow".to_string(), 2));
+    }
+    bottom.push((format!("springs: {} (t)", run.spring_filter().name()), 1));
+    let bottom = fit_fields(bottom, room);
     let block = Block::bordered()
         .title(Line::from(title))
         .title_bottom(Line::from(bottom).right_aligned())

@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 
-use super::{FOLLOW_MAX_ZOOM_OUT, FOLLOW_ZONE, LessonRun};
+use super::{FOLLOW_MAX_ZOOM_OUT, FOLLOW_ZONE, LessonRun, TRACK_RATE};
 use crate::render::{Camera, Projection};
 
 impl LessonRun {
@@ -80,21 +80,41 @@ impl LessonRun {
         }
     }
 
-    /// Moves the camera so that every body is in view (see [`Camera::follow`]).
+    /// Moves the camera so that every followed body is in view (see [`Camera::follow`]).
     pub(super) fn follow_bodies(&mut self) {
+        self.follow_bodies_after(0.0);
+    }
+
+    /// As [`LessonRun::follow_bodies`] after `elapsed` seconds of simulated time: while the
+    /// camera tracks the bodies it first moves its target towards
+    ///
+    /// ```text
+    /// aim = c + v̄ / λ,     target ← target + (1 - e^(-λ Δt)) (aim - target)
+    /// ```
+    /// where
+    /// - `c` is the followed particles' centroid (m) and `v̄` their mean velocity (m/s),
+    /// - `λ` is [`TRACK_RATE`] (1/s) and `Δt` the simulated time elapsed (s).
+    ///
+    /// Aiming `v̄/λ` ahead cancels the lag of the exponential approach for a body moving at a
+    /// steady velocity (its lag would be `v̄/λ`), so a sliding cube sits in the middle of the pane
+    /// at the distance of the first view. Tracking starts the first time following has to move
+    /// the view for bodies without a pinned particle, and stops at `r`, `c`, a pan or a new step.
+    pub(super) fn follow_bodies_after(&mut self, elapsed: f64) {
         if self.sim.diverged.is_some() {
             return;
         }
-        let mut points: Vec<DVec3> = Vec::new();
         let target = self.target_body();
-        for (_, body) in self
-            .sim
-            .scene
-            .bodies
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| target.is_none_or(|t| t == *i))
-        {
+        let followed = || {
+            self.sim
+                .scene
+                .bodies
+                .iter()
+                .enumerate()
+                .filter(move |(i, _)| target.is_none_or(|t| t == *i))
+                .map(|(_, b)| b)
+        };
+        let mut points: Vec<DVec3> = Vec::new();
+        for body in followed() {
             points.extend(body.state.x.iter().copied());
             for s in &body.state.spheres {
                 points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::X));
@@ -102,10 +122,28 @@ impl LessonRun {
                 points.extend([-1.0, 1.0].map(|k| s.center + k * s.radius * DVec3::Z));
             }
         }
+        let free = followed().all(|b| b.model.inv_mass.iter().all(|&w| w > 0.0));
+        if self.tracking && elapsed > 0.0 {
+            let (mut sum_x, mut sum_v, mut n) = (DVec3::ZERO, DVec3::ZERO, 0.0);
+            for body in followed() {
+                sum_x += body.state.x.iter().sum::<DVec3>();
+                sum_v += body.state.v.iter().sum::<DVec3>();
+                n += body.state.x.len() as f64;
+            }
+            let aim = (sum_x + sum_v / TRACK_RATE) / n;
+            if n > 0.0 && aim.is_finite() {
+                let k = 1.0 - (-TRACK_RATE * elapsed).exp();
+                self.camera.target += k * (aim - self.camera.target);
+            }
+        }
         let max_distance = self.home.distance * FOLLOW_MAX_ZOOM_OUT;
         let max_height = self.home.visible_height() * FOLLOW_MAX_ZOOM_OUT;
-        self.camera
+        let moved = self
+            .camera
             .follow(&points, self.aspect, FOLLOW_ZONE, max_distance, max_height);
+        if moved && free {
+            self.tracking = true;
+        }
     }
 
     pub(super) fn zoom(&mut self, factor: f64) {
@@ -123,6 +161,7 @@ impl LessonRun {
 
     pub(super) fn pan(&mut self, right: f64, up: f64) {
         self.camera.pan(right, up);
+        self.tracking = false;
         if self.follow {
             self.follow_bodies();
         }
@@ -131,6 +170,7 @@ impl LessonRun {
     /// Back to the step's initial view.
     pub fn reset_camera(&mut self) {
         self.camera = self.home;
+        self.tracking = false;
         self.pan_drag = None;
     }
 }

@@ -136,7 +136,7 @@ impl LessonRun {
         let kept = taken as f64 * dt + (self.accumulator - owed_before);
         self.rates.add(wall_dt, kept, taken);
         if self.follow {
-            self.follow_bodies();
+            self.follow_bodies_after(taken as f64 * dt);
         }
     }
 }

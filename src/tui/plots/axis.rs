@@ -133,6 +133,25 @@ pub(super) fn padded(lo: f64, hi: f64) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// A chart's title for a block `width` columns wide (its borders included): the first span,
+/// then each following span while the whole fits, so a title never ends cut inside a word or
+/// a number (the later spans hold the less needed fields, each starting with ` · `).
+#[must_use]
+pub fn fit_title(spans: Vec<Span<'static>>, width: u16) -> Line<'static> {
+    let room = usize::from(width.saturating_sub(2));
+    let mut used = 0;
+    let mut kept = Vec::new();
+    for (i, span) in spans.into_iter().enumerate() {
+        let w = span.content.chars().count();
+        if i > 0 && used + w > room {
+            break;
+        }
+        used += w;
+        kept.push(span);
+    }
+    Line::from(kept)
+}
+
 /// A number in at most 7 characters: `0`, `12.5`, `-0.0312`, `1.2e4`.
 #[must_use]
 pub fn number(v: f64) -> String {

@@ -271,7 +271,7 @@ pub(super) fn render_study(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
         ratatui::widgets::LegendPosition::TopLeft
     };
     Chart::new(datasets)
-        .block(Block::bordered().title(Line::from(spans)))
+        .block(Block::bordered().title(super::axis::fit_title(spans, area.width)))
         .x_axis(
             Axis::default()
                 .bounds([x0, x1])
