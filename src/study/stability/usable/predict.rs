@@ -28,7 +28,16 @@
 //! Then **one check run** at [`super::USABLE_MARGIN`] `dt_u` (stopped as soon as `|r|` passes
 //! `f |E_0|`): when it passes, `dt_u` is reported; when it fails, `dt_u` is lowered by
 //! [`super::USABLE_GRID`] = √2 and checked again (at most [`CHECK_ROUNDS`] times). A fit run
-//! that already passes at the scene limit makes the scene limit the candidate.
+//! that already passes at the scene limit makes the scene limit the candidate. A prediction
+//! more than [`MAX_FACTOR_DOWN`] below the scene limit is not checked: no usable dt (as the
+//! lesson app's grid, which stops 1024 times below it). Implicit Euler and XPBD on the jelly,
+//! whose own damping takes out about the whole energy at any dt probed, end there.
+//!
+//! Measured on `jelly-bowl` (the 1000-particle jelly): explicit Euler's two fit runs take
+//! 7 708 steps and its one check 209 576; the bisection it replaces ran about five passing runs
+//! of that length. Where the residual has a floor that does not fall with dt (RK4 on the
+//! jelly: about 1 % of `|E_0|` in the impact from 9e-4 s down to 3.2e-4 s) the checks step
+//! down by √2 until one passes; failing checks stop at the impact, about a third of the run.
 //!
 //! So what the table guarantees: a run at 95 % of the printed usable dt, over the scene's
 //! duration, kept `|E + D - E_0| ≤ f |E_0|` (that run is in the report); the printed dt
