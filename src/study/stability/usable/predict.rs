@@ -33,11 +33,9 @@
 //! lesson app's grid, which stops 1024 times below it). Implicit Euler and XPBD on the jelly,
 //! whose own damping takes out about the whole energy at any dt probed, end there.
 //!
-//! Measured on `jelly-bowl` (the 1000-particle jelly): explicit Euler's two fit runs take
-//! 7 708 steps and its one check 209 576; the bisection it replaces ran about five passing runs
-//! of that length. Where the residual has a floor that does not fall with dt (RK4 on the
-//! jelly: about 1 % of `|E_0|` in the impact from 9e-4 s down to 3.2e-4 s) the checks step
-//! down by √2 until one passes; failing checks stop at the impact, about a third of the run.
+//! Where the residual has a floor that does not fall with dt (an impact whose error is about
+//! the allowed residual at every dt near the prediction) the checks step down by √2 until one
+//! passes; a failing check stops where it fails, usually in the impact.
 //!
 //! So what the table guarantees: a run at 95 % of the printed usable dt, over the scene's
 //! duration, kept `|E + D - E_0| ≤ f |E_0|` (that run is in the report); the printed dt
