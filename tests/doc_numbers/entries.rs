@@ -157,6 +157,11 @@ pub const ENTRIES: &[Entry] = &[
     ),
     (
         "docs/studies.md",
+        &["80"],
+        "code src/study/stability/usable/predict.rs `pub const USABLE_AIM: f64 = 0.8;`: the usable dt's prediction aims at 80 % of the allowed residual",
+    ),
+    (
+        "docs/studies.md",
         &["360"],
         "code src/study/theory.rs `360`: the dense limit",
     ),
@@ -203,8 +208,8 @@ pub const ENTRIES: &[Entry] = &[
     ),
     (
         "docs/stability.md",
-        &["1", "95", "5"],
-        "code src/study/stability/usable.rs `pub const USABLE_FRACTION: f64 = 0.01;`: with USABLE_TOLERANCE = 0.05 and USABLE_MARGIN = 0.95",
+        &["1", "95", "80"],
+        "code src/study/stability/usable.rs `pub const USABLE_FRACTION: f64 = 0.01;`: with USABLE_MARGIN = 0.95 and predict.rs's USABLE_AIM = 0.8",
     ),
     (
         "docs/stability.md",

@@ -23,23 +23,33 @@
 //! - `f`: [`USABLE_FRACTION`] = 1 %
 //!
 //! The residual is checked every step on scenes under 2 000 springs, every
-//! [`super::CONFIRM_ENERGY_EVERY`] steps on larger ones (and after the last); a run stops as soon
-//! as it fails.
+//! [`super::CONFIRM_ENERGY_EVERY`] steps on larger ones (and after the last); a run that can no
+//! longer pass stops.
 //!
-//! # The search
+//! # Two searches
 //!
-//! `|r|` is not monotone in `dt` (a resonance can spoil one step and spare a larger one), so a
-//! bisection on the criterion alone could stop anywhere. The rule:
-//! 1. start at the scene limit (the confirmed stable dt; for a method stable at every dt
-//!    probed, the largest dt probed) and go down a geometric grid of ratio √2
-//!    ([`USABLE_GRID`]) until a run passes, at most [`USABLE_MAX_STEPS_DOWN`] grid points
-//!    (a factor 2¹⁰ = 1024): none passing → no usable dt;
-//! 2. bisect (geometric mean) between that point and the failing grid point above it until they
-//!    are within [`USABLE_TOLERANCE`] = 5 % of each other;
-//! 3. verify at [`USABLE_MARGIN`] = 0.95 of the result: when that run fails, start again at
-//!    step 1 from below it (at most [`USABLE_ROUNDS`] times, then no usable dt).
+//! A run that passes cannot stop early: it covers the whole horizon, and at a usable dt that is
+//! many steps. So the number of passing runs is the cost.
 //!
-//! So the reported dt and 95 % of it both passed; every run is in the report.
+//! - **The study** (`springlab study stability`, [`usable`]) fits the residual's power law in
+//!   `dt` to two runs at the scene limit and half of it, predicts the usable dt from it and
+//!   checks the prediction with one run at 95 % of it ([`predict`]): one passing run when the
+//!   prediction holds.
+//! - **The lesson app's status line** ([`search`], bounded by its own budget) searches without
+//!   a model: `|r|` is not monotone in `dt` (a resonance can spoil one step and spare a larger
+//!   one), so a bisection on the criterion alone could stop anywhere. The rule:
+//!   1. start at the scene limit (the confirmed stable dt; for a method stable at every dt
+//!      probed, the largest dt probed) and go down a geometric grid of ratio √2
+//!      ([`USABLE_GRID`]) until a run passes, at most [`USABLE_MAX_STEPS_DOWN`] grid points
+//!      (a factor 2¹⁰ = 1024): none passing → no usable dt;
+//!   2. bisect (geometric mean) between that point and the failing grid point above it until
+//!      they are within [`USABLE_TOLERANCE`] = 5 % of each other;
+//!   3. verify at [`USABLE_MARGIN`] = 0.95 of the result: when that run fails, start again at
+//!      step 1 from below it (at most [`USABLE_ROUNDS`] times, then no usable dt).
+//!
+//!   So the reported dt and 95 % of it both passed.
+//!
+//! Both report every run they made.
 //!
 //! References: E. Hairer, C. Lubich, G. Wanner, *Geometric Numerical Integration*, 2nd ed.,
 //! Springer 2006, §I.1 and §IX (energy error of non-symplectic and symplectic methods);
@@ -55,6 +65,8 @@ use crate::physics::Method;
 use crate::scene::Scene;
 use crate::simulation::Simulation;
 use crate::study::ahead::with_helpers_when;
+
+pub mod predict;
 
 /// The fraction `f` of `|E_0|` the residual may reach.
 pub const USABLE_FRACTION: f64 = 0.01;
@@ -82,14 +94,26 @@ pub struct UsableRun {
     pub residual_max: f64,
     /// Why it failed, or null.
     pub reason: Option<String>,
+    /// Whether it ran to the horizon (a run stopped early gives a lower bound of the residual).
+    pub complete: bool,
+    /// `fit` (runs on past the allowed residual, for the fit of [`predict`]), `check` (stops
+    /// there), or `grid` (the lesson app's search, [`search`]).
+    pub role: &'static str,
 }
 
-/// The usable dt of one method (module docs).
+/// The usable dt of one method, from the study's search ([`predict`]).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Usable {
-    /// The largest dt found whose residual stays within `fraction` of `|E_0|` over `horizon`,
-    /// and so does 95 % of it (s); null when none was found.
+    /// The dt the fit predicts for a residual of `aim · fraction · |E_0|`, checked: a run at
+    /// 95 % of it stayed within `fraction` of `|E_0|` over `horizon` (s); null when none was
+    /// found.
     pub dt: Option<f64>,
+    /// The order `q` of the prediction (`min` of the fitted and the declared order).
+    pub order: Option<f64>,
+    /// The share of the allowed residual the prediction aims at ([`predict::USABLE_AIM`]).
+    pub aim: f64,
+    /// The smallest dt whose run failed (s): the usable dt lies below it.
+    pub failed_above: Option<f64>,
     /// The horizon `H` of every run (s): the scene's duration.
     pub horizon: f64,
     /// The fraction `f`.
@@ -112,12 +136,14 @@ pub fn allowed_residual(scene: &Scene, scale: f64) -> f64 {
 #[must_use]
 pub fn usable_run(scene: &Scene, method: Method, dt: f64, horizon: f64, allowed: f64) -> UsableRun {
     let never = AtomicBool::new(false);
-    usable_run_unless(scene, method, dt, horizon, allowed, &never)
+    usable_run_unless(scene, method, dt, horizon, allowed, allowed, &never)
         .unwrap_or_else(|| unreachable!("not cancelled"))
 }
 
-/// [`usable_run`], given up (`None`) soon after `cancel` becomes true: a run computed ahead
-/// that the search no longer wants ([`crate::study::ahead`]).
+/// One run as [`usable_run`] that stops at the first `|residual| > stop` (J, at least
+/// `allowed`) or divergence, given up (`None`) soon after `cancel` becomes true: a run computed
+/// ahead that the search no longer wants ([`crate::study::ahead`]). It passes when it did not
+/// diverge and its residual stayed within `allowed`.
 #[must_use]
 pub fn usable_run_unless(
     scene: &Scene,
@@ -125,6 +151,7 @@ pub fn usable_run_unless(
     dt: f64,
     horizon: f64,
     allowed: f64,
+    stop: f64,
     cancel: &AtomicBool,
 ) -> Option<UsableRun> {
     let mut scene = scene.clone();
@@ -140,6 +167,7 @@ pub fn usable_run_unless(
     };
     let mut residual_max = 0.0f64;
     let mut reason = None;
+    let mut stopped = false;
     // The steps between two looks at the residual go to `Simulation::advance` (the fused
     // multi-step path where the scene allows it; the same bits as one step at a time).
     let mut taken = 0;
@@ -156,19 +184,31 @@ pub fn usable_run_unless(
         taken = k + 1;
         if let Some(d) = &sim.diverged {
             reason = Some(format!("diverged at t = {:.4e} s: {}", d.time, d.reason));
+            stopped = true;
             break;
         }
         let r = sim.energy_residual();
-        if r.is_nan() || r.abs() > allowed {
+        if r.is_nan() {
+            reason = Some(format!(
+                "E + D - E0 is not a number at t = {:.4e} s",
+                sim.time()
+            ));
+            residual_max = f64::NAN;
+            stopped = true;
+            break;
+        }
+        if r.abs() > allowed && reason.is_none() {
             reason = Some(format!(
                 "|E + D - E0| = {:.4e} J > {allowed:.4e} J at t = {:.4e} s",
                 r.abs(),
                 sim.time()
             ));
-            residual_max = if r.is_nan() { f64::NAN } else { r.abs() };
-            break;
         }
         residual_max = residual_max.max(r.abs());
+        if r.abs() > stop {
+            stopped = true;
+            break;
+        }
     }
     Some(UsableRun {
         dt,
@@ -176,6 +216,8 @@ pub fn usable_run_unless(
         passed: reason.is_none(),
         residual_max,
         reason,
+        complete: !stopped,
+        role: "grid",
     })
 }
 
@@ -243,7 +285,8 @@ fn down(
     None
 }
 
-/// The usable dt of `method` on `scene` (module docs), searched down from `start` (s).
+/// The usable dt of `method` on `scene` by the study's search ([`predict`]), from `start` (s,
+/// the scene limit) down.
 #[must_use]
 pub fn usable(scene: &Scene, method: Method, start: f64, scale: f64) -> Usable {
     usable_ahead(scene, method, start, scale, 0, &|| false)
@@ -262,28 +305,29 @@ pub fn usable_ahead(
 ) -> Usable {
     let horizon = scene.duration;
     let allowed = allowed_residual(scene, scale);
+    let e0 = allowed / USABLE_FRACTION;
     let mut runs = Vec::new();
-    let compute = |bits: &u64, cancel: &AtomicBool| {
-        usable_run_unless(
-            scene,
-            method,
-            f64::from_bits(*bits),
-            horizon,
-            allowed,
-            cancel,
-        )
+    let compute = |key: &predict::Key, cancel: &AtomicBool| {
+        predict::run_key(scene, method, *key, allowed, e0, cancel)
     };
-    let dt = with_helpers_when(helpers, &compute, idle, |ahead| {
-        search(start, &mut |dt, next| {
-            ahead.hint(next.iter().map(|d| d.to_bits()).collect());
-            let r = ahead.get(&dt.to_bits());
-            let passed = r.passed;
-            runs.push(r);
-            passed
-        })
+    let found = with_helpers_when(helpers, &compute, idle, |ahead| {
+        predict::predict_and_check(
+            start,
+            method.declaration().order,
+            allowed,
+            &mut |key, next| {
+                ahead.hint(next.to_vec());
+                let r = ahead.get(&key);
+                runs.push(r.clone());
+                r
+            },
+        )
     });
     Usable {
-        dt,
+        dt: found.dt,
+        order: found.order,
+        aim: predict::USABLE_AIM,
+        failed_above: found.failed_above,
         horizon,
         fraction: USABLE_FRACTION,
         allowed,
