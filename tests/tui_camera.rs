@@ -340,15 +340,7 @@ fn the_sliding_cube_stays_whole_in_the_pane_and_the_export() {
         );
         // The export: the picture between its caption bands.
         let path = tmp.path().join(format!("cube-{at}.png"));
-        springlab::tui::export::export_png(
-            run.sim(),
-            run.generation(),
-            run.camera(),
-            run.spring_filter(),
-            run.aspect(),
-            &path,
-        )
-        .expect("export");
+        crate::tui_export::export_run(&run, &path).expect("export");
         let (iw, ih, rgba) = crate::tui_export::read_png(&path);
         let size = springlab::tui::export::export_size(run.aspect());
         let (top, bottom) = crate::tui_export::bands(&run, size);

@@ -7,6 +7,21 @@ use springlab::tui::LessonRun;
 use springlab::tui::export::{export_png, export_size};
 use springlab::tui::raster::PaneRenderer;
 
+/// Exports what `run` shows (its simulation, camera, spring filter and aspect) to `path`.
+pub(crate) fn export_run(
+    run: &LessonRun,
+    path: &std::path::Path,
+) -> Result<std::path::PathBuf, String> {
+    export_png(
+        run.sim(),
+        run.generation(),
+        run.camera(),
+        run.spring_filter(),
+        run.aspect(),
+        path,
+    )
+}
+
 pub(crate) fn read_png(path: &std::path::Path) -> (u32, u32, Vec<u8>) {
     let decoder = png::Decoder::new(std::io::BufReader::new(
         std::fs::File::open(path).expect("png"),
@@ -98,15 +113,7 @@ fn export_writes_the_view_on_screen() {
     run.handle_key(ratatui::crossterm::event::KeyCode::Char(' '));
     run.tick(0.3);
     let path = dir.join("frame.png");
-    let written = export_png(
-        run.sim(),
-        run.generation(),
-        run.camera(),
-        run.spring_filter(),
-        run.aspect(),
-        &path,
-    )
-    .expect("export");
+    let written = export_run(&run, &path).expect("export");
     assert_eq!(written, path);
     let whole = read_png(&path);
     assert_eq!(export_size(2.0), (1280, 640));
@@ -143,15 +150,7 @@ fn export_writes_the_view_on_screen() {
         100.0 * home
     );
     // An unwritable path gives a message, not a panic.
-    let err = export_png(
-        run.sim(),
-        run.generation(),
-        run.camera(),
-        run.spring_filter(),
-        run.aspect(),
-        &dir.join("no/such/dir/x.png"),
-    )
-    .expect_err("unwritable");
+    let err = export_run(&run, &dir.join("no/such/dir/x.png")).expect_err("unwritable");
     assert!(err.starts_with("cannot write"), "{err}");
 }
 
@@ -167,15 +166,7 @@ fn the_export_overlay_covers_no_body() {
     let mut run = LessonRun::new(rope, 1).expect("step 2");
     run.set_aspect(2.0);
     let path = tmp.path().join("rope.png");
-    export_png(
-        run.sim(),
-        run.generation(),
-        run.camera(),
-        run.spring_filter(),
-        run.aspect(),
-        &path,
-    )
-    .expect("export");
+    export_run(&run, &path).expect("export");
     let whole = read_png(&path);
     let size = export_size(2.0);
     let (top, bottom) = bands(&run, size);
