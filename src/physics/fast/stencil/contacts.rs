@@ -11,19 +11,6 @@ use crate::physics::collide::Broad;
 /// that it never leaves out a particle that [`Collider::contact`] would put within `epsilon`.
 #[inline(always)]
 pub(super) fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3]) -> u8 {
-    let dot = |p: [V; 3], n: DVec3| {
-        p[0].mul(V::splat(n.x))
-            .add(p[1].mul(V::splat(n.y)))
-            .add(p[2].mul(V::splat(n.z)))
-    };
-    let minus = |p: DVec3| {
-        [
-            x[0].sub(V::splat(p.x)),
-            x[1].sub(V::splat(p.y)),
-            x[2].sub(V::splat(p.z)),
-        ]
-    };
-    let squared = |d: [V; 3]| d[0].mul(d[0]).add(d[1].mul(d[1])).add(d[2].mul(d[2]));
     let mut mask = 0u8;
     for collider in colliders {
         mask |= match collider.broad(epsilon) {
@@ -33,15 +20,15 @@ pub(super) fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3
                 phi_max,
             } => {
                 // NaN: let the exact test decide.
-                let phi = dot(minus(point), normal);
+                let phi = dot(minus(x, point), normal);
                 phi.less_than(V::splat(phi_max)) | phi.nan_lanes()
             }
             Broad::Sphere { center, d2_max } => {
-                let d2 = squared(minus(center));
+                let d2 = squared(minus(x, center));
                 d2.less_than(V::splat(d2_max)) | d2.nan_lanes()
             }
             Broad::Bowl { center, d2_min } => {
-                let d2 = squared(minus(center));
+                let d2 = squared(minus(x, center));
                 !d2.less_than(V::splat(d2_min))
             }
             Broad::HolePlane {
@@ -52,9 +39,9 @@ pub(super) fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3
                 h_floor,
                 rho2_min,
             } => {
-                let h = dot(minus(point), normal);
+                let h = dot(minus(x, point), normal);
                 let low = h.less_than(V::splat(h_max)) | h.nan_lanes();
-                let q = minus(hole_center);
+                let q = minus(x, hole_center);
                 let along = dot(q, normal);
                 let radial = [
                     q[0].sub(along.mul(V::splat(normal.x))),
@@ -68,6 +55,34 @@ pub(super) fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3
         };
     }
     mask
+}
+
+// Functions, not closures: a closure does not take its caller's target features, so LLVM kept
+// these out of line and called each AVX operation inside them as a function; `inline(always)`
+// functions are inlined into the AVX2 kernel, and their operations with them.
+
+/// `p · n` lane by lane.
+#[inline(always)]
+fn dot<V: Lanes>(p: [V; 3], n: DVec3) -> V {
+    p[0].mul(V::splat(n.x))
+        .add(p[1].mul(V::splat(n.y)))
+        .add(p[2].mul(V::splat(n.z)))
+}
+
+/// `x - p` lane by lane.
+#[inline(always)]
+fn minus<V: Lanes>(x: [V; 3], p: DVec3) -> [V; 3] {
+    [
+        x[0].sub(V::splat(p.x)),
+        x[1].sub(V::splat(p.y)),
+        x[2].sub(V::splat(p.z)),
+    ]
+}
+
+/// `|d|²` lane by lane.
+#[inline(always)]
+fn squared<V: Lanes>(d: [V; 3]) -> V {
+    d[0].mul(d[0]).add(d[1].mul(d[1])).add(d[2].mul(d[2]))
 }
 
 /// The contact force of `d`'s colliders on the `candidates` lanes of a chunk (positions `x`,
