@@ -513,7 +513,6 @@ fn testing_md_quotes_the_measured_orders_and_rk4s_end() {
 #[test]
 fn course_md_values_are_the_scenes_defaults() {
     use springlab::lesson::numbers;
-    use springlab::physics::collide::Collider;
     let page = read("docs/course.md");
     let scenes =
         |name: &str| String::from_utf8_lossy(&springlab(&["scenes", name]).stdout).to_string();
@@ -573,16 +572,7 @@ fn course_md_values_are_the_scenes_defaults() {
     // 26 neighbours in the 3 × 3 × 3 block: 6 axis ones, 20 shear.
     assert_eq!(3 * 3 * 3 - 1 - 6, 20);
     // The 2023 bowl: hole radius 9/√2, centre that high, depth 9 − 9/√2.
-    let jelly = springlab::scene::load("jelly-bowl", &[]).expect("jelly");
-    let (radius, centre) = jelly.bodies[0]
-        .model
-        .colliders
-        .iter()
-        .find_map(|c| match c {
-            Collider::Bowl { radius, center, .. } => Some((*radius, center.y)),
-            _ => None,
-        })
-        .expect("a bowl");
+    let (radius, centre) = crate::common::jelly_bowl();
     let hole = (radius * radius - centre * centre).sqrt();
     assert!(
         (hole - centre).abs() < 1e-12,

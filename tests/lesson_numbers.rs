@@ -411,7 +411,6 @@ fn every_number_in_the_lessons_is_an_input_a_placeholder_or_explained() {
 /// The entries above marked "checked".
 #[test]
 fn the_explained_numbers_hold() {
-    use springlab::physics::collide::Collider;
     use springlab::tui::lesson_run::{COEFFICIENT_FACTOR, FIRST_DRAG_RATE, FIRST_VERLET_GAMMA};
     // Lesson 8, step 4: it opens at 1/8 of real time; + four times multiplies dt by 16.
     let eight = lesson::builtin()
@@ -447,16 +446,7 @@ fn the_explained_numbers_hold() {
     assert!((5e-5f64 / (1.0 / 64.0) - 0.0032).abs() < 1e-15);
     assert!((5e-5f64 / 1e-3 - 0.05).abs() < 1e-15);
     // Lesson 5: the 2023 bowl has radius 9 and the hole radius 9/√2 ≈ 6.36.
-    let jelly = springlab::scene::load("jelly-bowl", &[]).expect("jelly");
-    let bowl = jelly.bodies[0]
-        .model
-        .colliders
-        .iter()
-        .find_map(|c| match c {
-            Collider::Bowl { radius, center, .. } => Some((*radius, center.y)),
-            _ => None,
-        })
-        .expect("a bowl");
+    let bowl = crate::common::jelly_bowl();
     assert_eq!(bowl.0, 9.0);
     assert_eq!(format!("{:.2}", 9.0 / 2f64.sqrt()), "6.36");
     assert!(

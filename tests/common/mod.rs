@@ -93,3 +93,18 @@ pub fn json_on_threads(args: &[&str], threads: &str) -> serde_json::Value {
     );
     serde_json::from_slice(&out.stdout).expect("one JSON object")
 }
+
+/// The built-in `jelly-bowl`'s bowl: its radius (m) and the height of its centre (m).
+pub fn jelly_bowl() -> (f64, f64) {
+    use springlab::physics::collide::Collider;
+    let jelly = scene::load("jelly-bowl", &[]).expect("jelly");
+    jelly.bodies[0]
+        .model
+        .colliders
+        .iter()
+        .find_map(|c| match c {
+            Collider::Bowl { radius, center, .. } => Some((*radius, center.y)),
+            _ => None,
+        })
+        .expect("a bowl")
+}
