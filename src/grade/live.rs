@@ -570,6 +570,7 @@ fn work(
         ));
     }
     let scales = body::Scales::of(setup);
+    let mut bound = body::EnergyBound::of(setup);
     let mut vmax = scales.velocity;
     let mut parting: Option<Parting> = None;
     let mut step = 0u64;
@@ -626,23 +627,17 @@ fn work(
         }
         vmax = vmax.max(theirs.speed());
         let framed = step.is_multiple_of(options.frame_every.max(1)) || step == target;
-        // Measured once per step, and only when the parting test or a frame needs it.
-        let mut measured = None;
+        // The parting test reads the bodies where they are; both are measured (copied, their
+        // energies summed) only for a frame.
         if parting.is_none()
             && let Some(track) = yours.as_ref()
         {
-            let (r, y) = (Measure::of(&theirs, setup), Measure::of(track, setup));
-            parting = body::parting(&r, &y, &scales, vmax, setup, step);
+            parting = body::parting(&theirs, track, &mut bound, &scales, vmax, setup, step);
             event |= parting.is_some();
-            measured = Some((r, Some(y)));
         }
         if event || framed {
-            let (r, y) = measured.unwrap_or_else(|| {
-                (
-                    Measure::of(&theirs, setup),
-                    yours.as_ref().map(|t| Measure::of(t, setup)),
-                )
-            });
+            let r = Measure::of(&theirs, setup);
+            let y = yours.as_ref().map(|t| Measure::of(t, setup));
             let frame = frame_of(step, setup, &r, y.as_ref(), parting, &failure);
             if tx.send(frame).is_err() {
                 break;

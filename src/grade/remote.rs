@@ -42,8 +42,6 @@ use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
-use glam::DVec3;
-use springlab_homework as api;
 use springlab_homework::wire::{
     self, MAGIC, MAX_FRAME, Wire, decode, physics_request, request_frame, to_grader, to_program,
 };
@@ -528,7 +526,14 @@ fn answer_physics(physics: Option<&Physics>, request: &[u8]) -> Vec<u8> {
     let Some(physics) = physics else {
         return refuse("this method has no Physics".to_string());
     };
-    let Ok((what, x, v)) = decode::<(u8, Vec<api::DVec3>, Vec<api::DVec3>)>(request) else {
+    let parsed = (|| {
+        let mut r = wire::Reader::new(request);
+        let what = u8::take(&mut r)?;
+        let (x, v) = (take_vecs(&mut r)?, take_vecs(&mut r)?);
+        r.finish()?;
+        Ok::<_, wire::WireError>((what, x, v))
+    })();
+    let Ok((what, x, v)) = parsed else {
         return refuse("unreadable Physics request".to_string());
     };
     let n = physics.particle_count();
@@ -551,8 +556,6 @@ fn answer_physics(physics: Option<&Physics>, request: &[u8]) -> Vec<u8> {
     if what != physics_request::ACCELERATIONS && 8 * size * size + 16 > MAX_FRAME {
         return refuse(jacobian_too_large(n));
     }
-    let x: Vec<DVec3> = x.into_iter().map(local_vec).collect();
-    let v: Vec<DVec3> = v.into_iter().map(local_vec).collect();
     let mut reply = Vec::with_capacity(2 + 8 + 8 * size);
     reply.extend_from_slice(&[to_program::PHYSICS_REPLY, 1]);
     match what {

@@ -3,6 +3,7 @@
 
 use glam::DVec3;
 use springlab_homework as api;
+use springlab_homework::wire::{Reader, Wire, WireError};
 
 use super::super::assignments::{
     Body, ContactCoefficients, Mass, Particle, Rope, Spring, SpringSetup, State,
@@ -23,6 +24,25 @@ pub(super) fn api_vecs(v: &[DVec3]) -> Vec<api::DVec3> {
 
 pub(super) fn local_vecs(v: Vec<api::DVec3>) -> Vec<DVec3> {
     v.into_iter().map(local_vec).collect()
+}
+
+/// A `Vec<DVec3>` in its wire form read straight into the grader's vectors: one length check
+/// for the list, no list of the API's vectors in between (a body's lists are thousands long).
+pub(super) fn take_vecs(r: &mut Reader<'_>) -> Result<Vec<DVec3>, WireError> {
+    let n = usize::take(r)?;
+    let size = n
+        .checked_mul(24)
+        .ok_or_else(|| WireError(format!("a list of {n} vectors")))?;
+    let bytes = r.bytes(size)?;
+    let f = |b: &[u8], i: usize| {
+        let mut a = [0u8; 8];
+        a.copy_from_slice(&b[8 * i..8 * i + 8]);
+        f64::from_le_bytes(a)
+    };
+    Ok(bytes
+        .chunks_exact(24)
+        .map(|b| DVec3::new(f(b, 0), f(b, 1), f(b, 2)))
+        .collect())
 }
 
 pub(super) fn api_spring(s: &Spring) -> api::Spring {
