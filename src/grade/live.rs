@@ -4,12 +4,13 @@
 //! ```text
 //! build   the crate through the grader (`grade::build`: sandbox, limits, cache by content)
 //! start   a `Remote` session: the student's program as a process of its own (`grade::remote`)
-//! worker  one thread, never the drawing thread:
-//!         for n = 1, 2, …   reference ← Reference.method(reference, dt, physics)
+//! worker  two threads, never the drawing thread:
+//!         for n = 1, 2, …   reference ← Reference.method(reference, dt, physics)   (its thread)
 //!                           yours     ← Remote.method(yours, dt, physics)     (until it fails)
 //!                           both      ← collision response of the scene (lattices)
 //!                           compare:  d_x = max_i |x_i - x̂_i|,  d_v = max_i |v_i - v̂_i|,
 //!                                     d_E = |E - Ê|
+//!         the reference's steps come through a bounded queue from a thread of their own;
 //!         frames go back through a bounded queue (the worker waits when it is full)
 //! part    the first step n where d_x > τ L, or d_v > τ V, or d_E > τ M (|g| L + V²)
 //! ```
@@ -18,6 +19,9 @@
 //! `√(|g| L)`, 1 mm/s and every reference speed so far (m/s), `M` the body's mass (kg), `g` the
 //! gravity (m/s²) and `τ` the relative tolerance ([`DEFAULT_TOLERANCE`]). Ties go to position,
 //! then velocity, then energy. A Verlet rope's velocity is `(x_n - x_{n-1})/dt` on both sides.
+//! `d_E` is computed (both energies: a pass over every spring each) only when a bound of it from
+//! `d_x` and `d_v` does not keep it below half its tolerance (`body::EnergyBound`), and for the
+//! frames.
 //!
 //! Both sides call the homework trait method of the same name with the same `dt` and the same
 //! [`Physics`] (the body's model: springs, dampers, gravity, drag), so a correct crate stays
@@ -47,7 +51,7 @@ mod body;
 mod build;
 mod watch;
 
-use body::{Measure, Track};
+use body::{Measure, Snapshot, Track};
 pub use build::{
     BuildOptions, Built, LazyBuilder, build_homework, builder, first_error, grader_hint,
 };
@@ -419,8 +423,12 @@ struct Shared {
     stop: AtomicBool,
     /// Steps the worker may take (the app's clock); `u64::MAX` runs free.
     target: AtomicU64,
-    worker: Mutex<Option<thread::Thread>>,
+    /// The worker and the reference's thread, woken when the target moves or at a stop.
+    threads: Mutex<Vec<thread::Thread>>,
 }
+
+/// Steps the reference's thread may be ahead of the worker.
+const REFERENCE_AHEAD: usize = 16;
 
 /// A running comparison (module docs); dropping it stops the worker.
 pub struct Live {
@@ -445,7 +453,7 @@ impl Live {
         let shared = Arc::new(Shared {
             stop: AtomicBool::new(false),
             target: AtomicU64::new(0),
-            worker: Mutex::new(None),
+            threads: Mutex::new(Vec::new()),
         });
         let (tx, frames) = mpsc::sync_channel(options.queue.max(1));
         let worker_shared = Arc::clone(&shared);
@@ -460,8 +468,8 @@ impl Live {
                 });
             })
             .ok();
-        if let Ok(mut w) = shared.worker.lock() {
-            *w = handle.map(|h| h.thread().clone());
+        if let (Ok(mut threads), Some(h)) = (shared.threads.lock(), handle) {
+            threads.push(h.thread().clone());
         }
         Live {
             shared,
@@ -488,10 +496,10 @@ impl Live {
     }
 
     fn wake(&self) {
-        if let Ok(w) = self.shared.worker.lock()
-            && let Some(t) = w.as_ref()
-        {
-            t.unpark();
+        if let Ok(threads) = self.shared.threads.lock() {
+            for t in threads.iter() {
+                t.unpark();
+            }
         }
     }
 
@@ -548,7 +556,52 @@ fn describe_failure(payload: &(dyn std::any::Any + Send), method: &str, step: u6
     format!("your {method}() panicked at step {step}: {why}")
 }
 
-/// The worker (module docs).
+/// The reference's thread: steps springlab's answers beside the worker (on the other core), up
+/// to the app's clock, and hands each step's body over through `steps` (bounded: it waits when
+/// the worker is [`REFERENCE_AHEAD`] steps behind). Ends when the worker stops listening, at
+/// `stop`, or at the horizon.
+fn reference_steps(setup: &Setup, shared: &Shared, horizon: u64, steps: &SyncSender<Snapshot>) {
+    let reference = Homework::reference(setup.assignment);
+    let mut theirs = Track::new(setup, 1);
+    let mut step = 0u64;
+    while step < horizon && !shared.stop.load(Ordering::Relaxed) {
+        if step >= shared.target.load(Ordering::Relaxed) {
+            thread::park_timeout(Duration::from_millis(20));
+            continue;
+        }
+        theirs.step(&reference, setup, 1);
+        step += 1;
+        if steps.send(Snapshot::of(&theirs, setup)).is_err() {
+            break;
+        }
+    }
+}
+
+/// Where the worker takes the reference's steps from.
+enum Steps {
+    /// The reference's thread ([`reference_steps`]).
+    Thread(Receiver<Snapshot>),
+    /// This thread, in turn (no second thread could be started).
+    Here(Box<Track>),
+}
+
+impl Steps {
+    /// The reference body after its next step; `None` when its thread ended.
+    fn next(&mut self, setup: &Setup) -> Option<Snapshot> {
+        match self {
+            Steps::Thread(steps) => steps.recv().ok(),
+            Steps::Here(track) => {
+                track.step(&Homework::reference(setup.assignment), setup, 1);
+                Some(Snapshot::of(track, setup))
+            }
+        }
+    }
+}
+
+/// The worker (module docs): the student's side and the comparison on this thread, the
+/// reference's steps on a thread of their own ([`reference_steps`]), so that the two sides'
+/// physics run on both cores at once; the bodies and every measurement are those of one thread
+/// doing both in turn.
 fn work(
     homework: &Homework,
     setup: &Setup,
@@ -556,9 +609,51 @@ fn work(
     shared: &Shared,
     tx: &SyncSender<Frame>,
 ) {
-    let reference = Homework::reference(setup.assignment);
+    let horizon = if setup.horizon == 0 {
+        u64::MAX
+    } else {
+        setup.horizon
+    };
+    let (steps_tx, steps) = mpsc::sync_channel(REFERENCE_AHEAD);
+    thread::scope(|scope| {
+        let spawned = thread::Builder::new()
+            .name("homework-reference".to_string())
+            .spawn_scoped(scope, move || {
+                physics::pool::alone(|| reference_steps(setup, shared, horizon, &steps_tx));
+            });
+        let mut steps = match spawned {
+            Ok(handle) => {
+                if let Ok(mut threads) = shared.threads.lock() {
+                    threads.push(handle.thread().clone());
+                }
+                Steps::Thread(steps)
+            }
+            Err(_) => Steps::Here(Box::new(Track::new(setup, 1))),
+        };
+        compare(homework, setup, options, shared, tx, &mut steps, horizon);
+        // The reference's thread ends at the closed channel (or `stop`); the scope waits.
+        drop(steps);
+        if let Ok(threads) = shared.threads.lock() {
+            for t in threads.iter() {
+                t.unpark();
+            }
+        }
+    });
+    // Dropping the last handle to a `Remote` (when the thread ends) stops its program.
+}
+
+/// The comparison (module docs): the student's steps, the parting test and the frames.
+fn compare(
+    homework: &Homework,
+    setup: &Setup,
+    options: LiveOptions,
+    shared: &Shared,
+    tx: &SyncSender<Frame>,
+    steps: &mut Steps,
+    horizon: u64,
+) {
     let mut failure: Option<String> = None;
-    let mut theirs = Track::new(setup, 1);
+    let mut theirs = Snapshot::of(&Track::new(setup, 1), setup);
     let mut yours = Some(Track::new(setup, options.ahead));
     let n = setup.model.particle_count();
     if setup.integrator == Integrator::ImplicitEuler && n > largest_jacobian_body() {
@@ -574,11 +669,6 @@ fn work(
     let mut vmax = scales.velocity;
     let mut parting: Option<Parting> = None;
     let mut step = 0u64;
-    let horizon = if setup.horizon == 0 {
-        u64::MAX
-    } else {
-        setup.horizon
-    };
     let mut finished_sent = false;
     loop {
         if shared.stop.load(Ordering::Relaxed) {
@@ -588,7 +678,7 @@ fn work(
         if step >= target {
             if step >= horizon && !finished_sent {
                 finished_sent = true;
-                let r = Measure::of(&theirs, setup);
+                let r = Measure::of_snapshot(&theirs, setup);
                 let y = yours.as_ref().map(|t| Measure::of(t, setup));
                 let frame = frame_of(step, setup, &r, y.as_ref(), parting, &failure);
                 if tx
@@ -604,7 +694,10 @@ fn work(
             thread::park_timeout(Duration::from_millis(20));
             continue;
         }
-        theirs.step(&reference, setup, 1);
+        let Some(next) = steps.next(setup) else {
+            break;
+        };
+        theirs = next;
         // The student's program may run ahead up to the target (many steps per request).
         let budget = target - step;
         step += 1;
@@ -625,7 +718,7 @@ fn work(
                 event = true;
             }
         }
-        vmax = vmax.max(theirs.speed());
+        vmax = vmax.max(theirs.speed);
         let framed = step.is_multiple_of(options.frame_every.max(1)) || step == target;
         // The parting test reads the bodies where they are; both are measured (copied, their
         // energies summed) only for a frame.
@@ -636,7 +729,7 @@ fn work(
             event |= parting.is_some();
         }
         if event || framed {
-            let r = Measure::of(&theirs, setup);
+            let r = Measure::of_snapshot(&theirs, setup);
             let y = yours.as_ref().map(|t| Measure::of(t, setup));
             let frame = frame_of(step, setup, &r, y.as_ref(), parting, &failure);
             if tx.send(frame).is_err() {

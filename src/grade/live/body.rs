@@ -372,7 +372,28 @@ impl Scales {
     }
 }
 
-/// A body's positions (m), velocities (m/s) and energy (J) after a step, measured once.
+/// The reference body after a step, as the reference's thread hands it to the worker: what the
+/// parting test and the frames read of it.
+pub(super) struct Snapshot {
+    /// Positions (m).
+    pub(super) x: Vec<DVec3>,
+    /// Velocities as measured (m/s, [`Track::velocities`]).
+    pub(super) v: Vec<DVec3>,
+    /// Largest speed (m/s, [`Track::speed`]).
+    pub(super) speed: f64,
+}
+
+impl Snapshot {
+    pub(super) fn of(track: &Track, setup: &Setup) -> Snapshot {
+        Snapshot {
+            x: track.positions().into_owned(),
+            v: track.velocities(setup).into_owned(),
+            speed: track.speed(),
+        }
+    }
+}
+
+/// A body's positions (m) and energy (J) after a step, measured once.
 pub(super) struct Measure {
     x: Vec<DVec3>,
     /// Total energy (J).
@@ -383,6 +404,14 @@ impl Measure {
     pub(super) fn of(track: &Track, setup: &Setup) -> Measure {
         let mut x = track.positions().into_owned();
         let mut v = track.velocities(setup).into_owned();
+        let energy = energy(setup, &mut x, &mut v);
+        Measure { x, energy }
+    }
+
+    /// The reference's measure from its snapshot.
+    pub(super) fn of_snapshot(snapshot: &Snapshot, setup: &Setup) -> Measure {
+        let mut x = snapshot.x.clone();
+        let mut v = snapshot.v.clone();
         let energy = energy(setup, &mut x, &mut v);
         Measure { x, energy }
     }
@@ -500,7 +529,7 @@ impl EnergyBound {
 /// reference `theirs` against the student's `yours`; the energies are computed only when
 /// `bound` cannot keep their difference below its tolerance.
 pub(super) fn parting(
-    theirs: &Track,
+    theirs: &Snapshot,
     yours: &Track,
     bound: &mut EnergyBound,
     scales: &Scales,
@@ -518,22 +547,86 @@ pub(super) fn parting(
             tolerance,
         })
     };
-    let (x, x_yours) = (theirs.positions(), yours.positions());
-    let dx = largest_difference(&x, &x_yours);
+    let (x, x_yours) = (theirs.x.as_slice(), yours.positions());
+    let dx = largest_difference(x, &x_yours);
     if let Some(p) = parted(Quantity::Position, dx, tau * scales.length) {
         return Some(p);
     }
-    let (v, v_yours) = (theirs.velocities(setup), yours.velocities(setup));
-    let dv = largest_difference(&v, &v_yours);
+    let (v, v_yours) = (theirs.v.as_slice(), yours.velocities(setup));
+    let dv = largest_difference(v, &v_yours);
     if let Some(p) = parted(Quantity::Velocity, dv, tau * vmax) {
         return Some(p);
     }
     let energy_scale = scales.mass * (scales.gravity * scales.length + vmax * vmax);
     let tolerance = tau * energy_scale;
-    if bound.holds(setup, &x, &v, dx, dv, tolerance) {
+    if bound.holds(setup, x, v, dx, dv, tolerance) {
         return None;
     }
-    let e = energy(setup, &mut x.into_owned(), &mut v.into_owned());
+    let e = energy(setup, &mut x.to_vec(), &mut v.to_vec());
     let e_yours = energy(setup, &mut x_yours.into_owned(), &mut v_yours.into_owned());
     parted(Quantity::Energy, (e - e_yours).abs(), tolerance)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::{EnergyBound, Scales, energy, largest_difference};
+    use crate::grade::Assignment;
+    use crate::grade::live::Setup;
+    use crate::physics::Method;
+
+    /// A displacement of length at most `size` for particle `i` (a fixed pattern, every
+    /// direction and length up to `size`).
+    fn nudge(i: usize, size: f64) -> DVec3 {
+        let f = |k: usize| ((i * 7919 + k * 104_729) % 1000) as f64 / 1000.0 - 0.5;
+        DVec3::new(f(1), f(2), f(3)) * (size / 0.75_f64.sqrt())
+    }
+
+    #[test]
+    fn the_energy_bound_never_hides_an_energy_difference_past_half_the_tolerance() {
+        let mut scene = crate::scene::load("jelly-bowl", &[]).expect("scene");
+        scene.set_method(Method::ExplicitEuler);
+        let setup = Setup::from_scene(Assignment::Jelly, 5, &scene, 0.0).expect("setup");
+        let scales = Scales::of(&setup);
+        let length = scales.length;
+        // The reference: squeezed and moving, so that springs are stretched and energy moves.
+        let x: Vec<DVec3> = (setup.start.x.iter().enumerate())
+            .map(|(i, p)| *p + nudge(i, 1e-3 * length))
+            .collect();
+        let v: Vec<DVec3> = (0..x.len())
+            .map(|i| nudge(i + 5, scales.velocity))
+            .collect();
+        let vmax = scales.velocity * 2.0;
+        let tolerance =
+            setup.tolerance * scales.mass * (scales.gravity * scales.length + vmax * vmax);
+        let exact = |xs: &[DVec3], vs: &[DVec3]| energy(&setup, &mut xs.to_vec(), &mut vs.to_vec());
+        let e = exact(&x, &v);
+        let mut bound = EnergyBound::of(&setup);
+        let (mut held, mut not) = (0, 0);
+        for k in 0..24 {
+            // Differences from 1e-16 L to 1e-4 L (and the same fraction of V).
+            let size = 10f64.powf(-16.0 + 0.5 * f64::from(k));
+            let y: Vec<DVec3> = (x.iter().enumerate())
+                .map(|(i, p)| *p + nudge(i + 11, size * length))
+                .collect();
+            let w: Vec<DVec3> = (v.iter().enumerate())
+                .map(|(i, u)| *u + nudge(i + 17, size * scales.velocity))
+                .collect();
+            let (dx, dv) = (largest_difference(&x, &y), largest_difference(&v, &w));
+            let de = (exact(&y, &w) - e).abs();
+            if bound.holds(&setup, &x, &v, dx, dv, tolerance) {
+                held += 1;
+                assert!(
+                    de <= tolerance / 2.0,
+                    "d_x = {dx:e} m, d_v = {dv:e} m/s: d_E = {de:e} J past {:e} J",
+                    tolerance / 2.0
+                );
+            } else {
+                not += 1;
+            }
+        }
+        // Both ways taken: small differences are told without the energies, large ones not.
+        assert!(held > 0 && not > 0, "held {held}, not {not}");
+    }
 }
