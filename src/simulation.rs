@@ -66,6 +66,7 @@ use serde::Serialize;
 
 use crate::physics::collide::Collider;
 use crate::physics::energy::energy_change;
+use crate::physics::fast::stencil::any_may_touch;
 use crate::physics::integrators::{Projection, guard_energy, guard_start_energy};
 use crate::physics::{
     Dissipated, Divergence, Energy, Method, SolveStats, State, Workspace, collide, diverge, energy,
@@ -529,7 +530,9 @@ fn watch(model: &crate::physics::Model, touched: Arc<AtomicBool>) -> Projection 
     let colliders = model.colliders.clone();
     let epsilon = model.contact.epsilon;
     Projection(Arc::new(move |x: &mut [DVec3], _v: &mut [DVec3]| {
-        if x.iter().any(|&p| may_respond(&colliders, epsilon, p)) {
+        if any_may_touch(&colliders, epsilon, x, |p| {
+            may_respond(&colliders, epsilon, p)
+        }) {
             touched.store(true, Ordering::Relaxed);
         }
     }))
