@@ -32,6 +32,8 @@
 //!                 { text = "semi-implicit Euler", keys = "m s + + + space" } ] }
 //! hide = { title = "Which method stays bounded?", try = [2], from = "Why", goal = true,
 //!          plots = ["stability"] }   # optional: kept back until the prediction is answered
+//! speed = 0.5                       # optional: simulated seconds per wall second (1/64 to 64),
+//!                                   # or "machine" (see Budget)
 //! +++
 //! The text of the step, in Markdown. Formulas go in code blocks:
 //!
@@ -79,7 +81,11 @@
 //! goal or prediction (at least [`HORIZON`] seconds) within the limits of `springlab run`; and
 //! when its text has placeholders computed from ω_max, their power iteration's worst case at
 //! most [`PLACEHOLDER_UPDATES`]. The scenes of `{{…@SCENE}}` placeholders obey the same limits. A step over them is refused with
-//! the error shown in the menu, like a malformed lesson.
+//! the error shown in the menu, like a malformed lesson. A step at a `speed` below 1 is held to
+//! its rate times that speed. A step with `speed = "machine"` knowingly runs below real time
+//! (lesson 8's full jelly at advise's dt): it opens in real time and runs as fast as the
+//! machine steps it, the status line's "× real time" saying how fast; only the run's limits
+//! hold for it.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -346,7 +352,7 @@ pub struct Step {
     /// `None`: every body.
     pub camera_body: Option<usize>,
     /// The speed the step opens at (simulated seconds per wall second; `None`: 1, or the
-    /// student's own after a step that set none).
+    /// student's own after a step that set none; `speed = "machine"` is 1).
     pub speed: Option<f64>,
     /// The Markdown text.
     pub text: String,

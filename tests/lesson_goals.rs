@@ -8,7 +8,7 @@
 
 use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 use springlab::lesson::{self, Goal, GoalProgress, Key, Keys, Lesson, Stroke};
-use springlab::physics::diverge;
+use springlab::physics::{Method, diverge};
 use springlab::tui::{App, Theme};
 
 /// Wall time of one frame (s).
@@ -110,6 +110,31 @@ fn lessons() -> Vec<Lesson> {
         .collect()
 }
 
+/// The registry names of the methods a try item's text lists ("semi-implicit Euler, RK4 and
+/// Verlet." is semi-implicit-euler, rk4 and verlet), sorted.
+fn method_names(list: &str) -> Vec<String> {
+    let mut names: Vec<String> = list
+        .trim_end_matches('.')
+        .split(", ")
+        .flat_map(|part| part.split(" and "))
+        .map(|name| name.trim().to_lowercase().replace(' ', "-"))
+        .collect();
+    names.sort();
+    names
+}
+
+/// The registry names of the methods the study charts show now, sorted.
+fn shown_names(app: &App) -> Vec<String> {
+    let shown = app.lesson().expect("open").shown_methods();
+    let mut names: Vec<String> = Method::ALL
+        .iter()
+        .filter(|m| shown[m.index()])
+        .map(|m| m.declaration().name.to_string())
+        .collect();
+    names.sort();
+    names
+}
+
 /// Wall time (s) a student watches after a try item that does not reach the goal.
 const WATCH: f64 = 0.5;
 
@@ -142,6 +167,13 @@ fn a_student_playing_every_try_list_in_order_meets_every_goal() {
                     ti + 1
                 );
                 play(&mut app, keys);
+                if let Some(named) = item.text.strip_prefix("Show only ") {
+                    assert_eq!(
+                        shown_names(&app),
+                        method_names(named),
+                        "{at}: the methods shown are the ones the item names"
+                    );
+                }
                 if goal_keys == Some(keys as *const Keys) {
                     let goal = step.goal.as_ref().expect("goal keys belong to a goal");
                     let verdict = goal_verdict(&mut app, goal);

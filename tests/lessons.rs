@@ -245,6 +245,14 @@ fn malformed_lessons_name_the_file_and_line() {
             "bad.md:10:10: camera: body = 0: expected the number (from 1)",
         ),
         (
+            step("speed = \"fast\""),
+            "bad.md:10:9: speed: expected simulated seconds per wall second from 1/64 to 64, or \"machine\"",
+        ),
+        (
+            step("speed = 100.0"),
+            "bad.md:10:9: speed: expected simulated seconds per wall second from 1/64 to 64",
+        ),
+        (
             step("camera = { rope = 1 }"),
             "bad.md:10:12: unknown field `rope`, expected `body`",
         ),
@@ -256,4 +264,23 @@ fn malformed_lessons_name_the_file_and_line() {
             "expected `{expected}` in `{message}`"
         );
     }
+}
+
+/// A step slower than real time is refused unless it says so: `speed = "machine"` opens it in
+/// real time (the machine's pace when it cannot keep up), free of the real-time budget only.
+#[test]
+fn a_step_below_real_time_needs_speed_machine() {
+    let step = |front: &str| {
+        format!(
+            "{HEADER}+++ step\ntitle = \"a\"\nscene = \"jelly-bowl\"\nmethod = \"midpoint\"\ndt = 8.5e-5\n{front}+++\ntext\n"
+        )
+    };
+    assert!(
+        error_of(&step("")).contains("a lesson runs in real time"),
+        "the full jelly at 8.5e-5 s is over the real-time budget"
+    );
+    let l = lesson::parse(&step("speed = \"machine\"\n"), "ok.md", None).expect("loads");
+    assert_eq!(l.steps[0].speed, Some(1.0));
+    // Its run's limits still hold: a budget-breaking dt is refused whatever the speed.
+    assert!(error_of(&step("speed = \"machine\"\n").replace("8.5e-5", "1e-9")).contains("bad.md"));
 }

@@ -38,7 +38,17 @@ struct StepToml {
     predict: Option<toml::Spanned<PredictToml>>,
     hide: Option<toml::Spanned<HideToml>>,
     camera: Option<toml::Spanned<CameraToml>>,
-    speed: Option<toml::Spanned<f64>>,
+    speed: Option<toml::Spanned<SpeedToml>>,
+}
+
+/// `speed = 0.5` (simulated seconds per wall second), or `speed = "machine"`: real time, or as
+/// fast as the machine steps it when it cannot keep up (a step that knowingly runs below real
+/// time, so not held to the real-time budget).
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum SpeedToml {
+    Factor(f64),
+    Word(String),
 }
 
 /// `camera = { body = 2 }`: the body the step's first view frames and the camera follows.
@@ -298,16 +308,22 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
             return Err(err(line, None, message));
         }
         let camera = st.camera.map(|c| (at(c.span().start), c.into_inner().body));
-        let speed = match st.speed {
-            Some(v) if !(1.0 / 64.0..=64.0).contains(v.get_ref()) => {
-                let (l, c) = at(v.span().start);
-                return Err(err(
-                    l,
-                    Some(c),
-                    "speed: expected simulated seconds per wall second from 1/64 to 64".into(),
-                ));
-            }
-            v => v.map(toml::Spanned::into_inner),
+        // The speed, and the rate the real-time budget holds it to (0: none, for "machine").
+        let (speed, budget_speed) = match st.speed {
+            None => (None, 1.0),
+            Some(v) => match v.get_ref() {
+                SpeedToml::Factor(f) if (1.0 / 64.0..=64.0).contains(f) => (Some(*f), *f),
+                SpeedToml::Word(w) if w == "machine" => (Some(1.0), 0.0),
+                _ => {
+                    let (l, c) = at(v.span().start);
+                    return Err(err(
+                        l,
+                        Some(c),
+                        "speed: expected simulated seconds per wall second from 1/64 to 64, or \"machine\""
+                            .into(),
+                    ));
+                }
+            },
         };
         let step = Step {
             speed,
@@ -345,7 +361,7 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
             &scene,
             scene.dt,
             step.horizon(),
-            step.speed.unwrap_or(1.0),
+            budget_speed,
             &format!("step \"{}\"", step.title),
         )
         .map_err(|m| err(*start, None, m))?;

@@ -12,6 +12,7 @@ mod clock;
 mod controls;
 mod deferred;
 mod goals;
+mod memo;
 mod observed;
 mod reveal;
 mod usable;
@@ -327,13 +328,15 @@ impl LessonRun {
             };
             self.step_work.request(inputs);
         } else {
-            self.studies = Studies::compute(&step.plots, &step.scene, &step.params);
-            self.text = crate::lesson::numbers::fill(
-                &step.text,
-                &step.scene,
-                &step.params,
-                Some(self.scene_at_start()),
-            );
+            let work = deferred::step_work(deferred::StepInputs {
+                text: step.text.clone(),
+                name: step.scene.clone(),
+                params: step.params.clone(),
+                plots: step.plots.clone(),
+                scene: self.scene_at_start(),
+            });
+            self.studies = work.studies;
+            self.text = work.text;
         }
         self.text_scroll = 0;
         self.hscroll = 0;

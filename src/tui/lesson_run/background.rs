@@ -12,6 +12,7 @@ use std::sync::mpsc::{self, Receiver, Sender};
 use std::sync::{Arc, Condvar, Mutex, PoisonError};
 
 use super::Limit;
+use super::memo::{self, Memo};
 use crate::physics::{Method, MethodParams, Model, State};
 use crate::study::theory::{self, Spectrum};
 
@@ -146,11 +147,17 @@ pub fn compute(bodies: &[(Model, State)]) -> Bodies {
     bodies
         .iter()
         .map(|(model, initial)| {
-            let omega = crate::study::omega_max(model, initial).omega;
-            (omega > 0.0 && omega.is_finite()).then(|| theory::spectrum(model, initial, omega))
+            SPECTRA.get_or(memo::key(&(model, initial)), || {
+                let omega = crate::study::omega_max(model, initial).omega;
+                (omega > 0.0 && omega.is_finite()).then(|| theory::spectrum(model, initial, omega))
+            })
         })
         .collect()
 }
+
+/// The last bodies' spectra ([`super::memo`]): `R`, a step opened again or a coefficient
+/// pressed back and forth finds its spectrum at once.
+static SPECTRA: Memo<Option<Spectrum>> = Memo::new(16);
 
 impl<Q: Send + 'static, A: Send + 'static> Latest<Q, A> {
     /// A worker (started at the first request) named `name` that computes `work`.

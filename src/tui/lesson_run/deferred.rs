@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use std::sync::mpsc::{self, Receiver, Sender};
 
 use super::background::Latest;
+use super::memo::{self, Memo};
 use crate::lesson::Plot;
 use crate::render::Camera;
 use crate::scene::Scene;
@@ -27,17 +28,24 @@ pub struct StepInputs {
 }
 
 /// The step's text with its numbers and its study charts.
+#[derive(Clone)]
 pub struct StepWork {
     pub text: String,
     pub studies: Studies,
 }
 
-/// Computes what a step shows beside its scene.
+/// The last steps' work ([`super::memo`]).
+static STEP_WORK: Memo<StepWork> = Memo::new(8);
+
+/// Computes what a step shows beside its scene (kept: a step opened again finds it at once).
 #[must_use]
 pub fn step_work(i: StepInputs) -> StepWork {
-    let studies = Studies::compute(&i.plots, &i.name, &i.params);
-    let text = crate::lesson::numbers::fill(&i.text, &i.name, &i.params, Some(i.scene));
-    StepWork { text, studies }
+    let key = memo::key(&(&i.text, &i.name, &i.params, &i.plots, &i.scene));
+    STEP_WORK.get_or(key, || {
+        let studies = Studies::compute(&i.plots, &i.name, &i.params);
+        let text = crate::lesson::numbers::fill(&i.text, &i.name, &i.params, Some(i.scene));
+        StepWork { text, studies }
+    })
 }
 
 /// The worker of [`step_work`].

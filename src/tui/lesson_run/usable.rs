@@ -13,6 +13,7 @@
 use std::collections::HashMap;
 
 use super::background::Latest;
+use super::memo::{self, Memo};
 use crate::physics::Method;
 use crate::scene::Scene;
 use crate::study::stability::{energy_scale, usable};
@@ -55,8 +56,20 @@ impl Default for Worker {
 /// The usable dt of `scene` (every body's method in turn, on the whole scene) from `start` (s)
 /// down, the smallest deciding; [`UsableDt::TooLarge`] as soon as the runs would pass
 /// [`SEARCH_BUDGET`] (a search cut short is never shown).
+///
+/// Kept for the process by the scene's whole contents ([`super::memo`]): another run of the same
+/// step (a step opened again) finds it at once.
 #[must_use]
 pub fn search(scene: &Scene, start: f64) -> UsableDt {
+    SEARCHES.get_or(memo::key(&(scene, start.to_bits())), || {
+        search_anew(scene, start)
+    })
+}
+
+/// The last searches.
+static SEARCHES: Memo<UsableDt> = Memo::new(16);
+
+fn search_anew(scene: &Scene, start: f64) -> UsableDt {
     if too_large(scene, start) {
         return UsableDt::TooLarge;
     }
