@@ -345,14 +345,32 @@ fn confirmed_limits_hold_fifty_horizons_at_95_percent() {
     fifty_times_longer_at_95_percent(&r, &cube);
 }
 
+/// `cube-plane` at n = 6 and its stability study for RK4 (default horizon 2 s), computed once
+/// for the two tests below: the study's stiffest state is `stability::stiffest(&cube, 2.0)`
+/// (the same run, the same samples).
+fn cube_and_rk4_study() -> &'static (scene::Scene, stability::StabilityReport) {
+    static STUDY: std::sync::OnceLock<(scene::Scene, stability::StabilityReport)> =
+        std::sync::OnceLock::new();
+    STUDY.get_or_init(|| {
+        let (cube, _) = stability::load_scene("cube-plane", &["n=6".into()]).unwrap();
+        let options = StabilityOptions {
+            methods: vec![Method::Rk4],
+            ..StabilityOptions::default()
+        };
+        assert_eq!(options.horizon, 2.0);
+        let r = stability::stability(&cube, &options, &mut |_, _| {}).unwrap();
+        (cube, r)
+    })
+}
+
 #[test]
 fn an_impact_stiffens_the_cube_and_free_fall_does_not() {
     // cube-plane at n = 6: the landing on the plane (t ≈ 1.4 s) squeezes the cube, and the
     // stiffest mode of the squeezed cube is stiffer than at rest.
-    let (cube, _) = stability::load_scene("cube-plane", &["n=6".into()]).unwrap();
+    let (cube, r) = cube_and_rk4_study();
     let body = &cube.bodies[0];
     let at_rest = omega_max(&body.model, &body.state).omega;
-    let s = stability::stiffest(&cube, 2.0).unwrap();
+    let s = r.stiffest_state.clone();
     assert!(s.ratio > 1.01, "{s:?}");
     assert!(s.time > 1.3 && s.time < 1.7, "{s:?}");
     assert!(relative(s.omega_max / at_rest, s.ratio) < 1e-12, "{s:?}");
@@ -381,12 +399,7 @@ fn an_impact_stiffens_the_cube_and_free_fall_does_not() {
 
 #[test]
 fn stiffest_state_is_reported_and_the_scene_limit_lies_between_the_theories() {
-    let (cube, _) = stability::load_scene("cube-plane", &["n=6".into()]).unwrap();
-    let options = StabilityOptions {
-        methods: vec![Method::Rk4],
-        ..StabilityOptions::default()
-    };
-    let r = stability::stability(&cube, &options, &mut |_, _| {}).unwrap();
+    let (_, r) = cube_and_rk4_study();
     assert!(r.stiffest_state.ratio > 1.01, "{:?}", r.stiffest_state);
     let m = &r.methods[0];
     let (scene_dt, linear, rest, squeezed) = (
