@@ -348,8 +348,24 @@ impl Collider {
             // A plane's φ costs no more than any test (and no bounds are needed).
             return true;
         }
-        match self.broad(epsilon) {
-            Broad::Plane { .. } => true,
+        self.broad(epsilon).may_touch(x)
+    }
+}
+
+impl Broad {
+    /// False when the bounds rule `x` (m) out; true also for NaN (the exact test decides). The
+    /// scalar form of the stencil's eight-lane broad phase (`stencil::contacts::may_touch`).
+    #[must_use]
+    pub(crate) fn may_touch(&self, x: DVec3) -> bool {
+        match *self {
+            Broad::Plane {
+                point,
+                normal,
+                phi_max,
+            } => {
+                let phi = (x - point).dot(normal);
+                phi < phi_max || phi.is_nan()
+            }
             Broad::Sphere { center, d2_max } => {
                 let d2 = (x - center).length_squared();
                 d2 < d2_max || d2.is_nan()

@@ -59,8 +59,8 @@ pub(super) fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3
 
 /// True when `exact` holds for a particle of `x` (m) that may touch one of `colliders` (closer
 /// than `epsilon`, m, or inside): the bounds of [`Collider::broad`], computed once per collider
-/// and tested particle by particle (the scalar form of [`may_touch`]), and `exact` only for the
-/// particles they do not rule out. The watch of the simulator's fused chunks
+/// and tested particle by particle ([`Broad::may_touch`], the scalar form of [`may_touch`]),
+/// and `exact` only for the particles they do not rule out. The watch of the simulator's fused chunks
 /// (`simulation::watch`) tests every particle after every step: a bound costs a few operations
 /// where the exact test of every collider costs a contact.
 pub(crate) fn any_may_touch(
@@ -71,45 +71,8 @@ pub(crate) fn any_may_touch(
 ) -> bool {
     colliders.iter().any(|collider| {
         let broad = collider.broad(epsilon);
-        x.iter().any(|&p| within(&broad, p) && exact(p))
+        x.iter().any(|&p| broad.may_touch(p) && exact(p))
     })
-}
-
-/// The test of [`may_touch`] for one particle `x` (m): false only when `broad` rules it out.
-#[inline(always)]
-fn within(broad: &Broad, x: DVec3) -> bool {
-    match *broad {
-        Broad::Plane {
-            point,
-            normal,
-            phi_max,
-        } => {
-            let phi = (x - point).dot(normal);
-            phi < phi_max || phi.is_nan()
-        }
-        Broad::Sphere { center, d2_max } => {
-            let d2 = (x - center).length_squared();
-            d2 < d2_max || d2.is_nan()
-        }
-        Broad::Bowl { center, d2_min } => {
-            let d2 = (x - center).length_squared();
-            d2 >= d2_min || d2.is_nan()
-        }
-        Broad::HolePlane {
-            point,
-            normal,
-            hole_center,
-            h_max,
-            h_floor,
-            rho2_min,
-        } => {
-            let h = (x - point).dot(normal);
-            let low = h < h_max || h.is_nan();
-            let q = x - hole_center;
-            let rho2 = (q - q.dot(normal) * normal).length_squared();
-            low && (h >= h_floor || rho2 >= rho2_min || rho2.is_nan())
-        }
-    }
 }
 
 // Functions, not closures: a closure does not take its caller's target features, so LLVM kept
@@ -241,7 +204,7 @@ mod tests {
             points.push(DVec3::new(f64::NAN, 0.0, 0.0));
             for &p in &points {
                 let touches = exact(&colliders, epsilon, p);
-                let passes = within(&broad, p);
+                let passes = broad.may_touch(p);
                 assert!(
                     !touches || passes,
                     "{collider:?}: {p} ruled out but touches"
