@@ -171,7 +171,8 @@ pub(super) const ENERGY: [(&str, &str, Color, usize); 6] = [
     (
         "+D = total + dissipated (flat if exact)",
         "+D",
-        Color::LightBlue,
+        // Not light blue: that is gravity's blue on a dark background (`theme::for_background`).
+        Color::LightCyan,
         4,
     ),
     (
@@ -331,4 +332,27 @@ fn per_body(history: &History, q: usize) -> Vec<Curve> {
             q: body_index(b, q),
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tui::theme::{Background, for_background, rgb};
+
+    /// The energy plot's six curves are six colours as drawn on either background: a dark
+    /// terminal draws blue as light blue, so gravity and "+D" were one colour there.
+    #[test]
+    fn the_energy_curves_are_six_colours_on_either_background() {
+        for background in [Background::Dark, Background::Light] {
+            let drawn: Vec<_> = ENERGY
+                .iter()
+                .map(|&(name, _, colour, _)| (name, rgb(for_background(colour, background))))
+                .collect();
+            for (i, (a, ca)) in drawn.iter().enumerate() {
+                for (b, cb) in &drawn[i + 1..] {
+                    assert_ne!(ca, cb, "{background:?}: {a} and {b} are drawn alike");
+                }
+            }
+        }
+    }
 }
