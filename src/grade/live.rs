@@ -427,6 +427,17 @@ struct Shared {
     threads: Mutex<Vec<thread::Thread>>,
 }
 
+impl Shared {
+    /// Wakes the worker and the reference's thread (the target moved, or stop).
+    fn wake(&self) {
+        if let Ok(threads) = self.threads.lock() {
+            for t in threads.iter() {
+                t.unpark();
+            }
+        }
+    }
+}
+
 /// Steps the reference's thread may be ahead of the worker.
 const REFERENCE_AHEAD: usize = 16;
 
@@ -496,11 +507,7 @@ impl Live {
     }
 
     fn wake(&self) {
-        if let Ok(threads) = self.shared.threads.lock() {
-            for t in threads.iter() {
-                t.unpark();
-            }
-        }
+        self.shared.wake();
     }
 
     /// Every frame queued so far.
@@ -633,11 +640,7 @@ fn work(
         compare(homework, setup, options, shared, tx, &mut steps, horizon);
         // The reference's thread ends at the closed channel (or `stop`); the scope waits.
         drop(steps);
-        if let Ok(threads) = shared.threads.lock() {
-            for t in threads.iter() {
-                t.unpark();
-            }
-        }
+        shared.wake();
     });
     // Dropping the last handle to a `Remote` (when the thread ends) stops its program.
 }

@@ -402,16 +402,19 @@ pub(super) struct Measure {
 
 impl Measure {
     pub(super) fn of(track: &Track, setup: &Setup) -> Measure {
-        let mut x = track.positions().into_owned();
-        let mut v = track.velocities(setup).into_owned();
-        let energy = energy(setup, &mut x, &mut v);
-        Measure { x, energy }
+        Measure::new(
+            track.positions().into_owned(),
+            track.velocities(setup).into_owned(),
+            setup,
+        )
     }
 
     /// The reference's measure from its snapshot.
     pub(super) fn of_snapshot(snapshot: &Snapshot, setup: &Setup) -> Measure {
-        let mut x = snapshot.x.clone();
-        let mut v = snapshot.v.clone();
+        Measure::new(snapshot.x.clone(), snapshot.v.clone(), setup)
+    }
+
+    fn new(mut x: Vec<DVec3>, mut v: Vec<DVec3>, setup: &Setup) -> Measure {
         let energy = energy(setup, &mut x, &mut v);
         Measure { x, energy }
     }
