@@ -15,7 +15,7 @@ use super::super::assignments::{
 use super::super::runner;
 use super::super::system::Physics;
 use super::convert::*;
-use super::{CallFailure, Session};
+use super::{CallFailure, STEP_ANSWER, Session};
 
 /// A student's program behind the homework traits: every method is a call to the program.
 ///
@@ -151,7 +151,7 @@ impl Remote {
             .steps(m, count, arguments, Some(p), self.default_limit);
         let mut values = Vec::with_capacity(answers.len());
         for bytes in &answers {
-            match read(bytes) {
+            match read(&bytes[STEP_ANSWER..]) {
                 Ok(v) => values.push(v),
                 Err(e) => {
                     self.shut_down();
