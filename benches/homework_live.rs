@@ -16,7 +16,8 @@
 //! elsewhere), so that a loaded machine does not inflate it. Criterion's "time" is the CPU time
 //! of one step; after each group one line gives the CPU seconds per simulated second of each
 //! variant (one simulated second run free from the step's start): real time needs it well
-//! below 1, beside the lesson's own simulation and drawing. dt is 1/64 s for the ropes (64 steps
+//! below 1, beside the lesson's own simulation and drawing; the wall time of that second
+//! beside it (run free, on an otherwise idle machine: below 1 s keeps up with the lesson). dt is 1/64 s for the ropes (64 steps
 //! per simulated second) and 1 ms for the jelly (1000).
 //!
 //! `cargo bench --bench homework_live -- --warm-up-time 1 --measurement-time 3 jelly`.
@@ -122,7 +123,18 @@ fn descendants_ns() -> u128 {
 /// CPU time of `steps` steps of the comparison, run free, in runs of at most 256 steps from
 /// the step's start (explicit Euler's rope blows up after a few thousand).
 fn run(homework: &Homework, setup: &Setup, steps: u64, options: LiveOptions) -> Duration {
+    timed(homework, setup, steps, options).0
+}
+
+/// [`run`]'s CPU time and its wall time.
+fn timed(
+    homework: &Homework,
+    setup: &Setup,
+    steps: u64,
+    options: LiveOptions,
+) -> (Duration, Duration) {
     let mut left = steps;
+    let wall = std::time::Instant::now();
     let start = cpu_ns();
     while left > 0 {
         let setup = Setup {
@@ -140,7 +152,10 @@ fn run(homework: &Homework, setup: &Setup, steps: u64, options: LiveOptions) -> 
         }
     }
     let ns = cpu_ns().saturating_sub(start);
-    Duration::from_nanos(u64::try_from(ns).unwrap_or(u64::MAX))
+    (
+        Duration::from_nanos(u64::try_from(ns).unwrap_or(u64::MAX)),
+        wall.elapsed(),
+    )
 }
 
 fn boundary(c: &mut Criterion) {
@@ -211,8 +226,12 @@ fn boundary(c: &mut Criterion) {
             .iter()
             .filter(|(variant, ..)| measured.contains(variant))
             .map(|(variant, homework, options)| {
-                let cpu = run(homework, &s, second, *options);
-                format!("{variant} {:.3}", cpu.as_secs_f64())
+                let (cpu, wall) = timed(homework, &s, second, *options);
+                format!(
+                    "{variant} {:.3} (wall {:.3} s)",
+                    cpu.as_secs_f64(),
+                    wall.as_secs_f64()
+                )
             })
             .collect();
         if !line.is_empty() {

@@ -438,8 +438,11 @@ impl Shared {
     }
 }
 
-/// Steps the reference's thread may be ahead of the worker.
-const REFERENCE_AHEAD: usize = 16;
+/// Steps the reference's thread may be ahead of the worker: two of the student's longest
+/// requests ([`LiveOptions::ahead`]'s default), so that the reference keeps stepping while the
+/// worker is inside one request (it takes that request's steps only when it has ended) and the
+/// two sides run side by side, not in turn.
+const REFERENCE_AHEAD: usize = 128;
 
 /// A running comparison (module docs); dropping it stops the worker.
 pub struct Live {

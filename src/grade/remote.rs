@@ -421,7 +421,8 @@ impl Session {
     }
 
     /// `count` steps of the integrator `method` in one request (STEPS), each from the last
-    /// one's answer (`wire`'s module docs): the answers of the steps that came, in order, and
+    /// one's answer (`wire`'s module docs): the answers of the steps that came, in order (each
+    /// still behind the one byte of its frame's kind, [`STEP_ANSWER`]: not copied again), and
     /// why the rest did not. Each step has `limit` from the previous answer (or the request).
     pub fn steps(
         &mut self,
@@ -485,9 +486,9 @@ impl Session {
                     let reply = answer_physics(physics, request);
                     self.send(&reply, deadline);
                 }
-                Some((&to_grader::STEP, answer)) if steps.is_some() => {
+                Some((&to_grader::STEP, _)) if steps.is_some() => {
                     if let Some((answers, limit)) = steps.as_mut() {
-                        answers.push(answer.to_vec());
+                        answers.push(frame);
                         deadline = Instant::now() + *limit;
                     }
                 }
@@ -514,6 +515,9 @@ impl Drop for Session {
         self.stop();
     }
 }
+
+/// Where a step's answer starts in what [`Session::steps`] returns (after the frame's kind).
+pub const STEP_ANSWER: usize = 1;
 
 /// The grader's answer to a PHYSICS request: accelerations or a Jacobian of `physics` at the
 /// requested state, or a refusal that the program turns into a panic.

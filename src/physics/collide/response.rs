@@ -4,7 +4,9 @@
 use glam::DVec3;
 
 use super::budget::take_kinetic_with_spheres;
-use super::{Bodies, Collider, Contact, ContactParams, DynamicSphere, World, step_spheres};
+use super::{
+    Bodies, Broad, Collider, Contact, ContactParams, DynamicSphere, World, step_spheres,
+};
 
 /// Velocity response and positional projection of every free particle against the model's
 /// colliders, after a step of `dt` seconds (module docs). Keeps position Verlet's history
@@ -33,6 +35,12 @@ pub fn resolve_logged<'a, 'b>(
     // Where every particle was before the responses: each particle's springs are measured
     // against these, so that no particle's answer depends on the order (module docs).
     let before: Vec<DVec3> = state.x[..n].to_vec();
+    // Each collider's bounds once per call, not once per particle as `Collider::may_touch` in
+    // `respond` makes them: a particle they rule out is one `respond` leaves as it is (a plane
+    // has none: its own test is as cheap).
+    let broads: Vec<Option<Broad>> = (model.colliders.iter())
+        .map(|c| (!matches!(c, Collider::Plane { .. })).then(|| c.broad(params.epsilon)))
+        .collect();
     let mut owed = 0.0;
     for i in 0..n {
         let w = model.inv_mass[i];
@@ -42,7 +50,10 @@ pub fn resolve_logged<'a, 'b>(
         let (x_old, v_old) = (state.x[i], state.v[i]);
         let (mut x, mut v) = (x_old, v_old);
         let mut touched = false;
-        for collider in model.colliders {
+        for (collider, broad) in model.colliders.iter().zip(&broads) {
+            if broad.as_ref().is_some_and(|b| !b.may_touch(x)) {
+                continue;
+            }
             // The rise of potential energy per kg from `from` to `to` (J/kg): gravity, and the
             // springs at i (neighbours where they were) where they gain; a release is not paid
             // back.
