@@ -147,6 +147,22 @@ pub struct Session {
     failed_starts: u32,
     /// Bytes the student's code printed on stdout (not replies).
     stray: Arc<AtomicUsize>,
+    /// What the answers to `Physics` requests reuse from one request to the next.
+    answers: Answers,
+}
+
+/// The lists and the reply of the answers to `Physics` requests, kept between requests (the
+/// 1000-particle jelly's RK4 asks four times a step): no allocation per answer.
+#[derive(Default)]
+struct Answers {
+    /// Positions (m) of the request.
+    x: Vec<glam::DVec3>,
+    /// Velocities (m/s) of the request.
+    v: Vec<glam::DVec3>,
+    /// Accelerations (m/s²) of the answer.
+    a: Vec<glam::DVec3>,
+    /// The reply, framed (its length first) as [`request_frame`] frames it.
+    reply: Vec<u8>,
 }
 
 impl std::fmt::Debug for Session {
@@ -172,6 +188,7 @@ impl Session {
             starts: 0,
             failed_starts: 0,
             stray: Arc::new(AtomicUsize::new(0)),
+            answers: Answers::default(),
         }
     }
 
@@ -327,8 +344,13 @@ impl Session {
     /// Sends one frame by `deadline`; a program that is gone, or does not read, is noticed by
     /// the next [`Session::next_event`].
     fn send(&mut self, payload: &[u8], deadline: Instant) {
+        self.send_framed(&request_frame(payload), deadline);
+    }
+
+    /// Writes a frame already framed (its length first).
+    fn send_framed(&mut self, frame: &[u8], deadline: Instant) {
         if let Some(pipes) = self.running.as_mut().and_then(|r| r.pipes.as_mut()) {
-            let _ = pipes.write(&request_frame(payload), deadline);
+            let _ = pipes.write(frame, deadline);
         }
     }
 
@@ -483,8 +505,10 @@ impl Session {
                     ));
                 }
                 Some((&to_grader::PHYSICS, request)) => {
-                    let reply = answer_physics(physics, request);
-                    self.send(&reply, deadline);
+                    answer_physics(physics, request, &mut self.answers);
+                    let reply = std::mem::take(&mut self.answers.reply);
+                    self.send_framed(&reply, deadline);
+                    self.answers.reply = reply;
                 }
                 Some((&to_grader::STEP, _)) if steps.is_some() => {
                     if let Some((answers, limit)) = steps.as_mut() {
@@ -520,65 +544,90 @@ impl Drop for Session {
 pub const STEP_ANSWER: usize = 1;
 
 /// The grader's answer to a PHYSICS request: accelerations or a Jacobian of `physics` at the
-/// requested state, or a refusal that the program turns into a panic.
-fn answer_physics(physics: Option<&Physics>, request: &[u8]) -> Vec<u8> {
-    let refuse = |message: String| {
-        let mut reply = vec![to_program::PHYSICS_REPLY, 0];
-        message.put(&mut reply);
-        reply
+/// requested state, or a refusal that the program turns into a panic; framed into
+/// `answers.reply`, the lists read into and computed in `answers`' own.
+fn answer_physics(physics: Option<&Physics>, request: &[u8], answers: &mut Answers) {
+    let reply = &mut answers.reply;
+    reply.clear();
+    // The length, written when the reply is complete.
+    reply.extend_from_slice(&[0; 4]);
+    write_answer(physics, request, &mut answers.x, &mut answers.v, &mut answers.a, reply);
+    // Replies are far below 4 GiB (MAX_FRAME).
+    let len = (reply.len() - 4) as u32;
+    reply[..4].copy_from_slice(&len.to_le_bytes());
+}
+
+/// [`answer_physics`]'s reply after its length: positions and velocities read into `x` and
+/// `v`, accelerations computed in `a`.
+fn write_answer(
+    physics: Option<&Physics>,
+    request: &[u8],
+    x: &mut Vec<glam::DVec3>,
+    v: &mut Vec<glam::DVec3>,
+    a: &mut Vec<glam::DVec3>,
+    reply: &mut Vec<u8>,
+) {
+    let refuse = |message: String, reply: &mut Vec<u8>| {
+        reply.extend_from_slice(&[to_program::PHYSICS_REPLY, 0]);
+        message.put(reply);
     };
     let Some(physics) = physics else {
-        return refuse("this method has no Physics".to_string());
+        return refuse("this method has no Physics".to_string(), reply);
     };
     let parsed = (|| {
         let mut r = wire::Reader::new(request);
         let what = u8::take(&mut r)?;
-        let (x, v) = (take_vecs(&mut r)?, take_vecs(&mut r)?);
+        read_vecs_into(&mut r, x)?;
+        read_vecs_into(&mut r, v)?;
         r.finish()?;
-        Ok::<_, wire::WireError>((what, x, v))
+        Ok::<_, wire::WireError>(what)
     })();
-    let Ok((what, x, v)) = parsed else {
-        return refuse("unreadable Physics request".to_string());
+    let Ok(what) = parsed else {
+        return refuse("unreadable Physics request".to_string(), reply);
     };
     let n = physics.particle_count();
     let name = match what {
         physics_request::ACCELERATIONS => "accelerations",
         physics_request::JACOBIAN_X => "jacobian_x",
         physics_request::JACOBIAN_V => "jacobian_v",
-        _ => return refuse(format!("unknown Physics request {what}")),
+        _ => return refuse(format!("unknown Physics request {what}"), reply),
     };
     if x.len() != n || v.len() != n {
-        return refuse(format!(
-            "Physics::{name}: the system has {n} particles, but x has {} entries and v has {}",
-            x.len(),
-            v.len()
-        ));
+        return refuse(
+            format!(
+                "Physics::{name}: the system has {n} particles, but x has {} entries and v has {}",
+                x.len(),
+                v.len()
+            ),
+            reply,
+        );
     }
     // A Jacobian is dense, (3n)² numbers: one that does not fit a frame is refused before it is
     // computed, with the reason.
     let size = 3 * n;
     if what != physics_request::ACCELERATIONS && 8 * size * size + 16 > MAX_FRAME {
-        return refuse(jacobian_too_large(n));
+        return refuse(jacobian_too_large(n), reply);
     }
-    let mut reply = Vec::with_capacity(2 + 8 + 8 * size);
+    reply.reserve(2 + 8 + 8 * size);
     reply.extend_from_slice(&[to_program::PHYSICS_REPLY, 1]);
     match what {
         physics_request::ACCELERATIONS => {
-            // The numbers straight from the vectors: no list of them in between.
-            let a = physics.accelerations(&x, &v);
-            size.put(&mut reply);
-            for a_i in &a {
+            // As `Physics::accelerations`, into the kept list; the numbers straight from it.
+            a.clear();
+            a.resize(n, glam::DVec3::ZERO);
+            crate::physics::accelerations(physics.model(), x, v, a);
+            size.put(reply);
+            for a_i in a.iter() {
                 reply.extend_from_slice(&a_i.x.to_le_bytes());
                 reply.extend_from_slice(&a_i.y.to_le_bytes());
                 reply.extend_from_slice(&a_i.z.to_le_bytes());
             }
         }
         physics_request::JACOBIAN_X => {
-            wire::put_slice(physics.jacobian_x(&x, &v).as_row_major(), &mut reply)
+            wire::put_slice(physics.jacobian_x(x, v).as_row_major(), reply);
         }
-        _ => wire::put_slice(physics.jacobian_v(&x, &v).as_row_major(), &mut reply),
+        _ => wire::put_slice(physics.jacobian_v(x, v).as_row_major(), reply),
     }
-    reply
 }
 
 /// Why a Jacobian of `n` particles is not sent: its size against the frame limit, and what a

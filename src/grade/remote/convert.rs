@@ -29,6 +29,13 @@ pub(super) fn local_vecs(v: Vec<api::DVec3>) -> Vec<DVec3> {
 /// A `Vec<DVec3>` in its wire form read straight into the grader's vectors: one length check
 /// for the list, no list of the API's vectors in between (a body's lists are thousands long).
 pub(super) fn take_vecs(r: &mut Reader<'_>) -> Result<Vec<DVec3>, WireError> {
+    let mut out = Vec::new();
+    read_vecs_into(r, &mut out)?;
+    Ok(out)
+}
+
+/// [`take_vecs`] into `out` (its memory reused; its entries replaced).
+pub(super) fn read_vecs_into(r: &mut Reader<'_>, out: &mut Vec<DVec3>) -> Result<(), WireError> {
     let n = usize::take(r)?;
     let size = n
         .checked_mul(24)
@@ -39,10 +46,13 @@ pub(super) fn take_vecs(r: &mut Reader<'_>) -> Result<Vec<DVec3>, WireError> {
         a.copy_from_slice(&b[8 * i..8 * i + 8]);
         f64::from_le_bytes(a)
     };
-    Ok(bytes
-        .chunks_exact(24)
-        .map(|b| DVec3::new(f(b, 0), f(b, 1), f(b, 2)))
-        .collect())
+    out.clear();
+    out.extend(
+        bytes
+            .chunks_exact(24)
+            .map(|b| DVec3::new(f(b, 0), f(b, 1), f(b, 2))),
+    );
+    Ok(())
 }
 
 pub(super) fn api_spring(s: &Spring) -> api::Spring {
