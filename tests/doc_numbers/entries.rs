@@ -392,10 +392,32 @@ pub const ENTRIES: &[Entry] = &[
     (
         "docs/homework-live.md",
         &[
-            "0.003", "0.005", "0.007", "0.010", "0.004", "0.24", "0.53", "0.40", "0.52", "1.10",
-            "1.00", "0.73", "1.86", "1.50",
+            "0.003", "0.005", "0.008", "0.004", "0.012", "0.22", "0.37", "0.32", "0.36", "0.58",
+            "0.53", "0.66", "1.10", "1.07", "13", "15",
         ],
         "timing: CPU seconds per simulated second printed by `cargo bench --bench homework_live`, and the load average while it ran",
+    ),
+    (
+        "docs/homework-live.md",
+        &[
+            "0.21", "0.07", "0.03", "0.01", "0.19", "0.06", "0.10", "0.14", "0.4",
+        ],
+        "timing: `perf record` of `cargo bench --bench homework_live` (jelly RK4, batched), samples per thread and kind of work scaled to the bench's CPU seconds per simulated second",
+    ),
+    (
+        "docs/homework-live.md",
+        &["128"],
+        "code src/grade/live.rs `REFERENCE_AHEAD`: two of `LiveOptions::ahead`'s 64 steps",
+    ),
+    (
+        "docs/homework-live.md",
+        &["512"],
+        "code src/grade/remote/frames.rs `PIPE_BYTES`: 512 KiB",
+    ),
+    (
+        "docs/homework-live.md",
+        &["48", "340"],
+        "label: bytes on the wire of the 1000-particle jelly, 24 per vector (two lists of 1000: 48 KB; RK4's four requests and answers and the step's answer: 4 × 72 + 48 ≈ 340 KB)",
     ),
     // docs/implicit-euler.md: why the solve is built as it is.
     (
