@@ -7,7 +7,9 @@ use std::fs::File;
 use std::io::{Read, Write};
 
 use crate::DVec3;
-use crate::wire::{MAGIC, MAX_FRAME, Reader, TOKEN_LEN, Wire, WireError, put_slice, to_grader, to_program};
+use crate::wire::{
+    MAGIC, MAX_FRAME, Reader, TOKEN_LEN, Wire, WireError, put_slice, to_grader, to_program,
+};
 
 thread_local! {
     /// The session token while the loop runs on this thread.
@@ -184,9 +186,10 @@ fn answer_of<T>(reply: &[u8], expected: usize, read: impl FnOnce(&[u8]) -> T) ->
                     "Physics: the grader answered {n} numbers, {expected} expected"
                 )));
             }
-            let bytes = r.bytes(n.checked_mul(8).ok_or_else(|| {
-                WireError(format!("a list of {n} numbers"))
-            })?)?;
+            let bytes = r.bytes(
+                n.checked_mul(8)
+                    .ok_or_else(|| WireError(format!("a list of {n} numbers")))?,
+            )?;
             r.finish()?;
             Ok(bytes)
         } else {

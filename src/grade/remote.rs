@@ -551,7 +551,14 @@ fn answer_physics(physics: Option<&Physics>, request: &[u8], answers: &mut Answe
     reply.clear();
     // The length, written when the reply is complete.
     reply.extend_from_slice(&[0; 4]);
-    write_answer(physics, request, &mut answers.x, &mut answers.v, &mut answers.a, reply);
+    write_answer(
+        physics,
+        request,
+        &mut answers.x,
+        &mut answers.v,
+        &mut answers.a,
+        reply,
+    );
     // Replies are far below 4 GiB (MAX_FRAME).
     let len = (reply.len() - 4) as u32;
     reply[..4].copy_from_slice(&len.to_le_bytes());

@@ -4,9 +4,7 @@
 use glam::DVec3;
 
 use super::budget::take_kinetic_with_spheres;
-use super::{
-    Bodies, Broad, Collider, Contact, ContactParams, DynamicSphere, World, step_spheres,
-};
+use super::{Bodies, Broad, Collider, Contact, ContactParams, DynamicSphere, World, step_spheres};
 
 /// Velocity response and positional projection of every free particle against the model's
 /// colliders, after a step of `dt` seconds (module docs). Keeps position Verlet's history
