@@ -54,9 +54,10 @@ for c in "${commands[@]}"; do
     if [[ -n "$out" ]]; then
         name="$(echo "$c" | tr ' ' '_' | tr -d -- '-' )"
         # Timings are the only numbers printed with exactly two decimals (or one, before
-        # "s in all"); signed percentages and the other columns have more or a sign.
-        sed -E -e 's/(^|[ (])[0-9]+\.[0-9]{2}( |$)/\1T\2/g' \
-            -e 's/(^|[ (])[0-9]+\.[0-9]{2}( |$)/\1T\2/g' \
+        # "s in all"); signed percentages and the other columns have more or a sign. The
+        # padding before a timing goes with it (a wall time of 10 s is one column wider).
+        sed -E -e 's/(^|[ (]) *[0-9]+\.[0-9]{2}( |$)/\1T\2/g' \
+            -e 's/(^|[ (]) *[0-9]+\.[0-9]{2}( |$)/\1T\2/g' \
             -e 's/, [0-9.]+ s in all$/, T s in all/' \
             "$scratch/table" > "$out/$name.txt"
     fi

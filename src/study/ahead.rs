@@ -50,6 +50,9 @@ pub struct Ahead<'f, K, R> {
     compute: &'f (dyn Fn(&K, &Cancel) -> Option<R> + Sync),
     /// Helpers start a guess only while this says a core is free.
     idle: &'f (dyn Fn() -> bool + Sync),
+    /// Whether there are helpers: then every run steps on its own thread alone
+    /// ([`crate::physics::pool::alone`]), since the search and its helpers share the cores.
+    shared: bool,
 }
 
 impl<K: Clone + Eq + Hash + Send, R: Clone + Send> Ahead<'_, K, R> {
@@ -82,7 +85,7 @@ impl<K: Clone + Eq + Hash + Send, R: Clone + Send> Ahead<'_, K, R> {
         drop(memo);
         let result = loop {
             // A demanded computation is never cancelled, so it always gives a result.
-            if let Some(r) = (self.compute)(key, &never) {
+            if let Some(r) = self.compute_here(key, &never) {
                 break r;
             }
             never.store(false, Ordering::SeqCst);
@@ -143,7 +146,7 @@ impl<K: Clone + Eq + Hash + Send, R: Clone + Send> Ahead<'_, K, R> {
             drop(memo);
             // A guess that panics is dropped like a cancelled one: the search, asking for it,
             // computes it itself and meets the same panic on its own thread.
-            let result = catch_unwind(AssertUnwindSafe(|| (self.compute)(&key, &cancel)))
+            let result = catch_unwind(AssertUnwindSafe(|| self.compute_here(&key, &cancel)))
                 .ok()
                 .flatten();
             let mut memo = self.lock();
@@ -152,6 +155,18 @@ impl<K: Clone + Eq + Hash + Send, R: Clone + Send> Ahead<'_, K, R> {
                 memo.done.insert(key, r);
             }
             self.changed.notify_all();
+        }
+    }
+
+    /// One computation on this thread; with helpers, its simulation steps without the global
+    /// pool's workers (the same bits either way): the search and each helper already keep a
+    /// core busy, and a pool worker woken for their small passes, spinning after each, would
+    /// only take time from them.
+    fn compute_here(&self, key: &K, cancel: &Cancel) -> Option<R> {
+        if self.shared {
+            crate::physics::pool::alone(|| (self.compute)(key, cancel))
+        } else {
+            (self.compute)(key, cancel)
         }
     }
 
@@ -217,6 +232,7 @@ where
         changed: Condvar::new(),
         compute,
         idle,
+        shared: helpers > 0,
     };
     std::thread::scope(|scope| {
         for _ in 0..helpers {

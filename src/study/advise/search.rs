@@ -75,9 +75,12 @@ fn verify(
     if crate::physics::pool::Pool::global().threads() < 2 {
         return (half(), confirm());
     }
+    // Two runs beside each other, each on its own thread alone (the same bits): a pool worker
+    // woken for one run's passes would take time from the other.
+    use crate::physics::pool::alone;
     std::thread::scope(|scope| {
-        let confirmation = scope.spawn(confirm);
-        let run = half();
+        let confirmation = scope.spawn(|| alone(confirm));
+        let run = alone(half);
         let confirmation = confirmation
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
