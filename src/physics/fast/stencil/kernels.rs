@@ -254,3 +254,227 @@ pub(super) unsafe fn spring_lanes_avx512(
         )
     }
 }
+
+/// The streaming loop with the AVX2 + FMA springs (see the module docs).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn range_avx2_fma<const POWER: bool>(
+    st: &Stencil,
+    s: &mut Scratch,
+    x: &[DVec3],
+    v: &[DVec3],
+    q0: usize,
+    q1: usize,
+    part: &mut Part,
+    output: &Output,
+) {
+    range_body::<Avx2, POWER>(
+        st,
+        s,
+        x,
+        v,
+        q0,
+        q1,
+        part,
+        output,
+        #[inline(always)]
+        |g, first, w, i, p| {
+            // SAFETY: this function only runs on a CPU with AVX2 and FMA (see `Stencil::range`),
+            // and `range_body` calls with chunks inside the window and the group's arrays.
+            unsafe { springs_avx2_fma(g, first, w, i, p) }
+        },
+    );
+}
+
+/// The springs of one chunk with AVX2 and FMA: `1/L` from the single-precision reciprocal
+/// square root estimate and one fifth-order refinement (see the module docs), fused
+/// multiply-adds; lanes whose `L²` is outside the single-precision normal range get the exact
+/// kernel's bits.
+///
+/// Not itself a `target_feature` function, so that the compiler inlines it; it is only called
+/// from functions that enable AVX2 and FMA.
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA, and the window and `g`'s arrays must hold the chunk (see
+/// `range_body`): `i + g.delta + LANES` at most the window's length, `p + LANES` at most the
+/// length of `g.rest_length` and `g.present`. These are not checked in release builds.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(super) unsafe fn springs_avx2_fma(
+    g: &Group,
+    first: &[Avx2; 6],
+    w: &Window,
+    i: usize,
+    p: usize,
+) -> (Forces<Avx2>, Avx2) {
+    use std::arch::x86_64::{_mm256_loadu_pd, _mm256_set1_pd, _mm256_setzero_pd};
+    let j = i + g.delta;
+    debug_assert!(j + LANES <= w.x[0].len() && p + LANES <= g.rest_length.len());
+    // SAFETY (the intrinsics): the caller guarantees AVX2 and FMA, and that LANES = 8 values
+    // exist from every index loaded below (window: `j = i + δ`; group arrays: `p`): two
+    // unaligned 256-bit loads read them.
+    unsafe {
+        let half =
+            |values: &[f64], at: usize, h: usize| _mm256_loadu_pd(values.as_ptr().add(at + 4 * h));
+        let present = Avx2::masks(g.present[p / LANES]);
+        let (stiffness, damping) = (_mm256_set1_pd(g.stiffness), _mm256_set1_pd(g.damping));
+        let mut f = [[_mm256_setzero_pd(); 2]; 3];
+        let mut power = [_mm256_setzero_pd(); 2];
+        for h in 0..2 {
+            // Written out, not with `map`: its closure would not be inlined.
+            let own = [
+                first[0].0[h],
+                first[1].0[h],
+                first[2].0[h],
+                first[3].0[h],
+                first[4].0[h],
+                first[5].0[h],
+            ];
+            let second = [
+                half(w.x[0], j, h),
+                half(w.x[1], j, h),
+                half(w.x[2], j, h),
+                half(w.v[0], j, h),
+                half(w.v[1], j, h),
+                half(w.v[2], j, h),
+            ];
+            let (forces, pw) = spring_lanes_avx2_fma(
+                &own,
+                &second,
+                stiffness,
+                damping,
+                half(&g.rest_length, p, h),
+                present[h],
+            );
+            (f[0][h], f[1][h], f[2][h], power[h]) = (forces[0], forces[1], forces[2], pw);
+        }
+        ([Avx2(f[0]), Avx2(f[1]), Avx2(f[2])], Avx2(power))
+    }
+}
+
+/// The arithmetic of [`springs_avx2_fma`] on four springs whose ends are in registers: their
+/// forces and their dampers' power (W). `first`, `second`: `[x, y, z, v_x, v_y, v_z]` of the
+/// first and second ends (m, m/s); `stiffness` `k` (N/m), `damping` `k_d` (N·s/m) and `rest`
+/// `L0` (m) per lane; `present`: all-ones in the lanes that hold a spring, zero elsewhere.
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(super) unsafe fn spring_lanes_avx2_fma(
+    first: &[std::arch::x86_64::__m256d; 6],
+    second: &[std::arch::x86_64::__m256d; 6],
+    stiffness: std::arch::x86_64::__m256d,
+    damping: std::arch::x86_64::__m256d,
+    rest: std::arch::x86_64::__m256d,
+    present: std::arch::x86_64::__m256d,
+) -> ([std::arch::x86_64::__m256d; 3], std::arch::x86_64::__m256d) {
+    use std::arch::x86_64::{
+        _CMP_GE_OQ, _CMP_LE_OQ, _mm_rsqrt_ps, _mm256_and_pd, _mm256_blendv_pd, _mm256_cmp_pd,
+        _mm256_cvtpd_ps, _mm256_cvtps_pd, _mm256_fmadd_pd, _mm256_fmsub_pd, _mm256_fnmadd_pd,
+        _mm256_movemask_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_sub_pd,
+    };
+    // SAFETY (the intrinsics): the caller guarantees AVX2 and FMA; nothing is loaded or stored.
+    unsafe {
+        // d = x_b - x_a
+        let dx = _mm256_sub_pd(second[0], first[0]);
+        let dy = _mm256_sub_pd(second[1], first[1]);
+        let dz = _mm256_sub_pd(second[2], first[2]);
+        // a = d·d = L²
+        let a = _mm256_fmadd_pd(dz, dz, _mm256_fmadd_pd(dy, dy, _mm256_mul_pd(dx, dx)));
+        // k_d (v_b - v_a)·d, computed while the square root is refined.
+        let dvx = _mm256_sub_pd(second[3], first[3]);
+        let dvy = _mm256_sub_pd(second[4], first[4]);
+        let dvz = _mm256_sub_pd(second[5], first[5]);
+        let dv_d = _mm256_fmadd_pd(dvz, dz, _mm256_fmadd_pd(dvy, dy, _mm256_mul_pd(dvx, dx)));
+        let damper = _mm256_mul_pd(damping, dv_d);
+        // y₀ ≈ 1/√a to 1.5·2⁻¹², from a rounded to single precision: valid where a is a
+        // normal single (2⁻¹²⁶ ≤ a ≤ FLT_MAX; false for 0, NaN and ∞).
+        let normal = _mm256_and_pd(
+            _mm256_cmp_pd::<_CMP_GE_OQ>(a, _mm256_set1_pd(f64::from(f32::MIN_POSITIVE))),
+            _mm256_cmp_pd::<_CMP_LE_OQ>(a, _mm256_set1_pd(f64::from(f32::MAX))),
+        );
+        let y0 = _mm256_cvtps_pd(_mm_rsqrt_ps(_mm256_cvtpd_ps(a)));
+        // e = 1 - a y₀², then y = y₀ + y₀ e s(e) with s(e) = ½ + ⅜e + 5⁄16 e² + 35⁄128 e³ +
+        // 63⁄256 e⁴ (the series of y₀ (1 - e)^(-½)), s in Estrin's form
+        // (½ + ⅜e) + e² ((5⁄16 + 35⁄128 e) + e² 63⁄256): its halves computed side by side.
+        let e = _mm256_fnmadd_pd(_mm256_mul_pd(a, y0), y0, _mm256_set1_pd(1.0));
+        let e2 = _mm256_mul_pd(e, e);
+        let low = _mm256_fmadd_pd(_mm256_set1_pd(3.0 / 8.0), e, _mm256_set1_pd(0.5));
+        let high = _mm256_fmadd_pd(_mm256_set1_pd(35.0 / 128.0), e, _mm256_set1_pd(5.0 / 16.0));
+        let high = _mm256_fmadd_pd(_mm256_set1_pd(63.0 / 256.0), e2, high);
+        let series = _mm256_fmadd_pd(high, e2, low);
+        let y = _mm256_fmadd_pd(_mm256_mul_pd(y0, e), series, y0);
+        // L = a / √a = a y; tension = k (L - L0) + k_d (v_b - v_a)·d / L
+        let stretch = _mm256_fmsub_pd(a, y, rest);
+        let damper_n = _mm256_mul_pd(damper, y);
+        let tension = _mm256_fmadd_pd(stiffness, stretch, damper_n);
+        // f = tension n = (tension / L) d, zero where there is no spring.
+        let scale = _mm256_and_pd(_mm256_mul_pd(tension, y), present);
+        let mut forces = [
+            _mm256_mul_pd(dx, scale),
+            _mm256_mul_pd(dy, scale),
+            _mm256_mul_pd(dz, scale),
+        ];
+        // The damper's power k_d ((v_b - v_a)·n)² (unused unless the caller asks for it).
+        let mut power = _mm256_and_pd(_mm256_mul_pd(damper_n, _mm256_mul_pd(dv_d, y)), present);
+        if _mm256_movemask_pd(normal) != 0b1111 {
+            // A rare lane (a zero-length spring, a diverging run): the exact kernel's bits there.
+            let (exact, exact_power) =
+                spring_lanes_exact_avx2(first, second, stiffness, damping, rest, present);
+            for (f, exact) in forces.iter_mut().zip(exact) {
+                *f = _mm256_blendv_pd(exact, *f, normal);
+            }
+            power = _mm256_blendv_pd(exact_power, power, normal);
+        }
+        (forces, power)
+    }
+}
+
+/// [`springs_exact`]'s operations on four springs whose ends are in registers (the same bits):
+/// the rare lanes of [`spring_lanes_avx2_fma`].
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn spring_lanes_exact_avx2(
+    first: &[std::arch::x86_64::__m256d; 6],
+    second: &[std::arch::x86_64::__m256d; 6],
+    stiffness: std::arch::x86_64::__m256d,
+    damping: std::arch::x86_64::__m256d,
+    rest: std::arch::x86_64::__m256d,
+    present: std::arch::x86_64::__m256d,
+) -> ([std::arch::x86_64::__m256d; 3], std::arch::x86_64::__m256d) {
+    use std::arch::x86_64::{
+        _CMP_GT_OQ, _mm256_add_pd, _mm256_and_pd, _mm256_cmp_pd, _mm256_div_pd, _mm256_mul_pd,
+        _mm256_set1_pd, _mm256_setzero_pd, _mm256_sqrt_pd, _mm256_sub_pd,
+    };
+    // SAFETY (the intrinsics): the caller guarantees AVX2; nothing is loaded or stored.
+    unsafe {
+        let (add, sub, mul) = (_mm256_add_pd, _mm256_sub_pd, _mm256_mul_pd);
+        let dx = sub(second[0], first[0]);
+        let dy = sub(second[1], first[1]);
+        let dz = sub(second[2], first[2]);
+        let length = _mm256_sqrt_pd(add(add(mul(dx, dx), mul(dy, dy)), mul(dz, dz)));
+        let positive = _mm256_cmp_pd::<_CMP_GT_OQ>(length, _mm256_setzero_pd());
+        let inv = _mm256_and_pd(_mm256_div_pd(_mm256_set1_pd(1.0), length), positive);
+        let (nx, ny, nz) = (mul(dx, inv), mul(dy, inv), mul(dz, inv));
+        let dvx = sub(second[3], first[3]);
+        let dvy = sub(second[4], first[4]);
+        let dvz = sub(second[5], first[5]);
+        let rel = add(add(mul(dvx, nx), mul(dvy, ny)), mul(dvz, nz));
+        let hooke = mul(stiffness, sub(length, rest));
+        let damper = mul(damping, rel);
+        let tension = _mm256_and_pd(add(hooke, damper), present);
+        let power = _mm256_and_pd(mul(damper, rel), present);
+        (
+            [mul(tension, nx), mul(tension, ny), mul(tension, nz)],
+            power,
+        )
+    }
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests;
