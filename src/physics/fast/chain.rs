@@ -97,7 +97,7 @@ pub fn project_chain(
         Kernel::Avx512 => unsafe { passes_avx512(scratch, c0, c1, iterations) },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: as above.
-        Kernel::Avx2 | Kernel::Avx2Fma => unsafe { passes_avx2(scratch, c0, c1, iterations) },
+        Kernel::Avx2 => unsafe { passes_avx2(scratch, c0, c1, iterations) },
         _ => passes::<Plain>(scratch, c0, c1, iterations),
     }
     scratch.store(&mut x[..n]);

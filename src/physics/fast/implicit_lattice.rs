@@ -732,7 +732,7 @@ macro_rules! on_kernel {
                 Kernel::Avx512 => unsafe { avx512($($arg),*) },
                 #[cfg(target_arch = "x86_64")]
                 // SAFETY: as above.
-                Kernel::Avx2 | Kernel::Avx2Fma => unsafe { avx2($($arg),*) },
+                Kernel::Avx2 => unsafe { avx2($($arg),*) },
                 _ => $body::<Plain>($($arg),*),
             }
         }

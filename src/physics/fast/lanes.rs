@@ -384,34 +384,11 @@ impl Lanes for Avx512 {
 /// [`Lanes`] as two AVX2 registers of four f64 each.
 ///
 /// Its methods call AVX2 instructions without checking the CPU: an `Avx2` value is only ever
-/// created inside `range_avx2` or `range_avx2_fma` (`target_feature(enable = "avx2")`
-/// functions, which run only where AVX2 was detected) or by the methods of a value that
-/// already exists.
+/// created inside `range_avx2` (a `target_feature(enable = "avx2")` function, which runs only
+/// where AVX2 was detected) or by the methods of a value that already exists.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
-pub(crate) struct Avx2(pub(crate) [std::arch::x86_64::__m256d; 2]);
-
-#[cfg(target_arch = "x86_64")]
-impl Avx2 {
-    /// The lanes whose bit is set in `mask` (bit `4h + l` is lane `l` of half `h`) as all-ones
-    /// lanes of two registers, zero elsewhere: what `and` keeps.
-    #[inline(always)]
-    pub(crate) fn masks(mask: u8) -> [std::arch::x86_64::__m256d; 2] {
-        use std::arch::x86_64::{
-            _mm256_and_si256, _mm256_castsi256_pd, _mm256_cmpeq_epi64, _mm256_set1_epi64x,
-            _mm256_setr_epi64x,
-        };
-        // SAFETY: AVX2, see the type's docs: (mask & bit) == bit gives all-ones lanes there.
-        unsafe {
-            let bits = _mm256_set1_epi64x(i64::from(mask));
-            let keep = |lo: i64| {
-                let b = _mm256_setr_epi64x(lo, lo << 1, lo << 2, lo << 3);
-                _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(bits, b), b))
-            };
-            [keep(1), keep(16)]
-        }
-    }
-}
+pub(crate) struct Avx2([std::arch::x86_64::__m256d; 2]);
 
 #[cfg(target_arch = "x86_64")]
 impl Lanes for Avx2 {
@@ -507,13 +484,21 @@ impl Lanes for Avx2 {
     }
     #[inline(always)]
     fn select(self, mask: u8) -> Avx2 {
-        use std::arch::x86_64::_mm256_and_pd;
-        let keep = Avx2::masks(mask);
-        // SAFETY: AVX2, see the type's docs.
+        use std::arch::x86_64::{
+            _mm256_and_pd, _mm256_and_si256, _mm256_castsi256_pd, _mm256_cmpeq_epi64,
+            _mm256_set1_epi64x, _mm256_setr_epi64x,
+        };
+        // SAFETY: AVX2, see the type's docs. Lane l of half h keeps its value when bit 4h + l
+        // of the mask is set: (mask & bit) == bit gives all-ones lanes there.
         unsafe {
+            let bits = _mm256_set1_epi64x(i64::from(mask));
+            let keep = |lo: i64| {
+                let b = _mm256_setr_epi64x(lo, lo << 1, lo << 2, lo << 3);
+                _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(bits, b), b))
+            };
             Avx2([
-                _mm256_and_pd(self.0[0], keep[0]),
-                _mm256_and_pd(self.0[1], keep[1]),
+                _mm256_and_pd(self.0[0], keep(1)),
+                _mm256_and_pd(self.0[1], keep(16)),
             ])
         }
     }

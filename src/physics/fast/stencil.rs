@@ -119,7 +119,7 @@ use crate::physics::springs::Spring;
 pub(crate) use contacts::any_may_touch;
 use kernels::range_portable;
 #[cfg(target_arch = "x86_64")]
-use kernels::{range_avx2, range_avx2_fma, range_avx512};
+use kernels::{range_avx2, range_avx512};
 use passes::{Part, SCRATCH, Scratch, cut, take};
 pub use team::{Crew, Pass, TeamUpdate};
 
@@ -156,10 +156,6 @@ pub enum Kernel {
     Portable,
     /// The same operations on AVX2 registers (x86-64): the same results bit for bit.
     Avx2,
-    /// AVX2 and FMA (x86-64): single-precision reciprocal square root estimate, one fifth-order
-    /// refinement and fused multiply-adds; the exact operations on lanes whose `L²` is not a
-    /// normal single-precision number.
-    Avx2Fma,
     /// AVX-512F (x86-64): reciprocal square root estimate, one fourth-order refinement and fused
     /// multiply-adds.
     Avx512,
@@ -167,12 +163,7 @@ pub enum Kernel {
 
 impl Kernel {
     /// Every kernel, slowest first.
-    pub const ALL: [Kernel; 4] = [
-        Kernel::Portable,
-        Kernel::Avx2,
-        Kernel::Avx2Fma,
-        Kernel::Avx512,
-    ];
+    pub const ALL: [Kernel; 3] = [Kernel::Portable, Kernel::Avx2, Kernel::Avx512];
 
     /// True when this CPU can run the kernel.
     #[must_use]
@@ -181,11 +172,6 @@ impl Kernel {
             Kernel::Portable => true,
             #[cfg(target_arch = "x86_64")]
             Kernel::Avx2 => std::arch::is_x86_feature_detected!("avx2"),
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2Fma => {
-                std::arch::is_x86_feature_detected!("avx2")
-                    && std::arch::is_x86_feature_detected!("fma")
-            }
             #[cfg(target_arch = "x86_64")]
             Kernel::Avx512 => std::arch::is_x86_feature_detected!("avx512f"),
             #[cfg(not(target_arch = "x86_64"))]
@@ -674,17 +660,6 @@ impl Stencil {
             (Kernel::Avx512, true) => {
                 // SAFETY: as above.
                 unsafe { range_avx512::<true>(self, s, x, v, q0, q1, part, output) }
-            }
-            #[cfg(target_arch = "x86_64")]
-            (Kernel::Avx2Fma, false) => {
-                // SAFETY: `with_kernel` and `Kernel::best` only choose `Avx2Fma` on a CPU that
-                // supports AVX2 and FMA.
-                unsafe { range_avx2_fma::<false>(self, s, x, v, q0, q1, part, output) }
-            }
-            #[cfg(target_arch = "x86_64")]
-            (Kernel::Avx2Fma, true) => {
-                // SAFETY: as above.
-                unsafe { range_avx2_fma::<true>(self, s, x, v, q0, q1, part, output) }
             }
             #[cfg(target_arch = "x86_64")]
             (Kernel::Avx2, false) => {

@@ -92,9 +92,6 @@ impl Rope {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: available (asserted above).
             Kernel::Avx2 => unsafe { chunks_avx2(g, &w, chunks) },
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: available (asserted above).
-            Kernel::Avx2Fma => unsafe { chunks_avx2_fma(g, &w, chunks) },
             _ => chunks_body::<Plain>(g, &w, chunks, |g, first, w, i, p| {
                 kernels::springs_exact::<Plain>(g, first, w, i, p)
             }),
@@ -164,22 +161,6 @@ fn chunks_avx2(g: &Group, w: &Window, chunks: u64) -> f64 {
         #[inline(always)]
         #[allow(clippy::redundant_closure)]
         |g, first, w, i, p| kernels::springs_exact::<Avx2>(g, first, w, i, p),
-    )
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn chunks_avx2_fma(g: &Group, w: &Window, chunks: u64) -> f64 {
-    chunks_body::<Avx2>(
-        g,
-        w,
-        chunks,
-        #[inline(always)]
-        |g, first, w, i, p| {
-            // SAFETY: AVX2 and FMA (this function's features); the chunks at 0 and 8 lie inside
-            // the window of 40 values and the group's arrays.
-            unsafe { kernels::springs_avx2_fma(g, first, w, i, p) }
-        },
     )
 }
 

@@ -67,7 +67,7 @@
 
 use super::kernels::springs_exact;
 #[cfg(target_arch = "x86_64")]
-use super::kernels::{spring_lanes_avx512, springs_avx2_fma, springs_avx512};
+use super::kernels::{spring_lanes_avx512, springs_avx512};
 use super::passes::{Forces, Window, load_padded, semi_implicit_euler, weight_drag_springs};
 #[allow(clippy::wildcard_imports)]
 use super::*;
@@ -195,9 +195,6 @@ fn small_steps<const POWER: bool>(
         #[cfg(target_arch = "x86_64")]
         // SAFETY: as above, AVX2.
         Kernel::Avx2 => unsafe { steps_avx2::<POWER>(st, s, dynamics, dt, steps) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as above, AVX2 and FMA.
-        Kernel::Avx2Fma => unsafe { steps_avx2_fma::<POWER>(st, s, dynamics, dt, steps) },
         _ => small_body::<Plain, POWER>(
             st,
             s,
@@ -289,30 +286,6 @@ fn steps_avx2<const POWER: bool>(
         #[inline(always)]
         #[allow(clippy::redundant_closure)]
         |g, first, w, i, p| springs_exact::<Avx2>(g, first, w, i, p),
-    );
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn steps_avx2_fma<const POWER: bool>(
-    st: &Stencil,
-    s: &mut SmallScratch,
-    d: &Dynamics,
-    dt: f64,
-    steps: u64,
-) {
-    small_body::<Avx2, POWER>(
-        st,
-        s,
-        d,
-        dt,
-        steps,
-        #[inline(always)]
-        |g, first, w, i, p| {
-            // SAFETY: this function only runs on a CPU with AVX2 and FMA, and `small_body`
-            // calls with chunks inside the window and the group's arrays.
-            unsafe { springs_avx2_fma(g, first, w, i, p) }
-        },
     );
 }
 
