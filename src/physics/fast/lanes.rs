@@ -384,12 +384,11 @@ impl Lanes for Avx512 {
 /// [`Lanes`] as two AVX2 registers of four f64 each.
 ///
 /// Its methods call AVX2 instructions without checking the CPU: an `Avx2` value is only ever
-/// created inside `range_avx2` or the small lattices' AVX2 steps (`target_feature(enable =
-/// "avx2")` functions, which run only where AVX2 was detected) or by the methods of a value
-/// that already exists.
+/// created inside `range_avx2` (a `target_feature(enable = "avx2")` function, which runs only
+/// where AVX2 was detected) or by the methods of a value that already exists.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
-pub(crate) struct Avx2(pub(crate) [std::arch::x86_64::__m256d; 2]);
+pub(crate) struct Avx2([std::arch::x86_64::__m256d; 2]);
 
 #[cfg(target_arch = "x86_64")]
 impl Lanes for Avx2 {

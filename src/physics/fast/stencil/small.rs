@@ -164,14 +164,6 @@ impl Stencil {
             let s = &mut *s.borrow_mut();
             s.load(self, x, v);
             match powers {
-                #[cfg(target_arch = "x86_64")]
-                None if self.kernel == Kernel::Avx2
-                    && (1..=FUSED_GROUPS).contains(&self.groups.len()) =>
-                {
-                    // SAFETY: `with_kernel` and `Kernel::best` only choose `Avx2` on a CPU that
-                    // supports AVX2; `load` sized the arrays for this stencil.
-                    unsafe { fused_steps_avx2(self, s, dynamics, dt, steps) }
-                }
                 None => small_steps::<false>(self, s, dynamics, dt, steps),
                 Some(powers) => {
                     s.power.clear();
@@ -184,27 +176,6 @@ impl Stencil {
             s.store(x, v);
         });
         true
-    }
-}
-
-/// The one-pass steps on AVX2 registers (`fused_avx2`) for a lattice of 1 to `FUSED_GROUPS`
-/// groups, on arrays that `SmallScratch::load` filled.
-///
-/// # Safety
-/// The CPU must support AVX2.
-#[cfg(target_arch = "x86_64")]
-unsafe fn fused_steps_avx2(st: &Stencil, s: &mut SmallScratch, d: &Dynamics, dt: f64, steps: u64) {
-    use fused_avx2::fused_avx2;
-    // SAFETY: AVX2 (the caller); the group count matches `G`.
-    unsafe {
-        match st.groups.len() {
-            1 => fused_avx2::<1>(st, s, d, dt, steps),
-            2 => fused_avx2::<2>(st, s, d, dt, steps),
-            3 => fused_avx2::<3>(st, s, d, dt, steps),
-            4 => fused_avx2::<4>(st, s, d, dt, steps),
-            5 => fused_avx2::<5>(st, s, d, dt, steps),
-            _ => fused_avx2::<6>(st, s, d, dt, steps),
-        }
     }
 }
 
@@ -738,7 +709,5 @@ fn chunk_mut(values: &mut [f64], at: usize) -> &mut [f64; LANES] {
     (&mut values[at..at + LANES]).try_into().expect("a chunk")
 }
 
-#[cfg(target_arch = "x86_64")]
-mod fused_avx2;
 #[cfg(test)]
 mod tests;

@@ -162,40 +162,6 @@ fn the_fused_path_gives_the_single_steps_bits() {
     }
 }
 
-/// The AVX2 one-pass steps themselves (not `small_body`): the same bits as single steps of
-/// the AVX2 kernel for 1 to `FUSED_GROUPS` groups (offsets below, equal to and above a chunk,
-/// a last chunk of one particle, pinned particles).
-#[cfg(target_arch = "x86_64")]
-#[test]
-fn the_avx2_one_pass_steps_give_the_single_steps_bits() {
-    if !Kernel::Avx2.is_available() {
-        return;
-    }
-    let params = MethodParams::default();
-    for (name, groups, model, state) in lattices() {
-        if groups > FUSED_GROUPS {
-            continue;
-        }
-        let model = model.with_kernel(Kernel::Avx2);
-        let stencil = model.stencil().expect("a lattice");
-        let dynamics = model.dynamics(true);
-        let mut fused = state.clone();
-        let mut scratch = SmallScratch::default();
-        scratch.load(stencil, &fused.x, &fused.v);
-        // SAFETY: AVX2 is available (checked above); `load` sized the arrays.
-        unsafe { fused_steps_avx2(stencil, &mut scratch, &dynamics, 1e-4, 40) };
-        scratch.store(&mut fused.x, &mut fused.v);
-        let mut single = state.clone();
-        let mut work = Workspace::new();
-        for _ in 0..40 {
-            Method::SemiImplicitEuler.step(&model, &mut single, 1e-4, &params, &mut work);
-        }
-        assert_ne!(bits(&single.x), bits(&state.x), "{name}: moved");
-        assert_eq!(bits(&fused.x), bits(&single.x), "{name}: positions");
-        assert_eq!(bits(&fused.v), bits(&single.v), "{name}: velocities");
-    }
-}
-
 #[test]
 fn large_lattices_and_colliders_are_left_to_the_single_steps() {
     let (jelly, mut state) = setup(Workload::JellySe);
