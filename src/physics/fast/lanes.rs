@@ -391,6 +391,30 @@ impl Lanes for Avx512 {
 pub(crate) struct Avx2([std::arch::x86_64::__m256d; 2]);
 
 #[cfg(target_arch = "x86_64")]
+impl Avx2 {
+    /// The lanes whose bit is set in `mask` (bit `4h + l` is lane `l` of half `h`) as all-ones
+    /// lanes of two registers, zero elsewhere.
+    #[inline(always)]
+    fn masks(mask: u8) -> [std::arch::x86_64::__m256d; 2] {
+        use std::arch::x86_64::{
+            _mm256_and_si256, _mm256_castsi256_pd, _mm256_cmpeq_epi64, _mm256_set1_epi64x,
+            _mm256_setr_epi64x,
+        };
+        // SAFETY: AVX2, see the type's docs: (mask & bit) == bit gives all-ones lanes there.
+        // Written without a closure, which would not be inlined (nor its intrinsics).
+        unsafe {
+            let bits = _mm256_set1_epi64x(i64::from(mask));
+            let low = _mm256_setr_epi64x(1, 2, 4, 8);
+            let high = _mm256_setr_epi64x(16, 32, 64, 128);
+            [
+                _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(bits, low), low)),
+                _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(bits, high), high)),
+            ]
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
 impl Lanes for Avx2 {
     #[inline(always)]
     fn zero() -> Avx2 {
@@ -484,21 +508,28 @@ impl Lanes for Avx2 {
     }
     #[inline(always)]
     fn select(self, mask: u8) -> Avx2 {
-        use std::arch::x86_64::{
-            _mm256_and_pd, _mm256_and_si256, _mm256_castsi256_pd, _mm256_cmpeq_epi64,
-            _mm256_set1_epi64x, _mm256_setr_epi64x,
-        };
-        // SAFETY: AVX2, see the type's docs. Lane l of half h keeps its value when bit 4h + l
-        // of the mask is set: (mask & bit) == bit gives all-ones lanes there.
+        use std::arch::x86_64::_mm256_and_pd;
+        let keep = Avx2::masks(mask);
+        // SAFETY: AVX2, see the type's docs: `and` keeps the lanes of `keep`.
         unsafe {
-            let bits = _mm256_set1_epi64x(i64::from(mask));
-            let keep = |lo: i64| {
-                let b = _mm256_setr_epi64x(lo, lo << 1, lo << 2, lo << 3);
-                _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(bits, b), b))
-            };
             Avx2([
-                _mm256_and_pd(self.0[0], keep(1)),
-                _mm256_and_pd(self.0[1], keep(16)),
+                _mm256_and_pd(self.0[0], keep[0]),
+                _mm256_and_pd(self.0[1], keep[1]),
+            ])
+        }
+    }
+    #[inline(always)]
+    fn blend(self, other: Avx2, mask: u8) -> Avx2 {
+        use std::arch::x86_64::_mm256_blendv_pd;
+        let take = Avx2::masks(mask);
+        // SAFETY: AVX2, see the type's docs. `blendv` takes its second operand where the
+        // mask's sign bit is set (all-ones lanes), the first elsewhere: no arithmetic, the
+        // same bits as the default's copy lane by lane, without its round trip through memory
+        // (eight scalar stores, then a vector load that cannot take them from the store queue).
+        unsafe {
+            Avx2([
+                _mm256_blendv_pd(other.0[0], self.0[0], take[0]),
+                _mm256_blendv_pd(other.0[1], self.0[1], take[1]),
             ])
         }
     }
