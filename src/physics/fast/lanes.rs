@@ -391,6 +391,30 @@ impl Lanes for Avx512 {
 pub(crate) struct Avx2([std::arch::x86_64::__m256d; 2]);
 
 #[cfg(target_arch = "x86_64")]
+impl Avx2 {
+    /// The lanes whose bit is set in `mask` (bit `4h + l` is lane `l` of half `h`) as all-ones
+    /// lanes of two registers, zero elsewhere.
+    #[inline(always)]
+    fn masks(mask: u8) -> [std::arch::x86_64::__m256d; 2] {
+        use std::arch::x86_64::{
+            _mm256_and_si256, _mm256_castsi256_pd, _mm256_cmpeq_epi64, _mm256_set1_epi64x,
+            _mm256_setr_epi64x,
+        };
+        // SAFETY: AVX2, see the type's docs: (mask & bit) == bit gives all-ones lanes there.
+        // Written without a closure, which would not be inlined (nor its intrinsics).
+        unsafe {
+            let bits = _mm256_set1_epi64x(i64::from(mask));
+            let low = _mm256_setr_epi64x(1, 2, 4, 8);
+            let high = _mm256_setr_epi64x(16, 32, 64, 128);
+            [
+                _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(bits, low), low)),
+                _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(bits, high), high)),
+            ]
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
 impl Lanes for Avx2 {
     #[inline(always)]
     fn zero() -> Avx2 {
@@ -460,10 +484,9 @@ impl Lanes for Avx2 {
     }
     #[inline(always)]
     fn clear_below(self, k: usize) -> Avx2 {
-        let mut values = [0.0; LANES];
-        self.store(&mut values);
-        values[..k.min(LANES)].fill(0.0);
-        Avx2::load(&values)
+        // Keep lanes k.. : bit l of the mask is lane l (zeros are +0.0, as the default's).
+        let keep = (0xFF_u32 << k.min(LANES)) as u8;
+        self.select(keep)
     }
     #[inline(always)]
     fn sqrt(self) -> Avx2 {
@@ -484,22 +507,74 @@ impl Lanes for Avx2 {
     }
     #[inline(always)]
     fn select(self, mask: u8) -> Avx2 {
-        use std::arch::x86_64::{
-            _mm256_and_pd, _mm256_and_si256, _mm256_castsi256_pd, _mm256_cmpeq_epi64,
-            _mm256_set1_epi64x, _mm256_setr_epi64x,
-        };
-        // SAFETY: AVX2, see the type's docs. Lane l of half h keeps its value when bit 4h + l
-        // of the mask is set: (mask & bit) == bit gives all-ones lanes there.
+        use std::arch::x86_64::_mm256_and_pd;
+        let keep = Avx2::masks(mask);
+        // SAFETY: AVX2, see the type's docs: `and` keeps the lanes of `keep`.
         unsafe {
-            let bits = _mm256_set1_epi64x(i64::from(mask));
-            let keep = |lo: i64| {
-                let b = _mm256_setr_epi64x(lo, lo << 1, lo << 2, lo << 3);
-                _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(bits, b), b))
-            };
             Avx2([
-                _mm256_and_pd(self.0[0], keep(1)),
-                _mm256_and_pd(self.0[1], keep(16)),
+                _mm256_and_pd(self.0[0], keep[0]),
+                _mm256_and_pd(self.0[1], keep[1]),
             ])
+        }
+    }
+    #[inline(always)]
+    fn blend(self, other: Avx2, mask: u8) -> Avx2 {
+        use std::arch::x86_64::_mm256_blendv_pd;
+        let take = Avx2::masks(mask);
+        // SAFETY: AVX2, see the type's docs. `blendv` takes its second operand where the
+        // mask's sign bit is set (all-ones lanes), the first elsewhere: no arithmetic, the
+        // same bits as the default's copy lane by lane, without its round trip through memory
+        // (eight scalar stores, then a vector load that cannot take them from the store queue).
+        unsafe {
+            Avx2([
+                _mm256_blendv_pd(other.0[0], self.0[0], take[0]),
+                _mm256_blendv_pd(other.0[1], self.0[1], take[1]),
+            ])
+        }
+    }
+    #[inline(always)]
+    fn load_vectors(vectors: &[DVec3; LANES]) -> [Avx2; 3] {
+        use std::arch::x86_64::{_mm256_loadu_pd, _mm256_permute2f128_pd, _mm256_shuffle_pd};
+        // SAFETY: AVX2, see the type's docs; `vectors` is 24 contiguous f64 (`DVec3` is
+        // `repr(C)` with three f64), six unaligned 256-bit loads.
+        unsafe {
+            let p = vectors.as_ptr().cast::<f64>();
+            let mut lanes = [[_mm256_loadu_pd(p); 2]; 3];
+            for h in 0..2 {
+                // Four vectors: a = x0 y0 z0 x1, b = y1 z1 x2 y2, c = z2 x3 y3 z3.
+                let a = _mm256_loadu_pd(p.add(12 * h));
+                let b = _mm256_loadu_pd(p.add(12 * h + 4));
+                let c = _mm256_loadu_pd(p.add(12 * h + 8));
+                // Halves: ab = x0 y0 | x2 y2, ac = z0 x1 | z2 x3, bc = y1 z1 | y3 z3; then
+                // one value of each pair (bit i of the shuffle: which of pair i).
+                let ab = _mm256_permute2f128_pd::<0x30>(a, b);
+                let ac = _mm256_permute2f128_pd::<0x21>(a, c);
+                let bc = _mm256_permute2f128_pd::<0x30>(b, c);
+                lanes[0][h] = _mm256_shuffle_pd::<0b1010>(ab, ac);
+                lanes[1][h] = _mm256_shuffle_pd::<0b0101>(ab, bc);
+                lanes[2][h] = _mm256_shuffle_pd::<0b1010>(ac, bc);
+            }
+            [Avx2(lanes[0]), Avx2(lanes[1]), Avx2(lanes[2])]
+        }
+    }
+    #[inline(always)]
+    fn store_vectors(lanes: [Avx2; 3], vectors: &mut [DVec3; LANES]) {
+        use std::arch::x86_64::{_mm256_permute2f128_pd, _mm256_shuffle_pd, _mm256_storeu_pd};
+        // SAFETY: AVX2, see the type's docs; `vectors` is 24 contiguous f64, six unaligned
+        // 256-bit stores.
+        unsafe {
+            let p = vectors.as_mut_ptr().cast::<f64>();
+            for h in 0..2 {
+                let (x, y, z) = (lanes[0].0[h], lanes[1].0[h], lanes[2].0[h]);
+                // The inverse of `load_vectors`: ab = x0 y0 | x2 y2, ac = z0 x1 | z2 x3,
+                // bc = y1 z1 | y3 z3, then a = x0 y0 z0 x1, b = y1 z1 x2 y2, c = z2 x3 y3 z3.
+                let ab = _mm256_shuffle_pd::<0b0000>(x, y);
+                let ac = _mm256_shuffle_pd::<0b1010>(z, x);
+                let bc = _mm256_shuffle_pd::<0b1111>(y, z);
+                _mm256_storeu_pd(p.add(12 * h), _mm256_permute2f128_pd::<0x20>(ab, ac));
+                _mm256_storeu_pd(p.add(12 * h + 4), _mm256_permute2f128_pd::<0x30>(bc, ab));
+                _mm256_storeu_pd(p.add(12 * h + 8), _mm256_permute2f128_pd::<0x31>(ac, bc));
+            }
         }
     }
     #[inline(always)]
@@ -538,5 +613,76 @@ impl Lanes for Avx2 {
                 _mm256_and_pd(self.0[1], keep[1]),
             ])
         }
+    }
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use super::*;
+
+    /// The AVX2 transposes and lane operations move values without changing a bit: the same as
+    /// the portable lanes (distinct values, negative zero, NaN payloads, infinities).
+    #[test]
+    fn the_avx2_transposes_and_masks_move_every_bit_as_the_plain_lanes() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        #[target_feature(enable = "avx2")]
+        fn check() {
+            let special = [-0.0, f64::from_bits(0x7ff8_0000_0000_1234), f64::INFINITY];
+            let vectors: [DVec3; LANES] = std::array::from_fn(|i| {
+                let v = |c: usize| {
+                    special
+                        .get(3 * i + c)
+                        .copied()
+                        .unwrap_or((10 * i + c) as f64 + 0.5)
+                };
+                DVec3::new(v(0), v(1), v(2))
+            });
+            let bits = |lanes: [[f64; LANES]; 3]| lanes.map(|c| c.map(f64::to_bits));
+            let out = |l: [Avx2; 3]| {
+                let mut a = [[0.0; LANES]; 3];
+                for (c, lane) in l.into_iter().enumerate() {
+                    lane.store(&mut a[c]);
+                }
+                a
+            };
+            let plain = to_lanes::<Plain>(&vectors).map(|l| l.0);
+            assert_eq!(bits(out(Avx2::load_vectors(&vectors))), bits(plain));
+            let mut back = [DVec3::ZERO; LANES];
+            Avx2::store_vectors(Avx2::load_vectors(&vectors), &mut back);
+            let flat = |v: &[DVec3; LANES]| v.map(|p| p.to_array().map(f64::to_bits));
+            assert_eq!(flat(&back), flat(&vectors));
+            let x = Avx2::load(&plain[0]);
+            let y = Avx2::load(&plain[1]);
+            for mask in [0u8, 1, 0b1010_0101, 0x80, 0xFF] {
+                let mut got = [0.0; LANES];
+                x.blend(y, mask).store(&mut got);
+                let expected: [f64; LANES] = std::array::from_fn(|l| {
+                    if mask & (1 << l) != 0 {
+                        plain[0][l]
+                    } else {
+                        plain[1][l]
+                    }
+                });
+                assert_eq!(
+                    got.map(f64::to_bits),
+                    expected.map(f64::to_bits),
+                    "blend {mask:b}"
+                );
+            }
+            for k in 0..=LANES {
+                let mut got = [0.0; LANES];
+                x.clear_below(k).store(&mut got);
+                let expected = Plain(plain[0]).clear_below(k).0;
+                assert_eq!(
+                    got.map(f64::to_bits),
+                    expected.map(f64::to_bits),
+                    "clear_below {k}"
+                );
+            }
+        }
+        // SAFETY: AVX2 is available (checked above).
+        unsafe { check() }
     }
 }
