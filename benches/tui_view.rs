@@ -1,7 +1,7 @@
 //! Drawing and encoding one frame of the lesson app's scene pane, per view, at 120 × 40 cells
 //! (8 × 16-pixel cells): lesson 6, step 2 (the cloth with four spheres) after 1.5 s.
 //!
-//! `cargo bench --bench tui_view`. Each case is what one frame costs:
+//! `cargo bench -p springlab-benches --bench tui_view`. Each case is what one frame costs:
 //! - `braille`: the line drawing into the cell buffer;
 //! - `halfblocks-24bit`, `halfblocks-256`: the rasteriser at 2 pixels a cell and the cells;
 //! - `sixel`, `kitty`, `iterm2`: the rasteriser at the pane's pixel size, the conversion to an

@@ -395,7 +395,7 @@ pub const ENTRIES: &[Entry] = &[
             "0.003", "0.005", "0.007", "0.010", "0.004", "0.24", "0.53", "0.40", "0.52", "1.10",
             "1.00", "0.73", "1.86", "1.50",
         ],
-        "timing: CPU seconds per simulated second printed by `cargo bench --bench homework_live`, and the load average while it ran",
+        "timing: CPU seconds per simulated second printed by `cargo bench -p springlab-benches --bench homework_live`, and the load average while it ran",
     ),
     // docs/implicit-euler.md: why the solve is built as it is.
     (
@@ -485,7 +485,7 @@ pub const ENTRIES: &[Entry] = &[
     (
         "docs/lesson-app.md",
         &["16", "5.8", "8.1", "5.0", "7.1", "2.8", "3.3"],
-        "timing: criterion medians of `cargo bench --bench tui_view`",
+        "timing: criterion medians of `cargo bench -p springlab-benches --bench tui_view`",
     ),
     (
         "docs/lesson-app.md",
