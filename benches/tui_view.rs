@@ -5,7 +5,7 @@
 //! - `braille`: the line drawing into the cell buffer;
 //! - `halfblocks-24bit`, `halfblocks-256`: the rasteriser at 2 pixels a cell and the cells;
 //! - `sixel`, `kitty`, `iterm2`: the rasteriser at the pane's pixel size, the conversion to an
-//!   `image` buffer and the protocol's encoding (done on the encoder thread in the app);
+//!   RGBA image and the protocol's encoding (done on the encoder thread in the app);
 //! - `app-halfblocks`: the whole lesson screen (text, plots, status, the half-block pane), what
 //!   the UI thread draws each frame.
 
