@@ -489,6 +489,11 @@ pub const ENTRIES: &[Entry] = &[
     ),
     (
         "docs/lesson-app.md",
+        &["560", "320", "7.9", "13.3"],
+        "timing: criterion medians of the sixel encoding alone (springlab's writer and icy_sixel 0.5 without diffusion) on the frame of `cargo bench -p springlab-benches --bench tui_view`, one run; 560 × 320 is its 70 × 20 cells of 8 × 16 pixels",
+    ),
+    (
+        "docs/lesson-app.md",
         &["4096"],
         "code src/tui/lesson_run.rs `pub const DEFAULT_MAX_STEPS_PER_FRAME: u64 = 4096;`",
     ),
