@@ -20,7 +20,7 @@
 //! beside it (run free, on an otherwise idle machine: below 1 s keeps up with the lesson). dt is 1/64 s for the ropes (64 steps
 //! per simulated second) and 1 ms for the jelly (1000).
 //!
-//! `cargo bench --bench homework_live -- --warm-up-time 1 --measurement-time 3 jelly`.
+//! `cargo bench -p springlab-benches --bench homework_live -- --warm-up-time 1 --measurement-time 3 jelly`.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -2,7 +2,7 @@
 //! springs, dt = 1e-4 s) and on the 128×128 cloth (`cloth128-se`'s: 16 384 particles, 97 026
 //! springs, dt = 2.5e-5 s), each with the workload's contact rule (see `docs/workloads.md`).
 //!
-//! `cargo bench --bench methods` (or `-- jelly` for one workload). The workload's own method
+//! `cargo bench -p springlab-benches --bench methods` (or `-- jelly` for one workload). The workload's own method
 //! runs with its own parameters; the other methods as `springlab bench` times them
 //! ([`Run::with_method`]: Verlet without projection, XPBD with its default substeps). Compare
 //! the methods within one run (ratios), not across runs: the machine is shared.

@@ -1,6 +1,6 @@
 //! Drawing one 640×480 frame of a cloth-spheres-like and a jelly-bowl-like scene.
 //!
-//! `cargo bench --bench render`. Frames per second = 1 / the median time. The scenes are built
+//! `cargo bench -p springlab-benches --bench render`. Frames per second = 1 / the median time. The scenes are built
 //! from the lattice builders and collider constructors (`tests/common/render_scenes.rs`) and
 //! simulated for a while first, so the cloth is draped over the spheres and the jelly is in the
 //! bowl; only the drawing is timed (not the PNG encoding, which runs on its own thread).

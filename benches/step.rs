@@ -1,6 +1,6 @@
 //! One step of every method on the oscillator and on ropes of 3 and 64 nodes.
 //!
-//! `cargo bench --bench step`. Compare methods within one run (ratios), not across runs: the
+//! `cargo bench -p springlab-benches --bench step`. Compare methods within one run (ratios), not across runs: the
 //! machine is shared.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};

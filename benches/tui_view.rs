@@ -1,11 +1,11 @@
 //! Drawing and encoding one frame of the lesson app's scene pane, per view, at 120 × 40 cells
 //! (8 × 16-pixel cells): lesson 6, step 2 (the cloth with four spheres) after 1.5 s.
 //!
-//! `cargo bench --bench tui_view`. Each case is what one frame costs:
+//! `cargo bench -p springlab-benches --bench tui_view`. Each case is what one frame costs:
 //! - `braille`: the line drawing into the cell buffer;
 //! - `halfblocks-24bit`, `halfblocks-256`: the rasteriser at 2 pixels a cell and the cells;
 //! - `sixel`, `kitty`, `iterm2`: the rasteriser at the pane's pixel size, the conversion to an
-//!   `image` buffer and the protocol's encoding (done on the encoder thread in the app);
+//!   RGBA image and the protocol's encoding (done on the encoder thread in the app);
 //! - `app-halfblocks`: the whole lesson screen (text, plots, status, the half-block pane), what
 //!   the UI thread draws each frame.
 

@@ -4,7 +4,7 @@
 //!
 //! Also the spring kernels' ceiling on data in the first-level cache (`kernel_ceiling`).
 //!
-//! Run with `cargo bench --bench workloads`.
+//! Run with `cargo bench -p springlab-benches --bench workloads`.
 
 use std::hint::black_box;
 

@@ -4,7 +4,7 @@
 //! ```text
 //! UI thread:  scene + camera ──PaneRenderer──▶ Pixmap ──halfblocks──▶ cells          (half-blocks)
 //!             scene + camera ──Job (channel)──▶ encoder thread                          (raster)
-//! encoder:    PaneRenderer ──▶ Pixmap ──▶ image::RgbaImage ──ratatui-image──▶ sixel / kitty / iTerm2
+//! encoder:    PaneRenderer ──▶ Pixmap ──▶ RgbaImage ──▶ sixel / kitty / iTerm2 (encoded, sixel)
 //!             ──Frame (channel)──▶ UI thread: drawn into the pane as one escape sequence
 //! ```
 //! A job may carry the plots as a picture ([`super::plots::picture`]): the encoder draws and
@@ -18,15 +18,7 @@
 use std::sync::mpsc::{Receiver, SyncSender, TryRecvError, sync_channel};
 use std::time::{Duration, Instant};
 
-use image::{DynamicImage, RgbaImage};
-use ratatui::buffer::Buffer;
 use ratatui::layout::{Rect, Size};
-use ratatui::widgets::Widget;
-use ratatui_image::Image;
-use ratatui_image::protocol::Protocol as Encoded;
-use ratatui_image::protocol::iterm2::Iterm2;
-use ratatui_image::protocol::kitty::Kitty;
-use ratatui_image::protocol::sixel::Sixel;
 use tiny_skia::Pixmap;
 
 use super::graphics::{Graphics, Protocol};
@@ -35,6 +27,13 @@ use super::plots::picture::Picture;
 use crate::physics::SpringKind;
 use crate::render::{Camera, KindToggles, MAX_SIDE, Renderer, Style};
 use crate::scene::Scene;
+
+mod encoded;
+mod image;
+pub mod sixel;
+
+pub use encoded::{Encoded, Kitty, Sequence, base64_append, show};
+pub use image::RgbaImage;
 
 /// Time the encoder may spend on one frame (draw + encode) before it lowers the resolution: a
 /// thirtieth of a second, the rate the app sends frames at while the simulation runs.
@@ -135,13 +134,13 @@ impl PaneRenderer {
     }
 }
 
-/// `pixmap` (premultiplied RGBA, opaque background) as an `image` buffer with straight alpha.
+/// `pixmap` (premultiplied RGBA, opaque background) as an image with straight alpha.
 #[must_use]
 pub fn to_image(pixmap: &Pixmap) -> RgbaImage {
     let mut out = RgbaImage::new(pixmap.width(), pixmap.height());
-    for (dst, src) in out.pixels_mut().zip(pixmap.pixels()) {
+    for (dst, src) in out.as_raw_mut().chunks_exact_mut(4).zip(pixmap.pixels()) {
         let c = src.demultiply();
-        dst.0 = [c.red(), c.green(), c.blue(), c.alpha()];
+        dst.copy_from_slice(&[c.red(), c.green(), c.blue(), c.alpha()]);
     }
     out
 }
@@ -167,42 +166,28 @@ fn encode_as(
     tmux_wrap: bool,
     id: u32,
 ) -> Result<Encoded, String> {
+    if image.width() == 0 || image.height() == 0 {
+        return Err(format!(
+            "cannot encode an empty image ({} × {} pixels)",
+            image.width(),
+            image.height()
+        ));
+    }
     match protocol {
-        Protocol::Sixel => sixel(&image, cells, tmux_wrap).map(|data| {
-            Encoded::Sixel(Sixel {
-                data,
-                size: cells,
-                is_tmux: tmux_wrap,
-            })
-        }),
-        Protocol::Kitty => Kitty::new(DynamicImage::ImageRgba8(image), cells, id, tmux_wrap, false)
-            .map(Encoded::Kitty)
-            .map_err(|e| e.to_string()),
-        Protocol::Iterm2 => Iterm2::new(DynamicImage::ImageRgba8(image), cells, tmux_wrap)
-            .map(Encoded::ITerm2)
-            .map_err(|e| e.to_string()),
+        Protocol::Sixel => Ok(Encoded::Sixel(Sequence {
+            data: sixel_sequence(&image, cells, tmux_wrap),
+            size: cells,
+        })),
+        Protocol::Kitty => Ok(Encoded::Kitty(encoded::kitty(&image, cells, id, tmux_wrap))),
+        Protocol::Iterm2 => encoded::iterm2(&image, cells, tmux_wrap).map(Encoded::Iterm2),
     }
 }
 
-/// `image` as a sixel sequence for `cells`, preceded by erasing those cells (so that nothing of
-/// the text under the image shows where it is transparent), wrapped for tmux when asked.
-///
-/// icy_sixel quantises the colours to 256 (Wu's method) without error diffusion: the frames are
-/// flat-shaded drawings, for which dithering only adds noise, and it halves both the encoding
-/// time and the size of the sequence (measured: 7 ms and 27 kB instead of 15 ms and 70 kB for
-/// the cloth of lesson 6 at 560 × 320 pixels).
-fn sixel(image: &RgbaImage, cells: Size, tmux_wrap: bool) -> Result<String, String> {
-    let options = icy_sixel::EncodeOptions {
-        diffusion: 0.0,
-        ..icy_sixel::EncodeOptions::default()
-    };
-    let encoded = icy_sixel::sixel_encode(
-        image.as_raw(),
-        image.width() as usize,
-        image.height() as usize,
-        &options,
-    )
-    .map_err(|e| format!("sixel encoding: {e}"))?;
+/// `image` as a sixel sequence for `cells` ([`sixel::encode`]), preceded by erasing those cells
+/// (so that nothing of the text under the image shows where it is transparent), wrapped for
+/// tmux when asked.
+fn sixel_sequence(image: &RgbaImage, cells: Size, tmux_wrap: bool) -> String {
+    let encoded = sixel::encode(image);
     let mut data = String::with_capacity(encoded.len() + 16 * usize::from(cells.height));
     // ECH (erase w characters), then down a line; back up at the end.
     for _ in 0..cells.height {
@@ -210,7 +195,7 @@ fn sixel(image: &RgbaImage, cells: Size, tmux_wrap: bool) -> Result<String, Stri
     }
     data.push_str(&format!("\x1b[{}A", cells.height));
     data.push_str(&encoded);
-    Ok(super::graphics::wrap(&data, tmux_wrap))
+    super::graphics::wrap(&data, tmux_wrap)
 }
 
 /// The kitty command that deletes the pane's image and frees its memory in the terminal (sent
@@ -225,11 +210,6 @@ pub fn kitty_delete(tmux_wrap: bool) -> String {
         ));
     }
     out
-}
-
-/// Draws an encoded frame into `area` (its top-left corner; the frame covers its own cells).
-pub fn show(frame: &Encoded, area: Rect, buf: &mut Buffer) {
-    Image::new(frame).allow_clipping(true).render(area, buf);
 }
 
 /// One frame to draw and encode.
@@ -476,8 +456,7 @@ fn encode_job(
     );
     let mut image = to_image(&pixmap);
     if size != full {
-        image =
-            image::imageops::resize(&image, full.0, full.1, image::imageops::FilterType::Nearest);
+        image = image.resize_nearest(full.0, full.1);
     }
     let encoded = encode(image, protocol, job.cells, job.graphics.tmux_wrap)?;
     Ok((encoded, scale))

@@ -10,7 +10,7 @@
 //! took (s). A pass over a lattice does more (the window's copy, the second ends' forces through
 //! the rings, the update and its stores, the caches below the first), so its springs·steps/s
 //! divided by this rate and by the threads is the fraction of the machine it uses.
-//! `springlab bench` prints it; `cargo bench --bench workloads` times [`Rope::evaluate`].
+//! `springlab bench` prints it; `cargo bench -p springlab-benches --bench workloads` times [`Rope::evaluate`].
 
 use std::time::Instant;
 
