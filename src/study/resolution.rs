@@ -377,18 +377,15 @@ pub fn resolution(
     let base = planned
         .iter()
         .position(|p| p.n == refinement.base && p.kinds == Kinds::All);
-    // Each run steps on its own thread alone (`pool::alone`, the same bits): the runs keep
-    // every core busy, and a pool worker woken for one run's passes (spinning after each)
-    // would only take time from the run beside it; the finest level, about half of the work,
-    // starts first on one core while the others follow one another on the rest.
-    let job = |i: usize| {
-        crate::physics::pool::alone(|| match planned.get(i) {
-            Some(p) => observe::measure(&p.scene, options.method, p.dt, p.steps),
-            None => {
-                let p = &planned[base.unwrap_or_default()];
-                observe::measure(&p.scene, options.method, p.dt / 2.0, p.steps * 2)
-            }
-        })
+    // Each run steps on its own thread alone (`pool::independent`): the finest level, about
+    // half of the work, starts first on one core while the others follow one another on the
+    // rest.
+    let job = |i: usize| match planned.get(i) {
+        Some(p) => observe::measure(&p.scene, options.method, p.dt, p.steps),
+        None => {
+            let p = &planned[base.unwrap_or_default()];
+            observe::measure(&p.scene, options.method, p.dt / 2.0, p.steps * 2)
+        }
     };
     let weight = |i: usize| match planned.get(i) {
         Some(p) => weight_of(p),

@@ -419,10 +419,8 @@ pub fn stability_with(
     // starts that cannot be split) is one more job beside them, started first: only the
     // report needs it.
     let count = options.methods.len();
-    // Each job steps its simulations on its own thread alone (`pool::alone`, the same bits):
-    // the jobs and their helpers already keep every core busy, and a pool worker woken for a
-    // job's small passes (and spinning after each) would only take time from another job.
-    let job_alone = |i: usize| {
+    // Each job steps its simulations on its own thread alone (`pool::independent`).
+    let job = |i: usize| {
         context.busy.fetch_add(1, Ordering::SeqCst);
         let _done = Leave(&context.busy);
         let Some(&m) = options.methods.get(i) else {
@@ -437,7 +435,6 @@ pub fn stability_with(
         limit.equilibrium_theory = at_equilibrium;
         Job::Method(Box::new(limit))
     };
-    let job = |i: usize| crate::physics::pool::alone(|| job_alone(i));
     let threads = context.threads;
     // Longest first, so that no long search starts last (the order changes no result): the
     // work of a step, times, with the usable dt searched, its steps: the energy error of an

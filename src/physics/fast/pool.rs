@@ -258,8 +258,9 @@ pub fn alone<R>(f: impl FnOnce() -> R) -> R {
 /// start last), each job taken from a shared counter by the next free thread. A job's result
 /// depends only on its index, never on the thread that runs it, so the results are the same
 /// bit for bit for any `threads`; with one thread the jobs run on the caller in index order.
-/// A job that steps a simulation may still use [`Pool::global`]: the first to ask gets its
-/// workers, the others run their parts themselves ([`Pool::run`]).
+/// With more than one thread each job steps on its thread [`alone`] (the same bits): the jobs
+/// already keep the cores busy, and a pool worker woken for one job's small passes, spinning
+/// after each, would only take time from the job beside it.
 ///
 /// Reference: R. L. Graham, "Bounds on multiprocessing timing anomalies", *SIAM J. Appl.
 /// Math.* 17 (1969) 416–429 (largest processing time first).
@@ -295,7 +296,8 @@ pub fn independent<R: Send>(
                 loop {
                     let k = next.fetch_add(1, Ordering::Relaxed);
                     let Some(&i) = order.get(k) else { break };
-                    if tx.send((i, None)).is_err() || tx.send((i, Some(job(i)))).is_err() {
+                    if tx.send((i, None)).is_err() || tx.send((i, Some(alone(|| job(i))))).is_err()
+                    {
                         break;
                     }
                 }
