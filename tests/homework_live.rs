@@ -18,11 +18,12 @@ use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 use springlab::grade::Assignment;
 use springlab::grade::build::Builder;
 use springlab::grade::live::{
-    BuildOptions, Frame, Live, LiveOptions, Quantity, Reload, Setup, Watcher, build_homework,
-    builder,
+    BuildOptions, Frame, Homework, Live, LiveOptions, Quantity, Reload, Setup, Watcher,
+    build_homework, builder,
 };
 use springlab::lesson::{self, Lesson};
 use springlab::physics::Method;
+use springlab::simulation::Simulation;
 use springlab::tui::{App, Screen, Theme};
 
 const ROPE: &str = include_str!("homework/rope.rs");
@@ -602,4 +603,108 @@ fn implicit_euler_on_the_thousand_particle_jelly_is_refused_with_its_reason() {
         .next_frame(Duration::from_secs(60))
         .expect("the reference goes on");
     assert_eq!((first.step, second.step), (1, 2));
+}
+
+/// Every frame of `setup`'s comparison run beside `lesson`, a simulation of the same step that
+/// hands its steps over as the app's lesson run does, in rounds of `round` steps (the lesson
+/// ahead, then the comparison catching up); the steps the reference took from it and whether
+/// the hand-over was still on at the end, and the lesson's simulation.
+fn beside_the_lesson(
+    homework: Homework,
+    setup: Setup,
+    mut lesson: Simulation,
+    round: u64,
+) -> (Vec<Frame>, u64, bool, Simulation) {
+    let horizon = setup.horizon;
+    let live = Live::start(homework, setup, LiveOptions::default());
+    let handover = live.handover().expect("a lattice with an explicit method hands over");
+    let mut frames = Vec::new();
+    while lesson.steps < horizon {
+        for _ in 0..round.min(horizon - lesson.steps) {
+            assert!(lesson.step().is_none(), "the lesson's body stays finite");
+            handover.offer(&lesson, 1);
+        }
+        live.advance_to(lesson.steps);
+        loop {
+            let f = live
+                .next_frame(Duration::from_secs(60))
+                .expect("a frame within a minute");
+            let done = f.step >= lesson.steps;
+            frames.push(f);
+            if done {
+                break;
+            }
+        }
+    }
+    (frames, handover.taken(), handover.is_on(), lesson)
+}
+
+/// Lesson 5's step `step` with `method`: its comparison over `steps` steps and the lesson's
+/// own simulation of it.
+fn jelly_step(step: usize, method: Method, steps: u64) -> (Setup, Simulation) {
+    let mut scene = lesson(5).steps[step - 1].build_scene().expect("scene");
+    scene.set_method(method);
+    let mut setup = Setup::from_scene(Assignment::Jelly, 5, &scene, 0.0).expect("setup");
+    setup.horizon = steps;
+    (setup, Simulation::new(scene))
+}
+
+#[test]
+fn the_reference_takes_the_lessons_own_steps_with_the_same_bits_and_refuses_an_edited_lesson() {
+    // The reference stepping alone and the reference taking the lesson's steps give the same
+    // frames bit for bit (positions, distances, energies, parting): for each explicit method
+    // on the 1000-particle jelly, and through contacts on the cube on its plane.
+    let cases = [
+        (5, Method::ExplicitEuler, 64),
+        (5, Method::Midpoint, 64),
+        (5, Method::Rk4, 64),
+        (2, Method::Rk4, 1500),
+    ];
+    for (step, method, steps) in cases {
+        let (setup, lesson) = jelly_step(step, method, steps);
+        let own = Homework::reference(Assignment::Jelly);
+        let alone = Live::start(own.clone(), setup.clone(), LiveOptions::default());
+        alone.run_free();
+        let mut want = Vec::new();
+        while let Some(f) = alone.next_frame(Duration::from_secs(60)) {
+            let done = f.finished;
+            want.push(Frame {
+                finished: false,
+                ..f
+            });
+            if done {
+                break;
+            }
+        }
+        let (got, taken, on, lesson) = beside_the_lesson(own, setup, lesson, 16);
+        let name = format!("lesson 5 step {step}, {}", method.declaration().name);
+        assert!(on, "{name}: the hand-over is still on");
+        // All but the first steps, computed both ways before the lesson's are trusted.
+        assert!(taken + 16 >= steps, "{name}: {taken} of {steps} steps taken");
+        let last = want.last().expect("frames").clone();
+        assert_eq!(got.last(), Some(&last), "{name}: the last frame");
+        for f in &got {
+            let same = want.iter().find(|w| w.step == f.step).expect("a frame there");
+            assert_eq!(f, same, "{name}: frame of step {}", f.step);
+        }
+        if step == 2 {
+            // The cube reached its plane: the collision response acted on the lesson's body.
+            let contacts = lesson.dissipated().contacts;
+            assert!(contacts != 0.0, "{name}: a contact happened ({contacts} J)");
+        }
+    }
+
+    // An edited lesson (stiffer springs) is not the reference's body: found in the first
+    // steps, the hand-over ends and the reference steps alone (no parting from itself).
+    let (setup, mut lesson) = jelly_step(5, Method::Rk4, 32);
+    for body in &mut lesson.scene.bodies {
+        body.model.update_springs(|s| s.stiffness *= 1.5);
+    }
+    let (frames, taken, on, _) =
+        beside_the_lesson(Homework::reference(Assignment::Jelly), setup, lesson, 16);
+    assert!(!on, "the hand-over ended");
+    assert_eq!(taken, 0);
+    let last = frames.last().expect("frames");
+    assert_eq!(last.parting, None, "{last:?}");
+    assert_eq!(last.distance, 0.0);
 }

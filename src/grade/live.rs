@@ -30,8 +30,9 @@
 //! the method and the step, and the reference keeps going.
 //!
 //! Files: this one holds the set-up and the worker; `live/body.rs` steps one body and measures
-//! it; `live/build.rs` builds a crate into a [`Remote`], and asks the grader for the method's
-//! hint; `live/watch.rs` rebuilds on every save.
+//! it; `live/handover.rs` hands the lesson's own steps of the body to the reference, which then
+//! does not compute them again; `live/build.rs` builds a crate into a [`Remote`], and asks the
+//! grader for the method's hint; `live/watch.rs` rebuilds on every save.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -49,9 +50,13 @@ use crate::scene::Scene;
 
 mod body;
 mod build;
+mod handover;
+mod reference;
 mod watch;
 
 use body::{Measure, Snapshot, Track};
+use reference::{Steps, reference_steps};
+pub use handover::Handover;
 pub use build::{
     BuildOptions, Built, LazyBuilder, build_homework, builder, first_error, grader_hint,
 };
@@ -449,6 +454,7 @@ pub struct Live {
     shared: Arc<Shared>,
     frames: Receiver<Frame>,
     setup: Setup,
+    handover: Option<Handover>,
 }
 
 impl std::fmt::Debug for Live {
@@ -472,13 +478,16 @@ impl Live {
         let (tx, frames) = mpsc::sync_channel(options.queue.max(1));
         let worker_shared = Arc::clone(&shared);
         let worker_setup = setup.clone();
+        let handover = Handover::for_setup(&setup);
+        let worker_handover = handover.clone();
         let handle = thread::Builder::new()
             .name("homework-live".to_string())
             .spawn(move || {
                 // Both sides' physics on this thread alone: the pool's workers stay with the
                 // lesson's own simulation (pool::alone).
                 physics::pool::alone(|| {
-                    work(&homework, &worker_setup, options, &worker_shared, &tx);
+                    let handover = worker_handover.as_ref();
+                    work(&homework, &worker_setup, options, &worker_shared, &tx, handover);
                 });
             })
             .ok();
@@ -489,7 +498,16 @@ impl Live {
             shared,
             frames,
             setup,
+            handover,
         }
+    }
+
+    /// Where the lesson's simulation hands its steps of the body to the reference
+    /// (`live/handover.rs`), when they can be the reference's: the lesson run calls
+    /// [`Handover::offer`] after each step.
+    #[must_use]
+    pub fn handover(&self) -> Option<Handover> {
+        self.handover.clone()
     }
 
     /// What it compares.
@@ -529,6 +547,9 @@ impl Live {
     /// the student's program is then killed).
     pub fn stop(&self) {
         self.shared.stop.store(true, Ordering::Relaxed);
+        if let Some(h) = &self.handover {
+            h.end();
+        }
         self.wake();
     }
 }
@@ -566,48 +587,6 @@ fn describe_failure(payload: &(dyn std::any::Any + Send), method: &str, step: u6
     format!("your {method}() panicked at step {step}: {why}")
 }
 
-/// The reference's thread: steps springlab's answers beside the worker (on the other core), up
-/// to the app's clock, and hands each step's body over through `steps` (bounded: it waits when
-/// the worker is [`REFERENCE_AHEAD`] steps behind). Ends when the worker stops listening, at
-/// `stop`, or at the horizon.
-fn reference_steps(setup: &Setup, shared: &Shared, horizon: u64, steps: &SyncSender<Snapshot>) {
-    let reference = Homework::reference(setup.assignment);
-    let mut theirs = Track::new(setup, 1);
-    let mut step = 0u64;
-    while step < horizon && !shared.stop.load(Ordering::Relaxed) {
-        if step >= shared.target.load(Ordering::Relaxed) {
-            thread::park_timeout(Duration::from_millis(20));
-            continue;
-        }
-        theirs.step(&reference, setup, 1);
-        step += 1;
-        if steps.send(Snapshot::of(&theirs, setup)).is_err() {
-            break;
-        }
-    }
-}
-
-/// Where the worker takes the reference's steps from.
-enum Steps {
-    /// The reference's thread ([`reference_steps`]).
-    Thread(Receiver<Snapshot>),
-    /// This thread, in turn (no second thread could be started).
-    Here(Box<Track>),
-}
-
-impl Steps {
-    /// The reference body after its next step; `None` when its thread ended.
-    fn next(&mut self, setup: &Setup) -> Option<Snapshot> {
-        match self {
-            Steps::Thread(steps) => steps.recv().ok(),
-            Steps::Here(track) => {
-                track.step(&Homework::reference(setup.assignment), setup, 1);
-                Some(Snapshot::of(track, setup))
-            }
-        }
-    }
-}
-
 /// The worker (module docs): the student's side and the comparison on this thread, the
 /// reference's steps on a thread of their own ([`reference_steps`]), so that the two sides'
 /// physics run on both cores at once; the bodies and every measurement are those of one thread
@@ -618,6 +597,7 @@ fn work(
     options: LiveOptions,
     shared: &Shared,
     tx: &SyncSender<Frame>,
+    handover: Option<&Handover>,
 ) {
     let horizon = if setup.horizon == 0 {
         u64::MAX
@@ -629,7 +609,9 @@ fn work(
         let spawned = thread::Builder::new()
             .name("homework-reference".to_string())
             .spawn_scoped(scope, move || {
-                physics::pool::alone(|| reference_steps(setup, shared, horizon, &steps_tx));
+                physics::pool::alone(|| {
+                    reference_steps(setup, shared, horizon, &steps_tx, handover);
+                });
             });
         let mut steps = match spawned {
             Ok(handle) => {

@@ -138,7 +138,7 @@ impl HomeworkView {
 
     /// Reads the watcher, (re)starts the comparison for the run's step, lets it advance to the
     /// run's step count and keeps its frames.
-    pub fn sync(&mut self, run: &LessonRun) {
+    pub fn sync(&mut self, run: &mut LessonRun) {
         while let Some(report) = self.watcher.as_ref().and_then(Watcher::try_next) {
             self.status = report.status();
             if let Reload::Reloaded(built) = report {
@@ -160,6 +160,7 @@ impl HomeworkView {
             self.restart(run);
             self.key = Some(key);
         }
+        let sim = run.sim();
         if let Some(live) = &self.live {
             live.advance_to(sim.steps);
             for frame in live.drain() {
@@ -179,8 +180,9 @@ impl HomeworkView {
         }
     }
 
-    fn restart(&mut self, run: &LessonRun) {
+    fn restart(&mut self, run: &mut LessonRun) {
         self.live = None;
+        run.set_handover(None);
         self.last = None;
         self.samples.clear();
         let Some(built) = &self.built else { return };
@@ -216,11 +218,11 @@ impl HomeworkView {
                             }
                         });
                 }
-                self.live = Some(Live::start(
-                    built.homework.clone(),
-                    setup,
-                    LiveOptions::default(),
-                ));
+                let live = Live::start(built.homework.clone(), setup, LiveOptions::default());
+                // The lesson's own steps of the body, so that the reference need not take
+                // them again (`grade::live`'s hand-over).
+                run.set_handover(live.handover());
+                self.live = Some(live);
             }
             Err(why) => self.idle = Some(why),
         }
@@ -339,7 +341,7 @@ impl App {
 
     /// Lets the attached crate's comparison follow the open lesson.
     pub(super) fn sync_homework(&mut self) {
-        if let (Some(view), Screen::Lesson(run)) = (&mut self.homework, &self.screen) {
+        if let (Some(view), Screen::Lesson(run)) = (&mut self.homework, &mut self.screen) {
             view.sync(run);
         }
     }

@@ -225,6 +225,8 @@ pub struct LessonRun {
     observed: Observed,
     /// The speed was set by the step's front matter.
     speed_from_step: bool,
+    /// Where each step's body goes to the attached homework's reference (`goals.rs`).
+    handover: Option<crate::grade::live::Handover>,
 }
 
 impl LessonRun {
@@ -295,6 +297,7 @@ impl LessonRun {
             spectra_wanted: false,
             observed: Observed::default(),
             speed_from_step: false,
+            handover: None,
         };
         let n = run.lesson.steps.len();
         run.met = vec![false; n];

@@ -278,7 +278,8 @@ impl Track {
         }
     }
 
-    fn raw_velocities(&self) -> Cow<'_, [DVec3]> {
+    /// Velocities (m/s) as the integrator left them.
+    pub(super) fn raw_velocities(&self) -> Cow<'_, [DVec3]> {
         match &self.shape {
             Shape::Rope(r) => Cow::Owned(r.masses.iter().map(|m| m.velocity).collect()),
             Shape::Lattice(s) => Cow::Borrowed(&s.v),
@@ -295,6 +296,21 @@ impl Track {
                     .collect(),
             ),
             _ => self.raw_velocities(),
+        }
+    }
+
+    /// A lattice's state replaced by positions `x` (m) and velocities `v` (m/s): the lesson's
+    /// own step (`handover.rs`); false for a rope, which keeps its state.
+    pub(super) fn set_lattice(&mut self, x: &[DVec3], v: &[DVec3]) -> bool {
+        match &mut self.shape {
+            Shape::Lattice(s) => {
+                s.x.clear();
+                s.x.extend_from_slice(x);
+                s.v.clear();
+                s.v.extend_from_slice(v);
+                true
+            }
+            Shape::Rope(_) => false,
         }
     }
 

@@ -7,9 +7,17 @@ use crate::physics::diverge;
 use super::LessonRun;
 
 impl LessonRun {
+    /// Each step's body goes to `handover` (the attached homework's reference), or nowhere.
+    pub fn set_handover(&mut self, handover: Option<crate::grade::live::Handover>) {
+        self.handover = handover;
+    }
+
     /// One step, then the history, the goal and the divergence check; true when it diverged.
     pub(super) fn step_once(&mut self) -> bool {
         let diverged = self.sim.step().is_some() || self.sim.diverged.is_some();
+        if let Some(handover) = self.handover.as_ref().filter(|_| !diverged) {
+            handover.offer(&self.sim, self.generation);
+        }
         if diverged {
             // The diverging sample is drawn too (the plot ends where the status line says).
             self.history
