@@ -243,5 +243,136 @@ fn boundary(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, boundary);
+/// CPU seconds (per thread name, from `/proc/self/task`; "program" for the student's program)
+/// since `before`.
+fn threads_cpu() -> Vec<(String, f64)> {
+    let tick = 100.0; // USER_HZ on Linux
+    let mut out: Vec<(String, f64)> = Vec::new();
+    let Ok(dir) = std::fs::read_dir("/proc/self/task") else {
+        return out;
+    };
+    for e in dir.flatten() {
+        let path = e.path();
+        let Ok(stat) = std::fs::read_to_string(path.join("stat")) else {
+            continue;
+        };
+        let Some(close) = stat.rfind(')') else {
+            continue;
+        };
+        let name = stat[stat.find('(').map_or(0, |i| i + 1)..close].to_string();
+        let fields: Vec<&str> = stat[close + 2..].split(' ').collect();
+        let ticks: f64 = fields.get(11).and_then(|u| u.parse().ok()).unwrap_or(0.0)
+            + fields.get(12).and_then(|u| u.parse().ok()).unwrap_or(0.0);
+        match out.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, t)) => *t += ticks / tick,
+            None => out.push((name, ticks / tick)),
+        }
+    }
+    out.push(("program".to_string(), descendants_ns() as f64 * 1e-9));
+    out
+}
+
+/// The app's way: the lesson's own simulation of the step's scene, stepped a frame of
+/// `per_frame` steps at a time on this thread (with its pool, or alone), each step offered to
+/// the comparison's reference (`Live::handover`), the comparison then let advance to it; the
+/// CPU seconds per simulated second of each thread over `seconds`, and the steps the reference
+/// took from the lesson.
+fn beside_lesson(
+    homework: &Homework,
+    number: u32,
+    step: usize,
+    method: Method,
+    seconds: f64,
+    alone: bool,
+) -> (Vec<(String, f64)>, u64, u64) {
+    let l = lesson::builtin()
+        .into_iter()
+        .map(|l| l.expect("lesson parses"))
+        .find(|l| l.number == number)
+        .expect("lesson exists");
+    let mut scene = l.steps[step - 1].build_scene().expect("scene");
+    scene.set_method(method);
+    let setup = Setup::from_scene(homework.assignment(), number, &scene, 0.0).expect("setup");
+    let steps = (seconds / setup.dt).round() as u64;
+    let mut sim = springlab::simulation::Simulation::new(scene);
+    let live = Live::start(homework.clone(), setup, LiveOptions::default());
+    let handover = live.handover();
+    let before = threads_cpu();
+    let per_frame = 32;
+    let mut behind = 0;
+    while sim.steps < steps {
+        let mut frame = || {
+            for _ in 0..per_frame {
+                sim.step();
+                if let Some(h) = &handover {
+                    h.offer(&sim, 0);
+                }
+            }
+        };
+        if alone {
+            springlab::physics::pool::alone(frame);
+        } else {
+            frame();
+        }
+        live.advance_to(sim.steps);
+        if let Some(f) = live.drain().last() {
+            behind = sim.steps - f.step;
+        }
+    }
+    while let Some(f) = live.next_frame(Duration::from_secs(600)) {
+        if f.step >= steps {
+            break;
+        }
+    }
+    let after = threads_cpu();
+    let taken = handover.as_ref().map_or(0, |h| h.taken());
+    let per_second: Vec<(String, f64)> = after
+        .into_iter()
+        .map(|(name, t)| {
+            let t0 = before
+                .iter()
+                .find(|(n, _)| *n == name)
+                .map_or(0.0, |(_, t)| *t);
+            (name, (t - t0) / seconds)
+        })
+        .filter(|(_, t)| *t > 0.0)
+        .collect();
+    (per_second, taken, behind)
+}
+
+/// Lesson 5 step 5's jelly, each explicit method, beside the lesson's own simulation (the
+/// app's way, its reference taking the lesson's steps): CPU seconds per simulated second by
+/// thread, the lesson's simulation with its pool and alone.
+fn lesson_beside(c: &mut Criterion) {
+    let mut group = c.benchmark_group("beside the lesson");
+    let mut wanted = false;
+    group.bench_function("jelly", |bench| {
+        wanted = true;
+        bench.iter(|| 0);
+    });
+    group.finish();
+    if !wanted {
+        return;
+    }
+    let parent = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench-homework-live");
+    std::fs::create_dir_all(&parent).expect("scratch");
+    let b = builder(&options(&parent)).expect("builder");
+    let jelly = built(&parent, &b, Assignment::Jelly, JELLY);
+    for method in [Method::ExplicitEuler, Method::Midpoint, Method::Rk4] {
+        for alone in [false, true] {
+            let (threads, taken, behind) = beside_lesson(&jelly, 5, 5, method, 3.0, alone);
+            let total: f64 = threads.iter().map(|(_, t)| t).sum();
+            let split: Vec<String> = threads.iter().map(|(n, t)| format!("{n} {t:.3}")).collect();
+            println!(
+                "beside the lesson/jelly {} (lesson {}): CPU s per simulated s {total:.3} = {}; \
+                 {taken} steps taken from the lesson, {behind} behind",
+                method.declaration().name,
+                if alone { "alone" } else { "with its pool" },
+                split.join(", ")
+            );
+        }
+    }
+}
+
+criterion_group!(benches, boundary, lesson_beside);
 criterion_main!(benches);

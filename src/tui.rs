@@ -553,9 +553,17 @@ impl App {
     /// As [`App::tick`], but stops stepping at `deadline` (the frame's time budget).
     pub fn tick_until(&mut self, wall_dt: f64, deadline: Option<Instant>) {
         let help = self.help;
+        // Beside a homework comparison the lesson steps on this thread alone: the comparison
+        // and the student's program need the other core (`homework_view.rs`).
+        let alone = self
+            .homework
+            .as_ref()
+            .is_some_and(homework_view::HomeworkView::comparing);
         if let Screen::Lesson(run) = &mut self.screen {
             if help {
                 run.tick_until(0.0, None);
+            } else if alone {
+                crate::physics::pool::alone(|| run.tick_until(wall_dt, deadline));
             } else {
                 run.tick_until(wall_dt, deadline);
             }

@@ -617,7 +617,9 @@ fn beside_the_lesson(
 ) -> (Vec<Frame>, u64, bool, Simulation) {
     let horizon = setup.horizon;
     let live = Live::start(homework, setup, LiveOptions::default());
-    let handover = live.handover().expect("a lattice with an explicit method hands over");
+    let handover = live
+        .handover()
+        .expect("a lattice with an explicit method hands over");
     let mut frames = Vec::new();
     while lesson.steps < horizon {
         for _ in 0..round.min(horizon - lesson.steps) {
@@ -680,11 +682,17 @@ fn the_reference_takes_the_lessons_own_steps_with_the_same_bits_and_refuses_an_e
         let name = format!("lesson 5 step {step}, {}", method.declaration().name);
         assert!(on, "{name}: the hand-over is still on");
         // All but the first steps, computed both ways before the lesson's are trusted.
-        assert!(taken + 16 >= steps, "{name}: {taken} of {steps} steps taken");
+        assert!(
+            taken + 16 >= steps,
+            "{name}: {taken} of {steps} steps taken"
+        );
         let last = want.last().expect("frames").clone();
         assert_eq!(got.last(), Some(&last), "{name}: the last frame");
         for f in &got {
-            let same = want.iter().find(|w| w.step == f.step).expect("a frame there");
+            let same = want
+                .iter()
+                .find(|w| w.step == f.step)
+                .expect("a frame there");
             assert_eq!(f, same, "{name}: frame of step {}", f.step);
         }
         if step == 2 {

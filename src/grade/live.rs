@@ -55,11 +55,11 @@ mod reference;
 mod watch;
 
 use body::{Measure, Snapshot, Track};
-use reference::{Steps, reference_steps};
-pub use handover::Handover;
 pub use build::{
     BuildOptions, Built, LazyBuilder, build_homework, builder, first_error, grader_hint,
 };
+pub use handover::Handover;
+use reference::{Steps, reference_steps};
 pub use watch::{Reload, Watcher};
 
 /// Relative tolerance `τ` of the parting test (module docs).
@@ -487,7 +487,14 @@ impl Live {
                 // lesson's own simulation (pool::alone).
                 physics::pool::alone(|| {
                     let handover = worker_handover.as_ref();
-                    work(&homework, &worker_setup, options, &worker_shared, &tx, handover);
+                    work(
+                        &homework,
+                        &worker_setup,
+                        options,
+                        &worker_shared,
+                        &tx,
+                        handover,
+                    );
                 });
             })
             .ok();

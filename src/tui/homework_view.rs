@@ -116,6 +116,14 @@ impl HomeworkView {
             || self.behind
     }
 
+    /// True while a comparison runs beside the lesson: the lesson's simulation then steps
+    /// alone (`physics::pool::alone`), leaving the other core to the comparison's threads and
+    /// the student's program (a pool worker woken for each of the lesson's passes spun on it).
+    #[must_use]
+    pub fn comparing(&self) -> bool {
+        self.live.is_some()
+    }
+
     /// The status line's text.
     #[must_use]
     pub fn status_line(&self) -> String {

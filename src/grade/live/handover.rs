@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! lesson (drawing thread)   after each step n:  offer (n, x_n, v_n)    a copy, into a queue of
-//!                                                                      at most QUEUE steps
+//!                                                                      at most QUEUE_BYTES
 //! reference (its thread)    step n:  the lesson's (n, x_n, v_n) if queued and trusted,
 //!                                    else its own step from n - 1 (as without a hand-over)
 //! trusted   when the first offer's body has the comparison's model, method and dt, after
@@ -31,8 +31,9 @@ use super::{Assignment, Integrator, Setup};
 use crate::physics::Model;
 use crate::simulation::Simulation;
 
-/// Steps the queue holds (48 KB each for the 1000-particle jelly).
-const QUEUE: usize = 256;
+/// Bytes the queue holds: 64 MiB, 1398 steps of the 1000-particle jelly (48 KB a step), so
+/// that a comparison behind the lesson by that much still finds the lesson's steps.
+const QUEUE_BYTES: usize = 64 << 20;
 /// Steps computed both ways before the lesson's states are trusted.
 pub(super) const VERIFY: u64 = 8;
 /// After that, every this many steps one is computed both ways again.
@@ -152,7 +153,7 @@ impl Handover {
             self.end();
             return;
         }
-        if queue.states.len() >= QUEUE {
+        if 48 * inner.particles * queue.states.len() >= QUEUE_BYTES {
             return;
         }
         let mut o = queue.spare.pop().unwrap_or(Offered {
