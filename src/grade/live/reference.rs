@@ -35,7 +35,7 @@ pub(super) fn reference_steps(
         }
         step += 1;
         match handover.and_then(|h| Some((h, h.take(step)?))) {
-            Some((h, lesson)) if verified >= VERIFY && step % RECHECK != 0 => {
+            Some((h, lesson)) if verified >= VERIFY && !step.is_multiple_of(RECHECK) => {
                 let used = theirs.set_lattice(&lesson.x, &lesson.v);
                 if !used {
                     theirs.step(&reference, setup, 1);
