@@ -11,6 +11,8 @@ use springlab::lesson::{self, Goal, GoalProgress, Key, Keys, Lesson, Stroke};
 use springlab::physics::{Method, diverge};
 use springlab::tui::{App, Theme};
 
+use crate::common::per_lesson;
+
 /// Wall time of one frame (s).
 const FRAME: f64 = 0.1;
 
@@ -138,164 +140,247 @@ fn shown_names(app: &App) -> Vec<String> {
 /// Wall time (s) a student watches after a try item that does not reach the goal.
 const WATCH: f64 = 0.5;
 
-/// A student moving through every lesson with `n`: at each step the prediction answered (with
-/// option 1: the try keys must work whatever was predicted), then exactly the keys of each try
-/// item in the order the lesson lists them, from the state the previous items and steps left,
-/// watching half a second after each; the goal's item must meet the goal, and the screen say so.
+per_lesson!(
+    a_student_playing_every_try_list_in_order_meets_every_goal,
+    student_walk,
+    [
+        rope: "rope",
+        hooke: "hooke",
+        euler: "euler",
+        verlet: "verlet",
+        jelly: "jelly",
+        cloth: "cloth",
+        speed_accuracy: "speed-accuracy",
+        model: "model",
+    ]
+);
+
+per_lesson!(
+    every_goal_is_met_by_its_try_keys_and_action_goals_not_by_idling,
+    goals_met,
+    [
+        rope: "rope",
+        hooke: "hooke",
+        euler: "euler",
+        verlet: "verlet",
+        jelly: "jelly",
+        cloth: "cloth",
+        model: "model",
+    ]
+);
+
+per_lesson!(
+    every_prediction_is_confirmed_by_a_run_of_its_answer_and_only_that,
+    predictions_confirmed,
+    [
+        euler: "euler",
+        verlet: "verlet",
+        jelly: "jelly",
+        speed_accuracy: "speed-accuracy",
+        model: "model",
+    ]
+);
+
+/// The per-lesson lists above name every lesson, every lesson with a goal and every lesson with
+/// a prediction, in the course's order.
 #[test]
-fn a_student_playing_every_try_list_in_order_meets_every_goal() {
-    let mut goals = 0;
-    for (li, l) in lessons().iter().enumerate() {
-        let mut app = App::new(lesson::builtin(), Theme::PLAIN);
-        app.open_lesson(li).expect("the lesson opens");
-        for (si, step) in l.steps.iter().enumerate() {
-            if si > 0 {
-                app.handle_key(KeyEvent::new(KeyCode::Char('n'), KeyModifiers::NONE));
-            }
-            assert_eq!(app.lesson().expect("open").step_index(), si);
-            if app.lesson().expect("open").awaiting_prediction() {
-                app.handle_key(KeyEvent::new(KeyCode::Char('1'), KeyModifiers::NONE));
-            }
-            let goal_keys = step.goal_keys().map(|k| k as *const Keys);
-            for (ti, item) in step.try_list.iter().enumerate() {
-                let Some(keys) = &item.keys else { continue };
-                let at = format!(
-                    "lesson {} step {} \"{}\" try {} ({keys})",
-                    l.number,
-                    si + 1,
-                    step.title,
-                    ti + 1
-                );
-                play(&mut app, keys);
-                if let Some(named) = item.text.strip_prefix("Show only ") {
-                    assert_eq!(
-                        shown_names(&app),
-                        method_names(named),
-                        "{at}: the methods shown are the ones the item names"
-                    );
-                }
-                if goal_keys == Some(keys as *const Keys) {
-                    let goal = step.goal.as_ref().expect("goal keys belong to a goal");
-                    let verdict = goal_verdict(&mut app, goal);
-                    let run = app.lesson().expect("open");
-                    assert_eq!(
-                        verdict,
-                        Some(true),
-                        "{at}: goal not met (t = {:.3} s, dt = {} s, diverged {:?})",
-                        run.sim().time(),
-                        run.sim().dt(),
-                        run.sim().diverged
-                    );
-                    assert_eq!(run.goal_state(), Some(true), "{at}: the screen says met");
-                    goals += 1;
-                } else {
-                    play(
-                        &mut app,
-                        &Keys::parse(&format!("wait:{WATCH}")).expect("a wait"),
-                    );
-                }
-            }
-        }
-    }
-    let all: usize = lessons()
+fn every_lesson_with_a_goal_or_a_prediction_has_its_tests() {
+    let all = lessons();
+    let slugs = |has: &dyn Fn(&Lesson) -> bool| -> Vec<String> {
+        all.iter()
+            .filter(|l| has(l))
+            .map(|l| l.slug.clone())
+            .collect()
+    };
+    assert_eq!(
+        crate::common::lesson_slugs(),
+        a_student_playing_every_try_list_in_order_meets_every_goal::SLUGS
+    );
+    assert_eq!(
+        slugs(&|l| l.steps.iter().any(|s| s.goal.is_some())),
+        every_goal_is_met_by_its_try_keys_and_action_goals_not_by_idling::SLUGS
+    );
+    assert_eq!(
+        slugs(&|l| l.steps.iter().any(|s| s.predict.is_some())),
+        every_prediction_is_confirmed_by_a_run_of_its_answer_and_only_that::SLUGS
+    );
+    let goals: usize = all
         .iter()
         .map(|l| l.steps.iter().filter(|s| s.goal.is_some()).count())
         .sum();
-    assert_eq!(goals, all, "every goal was played");
+    assert!(goals >= 8, "only {goals} goals");
+    for n in [3, 4, 5, 7] {
+        assert!(
+            all.iter()
+                .any(|l| l.number == n && l.steps.iter().any(|s| s.predict.is_some())),
+            "lesson {n} has a prediction"
+        );
+    }
 }
 
-#[test]
-fn every_goal_is_met_by_its_try_keys_and_action_goals_not_by_idling() {
-    let mut checked = 0;
-    for (li, l) in lessons().iter().enumerate() {
-        for (si, step) in l.steps.iter().enumerate() {
-            let Some(goal) = &step.goal else { continue };
-            let keys = step
-                .goal_keys()
-                .expect("a goal has its keys (checked at load)");
+/// The built-in lesson `slug` and its index in the menu.
+fn lesson(slug: &str) -> (usize, Lesson) {
+    lessons()
+        .into_iter()
+        .enumerate()
+        .find(|(_, l)| l.slug == slug)
+        .unwrap_or_else(|| panic!("no built-in lesson {slug}"))
+}
+
+/// A student moving through lesson `slug` with `n`: at each step the prediction answered (with
+/// option 1: the try keys must work whatever was predicted), then exactly the keys of each try
+/// item in the order the lesson lists them, from the state the previous items and steps left,
+/// watching half a second after each; the goal's item must meet the goal, and the screen say so.
+fn student_walk(slug: &str) {
+    let (li, l) = lesson(slug);
+    let mut goals = 0;
+    let mut played = 0;
+    let mut app = App::new(lesson::builtin(), Theme::PLAIN);
+    app.open_lesson(li).expect("the lesson opens");
+    for (si, step) in l.steps.iter().enumerate() {
+        if si > 0 {
+            app.handle_key(KeyEvent::new(KeyCode::Char('n'), KeyModifiers::NONE));
+        }
+        assert_eq!(app.lesson().expect("open").step_index(), si);
+        if app.lesson().expect("open").awaiting_prediction() {
+            app.handle_key(KeyEvent::new(KeyCode::Char('1'), KeyModifiers::NONE));
+        }
+        let goal_keys = step.goal_keys().map(|k| k as *const Keys);
+        for (ti, item) in step.try_list.iter().enumerate() {
+            let Some(keys) = &item.keys else { continue };
             let at = format!(
-                "lesson {} step {} \"{}\" ({keys})",
+                "lesson {} step {} \"{}\" try {} ({keys})",
                 l.number,
                 si + 1,
-                step.title
+                step.title,
+                ti + 1
             );
-            let mut app = open_at(li, si);
             play(&mut app, keys);
-            assert!(
-                app.lesson().expect("open").is_running()
-                    || app.lesson().expect("open").run_verdict().is_some(),
-                "{at}: the keys leave the run paused"
-            );
-            let verdict = goal_verdict(&mut app, goal);
-            let run = app.lesson().expect("open");
-            assert_eq!(
-                verdict,
-                Some(true),
-                "{at}: goal not met (t = {:.3} s, diverged {:?})",
-                run.sim().time(),
-                run.sim().diverged
-            );
-            assert_eq!(
-                run.goal_state(),
-                Some(true),
-                "{at}: the screen shows it met"
-            );
-            if keys.is_action() {
-                let mut idle = open_at(li, si);
-                play(&mut idle, &Keys::parse("space").expect("space"));
-                let verdict = goal_verdict(&mut idle, goal);
-                assert_ne!(
+            played += 1;
+            if let Some(named) = item.text.strip_prefix("Show only ") {
+                assert_eq!(
+                    shown_names(&app),
+                    method_names(named),
+                    "{at}: the methods shown are the ones the item names"
+                );
+            }
+            if goal_keys == Some(keys as *const Keys) {
+                let goal = step.goal.as_ref().expect("goal keys belong to a goal");
+                let verdict = goal_verdict(&mut app, goal);
+                let run = app.lesson().expect("open");
+                assert_eq!(
                     verdict,
                     Some(true),
-                    "{at}: idling for {} s meets a goal that asks for an action",
-                    goal.time
+                    "{at}: goal not met (t = {:.3} s, dt = {} s, diverged {:?})",
+                    run.sim().time(),
+                    run.sim().dt(),
+                    run.sim().diverged
+                );
+                assert_eq!(run.goal_state(), Some(true), "{at}: the screen says met");
+                goals += 1;
+            } else {
+                play(
+                    &mut app,
+                    &Keys::parse(&format!("wait:{WATCH}")).expect("a wait"),
                 );
             }
-            checked += 1;
         }
     }
-    assert!(checked >= 8, "only {checked} goals checked");
+    assert!(played > 0, "lesson {slug}: no try item has keys");
+    let all = l.steps.iter().filter(|s| s.goal.is_some()).count();
+    assert_eq!(goals, all, "lesson {slug}: every goal was played");
 }
 
-#[test]
-fn every_prediction_is_confirmed_by_a_run_of_its_answer_and_only_that() {
-    let mut predictions = Vec::new();
-    for (li, l) in lessons().iter().enumerate() {
-        for (si, step) in l.steps.iter().enumerate() {
-            let Some(p) = &step.predict else { continue };
-            predictions.push(l.number);
-            for (oi, option) in p.options.iter().enumerate() {
-                let at = format!(
-                    "lesson {} step {} option {} \"{}\" ({})",
-                    l.number,
-                    si + 1,
-                    oi + 1,
-                    option.text,
-                    option.keys
-                );
-                let mut app = open_at(li, si);
-                play(&mut app, &option.keys);
-                let holds = decide(&mut app, &option.claim);
-                let t = app.lesson().expect("open").sim().time();
-                assert!(
-                    holds.is_some(),
-                    "{at}: the run did not decide (t = {t:.3} s)"
-                );
-                assert_eq!(
-                    holds == Some(true),
-                    oi == p.answer,
-                    "{at}: the claim {} at t = {t:.3} s, but the answer is option {}",
-                    if holds == Some(true) {
-                        "holds"
-                    } else {
-                        "fails"
-                    },
-                    p.answer + 1
-                );
-            }
+/// Every goal of lesson `slug` is met by its try keys from the step's start; a goal that asks
+/// for an action is not met by starting the run and idling.
+fn goals_met(slug: &str) {
+    let (li, l) = lesson(slug);
+    let mut checked = 0;
+    for (si, step) in l.steps.iter().enumerate() {
+        let Some(goal) = &step.goal else { continue };
+        let keys = step
+            .goal_keys()
+            .expect("a goal has its keys (checked at load)");
+        let at = format!(
+            "lesson {} step {} \"{}\" ({keys})",
+            l.number,
+            si + 1,
+            step.title
+        );
+        let mut app = open_at(li, si);
+        play(&mut app, keys);
+        assert!(
+            app.lesson().expect("open").is_running()
+                || app.lesson().expect("open").run_verdict().is_some(),
+            "{at}: the keys leave the run paused"
+        );
+        let verdict = goal_verdict(&mut app, goal);
+        let run = app.lesson().expect("open");
+        assert_eq!(
+            verdict,
+            Some(true),
+            "{at}: goal not met (t = {:.3} s, diverged {:?})",
+            run.sim().time(),
+            run.sim().diverged
+        );
+        assert_eq!(
+            run.goal_state(),
+            Some(true),
+            "{at}: the screen shows it met"
+        );
+        if keys.is_action() {
+            let mut idle = open_at(li, si);
+            play(&mut idle, &Keys::parse("space").expect("space"));
+            let verdict = goal_verdict(&mut idle, goal);
+            assert_ne!(
+                verdict,
+                Some(true),
+                "{at}: idling for {} s meets a goal that asks for an action",
+                goal.time
+            );
+        }
+        checked += 1;
+    }
+    assert!(checked > 0, "lesson {slug} has no goal");
+}
+
+/// For every prediction of lesson `slug`, a run of each option's keys confirms its claim
+/// exactly when the option is the answer.
+fn predictions_confirmed(slug: &str) {
+    let (li, l) = lesson(slug);
+    let mut predictions = 0;
+    for (si, step) in l.steps.iter().enumerate() {
+        let Some(p) = &step.predict else { continue };
+        predictions += 1;
+        for (oi, option) in p.options.iter().enumerate() {
+            let at = format!(
+                "lesson {} step {} option {} \"{}\" ({})",
+                l.number,
+                si + 1,
+                oi + 1,
+                option.text,
+                option.keys
+            );
+            let mut app = open_at(li, si);
+            play(&mut app, &option.keys);
+            let holds = decide(&mut app, &option.claim);
+            let t = app.lesson().expect("open").sim().time();
+            assert!(
+                holds.is_some(),
+                "{at}: the run did not decide (t = {t:.3} s)"
+            );
+            assert_eq!(
+                holds == Some(true),
+                oi == p.answer,
+                "{at}: the claim {} at t = {t:.3} s, but the answer is option {}",
+                if holds == Some(true) {
+                    "holds"
+                } else {
+                    "fails"
+                },
+                p.answer + 1
+            );
         }
     }
-    for n in [3, 4, 5, 7] {
-        assert!(predictions.contains(&n), "lesson {n} has a prediction");
-    }
+    assert!(predictions > 0, "lesson {slug} has no prediction");
 }

@@ -717,38 +717,50 @@ fn status_line_shows_the_damped_limit() {
 /// Every live edit of the model (stiffness, damping, drag, γ, passes, dt, the method, a pin)
 /// restarts the energy accounting from the present state: right after the key the energy
 /// error `E + D - E_0` is zero, where the run before it had accumulated one (so the plot of
-/// the method's energy error does not jump by the edit's change of energy).
-#[test]
-fn every_live_edit_rebases_the_energy_accounting() {
-    for (slug, edits) in [
-        (
+/// the method's energy error does not jump by the edit's change of energy). One test per
+/// lesson, so that the test threads share them.
+mod every_live_edit_rebases_the_energy_accounting {
+    #[test]
+    fn verlet() {
+        super::edits_rebase(
             "verlet",
-            &["K", "k", "D", "d", "A", "a", "G", "g", "J", "j", "+", "-"][..],
-        ),
-        ("euler", &["me", "ms", "mr", "mi"][..]),
-        ("cloth", &["1", "2"][..]),
-    ] {
-        let mut app = open(slug);
-        for edit in edits {
-            keys(&mut app, " ");
-            for _ in 0..3 {
-                app.tick(0.1);
-            }
-            keys(&mut app, " ");
-            let sim = run(&app).sim();
-            assert!(sim.diverged.is_none(), "{slug} {edit}");
-            let before = sim.energy_residual();
-            assert!(
-                before != 0.0,
-                "{slug} before {edit}: the run has an energy error"
-            );
-            keys(&mut app, edit);
-            let after = run(&app).sim().energy_residual();
-            assert!(
-                after.abs() <= 1e-12 * run(&app).sim().energy().total.abs().max(1.0),
-                "{slug} {edit}: energy error {after} J right after the edit (was {before} J)"
-            );
+            &["K", "k", "D", "d", "A", "a", "G", "g", "J", "j", "+", "-"],
+        );
+    }
+
+    #[test]
+    fn euler() {
+        super::edits_rebase("euler", &["me", "ms", "mr", "mi"]);
+    }
+
+    #[test]
+    fn cloth() {
+        super::edits_rebase("cloth", &["1", "2"]);
+    }
+}
+
+/// Each of `edits` pressed after a short run of lesson `slug` leaves no energy error.
+fn edits_rebase(slug: &str, edits: &[&str]) {
+    let mut app = open(slug);
+    for edit in edits {
+        keys(&mut app, " ");
+        for _ in 0..3 {
+            app.tick(0.1);
         }
+        keys(&mut app, " ");
+        let sim = run(&app).sim();
+        assert!(sim.diverged.is_none(), "{slug} {edit}");
+        let before = sim.energy_residual();
+        assert!(
+            before != 0.0,
+            "{slug} before {edit}: the run has an energy error"
+        );
+        keys(&mut app, edit);
+        let after = run(&app).sim().energy_residual();
+        assert!(
+            after.abs() <= 1e-12 * run(&app).sim().energy().total.abs().max(1.0),
+            "{slug} {edit}: energy error {after} J right after the edit (was {before} J)"
+        );
     }
 }
 

@@ -464,13 +464,22 @@ impl LessonRun {
 
     /// Waits for the spectra of the newest change and the limit (the public key API and tests
     /// read an up-to-date limit after every key).
+    ///
+    /// Spectra asked for since the last request are computed on the calling thread: it waits
+    /// for them anyway, and a worker at the lower priority `WORKER_NICE` would wait behind every
+    /// other busy thread of a loaded machine while the caller sits idle.
     pub fn settle(&mut self) {
         if let Some(work) = self.step_work.settle() {
             self.take_step_work(work);
         }
-        self.send_spectra_request();
+        // A request the worker already has (from the event loop) first, so that it cannot
+        // replace the newer spectra computed below.
         if let Some(spectra) = self.background.settle() {
             self.spectra = std::sync::Arc::new(spectra);
+            self.limit_stale = true;
+        }
+        if std::mem::take(&mut self.spectra_wanted) {
+            self.spectra = std::sync::Arc::new(background::compute(&self.bodies_at_start()));
             self.limit_stale = true;
         }
         self.refresh_stale_limit();

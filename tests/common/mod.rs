@@ -108,3 +108,31 @@ pub fn jelly_bowl() -> (f64, f64) {
         })
         .expect("a bowl")
 }
+
+/// One test per built-in lesson: `per_lesson!(module, check, [name: "slug", …])` makes a module
+/// `module` holding, for each lesson, a test `name` that calls `super::check("slug")`, and
+/// `module::SLUGS`, the slugs in that order. A long check over every lesson becomes one test per
+/// lesson, so that the test threads share the lessons instead of one thread playing them all;
+/// each file compares its lists with [`lesson_slugs`] (a new lesson cannot be left out).
+macro_rules! per_lesson {
+    ($module:ident, $check:ident, [$($lesson:ident: $slug:literal),* $(,)?]) => {
+        mod $module {
+            pub const SLUGS: &[&str] = &[$($slug),*];
+            $(
+                #[test]
+                fn $lesson() {
+                    super::$check($slug);
+                }
+            )*
+        }
+    };
+}
+pub(crate) use per_lesson;
+
+/// The slugs of the built-in lessons, in the course's order.
+pub fn lesson_slugs() -> Vec<String> {
+    springlab::lesson::builtin()
+        .into_iter()
+        .map(|l| l.expect("built-in lessons load").slug)
+        .collect()
+}

@@ -213,43 +213,73 @@ fn arrows_orbit_the_camera() {
     assert!((back - p).length() < 1e-5, "{back} vs {p}");
 }
 
+/// The terminal sizes every screen is drawn at: degenerate, just below the 80×24 the app
+/// needs in each direction, exactly that, and larger.
+const SIZES: [(u16, u16); 7] = [
+    (1, 1),
+    (10, 5),
+    (79, 24),
+    (80, 23),
+    (80, 24),
+    (120, 40),
+    (200, 60),
+];
+
 #[test]
-fn every_screen_draws_at_every_size_without_panicking() {
-    let mut app = app();
-    let sizes = [
-        (1, 1),
-        (10, 5),
-        (79, 24),
-        (80, 23),
-        (80, 24),
-        (120, 40),
-        (200, 60),
-    ];
-    for &(w, h) in &sizes {
+fn the_menu_and_a_cloth_draw_at_every_size_without_panicking() {
+    let app = app();
+    for &(w, h) in &SIZES {
         draw(&app, w, h);
     }
     let (mut cloth, dir) = cloth_app("sizes", 6);
     key(&mut cloth, KeyCode::Right);
-    for &(w, h) in &sizes {
+    for &(w, h) in &SIZES {
         draw(&cloth, w, h);
     }
     let _ = std::fs::remove_dir_all(&dir);
-    for i in 0..app.lessons().len() {
-        app.open_lesson(i).expect("opens");
-        loop {
-            for &(w, h) in &sizes {
-                draw(&app, w, h);
-            }
-            key(&mut app, KeyCode::Char('?'));
-            draw(&app, 80, 24);
-            key(&mut app, KeyCode::Char('?'));
-            let step = run(&app).step_index();
-            key(&mut app, KeyCode::Char('n'));
-            if run(&app).step_index() == step {
-                break;
-            }
+}
+
+crate::common::per_lesson!(
+    every_screen_draws_at_every_size_without_panicking,
+    every_screen_draws,
+    [
+        rope: "rope",
+        hooke: "hooke",
+        euler: "euler",
+        verlet: "verlet",
+        jelly: "jelly",
+        cloth: "cloth",
+        speed_accuracy: "speed-accuracy",
+        model: "model",
+    ]
+);
+
+#[test]
+fn every_lesson_is_drawn_at_every_size() {
+    assert_eq!(
+        crate::common::lesson_slugs(),
+        every_screen_draws_at_every_size_without_panicking::SLUGS
+    );
+}
+
+/// Every step of lesson `slug`, with and without the help overlay, drawn at every size; a
+/// terminal below 80×24 is told so.
+fn every_screen_draws(slug: &str) {
+    let mut app = open(slug);
+    loop {
+        for &(w, h) in &SIZES {
+            draw(&app, w, h);
+        }
+        key(&mut app, KeyCode::Char('?'));
+        draw(&app, 80, 24);
+        key(&mut app, KeyCode::Char('?'));
+        let step = run(&app).step_index();
+        key(&mut app, KeyCode::Char('n'));
+        if run(&app).step_index() == step {
+            break;
         }
     }
+    assert_eq!(run(&app).step_index() + 1, run(&app).lesson().steps.len());
     assert!(screen_text(&app, 70, 20).contains("needs at least 80×24"));
 }
 

@@ -157,7 +157,7 @@ pub fn compute(bodies: &[(Model, State)]) -> Bodies {
 
 /// The last bodies' spectra ([`super::memo`]): `R`, a step opened again or a coefficient
 /// pressed back and forth finds its spectrum at once.
-static SPECTRA: Memo<Option<Spectrum>> = Memo::new(16);
+static SPECTRA: Memo<Option<Spectrum>> = Memo::new(memo::KEPT);
 
 impl<Q: Send + 'static, A: Send + 'static> Latest<Q, A> {
     /// A worker (started at the first request) named `name` that computes `work`.

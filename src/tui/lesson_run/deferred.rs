@@ -35,7 +35,7 @@ pub struct StepWork {
 }
 
 /// The last steps' work ([`super::memo`]).
-static STEP_WORK: Memo<StepWork> = Memo::new(8);
+static STEP_WORK: Memo<StepWork> = Memo::new(memo::KEPT);
 
 /// Computes what a step shows beside its scene (kept: a step opened again finds it at once).
 #[must_use]

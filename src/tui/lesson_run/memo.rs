@@ -2,7 +2,7 @@
 //! same step for every option of its prediction): its text's numbers and study charts and the
 //! bodies' spectra. Each is a function of its inputs alone, so it is kept here under a hash of
 //! the inputs' whole contents (every field and every number to the last bit, through `Debug`),
-//! the last few of each kind for the whole process: opening a step again finds them at once.
+//! the last [`KEPT`] of each kind for the whole process: opening a step again finds them at once.
 
 use std::collections::VecDeque;
 use std::fmt::{Debug, Write};
@@ -25,6 +25,12 @@ pub fn key(value: &impl Debug) -> u64 {
     let _ = write!(feed, "{value:?}");
     feed.0.finish()
 }
+
+/// How many results of each kind the app's memos keep: more than every body of every step of
+/// the built-in lessons (tested), so that a student going through every lesson and back, or
+/// a test suite opening every step several times, computes each once. The largest kept
+/// result, a dense spectrum, is a few tens of kilobytes.
+pub const KEPT: usize = 128;
 
 /// The last `capacity` results of one kind, by [`key`].
 pub struct Memo<V> {
@@ -87,5 +93,21 @@ mod tests {
         assert_eq!(get(1.0), 2.0);
         assert_eq!(calls.get(), 4);
         assert_ne!(key(&0.1), key(&(0.1 + f64::EPSILON)));
+    }
+
+    #[test]
+    fn the_memos_keep_every_body_of_every_built_in_step() {
+        let mut bodies = 0;
+        for lesson in crate::lesson::builtin() {
+            for step in lesson.expect("a built-in lesson loads").steps {
+                bodies += step
+                    .build_scene()
+                    .expect("a built-in step builds")
+                    .bodies
+                    .len();
+            }
+        }
+        assert!(bodies > 30, "{bodies} bodies");
+        assert!(KEPT >= bodies, "{KEPT} kept for {bodies} bodies");
     }
 }

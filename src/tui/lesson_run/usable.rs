@@ -67,7 +67,7 @@ pub fn search(scene: &Scene, start: f64) -> UsableDt {
 }
 
 /// The last searches.
-static SEARCHES: Memo<UsableDt> = Memo::new(16);
+static SEARCHES: Memo<UsableDt> = Memo::new(memo::KEPT);
 
 fn search_anew(scene: &Scene, start: f64) -> UsableDt {
     if too_large(scene, start) {
