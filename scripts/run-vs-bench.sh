@@ -12,9 +12,9 @@
 # The scene of each workload: the same particle count, springs, method, dt and steps; the
 # bench's contact rule is its own (docs/workloads.md), the scene's the course collider:
 #   jelly-se, jelly-rk4  cube-plane, a 10×10×10 cube of edge 0.9 m, k = 2000 N/m, k_d = 10 N·s/m,
-#                        resting on its plane from the start (its bottom layer at the plane), 1 s
+#                        dropped 1 m onto its plane (lands at about 0.45 s and stays), 1 s
 #   cloth128-se          cloth-sphere, 128×128, k = 5000 N/m, k_d = 0.02 N·s/m, two corners
-#                        pinned, falling onto its sphere, 5000 steps of 2.5e-5 s
+#                        pinned, draped over its sphere from the start, 5000 steps of 2.5e-5 s
 #   rope-se              rope, 64 nodes over 1 m, k = 50 000 N/m, k_d = 1 N·s/m, 10 000 steps
 #   rope-verlet          rope, 64 nodes, k = 0, Verlet with 20 projections, 10 000 steps
 # run's steps/s is its steps over its `wall_seconds` (the stepping, as bench times it).

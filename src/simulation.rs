@@ -63,7 +63,7 @@ use std::sync::{Arc, Mutex, PoisonError};
 use glam::DVec3;
 use serde::Serialize;
 
-use crate::physics::collide::{Bodies, Changes};
+use crate::physics::collide::{Bodies, Changes, DynamicSphere};
 use crate::physics::energy::{energy_change, energy_change_of};
 use crate::physics::integrators::{Response, guard_energy, guard_start_energy};
 use crate::physics::{
@@ -339,14 +339,11 @@ impl Simulation {
         }
     }
 
-    /// True when a step may be the method's step and the colliders' response (see
-    /// [`Simulation::advance`]): no energy guard, no sphere, no projection of the caller's.
+    /// True when a step may be the method's step and the collision response (see
+    /// [`Simulation::advance`]): no energy guard, no projection of the caller's.
     fn fusable(&self) -> bool {
-        self.scene.bodies.iter().zip(&self.work).all(|(b, work)| {
-            !b.method.declaration().energy_guard
-                && b.state.spheres.is_empty()
-                && work.projection.is_none()
-        })
+        (self.scene.bodies.iter().zip(&self.work))
+            .all(|(b, work)| !b.method.declaration().energy_guard && work.projection.is_none())
     }
 
     /// `chunk` steps of every body in one [`Method::steps`] call each; false, with every state
@@ -354,11 +351,15 @@ impl Simulation {
     fn fused_chunk(&mut self, chunk: u64) -> bool {
         let saved: Vec<State> = self.scene.bodies.iter().map(|b| b.state.clone()).collect();
         let mut evals = 0;
-        // Each body's response log (bodies with colliders).
+        // Each body's response log (bodies with colliders or spheres, as `plain_step`).
         let mut logs: Vec<Option<Arc<Mutex<ResponseLog>>>> = Vec::new();
         for (body, work) in self.scene.bodies.iter_mut().zip(&mut self.work) {
-            let log = (!body.model.colliders.is_empty()).then(|| {
-                let log = Arc::new(Mutex::new(ResponseLog::default()));
+            let contacts = !body.model.colliders.is_empty() || !body.state.spheres.is_empty();
+            let log = contacts.then(|| {
+                let log = Arc::new(Mutex::new(ResponseLog {
+                    spheres: body.state.spheres.clone(),
+                    ..ResponseLog::default()
+                }));
                 work.response = Some(response(self.dt, work.account, Arc::clone(&log)));
                 log
             });
@@ -383,13 +384,19 @@ impl Simulation {
             }
             return false;
         }
+        let logs: Vec<Option<ResponseLog>> = (logs.into_iter())
+            .map(|log| log.map(|log| take_log(&log)))
+            .collect();
+        // The spheres moved with the responses.
+        for (body, log) in self.scene.bodies.iter_mut().zip(&logs) {
+            if let Some(log) = log {
+                body.state.spheres.clone_from(&log.spheres);
+            }
+        }
         self.force_evals += evals;
         self.steps += chunk;
         self.fused_steps += chunk;
         if self.accounting {
-            let logs: Vec<Option<ResponseLog>> = (logs.into_iter())
-                .map(|log| log.map(|log| take_log(&log)))
-                .collect();
             // Step by step, body by body: the order of the sums of `Simulation::step`, each
             // step's share less what its response removed, as `plain_step` takes it.
             for s in 0..chunk as usize {
@@ -534,36 +541,45 @@ struct ResponseLog {
     changes: Changes,
     /// Verlet's history, unused (the fused methods keep none), for the [`Bodies`] view.
     x_prev: Vec<DVec3>,
+    /// The body's dynamic spheres, moved by the responses (the methods' steps do not read
+    /// them), back into the state after the chunk.
+    spheres: Vec<DynamicSphere>,
 }
 
-/// The response of `plain_step` (colliders only: a fused body has no spheres) as a rule
-/// between the steps of [`Method::steps`], the same calls on the same numbers: with `account`
-/// it records each step's change of energy in `log`.
+/// The contact part of `plain_step` (the spheres move, then every response happens) as a rule
+/// between the steps of [`Method::steps`], the same calls on the same numbers, on the spheres
+/// of `log`: with `account` it records each step's change of energy in `log`.
 fn response(dt: f64, account: bool, log: Arc<Mutex<ResponseLog>>) -> Response {
-    Response(Arc::new(move |model: &Model, x: &mut [DVec3], v: &mut [DVec3]| {
-        let mut log = log.lock().unwrap_or_else(PoisonError::into_inner);
-        let ResponseLog {
-            contacts,
-            changes,
-            x_prev,
-        } = &mut *log;
-        x_prev.resize(x.len(), DVec3::ZERO);
-        let bodies = Bodies {
-            x: &mut *x,
-            v: &mut *v,
-            x_prev,
-            history_valid: false,
-            spheres: &mut [],
-        };
-        if !account {
-            collide::resolve(model, bodies, dt);
-            return;
-        }
-        changes.clear();
-        collide::resolve_logged(model, bodies, dt, Some(changes));
-        changes.finish(model.particle_count());
-        contacts.push(energy_change_of(model, x, v, &[], changes));
-    }))
+    Response(Arc::new(
+        move |model: &Model, x: &mut [DVec3], v: &mut [DVec3]| {
+            let mut log = log.lock().unwrap_or_else(PoisonError::into_inner);
+            let ResponseLog {
+                contacts,
+                changes,
+                x_prev,
+                spheres,
+            } = &mut *log;
+            x_prev.resize(x.len(), DVec3::ZERO);
+            let mut bodies = Bodies {
+                x: &mut *x,
+                v: &mut *v,
+                x_prev,
+                history_valid: false,
+                spheres,
+            };
+            collide::advance_spheres(model, bodies.reborrow(), dt);
+            if !account {
+                collide::collide_spheres(model, bodies.reborrow(), dt);
+                collide::resolve(model, bodies, dt);
+                return;
+            }
+            changes.clear();
+            collide::collide_spheres_logged(model, bodies.reborrow(), dt, Some(changes));
+            collide::resolve_logged(model, bodies, dt, Some(changes));
+            changes.finish(model.particle_count());
+            contacts.push(energy_change_of(model, x, v, spheres, changes));
+        },
+    ))
 }
 
 /// The log of a finished chunk, taken out of its lock.

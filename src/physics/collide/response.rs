@@ -34,10 +34,11 @@ pub fn resolve_logged<'a, 'b>(
     // against these, so that no particle's answer depends on the order (module docs).
     let before: Vec<DVec3> = state.x[..n].to_vec();
     // Each collider's bounds once per call, not once per particle as `Collider::may_touch` in
-    // `respond` makes them: a particle they rule out is one `respond` leaves as it is (a plane
-    // has none: its own test is as cheap).
-    let broads: Vec<Option<Broad>> = (model.colliders.iter())
-        .map(|c| (!matches!(c, Collider::Plane { .. })).then(|| c.broad(params.epsilon)))
+    // `respond` makes them: a particle they rule out is one `respond` leaves as it is. A plane's
+    // bound is its own `φ < ε` test (with a margin), inline: most particles of a body resting
+    // on a plane are far from it, and calling `respond` for each cost more than the response.
+    let broads: Vec<Broad> = (model.colliders.iter())
+        .map(|c| c.broad(params.epsilon))
         .collect();
     let mut owed = 0.0;
     for i in 0..n {
@@ -45,11 +46,15 @@ pub fn resolve_logged<'a, 'b>(
         if w == 0.0 {
             continue;
         }
+        // Far from every collider (most particles of a body resting on one): nothing to do.
+        if !broads.iter().any(|b| b.may_touch(state.x[i])) {
+            continue;
+        }
         let (x_old, v_old) = (state.x[i], state.v[i]);
         let (mut x, mut v) = (x_old, v_old);
         let mut touched = false;
         for (collider, broad) in model.colliders.iter().zip(&broads) {
-            if broad.as_ref().is_some_and(|b| !b.may_touch(x)) {
+            if !broad.may_touch(x) {
                 continue;
             }
             // The rise of potential energy per kg from `from` to `to` (J/kg): gravity, and the

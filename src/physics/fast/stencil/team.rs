@@ -28,6 +28,11 @@
 //! the pass's power bit for bit. The slots are summed after the team, so they are never read
 //! while it runs (energy accounting in many steps at once, `Simulation::advance`).
 //!
+//! **A serial stage.** Between two passes the body may call [`Crew::serial`]: the first thread
+//! to come runs a function on whole buffers (the collision response after a step, which reads
+//! any particle and may scale every velocity), the others wait for it as at a barrier, and the
+//! team goes on with the next pass without handing the work back to the pool.
+//!
 //! **Stealing.** Every thread of the team has a home part, which it claims first in every pass
 //! (so a part's particles stay in one core's cache from pass to pass). A thread that has
 //! finished its part and finds another part of the pass still unclaimed after a few
