@@ -58,18 +58,17 @@
 //! elastic energy a projection after the step would: on `cloth-spheres` at dt = 0.005 s the
 //! guard halves none of the 600 steps of 3 s (`examples/implicit_guard.rs`).
 
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
 
 use glam::DVec3;
 use serde::Serialize;
 
-use crate::physics::collide::Collider;
-use crate::physics::energy::energy_change;
-use crate::physics::fast::stencil::any_may_touch;
-use crate::physics::integrators::{Projection, guard_energy, guard_start_energy};
+use crate::physics::collide::{Bodies, Changes, DynamicSphere};
+use crate::physics::energy::{energy_change, energy_change_of};
+use crate::physics::integrators::{Response, guard_energy, guard_start_energy};
 use crate::physics::{
-    Dissipated, Divergence, Energy, Method, SolveStats, State, Workspace, collide, diverge, energy,
+    Dissipated, Divergence, Energy, Method, Model, SolveStats, State, Workspace, collide, diverge,
+    energy,
 };
 use crate::scene::{Body, Scene};
 
@@ -110,6 +109,8 @@ pub struct Simulation {
     /// and the fused chunks given up in a row.
     fused_wait: u32,
     fused_misses: u32,
+    /// Steps taken in fused chunks.
+    fused_steps: u64,
 }
 
 /// Running totals of implicit Euler's solves.
@@ -155,6 +156,7 @@ impl Simulation {
             guard: true,
             fused_wait: 0,
             fused_misses: 0,
+            fused_steps: 0,
         };
         sim.rebase_energy();
         sim
@@ -297,18 +299,17 @@ impl Simulation {
     /// Takes up to `n` steps, stopping at divergence: the same states, counts, divergence and
     /// energy accounting as `n` calls of [`Simulation::step`], bit for bit.
     ///
-    /// Where nothing happens between two steps but the method itself (no sphere, no energy
-    /// guard, no collision response), the steps go to [`Method::steps`] in chunks of
+    /// Where nothing happens between two steps but the method itself and the colliders'
+    /// response (no sphere, no energy guard), the steps go to [`Method::steps`] in chunks of
     /// [`CHUNK`]: the fused multi-step passes `springlab bench` times (the rope's pass in
     /// structure-of-arrays form, the lattices' thread team). Colliders act inside the passes
-    /// (their contact force); their response after a step acts only on a particle within the
-    /// contact distance `ε` of a collider (`φ < ε`), so a chunk with colliders is tried only when
-    /// no free particle is that close at its start, and kept only when no particle came that
-    /// close at the end of any of its steps (each step's new positions are watched inside the
-    /// last pass, [`Workspace::projection`]); then every response would have done nothing, and
-    /// the chunk is the single steps bit for bit. With energy accounting those passes also write the
-    /// dissipated power of every stage, and each step's share is added in step order, as
-    /// [`Simulation::step`] adds it. A chunk is kept when every body's fastest particle ends it
+    /// (their contact force), and their response after each step ([`collide::resolve`], as
+    /// [`Simulation::step`] applies it) runs between two steps inside the chunk
+    /// ([`Workspace::response`]: on one thread of the team while the others wait, so the team
+    /// stays up), recording the energy it removes step by step. With energy accounting the
+    /// passes also write the dissipated power of every stage, and each step's share, less the
+    /// energy its response removed, is added in step order, as [`Simulation::step`] adds it.
+    /// A chunk is kept when every body's fastest particle ends it
     /// below a tenth of the divergence speed (at 100 m/s against 1000 m/s, so no step inside it
     /// can have diverged: unstable growth does not turn back); otherwise the states go back to
     /// the chunk's start and its steps are taken one by one, each checked.
@@ -338,20 +339,11 @@ impl Simulation {
         }
     }
 
-    /// True when a step may be the method's step alone (see [`Simulation::advance`]): no
-    /// energy guard, no sphere, and no free particle within reach of a collision response now.
+    /// True when a step may be the method's step and the collision response (see
+    /// [`Simulation::advance`]): no energy guard, no projection of the caller's.
     fn fusable(&self) -> bool {
-        self.scene.bodies.iter().zip(&self.work).all(|(b, work)| {
-            let declaration = b.method.declaration();
-            let colliders = &b.model.colliders;
-            !declaration.energy_guard
-                && b.state.spheres.is_empty()
-                && (colliders.is_empty()
-                    || (work.projection.is_none()
-                        && !b.state.x.iter().zip(&b.model.inv_mass).any(|(&x, &w)| {
-                            w != 0.0 && may_respond(colliders, b.model.contact.epsilon, x)
-                        })))
-        })
+        (self.scene.bodies.iter().zip(&self.work))
+            .all(|(b, work)| !b.method.declaration().energy_guard && work.projection.is_none())
     }
 
     /// `chunk` steps of every body in one [`Method::steps`] call each; false, with every state
@@ -359,12 +351,18 @@ impl Simulation {
     fn fused_chunk(&mut self, chunk: u64) -> bool {
         let saved: Vec<State> = self.scene.bodies.iter().map(|b| b.state.clone()).collect();
         let mut evals = 0;
-        // Raised when a step ends with a particle within reach of a collision response.
-        let touched = Arc::new(AtomicBool::new(false));
+        // Each body's response log (bodies with colliders or spheres, as `plain_step`).
+        let mut logs: Vec<Option<Arc<Mutex<ResponseLog>>>> = Vec::new();
         for (body, work) in self.scene.bodies.iter_mut().zip(&mut self.work) {
-            if !body.model.colliders.is_empty() {
-                work.projection = Some(watch(&body.model, Arc::clone(&touched)));
-            }
+            let contacts = !body.model.colliders.is_empty() || !body.state.spheres.is_empty();
+            let log = contacts.then(|| {
+                let log = Arc::new(Mutex::new(ResponseLog {
+                    spheres: body.state.spheres.clone(),
+                    ..ResponseLog::default()
+                }));
+                work.response = Some(response(self.dt, work.account, Arc::clone(&log)));
+                log
+            });
             evals += body.method.steps(
                 &body.model,
                 &mut body.state,
@@ -373,29 +371,52 @@ impl Simulation {
                 work,
                 chunk,
             );
-            work.projection = None;
+            work.response = None;
+            logs.push(log);
         }
         let calm = self.scene.bodies.iter().all(|b| {
             let speed = diverge::max_speed(&b.state);
             speed * speed < 0.01 * diverge::MAX_SPEED_SQUARED
         });
-        if !calm || touched.load(Ordering::Relaxed) {
+        if !calm {
             for (body, state) in self.scene.bodies.iter_mut().zip(saved) {
                 body.state = state;
             }
             return false;
         }
+        let logs: Vec<Option<ResponseLog>> = (logs.into_iter())
+            .map(|log| log.map(|log| take_log(&log)))
+            .collect();
+        // The spheres moved with the responses.
+        for (body, log) in self.scene.bodies.iter_mut().zip(&logs) {
+            if let Some(log) = log {
+                body.state.spheres.clone_from(&log.spheres);
+            }
+        }
         self.force_evals += evals;
         self.steps += chunk;
+        self.fused_steps += chunk;
         if self.accounting {
-            // Step by step, body by body: the order of the sums of `Simulation::step`.
+            // Step by step, body by body: the order of the sums of `Simulation::step`, each
+            // step's share less what its response removed, as `plain_step` takes it.
             for s in 0..chunk as usize {
-                for work in &self.work {
-                    self.dissipated = self.dissipated.plus(work.step_dissipated[s]);
+                for (work, log) in self.work.iter().zip(&logs) {
+                    let mut d = work.step_dissipated[s];
+                    if let Some(log) = log {
+                        d.contacts -= log.contacts[s];
+                        d = d.summed();
+                    }
+                    self.dissipated = self.dissipated.plus(d);
                 }
             }
         }
         true
+    }
+
+    /// The steps [`Simulation::advance`] took in fused chunks (the rest were single steps).
+    #[must_use]
+    pub fn fused_steps(&self) -> u64 {
+        self.fused_steps
     }
 
     /// Takes up to `n` steps, stopping at divergence; calls `after_step` after each one.
@@ -512,30 +533,58 @@ impl Simulation {
     }
 }
 
-/// True when a particle at `x` (m) is where the collision response after a step could act on
-/// it: within the contact distance `epsilon` (m) of a collider, `φ < ε` (NaN included), as
-/// [`collide::resolve`] tests it. Otherwise the response leaves the particle as it is.
-fn may_respond(colliders: &[Collider], epsilon: f64, x: DVec3) -> bool {
-    colliders.iter().any(|c| {
-        c.may_touch(x, epsilon)
-            && c.contact(x)
-                .is_some_and(|contact| contact.phi < epsilon || contact.phi.is_nan())
-    })
+/// What the collision responses of a fused chunk recorded, and their scratch.
+#[derive(Default)]
+struct ResponseLog {
+    /// With accounting: the change of energy each step's response made (J), in step order.
+    contacts: Vec<f64>,
+    changes: Changes,
+    /// Verlet's history, unused (the fused methods keep none), for the [`Bodies`] view.
+    x_prev: Vec<DVec3>,
+    /// The body's dynamic spheres, moved by the responses (the methods' steps do not read
+    /// them), back into the state after the chunk.
+    spheres: Vec<DynamicSphere>,
 }
 
-/// A step-end rule that changes nothing and raises `touched` when a particle ends the step
-/// within reach of a collision response of `model`'s colliders ([`may_respond`]; pinned
-/// particles too, which is only more cautious).
-fn watch(model: &crate::physics::Model, touched: Arc<AtomicBool>) -> Projection {
-    let colliders = model.colliders.clone();
-    let epsilon = model.contact.epsilon;
-    Projection(Arc::new(move |x: &mut [DVec3], _v: &mut [DVec3]| {
-        if any_may_touch(&colliders, epsilon, x, |p| {
-            may_respond(&colliders, epsilon, p)
-        }) {
-            touched.store(true, Ordering::Relaxed);
-        }
-    }))
+/// The contact part of `plain_step` (the spheres move, then every response happens) as a rule
+/// between the steps of [`Method::steps`], the same calls on the same numbers, on the spheres
+/// of `log`: with `account` it records each step's change of energy in `log`.
+fn response(dt: f64, account: bool, log: Arc<Mutex<ResponseLog>>) -> Response {
+    Response(Arc::new(
+        move |model: &Model, x: &mut [DVec3], v: &mut [DVec3]| {
+            let mut log = log.lock().unwrap_or_else(PoisonError::into_inner);
+            let ResponseLog {
+                contacts,
+                changes,
+                x_prev,
+                spheres,
+            } = &mut *log;
+            x_prev.resize(x.len(), DVec3::ZERO);
+            let mut bodies = Bodies {
+                x: &mut *x,
+                v: &mut *v,
+                x_prev,
+                history_valid: false,
+                spheres,
+            };
+            collide::advance_spheres(model, bodies.reborrow(), dt);
+            if !account {
+                collide::collide_spheres(model, bodies.reborrow(), dt);
+                collide::resolve(model, bodies, dt);
+                return;
+            }
+            changes.clear();
+            collide::collide_spheres_logged(model, bodies.reborrow(), dt, Some(changes));
+            collide::resolve_logged(model, bodies, dt, Some(changes));
+            changes.finish(model.particle_count());
+            contacts.push(energy_change_of(model, x, v, spheres, changes));
+        },
+    ))
+}
+
+/// The log of a finished chunk, taken out of its lock.
+fn take_log(log: &Mutex<ResponseLog>) -> ResponseLog {
+    std::mem::take(&mut *log.lock().unwrap_or_else(PoisonError::into_inner))
 }
 
 /// What one body's step did.

@@ -1,5 +1,6 @@
 //! `Simulation::advance` takes the fused multi-step passes (`Method::steps`) where nothing but
-//! the method acts between steps, and must give what as many single steps give, bit for bit:
+//! the method and the colliders' response acts between steps, and must give what as many single
+//! steps give, bit for bit:
 //! the same positions, velocities, step and force-evaluation counts, and the same divergence;
 //! with energy accounting on (as `springlab run` steps), the same energy dissipated and residual.
 
@@ -7,8 +8,8 @@ use springlab::physics::Method;
 use springlab::scene;
 use springlab::simulation::Simulation;
 
-/// `scene` (with `sets`), stepped by `method` at `dt`, energy accounting on or off, spheres
-/// removed (the fused path's conditions) and the colliders too unless `colliders`.
+/// `scene` (with `sets`), stepped by `method` at `dt`, energy accounting on or off, the
+/// colliders and dynamic spheres removed unless `colliders`.
 fn sim(
     name: &str,
     sets: &[&str],
@@ -23,8 +24,8 @@ fn sim(
     for body in &mut scene.bodies {
         if !colliders {
             body.model.colliders.clear();
+            body.state.spheres.clear();
         }
-        body.state.spheres.clear();
     }
     let mut sim = Simulation::new(scene);
     sim.set_dt(dt);
@@ -117,10 +118,10 @@ fn the_lattices_advance_as_single_steps() {
 
 #[test]
 fn a_body_that_lands_on_a_collider_advances_as_single_steps() {
-    // The jelly cube 0.1 m above its plane: it falls for about 0.14 s (fused chunks, the plane
-    // watched in every step's last pass), lands within a chunk (taken again step by step) and
-    // rests on it (its particles within the contact distance: step by step). The responses
-    // acted (energy taken out by contacts) and every number is the single steps'.
+    // The jelly cube 0.1 m above its plane: it falls for about 0.14 s, lands and rests on it,
+    // all in fused chunks, the response after each step taken between two steps of a chunk.
+    // The responses acted (energy taken out by contacts), every number is the single steps',
+    // and every chunk was fused (300 steps: four chunks of 64 and one of 44).
     for method in [Method::SemiImplicitEuler, Method::Rk4] {
         for accounting in [false, true] {
             let single = same_either_way_accounting(
@@ -145,6 +146,73 @@ fn a_body_that_lands_on_a_collider_advances_as_single_steps() {
                     single.dissipated().contacts > 0.0,
                     "{method}: no response acted"
                 );
+            }
+            let mut fused = sim(
+                "cube-plane",
+                &["offset=[0, -4.9, 0]"],
+                method,
+                1e-3,
+                accounting,
+                true,
+            );
+            fused.advance(300);
+            assert_eq!(fused.fused_steps(), 300, "{method}: steps in fused chunks");
+        }
+    }
+}
+
+#[test]
+fn a_cloth_on_spheres_advances_as_single_steps() {
+    // The course cloth of 2024 touches its sphere (kinematic, at rest) from the first step, and
+    // 2022's four spheres (dynamic, in free fall, radius 1 m at 1.5 m apart: they overlap and
+    // push each other apart): the spheres move and respond between two steps of a chunk. Every
+    // number is the single steps', the spheres' too, and every chunk was fused.
+    let cases: [(&str, &[&str], u64); 2] = [
+        ("cloth-sphere", &[], 70),
+        ("cloth-spheres", &["n=10", "sphere_radius=1"], 300),
+    ];
+    for (name, sets, n) in cases {
+        for accounting in [false, true] {
+            let single = same_either_way_accounting(
+                name,
+                sets,
+                Method::SemiImplicitEuler,
+                1e-4,
+                n,
+                accounting,
+                true,
+            );
+            let mut fused = sim(
+                name,
+                sets,
+                Method::SemiImplicitEuler,
+                1e-4,
+                accounting,
+                true,
+            );
+            fused.advance(n);
+            assert_eq!(fused.fused_steps(), n, "{name}: steps in fused chunks");
+            let spheres = |s: &Simulation| -> Vec<u64> {
+                s.states()
+                    .flat_map(|s| &s.spheres)
+                    .flat_map(|s| s.center.to_array().into_iter().chain(s.velocity.to_array()))
+                    .map(f64::to_bits)
+                    .collect()
+            };
+            assert!(
+                spheres(&fused) == spheres(&single),
+                "{name}: spheres differ"
+            );
+            if name == "cloth-sphere" && accounting {
+                assert!(
+                    single.dissipated().contacts != 0.0,
+                    "{name}: no response acted"
+                );
+            }
+            if name == "cloth-spheres" {
+                let first = single.states().flat_map(|s| &s.spheres).next();
+                let x = first.map_or(f64::NAN, |s| s.center.x);
+                assert!(x < -0.76, "{name}: the spheres were not pushed apart ({x})");
             }
         }
     }

@@ -18,7 +18,7 @@ use serde::Serialize;
 
 use glam::DVec3;
 
-use super::collide::{Changes, contact_power, spheres_energy};
+use super::collide::{Changes, DynamicSphere, contact_power, spheres_energy};
 use super::forces::{Model, applied_forces};
 use super::particles::State;
 
@@ -84,15 +84,28 @@ pub fn energy_with_elastic(model: &Model, state: &State, elastic: f64) -> Energy
 /// calls of [`energy`] up to rounding, without a pass over every spring.
 #[must_use]
 pub fn energy_change(model: &Model, state: &State, changes: &Changes) -> f64 {
+    energy_change_of(model, &state.x, &state.v, &state.spheres, changes)
+}
+
+/// [`energy_change`] of the positions `x` (m), velocities `v` (m/s) and dynamic `spheres` after
+/// the response.
+#[must_use]
+pub fn energy_change_of(
+    model: &Model,
+    x: &[DVec3],
+    v: &[DVec3],
+    spheres: &[DynamicSphere],
+    changes: &Changes,
+) -> f64 {
     // The position of particle j before the response.
-    let before = |j: usize| changes.of(j).map_or(state.x[j], |c| c.1);
+    let before = |j: usize| changes.of(j).map_or(x[j], |c| c.1);
     let mut delta = 0.0;
     for &(i, x_old, v_old) in &changes.particles {
         let i = i as usize;
         let m = model.mass[i];
-        let (x, v) = (state.x[i], state.v[i]);
+        let (x_new, v) = (x[i], v[i]);
         delta += 0.5 * m * (v.length_squared() - v_old.length_squared());
-        delta -= m * model.gravity.dot(x - x_old);
+        delta -= m * model.gravity.dot(x_new - x_old);
         for &s in model.springs_at(i) {
             let s = &model.springs[s as usize];
             let (a, b) = (s.a as usize, s.b as usize);
@@ -101,10 +114,10 @@ pub fn energy_change(model: &Model, state: &State, changes: &Changes) -> f64 {
                 // Counted with the other end, which comes first.
                 continue;
             }
-            delta += s.energy(&state.x) - s.energy_between(before(a), before(b));
+            delta += s.energy(x) - s.energy_between(before(a), before(b));
         }
     }
-    delta + spheres_energy(model.gravity, &state.spheres) - changes.spheres_before
+    delta + spheres_energy(model.gravity, spheres) - changes.spheres_before
 }
 
 /// The power that the dissipative forces take out of the particles at positions `x` (m) and

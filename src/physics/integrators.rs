@@ -175,6 +175,9 @@ impl Method {
         (0..n)
             .map(|_| {
                 let evals = self.step(model, state, dt, params, work);
+                if let Some(response) = &work.response {
+                    (response.0)(model, &mut state.x, &mut state.v);
+                }
                 if work.account {
                     work.step_dissipated.push(work.dissipated);
                 }
@@ -303,6 +306,10 @@ pub struct Workspace {
     pub projection: Option<Projection>,
     /// Set by a fused last pass that applied `projection` itself.
     pub(crate) projected: bool,
+    /// Applied to the whole state after each step of [`Method::steps`] (never by
+    /// [`Method::step`]): between two steps of a thread team, on one of its threads while the
+    /// others wait (`Simulation::advance`'s collision response).
+    pub response: Option<Response>,
     /// What the last collision response changed (energy accounting; see `Simulation`).
     pub(crate) changes: super::collide::Changes,
     /// Implicit Euler: start each solve from the last step's `Δv` (scaled by the ratio of the
@@ -335,6 +342,22 @@ pub type ProjectionFn = dyn Fn(&mut [DVec3], &mut [DVec3]) + Send + Sync;
 impl std::fmt::Debug for Projection {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str("Projection")
+    }
+}
+
+/// A rule on the whole state, positions and velocities (m, m/s), with the model, applied after
+/// each step of [`Method::steps`] (see [`Workspace::response`]). Unlike a [`Projection`] it may
+/// read any particle (a collision response that measures the springs, or pays from the body's
+/// kinetic energy); it runs on one thread at a time, in step order.
+#[derive(Clone)]
+pub struct Response(pub Arc<ResponseFn>);
+
+/// The function of a [`Response`].
+pub type ResponseFn = dyn Fn(&Model, &mut [DVec3], &mut [DVec3]) + Send + Sync;
+
+impl std::fmt::Debug for Response {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("Response")
     }
 }
 

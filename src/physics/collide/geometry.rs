@@ -356,6 +356,7 @@ impl Broad {
     /// False when the bounds rule `x` (m) out; true also for NaN (the exact test decides). The
     /// scalar form of the stencil's eight-lane broad phase (`stencil::contacts::may_touch`).
     #[must_use]
+    #[inline]
     pub(crate) fn may_touch(&self, x: DVec3) -> bool {
         match *self {
             Broad::Plane {

@@ -31,13 +31,17 @@ pub fn resolve_logged<'a, 'b>(
     let gravity = model.gravity;
     let n = state.x.len().min(model.particle_count());
     // Where every particle was before the responses: each particle's springs are measured
-    // against these, so that no particle's answer depends on the order (module docs).
-    let before: Vec<DVec3> = state.x[..n].to_vec();
+    // against these, so that no particle's answer depends on the order (module docs). The
+    // positions stay as they are until every particle has been answered: the new positions
+    // and velocities of the particles that respond wait in `moved`.
+    let before: &[DVec3] = &state.x[..n];
+    let mut moved: Vec<(usize, DVec3, DVec3)> = Vec::new();
     // Each collider's bounds once per call, not once per particle as `Collider::may_touch` in
-    // `respond` makes them: a particle they rule out is one `respond` leaves as it is (a plane
-    // has none: its own test is as cheap).
-    let broads: Vec<Option<Broad>> = (model.colliders.iter())
-        .map(|c| (!matches!(c, Collider::Plane { .. })).then(|| c.broad(params.epsilon)))
+    // `respond` makes them: a particle they rule out is one `respond` leaves as it is. A plane's
+    // bound is its own `φ < ε` test (with a margin), inline: most particles of a body resting
+    // on a plane are far from it, and calling `respond` for each cost more than the response.
+    let broads: Vec<Broad> = (model.colliders.iter())
+        .map(|c| c.broad(params.epsilon))
         .collect();
     let mut owed = 0.0;
     for i in 0..n {
@@ -45,18 +49,22 @@ pub fn resolve_logged<'a, 'b>(
         if w == 0.0 {
             continue;
         }
-        let (x_old, v_old) = (state.x[i], state.v[i]);
+        // Far from every collider (most particles of a body resting on one): nothing to do.
+        if !broads.iter().any(|b| b.may_touch(before[i])) {
+            continue;
+        }
+        let (x_old, v_old) = (before[i], state.v[i]);
         let (mut x, mut v) = (x_old, v_old);
         let mut touched = false;
         for (collider, broad) in model.colliders.iter().zip(&broads) {
-            if broad.as_ref().is_some_and(|b| !b.may_touch(x)) {
+            if !broad.may_touch(x) {
                 continue;
             }
             // The rise of potential energy per kg from `from` to `to` (J/kg): gravity, and the
             // springs at i (neighbours where they were) where they gain; a release is not paid
             // back.
             let rise = |from: DVec3, to: DVec3| {
-                let elastic = model.elastic_at(&before, i, to) - model.elastic_at(&before, i, from);
+                let elastic = model.elastic_at(before, i, to) - model.elastic_at(before, i, from);
                 -gravity.dot(to - from) + w * elastic.max(0.0)
             };
             if let Some(debt) = respond(collider, 0.0, params, &rise, &mut x, &mut v) {
@@ -65,13 +73,16 @@ pub fn resolve_logged<'a, 'b>(
             }
         }
         if touched {
-            state.x[i] = x;
-            state.v[i] = v;
-            keep_verlet_history(state.history_valid, &mut state.x_prev[i], x, v, dt);
+            moved.push((i, x, v));
             if let Some(log) = log.as_deref_mut() {
                 log.record(i, x_old, v_old);
             }
         }
+    }
+    for (i, x, v) in moved {
+        state.x[i] = x;
+        state.v[i] = v;
+        keep_verlet_history(state.history_valid, &mut state.x_prev[i], x, v, dt);
     }
     if owed > 0.0 {
         // Every particle's velocity changes: record them all (the records made above come first

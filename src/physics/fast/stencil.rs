@@ -116,7 +116,6 @@ use super::lanes::{LANES, Lanes, Plain, lanes};
 use super::pool::Pool;
 use crate::physics::collide::{Collider, ContactParams, contact_force};
 use crate::physics::springs::Spring;
-pub(crate) use contacts::any_may_touch;
 use kernels::range_portable;
 #[cfg(target_arch = "x86_64")]
 use kernels::{range_avx2, range_avx512};

@@ -255,8 +255,10 @@ pub(super) fn steps(
         kx,
         power_slots,
         step_dissipated,
+        response,
         ..
     } = work;
+    let response = response.as_ref();
     let [k1v, k2v, k3v, _] = k;
     let [x3, v2, v3, v4] = kx;
     let mut buffers = [
@@ -286,6 +288,10 @@ pub(super) fn steps(
                     let mut pass = *pass;
                     pass.power = account.then_some(4 * s + j);
                     crew.pass(&pass);
+                }
+                if let Some(response) = response {
+                    // The step's last pass wrote the state (buffers 0 and 1).
+                    crew.serial(0, 1, &|x, v| (response.0)(model, x, v));
                 }
             }
         });

@@ -99,7 +99,7 @@ pub(super) fn steps(
         d.add_power(dt, p);
         d.summed()
     };
-    if work.projection.is_none() {
+    if work.projection.is_none() && work.response.is_none() {
         work.step_powers.clear();
         let powers = account.then_some(&mut work.step_powers);
         if stencil.semi_implicit_euler_steps_with_power(
@@ -142,8 +142,10 @@ pub(super) fn steps(
         v_stage,
         power_slots,
         step_dissipated,
+        response,
         ..
     } = work;
+    let response = response.as_ref();
     let slots = if account {
         stencil.power_len() * batch as usize
     } else {
@@ -162,6 +164,11 @@ pub(super) fn steps(
         stencil.team_with_power(parts, &mut buffers, power_slots, &|crew| {
             for s in done..done + count {
                 crew.pass(&pass(s, (s - done) as usize));
+                if let Some(response) = response {
+                    // Between this step and the next, on the buffers the step wrote.
+                    let to = if s.is_multiple_of(2) { 2 } else { 0 };
+                    crew.serial(to, to + 1, &|x, v| (response.0)(model, x, v));
+                }
             }
         });
         if account {

@@ -28,6 +28,11 @@
 //! the pass's power bit for bit. The slots are summed after the team, so they are never read
 //! while it runs (energy accounting in many steps at once, `Simulation::advance`).
 //!
+//! **A serial stage.** Between two passes the body may call [`Crew::serial`]: the first thread
+//! to come runs a function on whole buffers (the collision response after a step, which reads
+//! any particle and may scale every velocity), the others wait for it as at a barrier, and the
+//! team goes on with the next pass without handing the work back to the pool.
+//!
 //! **Stealing.** Every thread of the team has a home part, which it claims first in every pass
 //! (so a part's particles stay in one core's cache from pass to pass). A thread that has
 //! finished its part and finds another part of the pass still unclaimed after a few
@@ -171,12 +176,16 @@ struct Common<'b> {
     claimed: [Padded; MAX_PARTS],
     /// `done[k]`: passes of part `k` finished.
     done: [Padded; MAX_PARTS],
+    /// Serial stages ([`Crew::serial`]) some thread has taken, and those finished.
+    serial_claimed: Padded,
+    serial_done: Padded,
     /// Set when a thread panicked: the others stop waiting.
     abort: AtomicBool,
     _borrow: PhantomData<&'b mut [DVec3]>,
 }
 
-// SAFETY: the raw pointers are only dereferenced in `Common::run_part`, under the barrier
+// SAFETY: the raw pointers are only dereferenced in `Common::run_part` and `Crew::serial`
+// (which has the buffers to itself between two passes), under the barrier
 // discipline of the module docs (whole reads of buffers no one writes during the pass, writes
 // only of the running part's own disjoint piece); the rest is `Sync`.
 unsafe impl Sync for Common<'_> {}
@@ -278,6 +287,8 @@ pub struct Crew<'t> {
     home: usize,
     /// Passes this thread has been through.
     passes: Cell<u64>,
+    /// Serial stages this thread has been through.
+    serials: Cell<u64>,
     /// The last pass needed a part whose owner did not come: take such parts at once.
     alone: Cell<bool>,
 }
@@ -359,6 +370,57 @@ impl Crew<'_> {
     }
 }
 
+impl Crew<'_> {
+    /// Runs `f` on the whole of buffers `x` and `v` on one thread of the team, the first to
+    /// come, while the others wait; returns when it is done. Called between two passes (every
+    /// part of the last pass is done when [`Crew::pass`] returns, and no thread starts the next
+    /// one before `f` has finished), so `f` sees the buffers complete and no other thread reads
+    /// or writes them meanwhile. Every thread calls it at the same point of the body, as it
+    /// calls the passes.
+    ///
+    /// # Panics
+    /// If a buffer index is out of range or `x == v`, or another thread of the team panicked.
+    pub fn serial(&self, x: usize, v: usize, f: &(dyn Fn(&mut [DVec3], &mut [DVec3]) + Sync)) {
+        let c = self.common;
+        assert!(x < c.count && v < c.count && x != v, "no buffers {x}, {v}");
+        let s = self.serials.get();
+        self.serials.set(s + 1);
+        if c.serial_claimed
+            .0
+            .compare_exchange(s, s + 1, Ordering::AcqRel, Ordering::Relaxed)
+            .is_ok()
+        {
+            let n = c.stencil.particles;
+            // SAFETY: two distinct buffers (checked above), each of at least n values (checked
+            // by `Stencil::team`); every part of the passes before is done, and the other
+            // threads wait below before their next pass, so none reads or writes them now.
+            let (xs, vs) = unsafe {
+                (
+                    std::slice::from_raw_parts_mut(c.buffers[x].ptr, n),
+                    std::slice::from_raw_parts_mut(c.buffers[v].ptr, n),
+                )
+            };
+            f(xs, vs);
+            c.serial_done.0.store(s + 1, Ordering::Release);
+            return;
+        }
+        let start = Instant::now();
+        let mut spins = 0u32;
+        while c.serial_done.0.load(Ordering::Acquire) <= s {
+            assert!(
+                !c.abort.load(Ordering::Relaxed),
+                "another thread of the team panicked"
+            );
+            spins += 1;
+            if spins.is_multiple_of(32) && start.elapsed() >= SPIN {
+                std::thread::yield_now();
+            } else {
+                std::hint::spin_loop();
+            }
+        }
+    }
+}
+
 /// Raises the team's abort flag when dropped during a panic.
 struct AbortOnPanic<'a>(&'a AtomicBool);
 
@@ -429,6 +491,8 @@ impl Stencil {
             },
             claimed: std::array::from_fn(|_| Padded::default()),
             done: std::array::from_fn(|_| Padded::default()),
+            serial_claimed: Padded::default(),
+            serial_done: Padded::default(),
             abort: AtomicBool::new(false),
             _borrow: PhantomData,
         };
@@ -441,6 +505,7 @@ impl Stencil {
                 common,
                 home,
                 passes: Cell::new(0),
+                serials: Cell::new(0),
                 alone: Cell::new(false),
             });
         });
