@@ -18,11 +18,11 @@ pub mod lesson;
 pub mod study;
 pub mod tui;
 
+use springlab_core::random;
 pub use springlab_core::{
     Energy, Method, MethodParams, Model, RunReport, Scene, SceneError, Simulation, Spring,
     SpringKind, State, Workspace,
 };
 pub use springlab_core::{bench, budget, format, output, physics, scene, simulation};
-use springlab_core::random;
 pub use springlab_grade::grade;
 pub use springlab_render::render;

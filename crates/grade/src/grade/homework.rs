@@ -24,12 +24,18 @@ use super::Assignment;
 /// The student API crate (`homework-api/` in springlab's repository) as `(relative path,
 /// contents)`: written into every homework crate and into the grader's build directory.
 pub const API_FILES: [(&str, &str); 8] = [
-    ("Cargo.toml", include_str!("../../../../homework-api/Cargo.toml")),
+    (
+        "Cargo.toml",
+        include_str!("../../../../homework-api/Cargo.toml"),
+    ),
     (
         "src/channel.rs",
         include_str!("../../../../homework-api/src/channel.rs"),
     ),
-    ("src/lib.rs", include_str!("../../../../homework-api/src/lib.rs")),
+    (
+        "src/lib.rs",
+        include_str!("../../../../homework-api/src/lib.rs"),
+    ),
     (
         "src/matrix.rs",
         include_str!("../../../../homework-api/src/matrix.rs"),
