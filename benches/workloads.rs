@@ -47,7 +47,7 @@ fn hundred_steps(c: &mut Criterion) {
     group.finish();
 }
 
-/// The ceiling of the streaming loop (`src/physics/fast/stencil/ceiling.rs`): a thousand chunks of
+/// The ceiling of the streaming loop (`crates/core/src/physics/fast/stencil/ceiling.rs`): a thousand chunks of
 /// eight springs with each kernel this CPU has, operands in the first-level cache. 8 000 springs
 /// over the time per iteration is the kernel's springs per second on one thread.
 fn kernel_ceiling(c: &mut Criterion) {

@@ -469,7 +469,7 @@ fn include_str_of_outside_files_is_refused_and_never_echoed() {
     let root = scratch("include");
     let secret = root.join("secret.txt");
     std::fs::write(&secret, "the grader's secret 4f1c").expect("secret");
-    let own = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/grade/reference.rs");
+    let own = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/grade/src/grade/reference.rs");
     let code = format!(
         r#"
 const PASSWD: &str = include_str!("/etc/passwd");

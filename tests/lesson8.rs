@@ -191,7 +191,7 @@ fn lesson_8_quotes_the_recorded_advice() {
 
 /// The recording still holds for the code: the two cheapest levels again, to 1e-9 relative.
 /// Not bit for bit: the spring kernel is chosen for the CPU (AVX-512, AVX2 or portable, see
-/// `src/physics/fast/stencil.rs`), and kernels differ in the last bit of a force, so a machine
+/// `crates/core/src/physics/fast/stencil.rs`), and kernels differ in the last bit of a force, so a machine
 /// other than the recording's gives sags that differ in their last digits; a change of the
 /// physics or of the study moves them by far more.
 #[test]

@@ -259,7 +259,7 @@ const EXPLAINED: &[(u32, &str, &str)] = &[
     (
         7,
         "30",
-        "a count: the floating-point operations of one spring's Hooke and damper force as src/physics/springs.rs writes it (two of them slow: the square root and the division)",
+        "a count: the floating-point operations of one spring's Hooke and damper force as crates/core/src/physics/springs.rs writes it (two of them slow: the square root and the division)",
     ),
     (7, "512", "AVX-512"),
     // Lesson 8 (issue 14).

@@ -4,9 +4,10 @@
 //! - the relative links of every Markdown file (`[text](path)`, `![alt](path)` and reference
 //!   definitions `[label]: path`), resolved from the Markdown file's folder; a `#fragment` is
 //!   dropped, web addresses (`scheme:`) and in-page anchors are not files;
-//! - in the doc comments (`//!`, `///`) of `src/`, every path-like mention of a `.md`, `.rs`,
-//!   `.toml` or `.png` file whose first folder is a top-level entry of the repository (for
-//!   example `docs/course.md`, `src/render/paint.rs`), resolved from the repository root, and
+//! - in the doc comments (`//!`, `///`) of `src/` and `crates/`, every path-like mention of a
+//!   `.md`, `.rs`, `.toml` or `.png` file whose first folder is a top-level entry of the
+//!   repository (for example `docs/course.md`, `crates/render/src/render/paint.rs`), resolved
+//!   from the repository root, and
 //!   every bare upper-case Markdown name (`ARCHITECTURE.md`), resolved from the root too.
 //!   Paths that start elsewhere (`DIR/src/lib.rs`, a student's crate; `dir/frame_00042.png`, an
 //!   output) name files outside the repository and are left alone.
@@ -174,10 +175,11 @@ fn broken_markdown_links(root: &Path) -> (usize, Vec<String>) {
     (found.checked, found.broken)
 }
 
-/// Broken file references in the doc comments of `src/`, as `file:line: missing path`.
+/// Broken file references in the doc comments of `src/` and `crates/`, as `file:line: missing path`.
 fn broken_doc_references(root: &Path) -> (usize, Vec<String>) {
     let mut files = Vec::new();
     files_with_suffix(&root.join("src"), ".rs", &mut files);
+    files_with_suffix(&root.join("crates"), ".rs", &mut files);
     let mut found = Findings::default();
     for file in &files {
         let text = fs::read_to_string(file).expect("sources are UTF-8");
@@ -220,7 +222,7 @@ fn every_file_named_in_a_doc_comment_exists() {
     );
     assert!(
         broken.is_empty(),
-        "doc comments in src/ name missing files:\n{}",
+        "doc comments in src/ and crates/ name missing files:\n{}",
         broken.join("\n")
     );
 }

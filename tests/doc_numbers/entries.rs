@@ -5,7 +5,7 @@ use super::Entry;
 
 const ORDERS: &str = "here testing_md_quotes_the_measured_orders_and_rk4s_end: recomputed on the oscillator at the dts the page names";
 const COURSE: &str = "here course_md_values_are_the_scenes_defaults: the built-in scene's default (`springlab scenes`)";
-const RUBRIC_JELLY: &str = "code src/grade/jelly.rs `| #4 integrators | 25 | explicit Euler 5, implicit Euler 2.5 + midpoint 2.5, RK4 15 |`: the rubric's weights, each a check's points";
+const RUBRIC_JELLY: &str = "code crates/grade/src/grade/jelly.rs `| #4 integrators | 25 | explicit Euler 5, implicit Euler 2.5 + midpoint 2.5, RK4 15 |`: the rubric's weights, each a check's points";
 const STUDIES: &str = "test tests/recorded_numbers.rs docs_studies_quotes_the_recorded_resolution_study_and_its_limit: from the recording, pinned to the code by tests/lesson8.rs";
 
 pub const ENTRIES: &[Entry] = &[
@@ -13,7 +13,7 @@ pub const ENTRIES: &[Entry] = &[
     (
         "README.md",
         &["10^6"],
-        "code src/physics/diverge.rs `MAX_SPEED_SQUARED: f64 = 1.0e6`: the divergence check",
+        "code crates/core/src/physics/diverge.rs `MAX_SPEED_SQUARED: f64 = 1.0e6`: the divergence check",
     ),
     (
         "README.md",
@@ -39,23 +39,23 @@ pub const ENTRIES: &[Entry] = &[
     (
         "README.md",
         &["22.04", "2.35"],
-        "code src/grade/autograder.rs `Ubuntu 22.04`: the image the autograder targets and its glibc",
+        "code crates/grade/src/grade/autograder.rs `Ubuntu 22.04`: the image the autograder targets and its glibc",
     ),
     // docs/running.md
     (
         "docs/running.md",
         &["10^9", "3.6", "10^11", "2", "3840", "2160", "10^10", "16"],
-        "code src/budget.rs `frame_pixels: 3840.0 * 2160.0`: `Limits::DEFAULT` (steps 1e9, work 3.6e11, memory, pixels, file bytes), each refused over it in tests/budget.rs",
+        "code crates/core/src/budget.rs `frame_pixels: 3840.0 * 2160.0`: `Limits::DEFAULT` (steps 1e9, work 3.6e11, memory, pixels, file bytes), each refused over it in tests/budget.rs",
     ),
     (
         "docs/running.md",
         &["10^8"],
-        "code src/budget.rs `pub const RATE: f64 = 1e8`: the rate the time estimates assume",
+        "code crates/core/src/budget.rs `pub const RATE: f64 = 1e8`: the rate the time estimates assume",
     ),
     (
         "docs/running.md",
         &["10"],
-        "code src/budget.rs `pub const NOTICE_SECONDS: f64 = 10.0`",
+        "code crates/core/src/budget.rs `pub const NOTICE_SECONDS: f64 = 10.0`",
     ),
     (
         "docs/running.md",
@@ -65,7 +65,7 @@ pub const ENTRIES: &[Entry] = &[
     (
         "docs/running.md",
         &["1e-6", "1e6", "1e9"],
-        "code src/scene/params.rs `pub const MASS: Range = Range::Between(1e-6, 1e6);`: the ranges (tests/budget.rs denormal_masses_and_overflowing_stiffness_are_out_of_range)",
+        "code crates/core/src/scene/params.rs `pub const MASS: Range = Range::Between(1e-6, 1e6);`: the ranges (tests/budget.rs denormal_masses_and_overflowing_stiffness_are_out_of_range)",
     ),
     (
         "docs/running.md",
@@ -86,7 +86,7 @@ pub const ENTRIES: &[Entry] = &[
     (
         "docs/studies.md",
         &["2.5", "3"],
-        "code src/scene.rs `observe_at: 2.5`: each scene's observation time T (`SceneDef::observe_at`)",
+        "code crates/core/src/scene.rs `observe_at: 2.5`: each scene's observation time T (`SceneDef::observe_at`)",
     ),
     (
         "docs/studies.md",
@@ -278,7 +278,7 @@ pub const ENTRIES: &[Entry] = &[
     (
         "docs/course.md",
         &["200", "400", "100", "64", "0.00005", "480", "35"],
-        "source: the GAMES101 handout and skeleton (the rope in pixels; springlab's rope is in SI units, src/scene/rope.rs)",
+        "source: the GAMES101 handout and skeleton (the rope in pixels; springlab's rope is in SI units, crates/core/src/scene/rope.rs)",
     ),
     (
         "docs/course.md",
@@ -306,7 +306,7 @@ pub const ENTRIES: &[Entry] = &[
     (
         "docs/grading.md",
         &["8", "2000"],
-        "code src/grade/build/source.rs `MAX_SOURCE_BYTES: u64 = 8 << 20`: what a submission's copy may hold",
+        "code crates/grade/src/grade/build/source.rs `MAX_SOURCE_BYTES: u64 = 8 << 20`: what a submission's copy may hold",
     ),
     (
         "docs/grading.md",
@@ -321,7 +321,7 @@ pub const ENTRIES: &[Entry] = &[
     (
         "docs/grading.md",
         &["3", "10", "16", "32", "60", "256", "80", "300", "3072"],
-        "code src/grade/remote.rs `file_bytes: 16 << 20`: the program's and the build's limits (src/grade/build.rs, src/cli/grade.rs defaults)",
+        "code crates/grade/src/grade/remote.rs `file_bytes: 16 << 20`: the program's and the build's limits (crates/grade/src/grade/build.rs, src/cli/grade.rs defaults)",
     ),
     (
         "docs/grading.md",
@@ -357,17 +357,17 @@ pub const ENTRIES: &[Entry] = &[
     (
         "docs/homework-live.md",
         &["2"],
-        "code src/grade/live/build.rs `call_limit: Duration::from_secs(2)`",
+        "code crates/grade/src/grade/live/build.rs `call_limit: Duration::from_secs(2)`",
     ),
     (
         "docs/homework-live.md",
         &["150"],
-        "code src/grade/live/watch.rs `Duration::from_millis(150)`",
+        "code crates/grade/src/grade/live/watch.rs `Duration::from_millis(150)`",
     ),
     (
         "docs/homework-live.md",
         &["12"],
-        "code src/grade/live/build.rs `at most 12 lines`",
+        "code crates/grade/src/grade/live/build.rs `at most 12 lines`",
     ),
     (
         "docs/homework-live.md",
@@ -407,12 +407,12 @@ pub const ENTRIES: &[Entry] = &[
     (
         "docs/homework-live.md",
         &["128"],
-        "code src/grade/live.rs `REFERENCE_AHEAD`: two of `LiveOptions::ahead`'s 64 steps",
+        "code crates/grade/src/grade/live.rs `REFERENCE_AHEAD`: two of `LiveOptions::ahead`'s 64 steps",
     ),
     (
         "docs/homework-live.md",
         &["512"],
-        "code src/grade/remote/frames.rs `PIPE_BYTES`: 512 KiB",
+        "code crates/grade/src/grade/remote/frames.rs `PIPE_BYTES`: 512 KiB",
     ),
     (
         "docs/homework-live.md",
@@ -496,7 +496,7 @@ pub const ENTRIES: &[Entry] = &[
     (
         "docs/lesson-app.md",
         &["3"],
-        "code src/scene.rs `observe_at: 3.0`: the cloth's observation time",
+        "code crates/core/src/scene.rs `observe_at: 3.0`: the cloth's observation time",
     ),
     (
         "docs/lesson-app.md",
@@ -537,7 +537,7 @@ pub const ENTRIES: &[Entry] = &[
     (
         "docs/lesson-app.md",
         &["1.25"],
-        "code src/render/camera.rs `pub const ZOOM_STEP: f64 = 1.25;`",
+        "code crates/render/src/render/camera.rs `pub const ZOOM_STEP: f64 = 1.25;`",
     ),
     // docs/studies/README.md
     (

@@ -251,7 +251,7 @@ fn example_files_describe_their_scenes() {
 #[test]
 fn module_doc_examples_load() {
     // The two examples in the documentation of `scene::file` are real, loadable files.
-    let source = include_str!("../../src/scene/file.rs");
+    let source = include_str!("../../crates/core/src/scene/file.rs");
     let mut blocks = Vec::new();
     let mut current: Option<String> = None;
     for line in source.lines().filter_map(|l| l.strip_prefix("//!")) {

@@ -54,7 +54,7 @@ macro_rules! methods {
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
         pub enum Method {
             $(
-                #[doc = concat!("Declared in `src/physics/integrators/", stringify!($file), ".rs`.")]
+                #[doc = concat!("Declared in `crates/core/src/physics/integrators/", stringify!($file), ".rs`.")]
                 $variant,
             )*
         }

@@ -156,7 +156,7 @@ pub fn take_kinetic(inv_mass: &[f64], v: &mut [DVec3], amount: f64) -> f64 {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Changes {
     /// `(particle, x before, v before)`, sorted by particle, each once after [`Changes::finish`].
-    pub(crate) particles: Vec<(u32, DVec3, DVec3)>,
+    pub particles: Vec<(u32, DVec3, DVec3)>,
     /// Kinetic and gravitational energy of the non-kinematic spheres before (J).
     pub(crate) spheres_before: f64,
     /// After [`Changes::finish`]: `slot[i]` is the index of particle `i` in `particles`, or

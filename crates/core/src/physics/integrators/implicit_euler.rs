@@ -42,14 +42,14 @@
 //! real scene adds sits behind the solve, each part in a file of its own and skippable on a
 //! first reading (why each is built as it is, with its measurements: `docs/implicit-euler.md`):
 //!
-//! - `src/physics/integrators/implicit_euler/solve.rs`: the conjugate-gradient solve itself
+//! - `crates/core/src/physics/integrators/implicit_euler/solve.rs`: the conjugate-gradient solve itself
 //!   (`System`) and how it went ([`SolveStats`]; CG stops at `|r| ≤ tol·|b|`, `tol = 10⁻³` by
 //!   default, `cg_tolerance`);
-//! - `src/physics/integrators/implicit_euler/contacts.rs`: contacts inside the solve (Baraff &
+//! - `crates/core/src/physics/integrators/implicit_euler/contacts.rs`: contacts inside the solve (Baraff &
 //!   Witkin §5.3), an active set of at most [`MAX_CONTACT_PASSES`] solves;
-//! - `src/physics/integrators/implicit_euler/warm.rs`: the warm start (the solve starts from the
+//! - `crates/core/src/physics/integrators/implicit_euler/warm.rs`: the warm start (the solve starts from the
 //!   last steps' `Δv` extrapolated);
-//! - `src/physics/integrators/implicit_euler/lattice.rs`: the lattice path, reaching the fast
+//! - `crates/core/src/physics/integrators/implicit_euler/lattice.rs`: the lattice path, reaching the fast
 //!   engine (`crate::physics::fast::implicit_lattice`): the same system with each spring block
 //!   stored as four numbers, two passes per CG iteration.
 //!

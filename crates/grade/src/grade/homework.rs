@@ -24,31 +24,37 @@ use super::Assignment;
 /// The student API crate (`homework-api/` in springlab's repository) as `(relative path,
 /// contents)`: written into every homework crate and into the grader's build directory.
 pub const API_FILES: [(&str, &str); 8] = [
-    ("Cargo.toml", include_str!("../../homework-api/Cargo.toml")),
+    (
+        "Cargo.toml",
+        include_str!("../../../../homework-api/Cargo.toml"),
+    ),
     (
         "src/channel.rs",
-        include_str!("../../homework-api/src/channel.rs"),
+        include_str!("../../../../homework-api/src/channel.rs"),
     ),
-    ("src/lib.rs", include_str!("../../homework-api/src/lib.rs")),
+    (
+        "src/lib.rs",
+        include_str!("../../../../homework-api/src/lib.rs"),
+    ),
     (
         "src/matrix.rs",
-        include_str!("../../homework-api/src/matrix.rs"),
+        include_str!("../../../../homework-api/src/matrix.rs"),
     ),
     (
         "src/physics.rs",
-        include_str!("../../homework-api/src/physics.rs"),
+        include_str!("../../../../homework-api/src/physics.rs"),
     ),
     (
         "src/serve.rs",
-        include_str!("../../homework-api/src/serve.rs"),
+        include_str!("../../../../homework-api/src/serve.rs"),
     ),
     (
         "src/vec3.rs",
-        include_str!("../../homework-api/src/vec3.rs"),
+        include_str!("../../../../homework-api/src/vec3.rs"),
     ),
     (
         "src/wire.rs",
-        include_str!("../../homework-api/src/wire.rs"),
+        include_str!("../../../../homework-api/src/wire.rs"),
     ),
 ];
 
@@ -185,7 +191,7 @@ mod tests {
 
     #[test]
     fn every_file_of_the_api_crate_is_embedded() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("homework-api");
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../homework-api");
         let mut on_disk = vec!["Cargo.toml".to_string()];
         for entry in std::fs::read_dir(root.join("src")).expect("homework-api/src") {
             let name = entry.expect("entry").file_name();

@@ -21,7 +21,7 @@ use tiny_skia::Pixmap;
 use super::colour::Colour;
 
 /// The bundled TrueType font.
-static FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSansMono.ttf");
+static FONT_BYTES: &[u8] = include_bytes!("../../../../assets/fonts/DejaVuSansMono.ttf");
 
 /// The parsed font, loaded once.
 #[must_use]

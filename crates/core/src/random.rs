@@ -4,16 +4,16 @@
 
 /// xorshift64*: a 64-bit state, never zero.
 #[derive(Clone, Debug)]
-pub(crate) struct XorShift64Star(u64);
+pub struct XorShift64Star(u64);
 
 impl XorShift64Star {
     /// A generator from `state` (a zero state is replaced by 1: xorshift never leaves zero).
-    pub(crate) fn new(state: u64) -> XorShift64Star {
+    pub fn new(state: u64) -> XorShift64Star {
         XorShift64Star(if state == 0 { 1 } else { state })
     }
 
     /// The next number, uniform in `[0, 1)` (53 random bits).
-    pub(crate) fn unit(&mut self) -> f64 {
+    pub fn unit(&mut self) -> f64 {
         self.0 ^= self.0 >> 12;
         self.0 ^= self.0 << 25;
         self.0 ^= self.0 >> 27;
@@ -22,7 +22,7 @@ impl XorShift64Star {
     }
 
     /// The next number, uniform in `[-1, 1)`.
-    pub(crate) fn symmetric(&mut self) -> f64 {
+    pub fn symmetric(&mut self) -> f64 {
         2.0 * self.unit() - 1.0
     }
 }
