@@ -8,4 +8,4 @@
 
 pub mod grade;
 
-use springlab_core::{physics, random, scene};
+use springlab_core::{physics, random, scene, simulation};

@@ -380,10 +380,26 @@ impl Sandbox {
         // No executable is open for writing in this process while a child is between fork and
         // exec (it would inherit the descriptor and the exec of that file would fail with
         // ETXTBSY): see [`writing_executable`]. spawn returns once the program has been exec'd.
-        let _forking = FORKS
-            .read()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
-        command.spawn()
+        // A child forked by code that does not take this lock (a `Command` elsewhere in the
+        // process: a test harness's, a library's) may still hold such a descriptor until its
+        // own exec; the exec then fails with ETXTBSY for that moment only, so it is tried again
+        // (at most `ETXTBSY_TRIES` times, 10, 20, … ms apart).
+        let mut tries = 1;
+        loop {
+            let spawned = {
+                let _forking = FORKS
+                    .read()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner);
+                command.spawn()
+            };
+            match spawned {
+                Err(e) if e.raw_os_error() == Some(libc::ETXTBSY) && tries < ETXTBSY_TRIES => {
+                    std::thread::sleep(Duration::from_millis(10 * u64::from(tries)));
+                    tries += 1;
+                }
+                other => return other,
+            }
+        }
     }
 
     /// Without a PID namespace: kills every process of job `slot`'s user and waits (up to 5 s)
@@ -436,6 +452,9 @@ impl Sandbox {
 }
 
 static FORKS: std::sync::RwLock<()> = std::sync::RwLock::new(());
+
+/// How many times [`Sandbox::spawn`] tries an exec that failed with ETXTBSY.
+const ETXTBSY_TRIES: u32 = 8;
 
 /// Held while this process has an executable open for writing (copying a program): no sandbox
 /// child is forked meanwhile.
@@ -493,4 +512,69 @@ pub fn reachable_by(path: &Path, uid: u32, gid: u32) -> bool {
         p = dir.parent();
     }
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Config, Launch, Layer, Rlimits, Sandbox, libc};
+    use std::io::Write;
+    use std::os::unix::fs::PermissionsExt;
+    use std::process::Stdio;
+    use std::time::Duration;
+
+    /// A script in a folder of its own, and a launch of it with every layer left out (what is
+    /// tested is the exec, not the confinement).
+    fn script() -> (tempfile::TempDir, Launch, Sandbox) {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let program = dir.path().join("prog.sh");
+        std::fs::write(&program, "#!/bin/sh\nexit 7\n").expect("write script");
+        std::fs::set_permissions(&program, std::fs::Permissions::from_mode(0o755)).expect("chmod");
+        let launch = Launch {
+            program,
+            args: Vec::new(),
+            env: Vec::new(),
+            cwd: dir.path().to_path_buf(),
+            read: Vec::new(),
+            write: Vec::new(),
+            limits: Rlimits {
+                address_space: 1 << 32,
+                cpu_seconds: 10,
+                file_bytes: 1 << 20,
+                open_files: 64,
+                processes: 4096,
+            },
+            slot: 0,
+        };
+        let config = Config {
+            disabled: Layer::ALL.to_vec(),
+            ..Config::default()
+        };
+        (dir, launch, Sandbox::detect(&config))
+    }
+
+    fn spawn(sandbox: &Sandbox, launch: &Launch) -> std::io::Result<std::process::Child> {
+        sandbox.spawn(launch, Stdio::null(), Stdio::null(), Stdio::null())
+    }
+
+    #[test]
+    fn an_exec_that_meets_a_descriptor_open_for_writing_is_tried_again_until_it_closes() {
+        let (_dir, launch, sandbox) = script();
+        // Held open for writing, as a child forked elsewhere in the process holds a copied
+        // program until its own exec: the kernel refuses to run the file meanwhile.
+        let mut writer = std::fs::OpenOptions::new()
+            .append(true)
+            .open(&launch.program)
+            .expect("open for writing");
+        writer.write_all(b"\n").expect("write");
+        let err = spawn(&sandbox, &launch).expect_err("no exec while a writer is open");
+        assert_eq!(err.raw_os_error(), Some(libc::ETXTBSY), "{err}");
+        // Closed while the spawn waits between its tries: the spawn succeeds.
+        let closer = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(15));
+            drop(writer);
+        });
+        let mut child = spawn(&sandbox, &launch).expect("spawned once the writer closed");
+        closer.join().expect("closer");
+        assert_eq!(child.wait().expect("wait").code(), Some(7));
+    }
 }
