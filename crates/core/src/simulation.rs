@@ -340,10 +340,19 @@ impl Simulation {
     }
 
     /// True when a step may be the method's step and the collision response (see
-    /// [`Simulation::advance`]): no energy guard, no projection of the caller's.
+    /// [`Simulation::advance`]): no energy guard, no projection of the caller's, and a body
+    /// with colliders or spheres stepped by a method with a many-step path (the response
+    /// between two of its steps sees positions and velocities only; a method without that path
+    /// gains nothing from a chunk, and Verlet's and XPBD's history `x_prev` must follow the
+    /// response, as [`plain_step`] keeps it).
     fn fusable(&self) -> bool {
-        (self.scene.bodies.iter().zip(&self.work))
-            .all(|(b, work)| !b.method.declaration().energy_guard && work.projection.is_none())
+        (self.scene.bodies.iter().zip(&self.work)).all(|(b, work)| {
+            let declaration = b.method.declaration();
+            let contacts = !b.model.colliders.is_empty() || !b.state.spheres.is_empty();
+            !declaration.energy_guard
+                && work.projection.is_none()
+                && (!contacts || declaration.many.is_some())
+        })
     }
 
     /// `chunk` steps of every body in one [`Method::steps`] call each; false, with every state
