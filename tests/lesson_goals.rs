@@ -143,16 +143,7 @@ const WATCH: f64 = 0.5;
 per_lesson!(
     a_student_playing_every_try_list_in_order_meets_every_goal,
     student_walk,
-    [
-        rope: "rope",
-        hooke: "hooke",
-        euler: "euler",
-        verlet: "verlet",
-        jelly: "jelly",
-        cloth: "cloth",
-        speed_accuracy: "speed-accuracy",
-        model: "model",
-    ]
+    every
 );
 
 per_lesson!(

@@ -203,16 +203,7 @@ fn the_mouse_picks_through_the_grid_of_the_view_shown() {
 crate::common::per_lesson!(
     no_step_starts_with_the_camera_moving,
     camera_still_at_start,
-    [
-        rope: "rope",
-        hooke: "hooke",
-        euler: "euler",
-        verlet: "verlet",
-        jelly: "jelly",
-        cloth: "cloth",
-        speed_accuracy: "speed-accuracy",
-        model: "model",
-    ]
+    every
 );
 
 #[test]

@@ -109,12 +109,29 @@ pub fn jelly_bowl() -> (f64, f64) {
         .expect("a bowl")
 }
 
-/// One test per built-in lesson: `per_lesson!(module, check, [name: "slug", …])` makes a module
-/// `module` holding, for each lesson, a test `name` that calls `super::check("slug")`, and
-/// `module::SLUGS`, the slugs in that order. A long check over every lesson becomes one test per
+/// One test per built-in lesson: `per_lesson!(module, check, [name: "slug", …])` (or `every`,
+/// all of them) makes a module `module` holding, for each lesson, a test `name` that calls
+/// `super::check("slug")`, and `module::SLUGS`, the slugs in that order. A long check over every lesson becomes one test per
 /// lesson, so that the test threads share the lessons instead of one thread playing them all;
 /// each file compares its lists with [`lesson_slugs`] (a new lesson cannot be left out).
 macro_rules! per_lesson {
+    // Every built-in lesson, the one list of them.
+    ($module:ident, $check:ident, every) => {
+        crate::common::per_lesson!(
+            $module,
+            $check,
+            [
+                rope: "rope",
+                hooke: "hooke",
+                euler: "euler",
+                verlet: "verlet",
+                jelly: "jelly",
+                cloth: "cloth",
+                speed_accuracy: "speed-accuracy",
+                model: "model",
+            ]
+        );
+    };
     ($module:ident, $check:ident, [$($lesson:ident: $slug:literal),* $(,)?]) => {
         mod $module {
             pub const SLUGS: &[&str] = &[$($slug),*];

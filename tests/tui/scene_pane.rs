@@ -242,16 +242,7 @@ fn the_menu_and_a_cloth_draw_at_every_size_without_panicking() {
 crate::common::per_lesson!(
     every_screen_draws_at_every_size_without_panicking,
     every_screen_draws,
-    [
-        rope: "rope",
-        hooke: "hooke",
-        euler: "euler",
-        verlet: "verlet",
-        jelly: "jelly",
-        cloth: "cloth",
-        speed_accuracy: "speed-accuracy",
-        model: "model",
-    ]
+    every
 );
 
 #[test]
