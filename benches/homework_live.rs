@@ -60,13 +60,18 @@ fn built(parent: &Path, b: &Arc<Builder>, assignment: Assignment, lib: &str) -> 
         .homework
 }
 
-fn setup(assignment: Assignment, number: u32, step: usize, method: Option<Method>) -> Setup {
+/// The scene of step `step` of lesson `number`.
+fn lesson_scene(number: u32, step: usize) -> springlab::scene::Scene {
     let l = lesson::builtin()
         .into_iter()
         .map(|l| l.expect("lesson parses"))
         .find(|l| l.number == number)
         .expect("lesson exists");
-    let mut scene = l.steps[step - 1].build_scene().expect("scene");
+    l.steps[step - 1].build_scene().expect("scene")
+}
+
+fn setup(assignment: Assignment, number: u32, step: usize, method: Option<Method>) -> Setup {
+    let mut scene = lesson_scene(number, step);
     if let Some(m) = method {
         scene.set_method(m);
     }
@@ -285,12 +290,7 @@ fn beside_lesson(
     seconds: f64,
     alone: bool,
 ) -> (Vec<(String, f64)>, u64, u64) {
-    let l = lesson::builtin()
-        .into_iter()
-        .map(|l| l.expect("lesson parses"))
-        .find(|l| l.number == number)
-        .expect("lesson exists");
-    let mut scene = l.steps[step - 1].build_scene().expect("scene");
+    let mut scene = lesson_scene(number, step);
     scene.set_method(method);
     let setup = Setup::from_scene(homework.assignment(), number, &scene, 0.0).expect("setup");
     let steps = (seconds / setup.dt).round() as u64;
