@@ -191,11 +191,93 @@ fn step(
 }
 
 /// Kinetic (with the implied velocities `(x - x_prev)/dt`), gravitational and elastic energy (J).
+///
+/// A spring without stiffness (a rod that only the projection holds) adds `½·0·(L - L0)²`,
+/// which is `+0` whenever `|x_b - x_a|²` and `L0` are finite (then `L - L0` is finite, and
+/// `(0·s)·s` is `+0` for every finite `s`): it adds `+0.0` without the square root, the same
+/// sum bit for bit (tested); otherwise the term is computed.
 fn mechanical_energy(model: &Model, x: &[DVec3], x_prev: &[DVec3], dt: f64) -> f64 {
     let mut e = 0.0;
     for i in 0..x.len() {
         let v = (x[i] - x_prev[i]) / dt;
         e += 0.5 * model.mass[i] * v.length_squared() - model.mass[i] * model.gravity.dot(x[i]);
     }
-    e + model.springs.iter().map(|s| s.energy(x)).sum::<f64>()
+    let elastic = model.springs.iter().map(|s| {
+        let rod = s.stiffness == 0.0
+            && s.rest_length.is_finite()
+            && (x[s.b as usize] - x[s.a as usize])
+                .length_squared()
+                .is_finite();
+        if rod { 0.0 } else { s.energy(x) }
+    });
+    e + elastic.sum::<f64>()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::springs::{Spring, SpringKind};
+
+    /// [`mechanical_energy`] as the textbook writes it: every spring's `½ k (L - L0)²`.
+    fn textbook(model: &Model, x: &[DVec3], x_prev: &[DVec3], dt: f64) -> f64 {
+        let mut e = 0.0;
+        for i in 0..x.len() {
+            let v = (x[i] - x_prev[i]) / dt;
+            e += 0.5 * model.mass[i] * v.length_squared()
+                - model.mass[i] * model.gravity.dot(x[i]);
+        }
+        e + model.springs.iter().map(|s| s.energy(x)).sum::<f64>()
+    }
+
+    fn spring(a: u32, b: u32, rest_length: f64, stiffness: f64) -> Spring {
+        Spring {
+            a,
+            b,
+            rest_length,
+            stiffness,
+            damping: 0.0,
+            kind: SpringKind::Struct,
+        }
+    }
+
+    #[test]
+    fn rods_without_stiffness_add_the_textbook_energy_bit_for_bit() {
+        let x = vec![
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(0.3, 0.9, -0.1),
+            DVec3::new(0.3, 0.9, -0.1),
+            DVec3::new(-0.2, 1.3, 0.4),
+        ];
+        let x_prev: Vec<DVec3> = x.iter().map(|p| *p + DVec3::new(1e-3, -2e-3, 0.5e-3)).collect();
+        let cases = [
+            // Rods only (the sum of +0 terms), rods between stiff springs, stretched and at
+            // rest, a rod of zero length and a negative zero difference.
+            vec![spring(0, 1, 0.25, 0.0), spring(1, 3, 0.5, 0.0)],
+            vec![spring(0, 1, 0.25, 0.0), spring(1, 2, 0.0, 0.0), spring(2, 3, 0.1, 500.0)],
+            vec![spring(2, 1, 0.0, 0.0), spring(0, 3, 1.0, 2.0e4), spring(3, 1, 0.7, 0.0)],
+        ];
+        for springs in cases {
+            let model = Model::new(
+                vec![0.1, 0.2, 0.3, 0.4],
+                &[true, false, false, false],
+                springs,
+                DVec3::new(0.0, -9.81, 0.0),
+                0.0,
+            );
+            for dt in [1e-3, 1.0 / 60.0] {
+                assert_eq!(
+                    mechanical_energy(&model, &x, &x_prev, dt).to_bits(),
+                    textbook(&model, &x, &x_prev, dt).to_bits()
+                );
+            }
+            // A position that is not finite: the rods' terms are computed (NaN), as the
+            // textbook's.
+            let mut bad = x.clone();
+            bad[3] = DVec3::new(f64::INFINITY, 0.0, 0.0);
+            assert_eq!(
+                mechanical_energy(&model, &bad, &x_prev, 1e-3).is_nan(),
+                textbook(&model, &bad, &x_prev, 1e-3).is_nan()
+            );
+        }
+    }
 }
