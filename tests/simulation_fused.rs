@@ -6,7 +6,7 @@
 
 use springlab::physics::Method;
 use springlab::scene;
-use springlab::simulation::Simulation;
+use springlab::simulation::{CHUNK, CHUNK_MAX, Simulation};
 
 /// `scene` (with `sets`), stepped by `method` at `dt`, energy accounting on or off, the
 /// colliders and dynamic spheres removed unless `colliders`.
@@ -104,8 +104,45 @@ fn the_rope_workload_advances_as_single_steps() {
     // with dampers and drag, whose power the accounting integrates.
     let sets = ["nodes=64", "damping=0.5", "drag=0.01"];
     same_either_way("rope", &sets, Method::SemiImplicitEuler, 1e-4, 1000);
-    // A method with no many-step path: its single steps, chunk by chunk.
+    // A method with no many-step path: its single steps, chunk by chunk; and the rope
+    // workload's rods (no stiffness, 20 projections), whose energy the accounting sums (with
+    // some drag, so that the dissipation compared is not zero).
     same_either_way("rope", &sets, Method::Verlet, 1e-3, 300);
+    let rods = [
+        "nodes=64",
+        "stiffness=0",
+        "iterations=20",
+        "verlet_damping=0",
+        "drag=0.01",
+    ];
+    same_either_way("rope", &rods, Method::Verlet, 1e-3, 700);
+}
+
+#[test]
+fn a_tiny_scene_takes_longer_chunks() {
+    // 64 particles and 63 springs: 64 · 1024 / 127 steps, at most CHUNK_MAX; the 1000 steps
+    // are one long chunk and a shorter one, both fused (the rope swings far below 100 m/s).
+    let mut rope = sim(
+        "rope",
+        &["nodes=64"],
+        Method::SemiImplicitEuler,
+        1e-4,
+        true,
+        false,
+    );
+    assert_eq!(rope.chunk_steps(), CHUNK_MAX);
+    rope.advance(1000);
+    assert_eq!((rope.steps, rope.fused_steps()), (1000, 1000));
+    // The jelly cube's 1000 particles and thousands of springs: the plain chunk.
+    let cube = sim(
+        "cube-plane",
+        &[],
+        Method::SemiImplicitEuler,
+        1e-4,
+        true,
+        false,
+    );
+    assert_eq!(cube.chunk_steps(), CHUNK);
 }
 
 #[test]

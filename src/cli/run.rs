@@ -15,9 +15,9 @@ use crate::physics::Method;
 use crate::scene::{self, Scene};
 use crate::simulation::{RunReport, Simulation};
 
-/// Most steps between two checks of Ctrl-C and two progress updates: four of
-/// [`crate::simulation::CHUNK`].
-const PIECE: u64 = 256;
+/// Most steps between two checks of Ctrl-C and two progress updates, in fused chunks
+/// ([`Simulation::chunk_steps`]): four.
+const PIECE_CHUNKS: u64 = 4;
 
 /// Options of `springlab run`.
 #[derive(Debug, Args)]
@@ -211,14 +211,14 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let mut progress = Progress::new(steps, &format!("run {}", args.scene));
     let mut csv_error = None;
     // The steps go to `Simulation::advance` (the fused multi-step passes where the scene
-    // allows them, the same numbers as single steps) in pieces of at most `PIECE` steps,
+    // allows them, the same numbers as single steps) in pieces of at most `PIECE_CHUNKS` chunks,
     // ending at every CSV row.
     let mut done = 0;
     while done < steps && sim.diverged.is_none() {
         // Ctrl-C: stop between pieces; the CSV's temporary file is removed when dropped.
         interrupt::check()?;
         progress.set(done);
-        let mut piece = (steps - done).min(PIECE);
+        let mut piece = (steps - done).min(PIECE_CHUNKS * sim.chunk_steps());
         if csv.is_some() {
             piece = piece.min(args.csv_every - sim.steps % args.csv_every);
         }

@@ -79,6 +79,14 @@ pub const MAX_HALVINGS: u32 = 5;
 /// team, few enough that a chunk taken again step by step costs little.
 pub const CHUNK: u64 = 64;
 
+/// A scene of fewer particles and springs than this takes longer fused chunks than [`CHUNK`]
+/// (up to [`CHUNK_MAX`]), so that a chunk holds about as much work
+/// ([`Simulation::chunk_steps`]).
+const CHUNK_WORK: u64 = 1024;
+
+/// Most steps of one fused chunk (a tiny scene's).
+pub const CHUNK_MAX: u64 = 512;
+
 /// A scene in motion.
 #[derive(Clone, Debug)]
 pub struct Simulation {
@@ -301,7 +309,7 @@ impl Simulation {
     ///
     /// Where nothing happens between two steps but the method itself and the colliders'
     /// response (no sphere, no energy guard), the steps go to [`Method::steps`] in chunks of
-    /// [`CHUNK`]: the fused multi-step passes `springlab bench` times (the rope's pass in
+    /// [`Simulation::chunk_steps`]: the fused multi-step passes `springlab bench` times (the rope's pass in
     /// structure-of-arrays form, the lattices' thread team). Colliders act inside the passes
     /// (their contact force), and their response after each step ([`collide::resolve`], as
     /// [`Simulation::step`] applies it) runs between two steps inside the chunk
@@ -316,7 +324,7 @@ impl Simulation {
     pub fn advance(&mut self, n: u64) {
         let mut left = n;
         while left > 0 && self.diverged.is_none() {
-            let chunk = left.min(CHUNK);
+            let chunk = left.min(self.chunk_steps());
             if self.fused_wait > 0 {
                 self.fused_wait -= 1;
             } else if chunk >= 2 && self.fusable() {
@@ -337,6 +345,21 @@ impl Simulation {
             }
             left -= chunk;
         }
+    }
+
+    /// Steps per fused chunk of [`Simulation::advance`]: [`CHUNK`], or for a scene of fewer
+    /// than [`CHUNK_WORK`] particles and springs as many more as keep the chunk's work about
+    /// the same, at most [`CHUNK_MAX`] (a 64-node rope: 512). A chunk has fixed costs (the
+    /// states saved, the passes' start, the layout copied in and out, the speed test at its
+    /// end), a large share of a tiny scene's short chunk; one taken again step by step costs
+    /// no more than the steps it holds. The length changes no result: a fused chunk is the
+    /// same as its single steps.
+    #[must_use]
+    pub fn chunk_steps(&self) -> u64 {
+        let size: u64 = (self.scene.bodies.iter())
+            .map(|b| (b.model.particle_count() + b.model.springs().len()) as u64)
+            .sum();
+        (CHUNK * CHUNK_WORK / size.max(1)).clamp(CHUNK, CHUNK_MAX)
     }
 
     /// True when a step may be the method's step and the collision response (see
