@@ -43,14 +43,23 @@ pub fn resolve_logged<'a, 'b>(
     let broads: Vec<Broad> = (model.colliders.iter())
         .map(|c| c.broad(params.epsilon))
         .collect();
+    // Far from every collider (most particles of a body resting on one): nothing to do. The
+    // others, in index order.
+    let near = near_any(&broads, before);
+    let candidates = near.iter().enumerate().flat_map(|(k, &word)| {
+        let mut bits = word;
+        std::iter::from_fn(move || {
+            (bits != 0).then(|| {
+                let i = 64 * k + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                i
+            })
+        })
+    });
     let mut owed = 0.0;
-    for i in 0..n {
+    for i in candidates {
         let w = model.inv_mass[i];
         if w == 0.0 {
-            continue;
-        }
-        // Far from every collider (most particles of a body resting on one): nothing to do.
-        if !broads.iter().any(|b| b.may_touch(before[i])) {
             continue;
         }
         let (x_old, v_old) = (before[i], state.v[i]);
@@ -103,6 +112,44 @@ pub fn resolve_logged<'a, 'b>(
             );
         }
     }
+}
+
+/// The particles at `x` that one of `broads` may touch ([`Broad::may_touch`]), as bits: bit
+/// `i % 64` of word `i / 64`. One loop per collider over all the particles, without a branch
+/// per particle (a plane's and a sphere's tests written out, as `may_touch` makes them), so that
+/// a body resting on a collider costs a few operations per particle far from it.
+fn near_any(broads: &[Broad], x: &[DVec3]) -> Vec<u64> {
+    let mut near = vec![0u64; x.len().div_ceil(64)];
+    for broad in broads {
+        for (word, xs) in near.iter_mut().zip(x.chunks(64)) {
+            let mut bits = 0u64;
+            match *broad {
+                Broad::Plane {
+                    point,
+                    normal,
+                    phi_max,
+                } => {
+                    for (k, p) in xs.iter().enumerate() {
+                        let phi = (*p - point).dot(normal);
+                        bits |= u64::from(phi < phi_max || phi.is_nan()) << k;
+                    }
+                }
+                Broad::Sphere { center, d2_max } => {
+                    for (k, p) in xs.iter().enumerate() {
+                        let d2 = (*p - center).length_squared();
+                        bits |= u64::from(d2 < d2_max || d2.is_nan()) << k;
+                    }
+                }
+                _ => {
+                    for (k, p) in xs.iter().enumerate() {
+                        bits |= u64::from(broad.may_touch(*p)) << k;
+                    }
+                }
+            }
+            *word |= bits;
+        }
+    }
+    near
 }
 
 /// The body pays `amount` J from its kinetic energy ([`take_kinetic_with_spheres`]); every
@@ -300,4 +347,68 @@ pub fn after_step<'a, 'b>(model: impl Into<World<'a>>, state: impl Into<Bodies<'
     let (model, mut state) = (model.into(), state.into());
     step_spheres(model, state.reborrow(), dt);
     resolve(model, state, dt);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn near_any_marks_what_some_collider_may_touch() {
+        // Every kind of collider, alone and together, against particles on a grid through
+        // them (inside, near, far), a NaN position and a count that is not a whole word.
+        let colliders = [
+            Collider::Plane {
+                point: DVec3::new(0.0, 0.1, 0.0),
+                normal: DVec3::new(0.0, 1.0, 0.0),
+            },
+            Collider::Sphere {
+                center: DVec3::new(0.3, 0.5, 0.0),
+                radius: 0.25,
+            },
+            Collider::Bowl {
+                center: DVec3::new(-0.4, 0.6, 0.1),
+                radius: 0.5,
+                rim_height: 0.6,
+            },
+            Collider::HolePlane {
+                point: DVec3::ZERO,
+                normal: DVec3::new(0.0, 1.0, 0.0),
+                hole_center: DVec3::new(0.5, 0.0, -0.2),
+                hole_radius: 0.3,
+            },
+        ];
+        let mut x: Vec<DVec3> = (0..7 * 7 * 4)
+            .map(|i| {
+                let (a, b, c) = (i % 7, (i / 7) % 7, i / 49);
+                DVec3::new(
+                    0.2 * f64::from(a) - 0.6,
+                    0.2 * f64::from(b) - 0.3,
+                    0.1 * f64::from(c),
+                )
+            })
+            .collect();
+        x[70] = DVec3::new(f64::NAN, 0.0, 0.0);
+        for k in 0..=colliders.len() {
+            let list = if k == colliders.len() {
+                &colliders[..]
+            } else {
+                &colliders[k..=k]
+            };
+            let broads: Vec<Broad> = list.iter().map(|c| c.broad(1e-3)).collect();
+            let near = near_any(&broads, &x);
+            let mut touching = 0;
+            for (i, p) in x.iter().enumerate() {
+                let expected = broads.iter().any(|b| b.may_touch(*p));
+                assert_eq!(
+                    near[i / 64] >> (i % 64) & 1 == 1,
+                    expected,
+                    "particle {i}, {list:?}"
+                );
+                touching += usize::from(expected);
+            }
+            // Neither none nor all: the grid reaches both sides of every bound.
+            assert!(touching > 1 && touching < x.len(), "{list:?}: {touching}");
+        }
+    }
 }
