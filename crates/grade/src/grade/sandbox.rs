@@ -364,11 +364,16 @@ impl Sandbox {
         };
         let filter = self.seccomp.as_ref().ok().cloned();
         let limits = launch.limits;
+        let grader = libc::pid_t::try_from(std::process::id()).unwrap_or(-1);
         let pre_exec = move || -> io::Result<()> {
             let ruleset_fd = ruleset.as_ref().map_or(-1, AsRawFd::as_raw_fd);
             if ns != 0 {
                 // SAFETY: system calls on data prepared before the fork (module docs).
-                unsafe { enter_namespaces(ns, userns, &uid_map, &gid_map, proc_rule, ruleset_fd)? };
+                unsafe {
+                    enter_namespaces(
+                        grader, ns, userns, &uid_map, &gid_map, proc_rule, ruleset_fd,
+                    )?
+                };
             }
             // SAFETY: as above.
             unsafe { confine(uid, gid, limits, ruleset_fd, filter.as_deref()) }
