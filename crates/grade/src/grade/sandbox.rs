@@ -2,7 +2,8 @@
 //!
 //! ```text
 //! grader ─fork─▶ A  (own process group; with namespaces: unshare(pid, net, mount, ipc, uts
-//!                    [, user when not root]); waits and ends as B's program ended)
+//!                    [, user when not root]); waits and ends as B's program ended; kills B
+//!                    as soon as the grader process ends (a pidfd of it, polled))
 //!                └─fork─▶ B  pid 1 of the new PID namespace (dies with A: PDEATHSIG); mounts a
 //!                         fresh /proc (hidepid=invisible); reaps; when the program ends it
 //!                         exits, and the kernel kills every process left in the namespace
