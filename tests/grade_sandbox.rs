@@ -629,3 +629,88 @@ fn attack() {
     assert!(!everything.contains("9d2e"), "{everything}");
     assert!(!everything.contains("mem of"), "{everything}");
 }
+
+/// The command name (`/proc/PID/comm`) and state letter of process `pid`.
+fn comm_and_state(pid: u32) -> Option<(String, char)> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    let (open, close) = (stat.find('(')?, stat.rfind(')')?);
+    let state = stat[close + 1..].trim_start().chars().next()?;
+    Some((stat[open + 1..close].to_string(), state))
+}
+
+/// A grader that dies while the student's program loops (SIGKILLed, as by a course harness,
+/// without any cleanup of its own) takes the program with it: with namespaces, the process
+/// between the grader and the namespace watches the grader process and kills the namespace
+/// when it ends. (Without namespaces the program is the grader's direct child and is swept at
+/// the next grade of that slot: docs/grading.md.)
+#[test]
+fn a_looping_program_does_not_outlive_a_killed_grader() {
+    let Some(report) = layers() else { return };
+    if !is_active(&report, "namespaces") {
+        println!("no PID namespace on this machine: nothing watches the grader\n{report}");
+        return;
+    }
+    let uid = 64020;
+    let root = scratch("killed-grader");
+    let dir = starter_with(
+        &root,
+        "spinner",
+        "fn attack() { loop { std::hint::spin_loop(); } }",
+    );
+    let t = target();
+    let mut grader = Command::new(env!("CARGO_BIN_EXE_springlab"))
+        .current_dir(&root)
+        .args([
+            "grade",
+            dir.to_str().expect("utf-8"),
+            "--target-dir",
+            t.to_str().expect("utf-8"),
+            "--sandbox-uid",
+            &uid.to_string(),
+            "--time-limit-ms",
+            "120000",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run springlab");
+    // The program (the grader copies it as `program`) running as the sandbox user; a guard of 300 s
+    // against a build that never ends, never a timing assertion.
+    let spinning = || {
+        processes_of(uid)
+            .into_iter()
+            .any(|pid| comm_and_state(pid).is_some_and(|(c, s)| c == "program" && s == 'R'))
+    };
+    let start = Instant::now();
+    while !spinning() {
+        if let Some(status) = grader.try_wait().expect("wait") {
+            let out = grader.wait_with_output().expect("output");
+            panic!("the grader ended ({status}) before the program looped: {out:?}");
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(300),
+            "no looping program within 300 s"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    grader.kill().expect("SIGKILL the grader");
+    grader.wait().expect("reap the grader");
+    let start = Instant::now();
+    while !processes_of(uid).is_empty() && start.elapsed() < Duration::from_secs(5) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let left = processes_of(uid);
+    for pid in &left {
+        // Never leave a spinning program behind, even when the test fails.
+        let _ = nix::sys::signal::kill(
+            nix::unistd::Pid::from_raw(i32::try_from(*pid).expect("pid")),
+            nix::sys::signal::Signal::SIGKILL,
+        );
+    }
+    let named: Vec<_> = left.iter().map(|&p| (p, comm_and_state(p))).collect();
+    assert_eq!(
+        named,
+        Vec::new(),
+        "processes of the sandbox user 5 s after the grader was killed"
+    );
+}

@@ -1,7 +1,10 @@
 //! A homework method that never returns costs its item, and only its item, once the per-check
-//! time limit passes; grading goes on and finishes. (The looping thread is abandoned and keeps
-//! spinning until this test process exits, which is why this test has a file of its own.)
+//! time limit passes; grading goes on and finishes. The grader abandons the looping thread; the
+//! loop here ends only when the test releases it after the grade is complete (the grader cannot
+//! tell it from an endless one), so that the abandoned thread does not spin through every other
+//! test of the binary.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use springlab::grade::{
@@ -9,8 +12,21 @@ use springlab::grade::{
     State, grade_cloth,
 };
 
-/// The reference with an RK4 that loops forever (a `while` whose condition never changes).
+/// The reference with an RK4 that loops until [`RELEASED`] (a `while` whose condition the
+/// homework never changes).
 struct Looping;
+
+/// Set by the test once `grade_cloth` has returned: the abandoned loop ends.
+static RELEASED: AtomicBool = AtomicBool::new(false);
+
+/// Releases the loop when dropped, so that a failing assertion releases it too.
+struct Release;
+
+impl Drop for Release {
+    fn drop(&mut self) {
+        RELEASED.store(true, Ordering::Relaxed);
+    }
+}
 
 impl ClothHomework for Looping {
     fn springs(&self, n: usize) -> Vec<SpringSetup> {
@@ -54,7 +70,7 @@ impl ClothHomework for Looping {
     fn rk4(&self, s: &mut State, _dt: f64, _physics: &Physics) {
         let mut t = 0.0;
         let end = 1.0;
-        while t < end {
+        while t < end && !RELEASED.load(Ordering::Relaxed) {
             // The step is never added to t.
             std::hint::black_box(&mut s.x);
             t += 0.0;
@@ -69,7 +85,9 @@ fn an_endless_loop_times_out_and_scores_zero_for_its_item_only() {
         ..Options::default()
     };
     let start = Instant::now();
+    let release = Release;
     let report = grade_cloth(Looping, &options);
+    drop(release);
     print!("{}", report.table());
     for item in &report.items {
         if item.id == "rk4" {

@@ -345,14 +345,14 @@ fn confirmed_limits_hold_fifty_horizons_at_95_percent() {
     fifty_times_longer_at_95_percent(&r, &cube);
 }
 
-/// `cube-plane` at n = 6 and its stability study for RK4 (default horizon 2 s), computed once
+/// `cube-plane` at n = 5 and its stability study for RK4 (default horizon 2 s), computed once
 /// for the two tests below: the study's stiffest state is `stability::stiffest(&cube, 2.0)`
 /// (the same run, the same samples).
 fn cube_and_rk4_study() -> &'static (scene::Scene, stability::StabilityReport) {
     static STUDY: std::sync::OnceLock<(scene::Scene, stability::StabilityReport)> =
         std::sync::OnceLock::new();
     STUDY.get_or_init(|| {
-        let (cube, _) = stability::load_scene("cube-plane", &["n=6".into()]).unwrap();
+        let (cube, _) = stability::load_scene("cube-plane", &["n=5".into()]).unwrap();
         let options = StabilityOptions {
             methods: vec![Method::Rk4],
             ..StabilityOptions::default()
@@ -365,7 +365,7 @@ fn cube_and_rk4_study() -> &'static (scene::Scene, stability::StabilityReport) {
 
 #[test]
 fn an_impact_stiffens_the_cube_and_free_fall_does_not() {
-    // cube-plane at n = 6: the landing on the plane (t ≈ 1.4 s) squeezes the cube, and the
+    // cube-plane at n = 5: the landing on the plane (t ≈ 1.4 s) squeezes the cube, and the
     // stiffest mode of the squeezed cube is stiffer than at rest.
     let (cube, r) = cube_and_rk4_study();
     let body = &cube.bodies[0];

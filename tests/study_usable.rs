@@ -109,8 +109,15 @@ fn the_damped_ropes_explicit_euler_is_classed_by_the_hanging_equilibrium() {
 
 /// `|E + D - E0|` at its largest over `seconds` of `scene` with `method` at `dt` (J), and E0:
 /// sampled every 10 steps (the residual is a sum of smooth per-step terms; the steps between
-/// samples go through the fused multi-step passes).
-fn largest_residual(scene: &scene::Scene, method: Method, dt: f64, seconds: f64) -> (f64, f64) {
+/// samples go through the fused multi-step passes). With `stop_above`, the run stops at the
+/// first sample whose residual exceeds it.
+fn largest_residual(
+    scene: &scene::Scene,
+    method: Method,
+    dt: f64,
+    seconds: f64,
+    stop_above: Option<f64>,
+) -> (f64, f64) {
     let mut scene = scene.clone();
     scene.set_method(method);
     let mut sim = Simulation::new(scene);
@@ -125,6 +132,9 @@ fn largest_residual(scene: &scene::Scene, method: Method, dt: f64, seconds: f64)
         done += n;
         assert!(sim.diverged.is_none(), "{method} diverged at dt = {dt}");
         worst = worst.max(sim.energy_residual().abs());
+        if stop_above.is_some_and(|limit| worst > limit) {
+            break;
+        }
     }
     (worst, sim.energy_initial())
 }
@@ -137,14 +147,14 @@ fn jelly_bowl_prints_a_usable_dt_and_it_is_usable_for_ten_seconds() {
         "stability",
         "jelly-bowl",
         "--set",
-        "n=4",
+        "n=3",
         "--methods",
         "explicit-euler,semi-implicit-euler",
         "--json",
     ]);
-    // The course's jelly with 4³ particles instead of 10³: the same bowl, floor, hole and
-    // coefficients, a study and two 10 s runs that a test can afford.
-    let scene = scene::load("jelly-bowl", &["n=4".to_string()]).expect("built-in");
+    // The course's jelly with 3³ particles instead of 10³: the same bowl, floor, hole and
+    // coefficients, a study and three 10 s runs that a test can afford.
+    let scene = scene::load("jelly-bowl", &["n=3".to_string()]).expect("built-in");
     for (entry, method) in report["methods"]
         .as_array()
         .expect("methods")
@@ -162,11 +172,23 @@ fn jelly_bowl_prints_a_usable_dt_and_it_is_usable_for_ten_seconds() {
             dt <= stable,
             "{method}: usable {dt} above the scene dt {stable}"
         );
-        let (worst, e0) = largest_residual(&scene, method, 0.95 * dt, 10.0);
+        let (worst, e0) = largest_residual(&scene, method, 0.95 * dt, 10.0, None);
         assert!(
             worst <= 0.01 * e0.abs(),
             "{method} at 0.95 × {dt} s: |residual| reached {worst} J, E0 = {e0} J"
         );
+        // Explicit Euler's residual drifts (it pumps every vibration): at twice its usable dt
+        // it passes 1 % of E0 within the same 10 s, so the check above fails on a usable dt
+        // printed twice too large. (Semi-implicit Euler's residual oscillates; its usable dt
+        // is the search's lower bound, and twice it still holds here.)
+        if method == Method::ExplicitEuler {
+            let (worst, e0) =
+                largest_residual(&scene, method, 2.0 * dt, 10.0, Some(0.01 * e0.abs()));
+            assert!(
+                worst > 0.01 * e0.abs(),
+                "{method} at 2 × {dt} s: |residual| stayed at {worst} J, E0 = {e0} J"
+            );
+        }
     }
 }
 

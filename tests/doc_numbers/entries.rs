@@ -193,7 +193,7 @@ pub const ENTRIES: &[Entry] = &[
     // docs/stability.md (its table and stiffest states: stability_md_is_the_recorded_study)
     (
         "docs/stability.md",
-        &["1000", "4^3"],
+        &["1000", "3^3"],
         "label: the size of the course cube and of the small jelly a test uses",
     ),
     (

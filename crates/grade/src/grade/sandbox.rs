@@ -2,7 +2,8 @@
 //!
 //! ```text
 //! grader ─fork─▶ A  (own process group; with namespaces: unshare(pid, net, mount, ipc, uts
-//!                    [, user when not root]); waits and ends as B's program ended)
+//!                    [, user when not root]); waits and ends as B's program ended; kills B
+//!                    as soon as the grader process ends (a pidfd of it, polled))
 //!                └─fork─▶ B  pid 1 of the new PID namespace (dies with A: PDEATHSIG); mounts a
 //!                         fresh /proc (hidepid=invisible); reaps; when the program ends it
 //!                         exits, and the kernel kills every process left in the namespace
@@ -364,11 +365,16 @@ impl Sandbox {
         };
         let filter = self.seccomp.as_ref().ok().cloned();
         let limits = launch.limits;
+        let grader = libc::pid_t::try_from(std::process::id()).unwrap_or(-1);
         let pre_exec = move || -> io::Result<()> {
             let ruleset_fd = ruleset.as_ref().map_or(-1, AsRawFd::as_raw_fd);
             if ns != 0 {
                 // SAFETY: system calls on data prepared before the fork (module docs).
-                unsafe { enter_namespaces(ns, userns, &uid_map, &gid_map, proc_rule, ruleset_fd)? };
+                unsafe {
+                    enter_namespaces(
+                        grader, ns, userns, &uid_map, &gid_map, proc_rule, ruleset_fd,
+                    )?
+                };
             }
             // SAFETY: as above.
             unsafe { confine(uid, gid, limits, ruleset_fd, filter.as_deref()) }

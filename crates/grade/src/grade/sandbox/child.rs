@@ -24,19 +24,99 @@ unsafe fn write_file(path: &[u8], data: &[u8]) -> bool {
     n == data.len() as isize
 }
 
-/// Closes every descriptor but `keep`.
-unsafe fn close_all_but(keep: libc::c_int) {
+/// Closes every descriptor but those in `keep` (negative entries are ignored).
+unsafe fn close_all_but(keep: &[libc::c_int]) {
+    // The kept descriptors in ascending order, on the stack (no allocation).
+    let mut sorted = [-1; 4];
+    let mut n = 0;
+    for &fd in keep {
+        if fd >= 0 && n < sorted.len() {
+            sorted[n] = fd;
+            n += 1;
+        }
+    }
+    sorted[..n].sort_unstable();
+    let mut low = 0u32;
     // SAFETY: close_range on ranges of this process's descriptors.
     unsafe {
-        if keep > 0 {
-            libc::syscall(libc::SYS_close_range, 0u32, (keep - 1) as u32, 0u32);
+        for &fd in &sorted[..n] {
+            let fd = fd as u32;
+            if fd > low {
+                libc::syscall(libc::SYS_close_range, low, fd - 1, 0u32);
+            }
+            low = low.max(fd + 1);
         }
-        libc::syscall(libc::SYS_close_range, (keep + 1) as u32, u32::MAX, 0u32);
+        libc::syscall(libc::SYS_close_range, low, u32::MAX, 0u32);
     }
 }
 
-/// In A (module docs): new namespaces, then B and C; returns only in C.
+/// A pidfd of process `pid` (close-on-exec), or -1 where the kernel has none (before 5.3:
+/// ENOSYS).
+unsafe fn pidfd_open(pid: libc::pid_t) -> libc::c_int {
+    // SAFETY: pidfd_open takes a pid and flags; no memory.
+    let fd = unsafe { libc::syscall(libc::SYS_pidfd_open, pid, 0) };
+    libc::c_int::try_from(fd).unwrap_or(-1)
+}
+
+/// In A: waits until B ends; or, as soon as the grader process
+/// has ended (whichever thread forked A), kills B (and with it the whole namespace) and exits.
+/// With pidfds of both, `poll` sleeps until one of them ends; without (an old kernel), the
+/// checks run every 50 ms.
+unsafe fn watch(grader: libc::pid_t, grader_fd: libc::c_int, b: libc::pid_t) {
+    // SAFETY: (the whole function) system calls only, on locals.
+    unsafe {
+        let b_fd = if grader_fd >= 0 { pidfd_open(b) } else { -1 };
+        loop {
+            let mut status = 0;
+            let got = libc::waitpid(b, &raw mut status, libc::WNOHANG);
+            if got == b {
+                return;
+            }
+            if got < 0 && errno() != libc::EINTR {
+                libc::_exit(126);
+            }
+            let mut fds = [
+                libc::pollfd {
+                    fd: grader_fd,
+                    events: libc::POLLIN,
+                    revents: 0,
+                },
+                libc::pollfd {
+                    fd: b_fd,
+                    events: libc::POLLIN,
+                    revents: 0,
+                },
+            ];
+            // The grader ended: A was handed to another process (getppid() changed) or the
+            // grader's pidfd is readable.
+            let ended = |fds: &[libc::pollfd; 2]| {
+                libc::getppid() != grader || fds[0].revents & (libc::POLLIN | libc::POLLHUP) != 0
+            };
+            if ended(&fds) {
+                libc::kill(b, libc::SIGKILL);
+                libc::_exit(137);
+            }
+            if b_fd >= 0 {
+                libc::poll(fds.as_mut_ptr(), 2, -1);
+                if ended(&fds) {
+                    libc::kill(b, libc::SIGKILL);
+                    libc::_exit(137);
+                }
+            } else {
+                let pause = libc::timespec {
+                    tv_sec: 0,
+                    tv_nsec: 50_000_000,
+                };
+                libc::nanosleep(&raw const pause, std::ptr::null_mut());
+            }
+        }
+    }
+}
+
+/// In A (module docs): new namespaces, then B and C; returns only in C. `grader` is the pid of
+/// the grader process (A's parent): when it ends, A kills B ([`watch`]).
 pub(super) unsafe fn enter_namespaces(
+    grader: libc::pid_t,
     ns: libc::c_int,
     userns: bool,
     uid_map: &str,
@@ -46,6 +126,12 @@ pub(super) unsafe fn enter_namespaces(
 ) -> io::Result<()> {
     // SAFETY: (the whole function) system calls only, on data prepared before the fork.
     unsafe {
+        // A pidfd of the grader process, then a check that it is still A's parent (it may have
+        // ended before the pidfd was opened).
+        let grader_fd = pidfd_open(grader);
+        if libc::getppid() != grader {
+            return Err(io::Error::from_raw_os_error(libc::ESRCH));
+        }
         if libc::unshare(ns) != 0 {
             return Err(io::Error::last_os_error());
         }
@@ -66,10 +152,9 @@ pub(super) unsafe fn enter_namespaces(
             return Err(io::Error::last_os_error());
         }
         if b > 0 {
-            // A: wait for B, then end as the program ended.
-            close_all_but(pipe[0]);
-            let mut status = 0;
-            while libc::waitpid(b, &raw mut status, 0) < 0 && errno() == libc::EINTR {}
+            // A: wait for B (or kill it when the grader ends), then end as the program ended.
+            close_all_but(&[pipe[0], grader_fd]);
+            watch(grader, grader_fd, b);
             let mut word = [0u8; 4];
             if libc::read(pipe[0], word.as_mut_ptr().cast(), 4) != 4 {
                 libc::_exit(126);
@@ -81,6 +166,9 @@ pub(super) unsafe fn enter_namespaces(
         // the pipe is not needed either: A only ends after B.)
         libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL, 0, 0, 0);
         libc::close(pipe[0]);
+        if grader_fd >= 0 {
+            libc::close(grader_fd);
+        }
         if proc_rule
             && libc::mount(
                 std::ptr::null(),
@@ -111,7 +199,7 @@ pub(super) unsafe fn enter_namespaces(
         if c > 0 {
             // B: reap everything; when C ends, report its status and exit (the kernel then
             // kills whatever is left in the namespace).
-            close_all_but(pipe[1]);
+            close_all_but(&[pipe[1]]);
             loop {
                 let mut status = 0;
                 let pid = libc::waitpid(-1, &raw mut status, 0);
