@@ -20,36 +20,23 @@ pub(super) fn springs_exact<V: Lanes>(
     p: usize,
 ) -> (Forces<V>, V) {
     let j = i + g.delta;
-    debug_assert!(
-        j + LANES <= w.x[0].len() && p + LANES <= g.rest_length.len(),
-        "a chunk outside the window or the group"
-    );
-    // SAFETY: every caller (`range_body`, the small lattices' steps, the ceiling's rope) calls
-    // with the chunk's `LANES` springs and both their ends inside the window and the group's
-    // padded arrays (see `range_body`): `j + LANES` at most the length of every window array
-    // (all six have the same length), `p + LANES` at most the length of `rest_length`, and
-    // so `p / LANES` below that of `present`. Unchecked: the bounds checks were a sizeable
-    // share of the instructions of a chunk, in the loop whose length sets how many chunks
-    // the processor overlaps.
-    let at = |values: &[f64], k: usize| unsafe { V::load(&*values.as_ptr().add(k).cast()) };
     // d = x_b - x_a, L = |d|
-    let dx = at(w.x[0], j).sub(first[0]);
-    let dy = at(w.x[1], j).sub(first[1]);
-    let dz = at(w.x[2], j).sub(first[2]);
+    let dx = V::load(lanes(w.x[0], j)).sub(first[0]);
+    let dy = V::load(lanes(w.x[1], j)).sub(first[1]);
+    let dz = V::load(lanes(w.x[2], j)).sub(first[2]);
     let length = dx.mul(dx).add(dy.mul(dy)).add(dz.mul(dz)).sqrt();
     // n = d / L; a zero-length spring has no direction and no force.
     let inv = V::splat(1.0).div(length).where_positive(length);
     let (nx, ny, nz) = (dx.mul(inv), dy.mul(inv), dz.mul(inv));
     // Hooke k (L - L0) plus the damper k_d (v_b - v_a)·n, zero where there is no spring.
-    let dvx = at(w.v[0], j).sub(first[3]);
-    let dvy = at(w.v[1], j).sub(first[4]);
-    let dvz = at(w.v[2], j).sub(first[5]);
+    let dvx = V::load(lanes(w.v[0], j)).sub(first[3]);
+    let dvy = V::load(lanes(w.v[1], j)).sub(first[4]);
+    let dvz = V::load(lanes(w.v[2], j)).sub(first[5]);
     let rel = dvx.mul(nx).add(dvy.mul(ny)).add(dvz.mul(nz));
-    let rest = at(&g.rest_length, p);
+    let rest = V::load(lanes(&g.rest_length, p));
     let hooke = V::splat(g.stiffness).mul(length.sub(rest));
     let damper = V::splat(g.damping).mul(rel);
-    // SAFETY: as above, `p / LANES < present.len()`.
-    let present = unsafe { *g.present.get_unchecked(p / LANES) };
+    let present = g.present[p / LANES];
     let tension = hooke.add(damper).select(present);
     let power = damper.mul(rel).select(present);
     ([tension.mul(nx), tension.mul(ny), tension.mul(nz)], power)
