@@ -353,6 +353,22 @@ impl Collider {
 }
 
 impl Broad {
+    /// A plane's bounds: `φ = (x - p)·n` below `φ_max` (m), or NaN.
+    #[must_use]
+    #[inline]
+    pub(crate) fn plane_may_touch(x: DVec3, point: DVec3, normal: DVec3, phi_max: f64) -> bool {
+        let phi = (x - point).dot(normal);
+        phi < phi_max || phi.is_nan()
+    }
+
+    /// A sphere's bounds: `|x - c|²` below `d2_max` (m²), or NaN.
+    #[must_use]
+    #[inline]
+    pub(crate) fn sphere_may_touch(x: DVec3, center: DVec3, d2_max: f64) -> bool {
+        let d2 = (x - center).length_squared();
+        d2 < d2_max || d2.is_nan()
+    }
+
     /// False when the bounds rule `x` (m) out; true also for NaN (the exact test decides). The
     /// scalar form of the stencil's eight-lane broad phase (`stencil::contacts::may_touch`).
     #[must_use]
@@ -363,14 +379,8 @@ impl Broad {
                 point,
                 normal,
                 phi_max,
-            } => {
-                let phi = (x - point).dot(normal);
-                phi < phi_max || phi.is_nan()
-            }
-            Broad::Sphere { center, d2_max } => {
-                let d2 = (x - center).length_squared();
-                d2 < d2_max || d2.is_nan()
-            }
+            } => Self::plane_may_touch(x, point, normal, phi_max),
+            Broad::Sphere { center, d2_max } => Self::sphere_may_touch(x, center, d2_max),
             Broad::Bowl { center, d2_min } => {
                 let d2 = (x - center).length_squared();
                 d2 >= d2_min || d2.is_nan()

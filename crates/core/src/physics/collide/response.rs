@@ -116,7 +116,7 @@ pub fn resolve_logged<'a, 'b>(
 
 /// The particles at `x` that one of `broads` may touch ([`Broad::may_touch`]), as bits: bit
 /// `i % 64` of word `i / 64`. One loop per collider over all the particles, without a branch
-/// per particle (a plane's and a sphere's tests written out, as `may_touch` makes them), so that
+/// per particle (the plane's and the sphere's tests called in loops of their own), so that
 /// a body resting on a collider costs a few operations per particle far from it.
 fn near_any(broads: &[Broad], x: &[DVec3]) -> Vec<u64> {
     let mut near = vec![0u64; x.len().div_ceil(64)];
@@ -130,14 +130,12 @@ fn near_any(broads: &[Broad], x: &[DVec3]) -> Vec<u64> {
                     phi_max,
                 } => {
                     for (k, p) in xs.iter().enumerate() {
-                        let phi = (*p - point).dot(normal);
-                        bits |= u64::from(phi < phi_max || phi.is_nan()) << k;
+                        bits |= u64::from(Broad::plane_may_touch(*p, point, normal, phi_max)) << k;
                     }
                 }
                 Broad::Sphere { center, d2_max } => {
                     for (k, p) in xs.iter().enumerate() {
-                        let d2 = (*p - center).length_squared();
-                        bits |= u64::from(d2 < d2_max || d2.is_nan()) << k;
+                        bits |= u64::from(Broad::sphere_may_touch(*p, center, d2_max)) << k;
                     }
                 }
                 _ => {

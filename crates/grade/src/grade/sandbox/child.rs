@@ -66,6 +66,19 @@ unsafe fn watch(grader: libc::pid_t, grader_fd: libc::c_int, b: libc::pid_t) {
     // SAFETY: (the whole function) system calls only, on locals.
     unsafe {
         let b_fd = if grader_fd >= 0 { pidfd_open(b) } else { -1 };
+        // `revents` is set by the last poll (a descriptor of -1 is ignored by poll).
+        let mut fds = [
+            libc::pollfd {
+                fd: grader_fd,
+                events: libc::POLLIN,
+                revents: 0,
+            },
+            libc::pollfd {
+                fd: b_fd,
+                events: libc::POLLIN,
+                revents: 0,
+            },
+        ];
         loop {
             let mut status = 0;
             let got = libc::waitpid(b, &raw mut status, libc::WNOHANG);
@@ -75,33 +88,14 @@ unsafe fn watch(grader: libc::pid_t, grader_fd: libc::c_int, b: libc::pid_t) {
             if got < 0 && errno() != libc::EINTR {
                 libc::_exit(126);
             }
-            let mut fds = [
-                libc::pollfd {
-                    fd: grader_fd,
-                    events: libc::POLLIN,
-                    revents: 0,
-                },
-                libc::pollfd {
-                    fd: b_fd,
-                    events: libc::POLLIN,
-                    revents: 0,
-                },
-            ];
             // The grader ended: A was handed to another process (getppid() changed) or the
-            // grader's pidfd is readable.
-            let ended = |fds: &[libc::pollfd; 2]| {
-                libc::getppid() != grader || fds[0].revents & (libc::POLLIN | libc::POLLHUP) != 0
-            };
-            if ended(&fds) {
+            // grader's pidfd became readable in the last poll.
+            if libc::getppid() != grader || fds[0].revents & (libc::POLLIN | libc::POLLHUP) != 0 {
                 libc::kill(b, libc::SIGKILL);
                 libc::_exit(137);
             }
             if b_fd >= 0 {
                 libc::poll(fds.as_mut_ptr(), 2, -1);
-                if ended(&fds) {
-                    libc::kill(b, libc::SIGKILL);
-                    libc::_exit(137);
-                }
             } else {
                 let pause = libc::timespec {
                     tv_sec: 0,
