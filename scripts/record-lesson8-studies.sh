@@ -10,5 +10,7 @@ bin=target/release/springlab
 mkdir -p docs/studies
 # The levels lesson 8's table shows (the default stops one level above the scene's n = 25).
 "$bin" study resolution cloth-sphere --n 9,13,17,25,35,49 --json > docs/studies/resolution-cloth-sphere.json
-"$bin" advise jelly-bowl --tolerance 0.01 --json > docs/studies/advise-jelly-bowl.json
+# The advice is recorded with the exact spring kernel (AVX2 or portable, the same bits on every
+# x86-64 machine); tests/recorded_numbers.rs re-runs its recommendation with that kernel.
+SPRINGLAB_KERNEL=exact "$bin" advise jelly-bowl --tolerance 0.01 --json > docs/studies/advise-jelly-bowl.json
 echo "recorded docs/studies/resolution-cloth-sphere.json and docs/studies/advise-jelly-bowl.json"

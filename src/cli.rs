@@ -118,6 +118,11 @@ pub enum Command {
 #[must_use]
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    let kernel = std::env::var(crate::physics::stencil::KERNEL_ENV).ok();
+    if let Err(e) = crate::physics::stencil::Kernel::from_env(kernel.as_deref()) {
+        eprintln!("springlab: {e}");
+        return ExitCode::FAILURE;
+    }
     let dir = cli.lessons.as_deref();
     let result = match cli.command {
         Some(Command::Lesson { which, homework }) => lessons::open(

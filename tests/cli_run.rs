@@ -271,3 +271,51 @@ fn scenes_shows_a_methods_parameters_only_for_that_method() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("unknown scene `nosuch`"));
 }
+
+/// `SPRINGLAB_KERNEL` chooses the spring kernel; a name that is not a kernel stops the command
+/// with a message naming the variable and the choices, and `exact` gives the same `run --json`
+/// (wall time aside) as `portable`: both compute `sqrt`, then `1/L`, correctly rounded, where
+/// `avx512` does not.
+#[test]
+fn springlab_kernel_chooses_the_spring_kernel_or_says_what_it_accepts() {
+    let run = |kernel: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_springlab"))
+            .env("SPRINGLAB_KERNEL", kernel)
+            .args(["run", "cube-plane", "--time", "0.2", "--json"])
+            .output()
+            .expect("springlab")
+    };
+    let bad = run("fastest");
+    assert!(!bad.status.success());
+    assert!(bad.stdout.is_empty());
+    assert_eq!(
+        String::from_utf8_lossy(&bad.stderr),
+        "springlab: SPRINGLAB_KERNEL=fastest: not a spring kernel; expected exact, portable, avx2 or avx512\n"
+    );
+    let without_wall = |out: std::process::Output| {
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let mut v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+        v.as_object_mut().expect("an object").remove("wall_seconds");
+        v
+    };
+    let exact = without_wall(run("exact"));
+    assert_eq!(exact, without_wall(run("portable")));
+    // The variable acts: AVX-512's refined reciprocal square root differs in the last bits (and
+    // so does the run), or the CPU without it is told so.
+    if springlab::physics::stencil::Kernel::Avx512.is_available() {
+        assert_ne!(exact, without_wall(run("avx512")));
+    } else {
+        let refused = run("avx512");
+        assert!(!refused.status.success());
+        assert!(
+            String::from_utf8_lossy(&refused.stderr)
+                .contains("this CPU cannot run the Avx512 kernel"),
+            "{}",
+            String::from_utf8_lossy(&refused.stderr)
+        );
+    }
+}

@@ -178,16 +178,70 @@ impl Kernel {
         }
     }
 
-    /// The fastest kernel this CPU can run.
+    /// The kernel every new model computes with: the one [`KERNEL_ENV`] names, when it names one
+    /// this CPU can run (see [`Kernel::from_env`]), else the fastest this CPU can run.
     #[must_use]
     pub fn best() -> Kernel {
+        static CHOSEN: std::sync::OnceLock<Kernel> = std::sync::OnceLock::new();
+        *CHOSEN.get_or_init(|| {
+            Kernel::from_env(std::env::var(KERNEL_ENV).ok().as_deref())
+                .ok()
+                .flatten()
+                .unwrap_or_else(Kernel::fastest)
+        })
+    }
+
+    /// The fastest kernel this CPU can run.
+    #[must_use]
+    pub fn fastest() -> Kernel {
         Kernel::ALL
             .into_iter()
             .rev()
             .find(|k| k.is_available())
             .unwrap_or(Kernel::Portable)
     }
+
+    /// The kernel a value of [`KERNEL_ENV`] names: `None` when unset or empty; `exact` is the
+    /// fastest of the kernels with correctly rounded `sqrt` and `1/L` (AVX2, else portable), whose
+    /// results are the same bits on every x86-64 machine. An unknown name, or a kernel this CPU
+    /// cannot run, is an error naming the choices.
+    ///
+    /// # Errors
+    /// The message names the value, what is wrong and the accepted values.
+    pub fn from_env(value: Option<&str>) -> Result<Option<Kernel>, String> {
+        let Some(value) = value.map(str::trim).filter(|v| !v.is_empty()) else {
+            return Ok(None);
+        };
+        let kernel = match value.to_ascii_lowercase().as_str() {
+            "portable" => Kernel::Portable,
+            "avx2" => Kernel::Avx2,
+            "avx512" => Kernel::Avx512,
+            "exact" if Kernel::Avx2.is_available() => Kernel::Avx2,
+            "exact" => Kernel::Portable,
+            _ => {
+                return Err(format!(
+                    "{KERNEL_ENV}={value}: not a spring kernel; expected exact, portable, avx2 or avx512"
+                ));
+            }
+        };
+        if kernel.is_available() {
+            Ok(Some(kernel))
+        } else {
+            Err(format!(
+                "{KERNEL_ENV}={value}: this CPU cannot run the {kernel:?} kernel; expected exact or portable{}",
+                if Kernel::Avx2.is_available() {
+                    ", avx2"
+                } else {
+                    ""
+                }
+            ))
+        }
+    }
 }
+
+/// The environment variable that chooses the spring kernel ([`Kernel::from_env`]), for example
+/// `exact` to get the same bits on a machine with AVX-512 as on one without.
+pub const KERNEL_ENV: &str = "SPRINGLAB_KERNEL";
 
 /// Everything besides the springs that acts on a particle: weight, drag and the colliders'
 /// contact force, as in [`super::forces::forces`]:
