@@ -32,9 +32,12 @@
 //! second end `δ` particles later, so it is kept in a ring buffer per offset holding the last
 //! `R ≥ δ + TILE + 8` forces (`R` a power of two, index `p mod R`, plus a copy of the first
 //! eight after the end so that eight values can always be read at once). The whole working set
-//! stays in the core's caches however large the lattice is. Positions and velocities are first
+//! stays in the core's caches however large the lattice is. Positions and velocities are
 //! copied into one contiguous `f64` array per component (structure of arrays; with AVX-512 eight
-//! particles at a time by two-register permutes).
+//! particles at a time by two-register permutes) as the loop goes, each tile's second ends just
+//! before its pass 1, so that they are still in the first-level cache when the springs read them
+//! (measured on the 128×128 cloth, one thread: 3–4 % faster than copying the whole range first;
+//! the jelly cube, whose copy fits that cache, as fast).
 //!
 //! **To the end of the step in the same pass.** Pass 2 finishes each chunk with what the caller
 //! asked for ([`Output`]): the spring force; the total force with weight, drag and the

@@ -183,15 +183,6 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
     let ring = ring.get_mut(st.ring_len);
     let real = n.min(base + len) - base;
     let whole = real / LANES * LANES;
-    for i in (0..whole).step_by(LANES) {
-        let p = base + i;
-        let xc = V::load_vectors(x[p..p + LANES].try_into().expect("a chunk"));
-        let vc = V::load_vectors(v[p..p + LANES].try_into().expect("a chunk"));
-        for c in 0..3 {
-            xc[c].store((&mut xs[c][i..i + LANES]).try_into().expect("a chunk"));
-            vc[c].store((&mut vs[c][i..i + LANES]).try_into().expect("a chunk"));
-        }
-    }
     for (i, (x, v)) in x[base + whole..base + real]
         .iter()
         .zip(&v[base + whole..base + real])
@@ -208,6 +199,38 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
     for c in xs.iter_mut().chain(vs.iter_mut()) {
         c[real..].fill(0.0);
     }
+    // The whole chunks are copied as the loop goes, a tile ahead of the springs that read them
+    // (so the window is still in the first-level cache when they do): before the springs
+    // starting below particle `t`, the window up to `need(t)`.
+    let need = |t: usize| {
+        (t - base + st.reach + LANES)
+            .next_multiple_of(LANES)
+            .min(whole)
+    };
+    let mut copied = 0;
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn copy<V: Lanes>(
+        x: &[DVec3],
+        v: &[DVec3],
+        base: usize,
+        xs: &mut [&mut [f64]; 3],
+        vs: &mut [&mut [f64]; 3],
+        copied: &mut usize,
+        to: usize,
+    ) {
+        for i in (*copied..to).step_by(LANES) {
+            let p = base + i;
+            let xc = V::load_vectors(x[p..p + LANES].try_into().expect("a chunk"));
+            let vc = V::load_vectors(v[p..p + LANES].try_into().expect("a chunk"));
+            for c in 0..3 {
+                xc[c].store((&mut xs[c][i..i + LANES]).try_into().expect("a chunk"));
+                vc[c].store((&mut vs[c][i..i + LANES]).try_into().expect("a chunk"));
+            }
+        }
+        *copied = (*copied).max(to);
+    }
+    copy::<V>(x, v, base, &mut xs, &mut vs, &mut copied, need(q0));
     let w = Window {
         x: [&*xs[0], &*xs[1], &*xs[2]],
         v: [&*vs[0], &*vs[1], &*vs[2]],
@@ -223,6 +246,11 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
     const CHUNKS: usize = TILE / LANES;
     for t0 in (q0..q1).step_by(TILE) {
         let t1 = (t0 + TILE).min(q1);
+        copy::<V>(x, v, base, &mut xs, &mut vs, &mut copied, need(t1));
+        let w = Window {
+            x: [&*xs[0], &*xs[1], &*xs[2]],
+            v: [&*vs[0], &*vs[1], &*vs[2]],
+        };
         // Pass 1, chunk by chunk: the springs that start here, offset by offset (the groups
         // a chunk has are a prefix of the list), into the rings, and their sum `plus`.
         let mut plus = [[V::zero(); 3]; CHUNKS];
