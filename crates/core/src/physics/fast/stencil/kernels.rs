@@ -182,7 +182,8 @@ pub(super) unsafe fn springs_avx512(
             _mm512_set1_pd(g.stiffness),
             _mm512_set1_pd(g.damping),
             load(&g.rest_length, p),
-            g.present[p / LANES],
+            // The caller guarantees `p + LANES <= rest_length.len() = LANES present.len()`.
+            *g.present.get_unchecked(p / LANES),
         );
         ([Avx512(fx), Avx512(fy), Avx512(fz)], Avx512(power))
     }

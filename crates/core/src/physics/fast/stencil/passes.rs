@@ -240,7 +240,8 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
         let first = q0.saturating_sub(g.delta) / LANES * LANES;
         for p in (first..q0.min(g.starts)).step_by(LANES) {
             let (f, _) = springs(g, &w.first_ends(p - base), &w, p - base, p);
-            ring_store(ring, g, p, f);
+            // SAFETY: `ring` is `ring_len` long, which holds every group's ring.
+            unsafe { ring_store(ring, g, p, f) };
         }
     }
     const CHUNKS: usize = TILE / LANES;
@@ -261,7 +262,8 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
             let mut power = V::zero();
             for g in st.groups.iter().take_while(|g| p < g.starts) {
                 let (f, pw) = springs(g, &first, &w, p - base, p);
-                ring_store(ring, g, p, f);
+                // SAFETY: `ring` is `ring_len` long, which holds every group's ring.
+                unsafe { ring_store(ring, g, p, f) };
                 for (total, part) in sum.iter_mut().zip(f) {
                     *total = total.add(part);
                 }
@@ -277,7 +279,8 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
         for (c, q) in (t0..t1).step_by(LANES).enumerate() {
             let mut minus = [V::zero(); 3];
             for g in &st.groups {
-                let mut f: Forces<V> = ring_load(ring, g, q.wrapping_sub(g.delta));
+                // SAFETY: as above.
+                let mut f: Forces<V> = unsafe { ring_load(ring, g, q.wrapping_sub(g.delta)) };
                 if q < g.delta {
                     // Near particle 0 the first lanes have no such spring (it would start
                     // before particle 0); their ring slots hold other values.
@@ -516,43 +519,48 @@ pub(super) fn weight_drag_springs<V: Lanes>(
 /// Keeps the forces of the chunk of springs starting at `p` (a multiple of `LANES`) in the
 /// ring of `g`: component `c` of particle `p` at `ring_offset + c (R + LANES) + p mod R`.
 ///
-/// # Panics
-/// If `ring` is shorter than the stencil's `ring_len` (never: `range_body` sizes it).
+/// Unchecked (the streaming loop calls it for every chunk of every group, where a bounds check
+/// is several instructions besides the three stores).
+///
+/// # Safety
+/// `ring` must hold the group's ring: `g.ring_offset + 3 (g.ring + LANES) <= ring.len()`, as
+/// every slice of at least the stencil's `ring_len` does (`range_body` takes that length).
 #[inline(always)]
-pub(super) fn ring_store<V: Lanes>(ring: &mut [f64], g: &Group, p: usize, f: Forces<V>) {
+pub(super) unsafe fn ring_store<V: Lanes>(ring: &mut [f64], g: &Group, p: usize, f: Forces<V>) {
     let slot = p & (g.ring - 1);
     let stride = g.ring + LANES;
-    // One check for all the stores below: the group's three components. Within them,
-    // slot + LANES <= R + LANES = stride, and the mirror is the last LANES of a component.
-    let ring = &mut ring[g.ring_offset..g.ring_offset + 3 * stride];
+    debug_assert!(g.ring_offset + 3 * stride <= ring.len());
+    // SAFETY: the caller guarantees the group's three components (see above).
+    let ring = unsafe { ring.as_mut_ptr().add(g.ring_offset) };
     for (c, part) in f.into_iter().enumerate() {
         let at = c * stride + slot;
-        debug_assert!(at + LANES <= ring.len());
-        // SAFETY: `at + LANES <= 3 * stride = ring.len()` because `c <= 2` and
-        // `slot < R`; `Lanes::store` writes exactly LANES values.
-        part.store(unsafe { &mut *ring.as_mut_ptr().add(at).cast::<[f64; LANES]>() });
+        // SAFETY: `at + LANES <= 3 * stride` because `c <= 2` and `slot < R`, inside the
+        // group's components; `Lanes::store` writes exactly LANES values.
+        part.store(unsafe { &mut *ring.add(at).cast::<[f64; LANES]>() });
         if slot == 0 {
             // The mirror after the end, so that reads can run across the wrap.
             let mirror = c * stride + g.ring;
-            // SAFETY: `mirror + LANES = (c + 1) * stride <= ring.len()`.
-            part.store(unsafe { &mut *ring.as_mut_ptr().add(mirror).cast::<[f64; LANES]>() });
+            // SAFETY: `mirror + LANES = (c + 1) * stride`, inside the group's components.
+            part.store(unsafe { &mut *ring.add(mirror).cast::<[f64; LANES]>() });
         }
     }
 }
 
 /// The forces of the `LANES` springs of `g` starting at `p` (any `p`, taken modulo `R`), from
-/// the ring.
+/// the ring. Unchecked, as [`ring_store`].
 ///
-/// # Panics
-/// If `ring` is shorter than the stencil's `ring_len` (never: `range_body` sizes it).
+/// # Safety
+/// As [`ring_store`]: `g.ring_offset + 3 (g.ring + LANES) <= ring.len()`.
 #[inline(always)]
-pub(super) fn ring_load<V: Lanes>(ring: &[f64], g: &Group, p: usize) -> Forces<V> {
+pub(super) unsafe fn ring_load<V: Lanes>(ring: &[f64], g: &Group, p: usize) -> Forces<V> {
     let slot = p & (g.ring - 1);
     let stride = g.ring + LANES;
-    let ring = &ring[g.ring_offset..g.ring_offset + 3 * stride];
-    debug_assert!(2 * stride + slot + LANES <= ring.len());
-    // SAFETY: `c * stride + slot + LANES <= 3 * stride = ring.len()` for `c <= 2`, because
-    // `slot < R = stride - LANES`; `Lanes::load` reads exactly LANES values.
-    let load = |c: usize| unsafe { V::load(&*ring.as_ptr().add(c * stride + slot).cast()) };
+    debug_assert!(g.ring_offset + 3 * stride <= ring.len());
+    // SAFETY: `g.ring_offset + c * stride + slot + LANES <= g.ring_offset + 3 * stride <=
+    // ring.len()` for `c <= 2`, because `slot < R = stride - LANES` (the caller guarantees the
+    // last); `Lanes::load` reads exactly LANES values.
+    let load = |c: usize| unsafe {
+        V::load(&*ring.as_ptr().add(g.ring_offset + c * stride + slot).cast())
+    };
     [load(0), load(1), load(2)]
 }
