@@ -260,7 +260,13 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
             let first = w.first_ends::<V>(p - base);
             let mut sum = [V::zero(); 3];
             let mut power = V::zero();
-            for g in st.groups.iter().take_while(|g| p < g.starts) {
+            // Every group but near the end (the groups are sorted by δ, so `starts` falls).
+            let groups = if p < n - st.reach {
+                &st.groups[..]
+            } else {
+                &st.groups[..st.groups.partition_point(|g| p < g.starts)]
+            };
+            for g in groups {
                 let (f, pw) = springs(g, &first, &w, p - base, p);
                 // SAFETY: `ring` is `ring_len` long, which holds every group's ring.
                 unsafe { ring_store(ring, g, p, f) };
