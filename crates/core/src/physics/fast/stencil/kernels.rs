@@ -129,8 +129,9 @@ pub(super) fn range_avx512<const POWER: bool>(
         #[inline(always)]
         |g, first, w, i, p| {
             // SAFETY: this function only runs on a CPU with AVX-512F (see `Stencil::range`), and
-            // `range_body` calls with chunks inside the window and the group's arrays.
-            unsafe { springs_avx512(g, first, w, i, p) }
+            // `range_body` calls with chunks inside the window and the group's arrays, its six
+            // components one after the other at a fixed stride (`Scratch::xv`).
+            unsafe { springs_avx512_strided(g, first, w, i, p) }
         },
     );
 }
@@ -183,6 +184,58 @@ pub(super) unsafe fn springs_avx512(
             _mm512_set1_pd(g.damping),
             load(&g.rest_length, p),
             // The caller guarantees `p + LANES <= rest_length.len() = LANES present.len()`.
+            *g.present.get_unchecked(p / LANES),
+        );
+        ([Avx512(fx), Avx512(fy), Avx512(fz)], Avx512(power))
+    }
+}
+
+/// [`springs_avx512`] on a window whose six components lie one after the other at a fixed
+/// stride `S` (the streaming loop's, `Scratch::xv`): the second ends are read from one pointer
+/// and `S` instead of six pointers, which leaves the loop registers for the rest (the same
+/// loads, so the same forces).
+///
+/// # Safety
+/// As [`springs_avx512`]; also `w.x[1]`, `w.x[2]`, `w.v[0]`, `w.v[1]`, `w.v[2]` must start
+/// `S`, `2 S`, … `5 S` values after `w.x[0]`, inside one allocation.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(super) unsafe fn springs_avx512_strided(
+    g: &Group,
+    first: &[Avx512; 6],
+    w: &Window,
+    i: usize,
+    p: usize,
+) -> (Forces<Avx512>, Avx512) {
+    use std::arch::x86_64::{_mm512_loadu_pd, _mm512_set1_pd};
+    let j = i + g.delta;
+    debug_assert!(j + LANES <= w.x[0].len() && p + LANES <= g.rest_length.len());
+    // SAFETY (the intrinsics and the pointers): the caller guarantees AVX-512F, the layout
+    // (component `c` at `c S` values from `w.x[0]`), and that LANES values exist from `j` in
+    // every component and from `p` in the group's arrays.
+    unsafe {
+        let base = w.x[0].as_ptr();
+        let stride = w.x[1].as_ptr().offset_from(base) as usize;
+        debug_assert!((0..3).all(|c| w.x[c].as_ptr() == base.add(c * stride)
+            && w.v[c].as_ptr() == base.add((3 + c) * stride)));
+        let at = base.add(j);
+        let second = [
+            _mm512_loadu_pd(at),
+            _mm512_loadu_pd(at.add(stride)),
+            _mm512_loadu_pd(at.add(2 * stride)),
+            _mm512_loadu_pd(at.add(3 * stride)),
+            _mm512_loadu_pd(at.add(4 * stride)),
+            _mm512_loadu_pd(at.add(5 * stride)),
+        ];
+        let first = [
+            first[0].0, first[1].0, first[2].0, first[3].0, first[4].0, first[5].0,
+        ];
+        let ([fx, fy, fz], power) = spring_lanes_avx512(
+            &first,
+            &second,
+            _mm512_set1_pd(g.stiffness),
+            _mm512_set1_pd(g.damping),
+            _mm512_loadu_pd(g.rest_length.as_ptr().add(p)),
             *g.present.get_unchecked(p / LANES),
         );
         ([Avx512(fx), Avx512(fy), Avx512(fz)], Avx512(power))

@@ -82,10 +82,11 @@ pub(super) struct Part<'o> {
 /// Scratch buffers of one thread (reused, so steps do not allocate).
 #[derive(Default)]
 pub(super) struct Scratch {
-    /// Positions `x`, `y`, `z` of the particles `base..` (m), zero past the last particle.
-    pub(super) x: [Aligned; 3],
-    /// Velocities (m/s), the same layout.
-    pub(super) v: [Aligned; 3],
+    /// Positions `x`, `y`, `z` of the particles `base..` (m), zero past the last particle,
+    /// then velocities `v_x`, `v_y`, `v_z` (m/s) in the same layout: six components of `S`
+    /// values each, one after the other (`S` a multiple of `LANES`), so that the AVX-512
+    /// kernel reaches all six from one pointer and `S`.
+    pub(super) xv: Aligned,
     /// Every group's force ring (N), see [`Group::ring_offset`].
     pub(super) ring: Aligned,
 }
@@ -175,11 +176,15 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
     // (from q0 - reach) up to the chunk that contains q1 - 1, and their second ends.
     let base = q0.saturating_sub(st.reach) / LANES * LANES;
     let len = q1.next_multiple_of(LANES) + st.reach - base;
-    let Scratch { x: xs, v: vs, ring } = s;
-    let [xs0, xs1, xs2] = xs;
-    let [vs0, vs1, vs2] = vs;
-    let mut xs = [xs0.get_mut(len), xs1.get_mut(len), xs2.get_mut(len)];
-    let mut vs = [vs0.get_mut(len), vs1.get_mut(len), vs2.get_mut(len)];
+    let Scratch { xv, ring } = s;
+    let stride = len.next_multiple_of(LANES);
+    let (xs, vs) = xv.get_mut(6 * stride).split_at_mut(3 * stride);
+    let (xs0, rest) = xs.split_at_mut(stride);
+    let (xs1, xs2) = rest.split_at_mut(stride);
+    let (vs0, rest) = vs.split_at_mut(stride);
+    let (vs1, vs2) = rest.split_at_mut(stride);
+    let mut xs = [&mut xs0[..len], &mut xs1[..len], &mut xs2[..len]];
+    let mut vs = [&mut vs0[..len], &mut vs1[..len], &mut vs2[..len]];
     let ring = ring.get_mut(st.ring_len);
     let real = n.min(base + len) - base;
     let whole = real / LANES * LANES;
