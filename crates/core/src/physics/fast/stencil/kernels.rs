@@ -1,7 +1,10 @@
 //! The spring kernels of the stencil, one per instruction set (see the parent module's docs,
 //! "One reciprocal square root" and "Three kernels"): the exact one (`sqrt`, then `1/L`) in
 //! plain Rust and on AVX2 registers, and the AVX-512F one with the reciprocal square root
-//! estimate and one fourth-order refinement. Each instantiates the streaming loop of [`super::passes`].
+//! estimate and one fourth-order refinement. Each instantiates the streaming loop of [`super::passes`];
+//! the AVX-512 one reads the second ends from one pointer and the window's component stride
+//! ([`springs_avx512_strided`]), which leaves the loop the registers the six component pointers
+//! took.
 
 use super::passes::*;
 #[allow(clippy::wildcard_imports)]
