@@ -266,7 +266,7 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
             let mut sum = [V::zero(); 3];
             let mut power = V::zero();
             // Every group but near the end (the groups are sorted by δ, so `starts` falls).
-            let groups = if p < n - st.reach {
+            let groups = if p + st.reach < n {
                 &st.groups[..]
             } else {
                 &st.groups[..st.groups.partition_point(|g| p < g.starts)]
