@@ -81,8 +81,7 @@ use crate::physics::lanes::first_lanes;
 use std::arch::x86_64::{
     __m512d, __m512i, _CMP_LT_OQ, _mm512_add_pd, _mm512_cmp_pd_mask, _mm512_load_pd,
     _mm512_loadu_pd, _mm512_loadu_si512, _mm512_maskz_mov_pd, _mm512_mul_pd,
-    _mm512_permutex2var_pd, _mm512_set1_pd, _mm512_setzero_pd, _mm512_store_pd, _mm512_storeu_pd,
-    _mm512_sub_pd,
+    _mm512_permutex2var_pd, _mm512_set1_pd, _mm512_setzero_pd, _mm512_store_pd, _mm512_sub_pd,
 };
 
 /// Up to this many particles a lattice is "small": its state stays in the first-level cache,
@@ -632,7 +631,12 @@ unsafe fn fused_avx512<const G: usize, const POWER: bool>(
         let drag = _mm512_set1_pd(d.drag);
         let zero = _mm512_setzero_pd();
         let line = |p: *const [Line; 6], i: usize| _mm512_load_pd((*p)[i].0.as_ptr());
-        for _ in 0..steps {
+        // With `POWER`: the lane sums of the last steps, added up a block at a time (off the
+        // steps' own work), and the contact power, zero in every lane.
+        let mut block = [Line::default(); LANES];
+        let mut filled = 0;
+        let contact = Stencil::lanes_total(&[0.0; LANES]);
+        for step in 0..steps {
             // The forces of the previous chunk, for the groups with δ < 8 (k = 0).
             let mut previous = [[zero; 3]; G];
             // With `POWER`: the step's dampers and drag so far, per lane (W).
@@ -701,8 +705,10 @@ unsafe fn fused_avx512<const G: usize, const POWER: bool>(
                 let keep = if c + 1 == chunks { last_keep } else { u8::MAX };
                 if POWER {
                     // As `small_body`'s pass 2: the drag c |v|² of the free particles.
-                    let drag_power = if d.drag == 0.0 {
-                        zero
+                    // Without drag the sum skips the zeros: `dampers` is never -0 (it starts
+                    // at +0), so adding +0 changes no bit.
+                    if d.drag == 0.0 {
+                        dissipated = _mm512_add_pd(dissipated, dampers);
                     } else {
                         let v = [first[3], first[4], first[5]];
                         let v2 = _mm512_add_pd(
@@ -710,9 +716,9 @@ unsafe fn fused_avx512<const G: usize, const POWER: bool>(
                             _mm512_mul_pd(v[2], v[2]),
                         );
                         let free = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(zero, w);
-                        _mm512_maskz_mov_pd(free, _mm512_mul_pd(drag, v2))
-                    };
-                    dissipated = _mm512_add_pd(dissipated, _mm512_add_pd(dampers, drag_power));
+                        let drag_power = _mm512_maskz_mov_pd(free, _mm512_mul_pd(drag, v2));
+                        dissipated = _mm512_add_pd(dissipated, _mm512_add_pd(dampers, drag_power));
+                    }
                 }
                 let own = &mut *own;
                 for i in 0..3 {
@@ -740,10 +746,14 @@ unsafe fn fused_avx512<const G: usize, const POWER: bool>(
                 }
             }
             if POWER {
-                // One chunk of the power buffer: the lane sums, then a zero contact power.
-                let mut buffer = [0.0; 2 * LANES];
-                _mm512_storeu_pd(buffer.as_mut_ptr(), dissipated);
-                powers.push(Stencil::sum_power(&buffer));
+                // `dissipated` is `Stencil::sum_power`'s lane sums of the dampers and drag.
+                _mm512_store_pd(block[filled].0.as_mut_ptr(), dissipated);
+                filled += 1;
+                if filled == LANES || step + 1 == steps {
+                    let totals = block[..filled].iter().map(|l| Stencil::lanes_total(&l.0));
+                    powers.extend(totals.map(|total| (total, contact)));
+                    filled = 0;
+                }
             }
         }
     }
