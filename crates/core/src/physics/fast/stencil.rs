@@ -555,8 +555,12 @@ impl Stencil {
                 }
             }
         }
-        let total = |s: [f64; LANES]| s.iter().sum::<f64>();
-        (total(sums[0]), total(sums[1]))
+        (Self::lanes_total(&sums[0]), Self::lanes_total(&sums[1]))
+    }
+
+    /// The last sum of [`Stencil::sum_power`]: its lane sums added in lane order.
+    pub(super) fn lanes_total(sums: &[f64; LANES]) -> f64 {
+        sums.iter().sum()
     }
 
     /// Adds the spring forces (N) at positions `x` and velocities `v` to `f`, on as many

@@ -23,8 +23,8 @@
 //! colliders or per-step projections (see [`Stencil::semi_implicit_euler_steps`]). With energy
 //! accounting ([`Stencil::semi_implicit_euler_steps_with_power`]) pass 1 also keeps each chunk's
 //! damper power and pass 2 adds the drag, into one step's power buffer as the streaming loop
-//! writes it, summed after each step (the same bits; the one-pass AVX-512 loop below does not
-//! compute power, so such calls take the two passes).
+//! writes it, summed after each step (the same bits; the one-pass AVX-512 loop below computes
+//! the same chunk values and sums them in the same order).
 //!
 //! # One pass per step (AVX-512, at most six offset groups)
 //!
@@ -43,8 +43,13 @@
 //!              all computed already: they start δ particles earlier)
 //!     F = plus - minus;  f = (m g - c v) + F;  a = f · (1/m);  v' = v + dt a;  x' = x + dt v'
 //!     store x', v' into chunk c
+//!     with power:  P += (0 + P_δ₁[c] + P_δ₂[c] + …) + c |v|² (free particles)
+//! with power, after the last chunk:  the step's power = the sum of P's lanes
 //! ```
-//! where `f_δ[c]` is zero for a chunk before the first (`c < 0`) or past the group's springs.
+//! where `f_δ[c]` is zero for a chunk before the first (`c < 0`) or past the group's springs,
+//! `P_δ[c]` (W) the dampers' power of those springs, `P` (W, per lane, zero at the start of
+//! the step) the dampers and drag of the chunks so far: the chunk values of the two passes'
+//! power buffer, added in the order of [`Stencil::sum_power`].
 //! Four things make this faster than the two passes (on the 64-particle rope of `rope-se`
 //! about 150 ns a step instead of about 310, measured with `examples/rope_micro.rs`):
 //! - The springs' second ends and the forces that end in a chunk are lane permutations
@@ -74,9 +79,9 @@ use super::*;
 use crate::physics::lanes::first_lanes;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::{
-    __m512d, __m512i, _mm512_add_pd, _mm512_load_pd, _mm512_loadu_pd, _mm512_loadu_si512,
-    _mm512_maskz_mov_pd, _mm512_mul_pd, _mm512_permutex2var_pd, _mm512_set1_pd, _mm512_setzero_pd,
-    _mm512_store_pd, _mm512_sub_pd,
+    __m512d, __m512i, _CMP_LT_OQ, _mm512_add_pd, _mm512_cmp_pd_mask, _mm512_load_pd,
+    _mm512_loadu_pd, _mm512_loadu_si512, _mm512_maskz_mov_pd, _mm512_mul_pd,
+    _mm512_permutex2var_pd, _mm512_set1_pd, _mm512_setzero_pd, _mm512_store_pd, _mm512_sub_pd,
 };
 
 /// Up to this many particles a lattice is "small": its state stays in the first-level cache,
@@ -151,12 +156,12 @@ impl Stencil {
             dynamics.mass.len() >= n && dynamics.inv_mass.len() >= n,
             "masses too short"
         );
+        let mut powers = powers;
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `with_kernel` and `Kernel::best` only choose `Avx512` on a CPU that supports
         // AVX-512F.
-        if powers.is_none()
-            && self.kernel == Kernel::Avx512
-            && unsafe { fused_steps(self, dynamics, x, v, dt, steps) }
+        if self.kernel == Kernel::Avx512
+            && unsafe { fused_steps(self, dynamics, x, v, dt, steps, powers.as_deref_mut()) }
         {
             return true;
         }
@@ -499,7 +504,8 @@ impl FusedScratch {
 }
 
 /// The fused steps for a lattice of `G` groups, or false (nothing done) for more groups than
-/// `FUSED_GROUPS`.
+/// `FUSED_GROUPS`; with `powers`, each step's dissipated power appended to it, as
+/// [`Stencil::semi_implicit_euler_steps_with_power`] gives it.
 ///
 /// # Safety
 /// The CPU must support AVX-512F.
@@ -511,6 +517,7 @@ unsafe fn fused_steps(
     v: &mut [DVec3],
     dt: f64,
     steps: u64,
+    powers: Option<&mut Vec<(f64, f64)>>,
 ) -> bool {
     if st.groups.is_empty() || st.groups.len() > FUSED_GROUPS {
         return false;
@@ -520,13 +527,19 @@ unsafe fn fused_steps(
         s.load(st, d, x, v);
         // SAFETY: the caller guarantees AVX-512F; `load` sized the arrays for `st`.
         unsafe {
-            match st.groups.len() {
-                1 => fused_avx512::<1>(st, s, d, dt, steps),
-                2 => fused_avx512::<2>(st, s, d, dt, steps),
-                3 => fused_avx512::<3>(st, s, d, dt, steps),
-                4 => fused_avx512::<4>(st, s, d, dt, steps),
-                5 => fused_avx512::<5>(st, s, d, dt, steps),
-                _ => fused_avx512::<6>(st, s, d, dt, steps),
+            match (st.groups.len(), powers) {
+                (1, None) => fused_avx512::<1, false>(st, s, d, dt, steps, &mut Vec::new()),
+                (2, None) => fused_avx512::<2, false>(st, s, d, dt, steps, &mut Vec::new()),
+                (3, None) => fused_avx512::<3, false>(st, s, d, dt, steps, &mut Vec::new()),
+                (4, None) => fused_avx512::<4, false>(st, s, d, dt, steps, &mut Vec::new()),
+                (5, None) => fused_avx512::<5, false>(st, s, d, dt, steps, &mut Vec::new()),
+                (_, None) => fused_avx512::<6, false>(st, s, d, dt, steps, &mut Vec::new()),
+                (1, Some(p)) => fused_avx512::<1, true>(st, s, d, dt, steps, p),
+                (2, Some(p)) => fused_avx512::<2, true>(st, s, d, dt, steps, p),
+                (3, Some(p)) => fused_avx512::<3, true>(st, s, d, dt, steps, p),
+                (4, Some(p)) => fused_avx512::<4, true>(st, s, d, dt, steps, p),
+                (5, Some(p)) => fused_avx512::<5, true>(st, s, d, dt, steps, p),
+                (_, Some(p)) => fused_avx512::<6, true>(st, s, d, dt, steps, p),
             }
         }
         s.store(x, v);
@@ -552,19 +565,24 @@ struct FusedGroup {
 }
 
 /// `steps` semi-implicit Euler steps on the arrays of `s`, one pass over the chunks per step
-/// (see the module docs, "One pass per step"), for a lattice of exactly `G` groups.
+/// (see the module docs, "One pass per step"), for a lattice of exactly `G` groups; with
+/// `POWER`, each step's dissipated power pushed to `powers`, as `small_body` computes it: per
+/// chunk the dampers of its springs group by group, then the drag of its free particles,
+/// added chunk by chunk into per-lane sums, which [`Stencil::sum_power`] adds up (no contact:
+/// a small lattice here has no colliders).
 ///
 /// # Safety
 /// The CPU must support AVX-512F, `st.groups.len() == G`, and `s` must have been loaded for
 /// `st` ([`FusedScratch::load`]).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-unsafe fn fused_avx512<const G: usize>(
+unsafe fn fused_avx512<const G: usize, const POWER: bool>(
     st: &Stencil,
     s: &mut FusedScratch,
     d: &Dynamics,
     dt: f64,
     steps: u64,
+    powers: &mut Vec<(f64, f64)>,
 ) {
     debug_assert_eq!(st.groups.len(), G);
     let n = st.particles;
@@ -613,15 +631,23 @@ unsafe fn fused_avx512<const G: usize>(
         let drag = _mm512_set1_pd(d.drag);
         let zero = _mm512_setzero_pd();
         let line = |p: *const [Line; 6], i: usize| _mm512_load_pd((*p)[i].0.as_ptr());
-        for _ in 0..steps {
+        // With `POWER`: the lane sums of the last steps, added up a block at a time (off the
+        // steps' own work), and the contact power, zero in every lane.
+        let mut block = [Line::default(); LANES];
+        let mut filled = 0;
+        let contact = Stencil::lanes_total(&[0.0; LANES]);
+        for step in 0..steps {
             // The forces of the previous chunk, for the groups with δ < 8 (k = 0).
             let mut previous = [[zero; 3]; G];
+            // With `POWER`: the step's dampers and drag so far, per lane (W).
+            let mut dissipated = zero;
             for c in 0..chunks {
                 let own = state.add(c);
                 let first: [__m512d; 6] = std::array::from_fn(|i| line(own, i));
                 // Pass 1 of the chunk: each group's springs starting here, and their sum.
                 let mut plus = [zero; 3];
                 let mut current = [[zero; 3]; G];
+                let mut dampers = zero;
                 for g in 0..G {
                     let group = &groups[g];
                     if c >= group.chunks {
@@ -632,7 +658,7 @@ unsafe fn fused_avx512<const G: usize>(
                     let second: [__m512d; 6] = std::array::from_fn(|i| {
                         _mm512_permutex2var_pd(line(a, i), group.second, line(b, i))
                     });
-                    let (f, _) = spring_lanes_avx512(
+                    let (f, power) = spring_lanes_avx512(
                         &first,
                         &second,
                         group.stiffness,
@@ -650,6 +676,9 @@ unsafe fn fused_avx512<const G: usize>(
                         *total = _mm512_add_pd(*total, part);
                     }
                     current[g] = f;
+                    if POWER {
+                        dampers = _mm512_add_pd(dampers, power);
+                    }
                 }
                 // Pass 2 of the chunk: minus the springs that end here (they started δ
                 // earlier: a lane shift of two chunks of forces), then the step.
@@ -674,6 +703,23 @@ unsafe fn fused_avx512<const G: usize>(
                 let weight = &*weight.as_ptr().add(c);
                 let w = _mm512_load_pd((*inv_mass.as_ptr().add(c)).0.as_ptr());
                 let keep = if c + 1 == chunks { last_keep } else { u8::MAX };
+                if POWER {
+                    // As `small_body`'s pass 2: the drag c |v|² of the free particles.
+                    // Without drag the sum skips the zeros: `dampers` is never -0 (it starts
+                    // at +0), so adding +0 changes no bit.
+                    if d.drag == 0.0 {
+                        dissipated = _mm512_add_pd(dissipated, dampers);
+                    } else {
+                        let v = [first[3], first[4], first[5]];
+                        let v2 = _mm512_add_pd(
+                            _mm512_add_pd(_mm512_mul_pd(v[0], v[0]), _mm512_mul_pd(v[1], v[1])),
+                            _mm512_mul_pd(v[2], v[2]),
+                        );
+                        let free = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(zero, w);
+                        let drag_power = _mm512_maskz_mov_pd(free, _mm512_mul_pd(drag, v2));
+                        dissipated = _mm512_add_pd(dissipated, _mm512_add_pd(dampers, drag_power));
+                    }
+                }
                 let own = &mut *own;
                 for i in 0..3 {
                     // F = plus - minus;  f = (m g - c v) + F;  a = f · (1/m)
@@ -697,6 +743,16 @@ unsafe fn fused_avx512<const G: usize>(
                     };
                     _mm512_store_pd(own[i].0.as_mut_ptr(), x_new);
                     _mm512_store_pd(own[3 + i].0.as_mut_ptr(), v_new);
+                }
+            }
+            if POWER {
+                // `dissipated` is `Stencil::sum_power`'s lane sums of the dampers and drag.
+                _mm512_store_pd(block[filled].0.as_mut_ptr(), dissipated);
+                filled += 1;
+                if filled == LANES || step + 1 == steps {
+                    let totals = block[..filled].iter().map(|l| Stencil::lanes_total(&l.0));
+                    powers.extend(totals.map(|total| (total, contact)));
+                    filled = 0;
                 }
             }
         }

@@ -145,8 +145,17 @@ fn the_fused_path_gives_the_single_steps_bits() {
         let dynamics = model.dynamics(true);
         let mut fused = state.clone();
         // SAFETY: AVX-512F is available (checked above).
-        let taken =
-            unsafe { fused_steps(stencil, &dynamics, &mut fused.x, &mut fused.v, 1e-4, 40) };
+        let taken = unsafe {
+            fused_steps(
+                stencil,
+                &dynamics,
+                &mut fused.x,
+                &mut fused.v,
+                1e-4,
+                40,
+                None,
+            )
+        };
         assert_eq!(taken, groups <= FUSED_GROUPS, "{name}");
         if !taken {
             assert_eq!(bits(&fused.x), bits(&state.x), "{name}: changed");
@@ -159,6 +168,93 @@ fn the_fused_path_gives_the_single_steps_bits() {
         }
         assert_eq!(bits(&fused.x), bits(&single.x), "{name}: positions");
         assert_eq!(bits(&fused.v), bits(&single.v), "{name}: velocities");
+    }
+}
+
+/// The two passes (`small_body` with power, the AVX-512 kernel): the states after `steps`
+/// steps and each step's power.
+#[cfg(target_arch = "x86_64")]
+fn two_passes_with_power(
+    stencil: &Stencil,
+    dynamics: &Dynamics,
+    state: &mut State,
+    steps: u64,
+) -> Vec<(f64, f64)> {
+    let mut s = SmallScratch::default();
+    s.load(stencil, &state.x, &state.v);
+    s.power.resize(stencil.power_len(), 0.0);
+    small_steps::<true>(stencil, &mut s, dynamics, 1e-4, steps);
+    s.store(&mut state.x, &mut state.v);
+    s.powers
+}
+
+/// With power asked, the fused path gives each step's dissipated power with the same bits as
+/// the two passes (dampers of every group, the drag of the free particles), and the same
+/// states; the drag, and with it the power, is nonzero on every lattice here.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn the_fused_path_gives_the_two_passes_power_bits() {
+    if !Kernel::Avx512.is_available() {
+        return;
+    }
+    let power_bits = |p: &[(f64, f64)]| -> Vec<[u64; 2]> {
+        p.iter().map(|(a, b)| [a.to_bits(), b.to_bits()]).collect()
+    };
+    for (name, groups, model, state) in lattices() {
+        let model = model.with_kernel(Kernel::Avx512);
+        let stencil = model.stencil().expect("a lattice");
+        let dynamics = model.dynamics(true);
+        let mut fused = state.clone();
+        // Appended after what the vector holds.
+        let mut fused_powers = vec![(1.0, 2.0)];
+        // SAFETY: AVX-512F is available (checked above).
+        let taken = unsafe {
+            fused_steps(
+                stencil,
+                &dynamics,
+                &mut fused.x,
+                &mut fused.v,
+                1e-4,
+                40,
+                Some(&mut fused_powers),
+            )
+        };
+        assert_eq!(taken, groups <= FUSED_GROUPS, "{name}");
+        if !taken {
+            assert_eq!(fused_powers, [(1.0, 2.0)], "{name}: changed");
+            continue;
+        }
+        let mut two = state.clone();
+        let two_powers = two_passes_with_power(stencil, &dynamics, &mut two, 40);
+        assert_eq!(two_powers.len(), 40, "{name}");
+        assert_eq!(fused_powers[0], (1.0, 2.0), "{name}: kept");
+        assert_eq!(
+            power_bits(&fused_powers[1..]),
+            power_bits(&two_powers),
+            "{name}"
+        );
+        assert_eq!(bits(&fused.x), bits(&two.x), "{name}: positions");
+        assert_eq!(bits(&fused.v), bits(&two.v), "{name}: velocities");
+        assert!(
+            two_powers.iter().all(|&(d, c)| d > 0.0 && c == 0.0),
+            "{name}"
+        );
+        // Through the seam, the same.
+        let mut via = state.clone();
+        let mut via_powers = Vec::new();
+        assert!(stencil.semi_implicit_euler_steps_with_power(
+            &mut via.x,
+            &mut via.v,
+            &dynamics,
+            1e-4,
+            40,
+            Some(&mut via_powers)
+        ));
+        assert_eq!(
+            power_bits(&via_powers),
+            power_bits(&two_powers),
+            "{name}: seam"
+        );
     }
 }
 
