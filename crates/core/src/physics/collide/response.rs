@@ -239,11 +239,39 @@ impl Changes {
         }
     }
 
+    /// The recorded particles (after [`Changes::finish`]) that are not exactly where they were
+    /// before, now at `x`, or are not [`calm`] there, as bits: bit `i % 64` of word `i / 64`.
+    /// A spring between two particles outside this set (the second one calm) has the same
+    /// finite energy as before.
+    pub(crate) fn moved(&self, x: &[DVec3]) -> Vec<u64> {
+        let mut bits = vec![0u64; x.len().div_ceil(64)];
+        for &(i, x_old, _) in &self.particles {
+            let i = i as usize;
+            if x[i] != x_old || !calm(x[i]) {
+                bits[i / 64] |= 1 << (i % 64);
+            }
+        }
+        bits
+    }
+
+    /// Kinetic and gravitational energy of the non-kinematic spheres before the responses (J).
+    #[must_use]
+    pub fn spheres_before(&self) -> f64 {
+        self.spheres_before
+    }
+
     /// The record of particle `i`, if it changed.
     pub(crate) fn of(&self, i: usize) -> Option<&(u32, DVec3, DVec3)> {
         let k = *self.slot.get(i)?;
         self.particles.get(k as usize)
     }
+}
+
+/// True when every coordinate of `p` is below 1e50 m in size (false for NaN and ±∞): a spring
+/// between two calm points has a finite elastic energy for any stiffness below 1e200 N/m.
+#[must_use]
+pub(crate) fn calm(p: DVec3) -> bool {
+    p.abs().cmplt(DVec3::splat(1e50)).all()
 }
 
 /// Kinetic and gravitational energy of the non-kinematic dynamic `spheres` under `gravity`
