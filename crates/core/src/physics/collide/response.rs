@@ -207,6 +207,8 @@ pub struct Changes {
     /// After [`Changes::finish`]: `slot[i]` is the index of particle `i` in `particles`, or
     /// `u32::MAX` when it did not change (grown to the particle count on first use).
     slot: Vec<u32>,
+    /// Scratch of [`Changes::finish`] (reused).
+    sorted: Vec<(u32, DVec3, DVec3)>,
 }
 
 impl Changes {
@@ -228,15 +230,36 @@ impl Changes {
     /// Sorts the records by particle and keeps each particle's first (its state before any
     /// change); `particles` is the system's particle count.
     pub fn finish(&mut self, particles: usize) {
-        // A stable sort keeps the records of one particle in the order they were made.
-        self.particles.sort_by_key(|p| p.0);
-        self.particles.dedup_by_key(|p| p.0);
         if self.slot.len() < particles {
             self.slot.resize(particles, u32::MAX);
         }
-        for (k, &(i, ..)) in self.particles.iter().enumerate() {
-            self.slot[i as usize] = k as u32;
+        if self.particles.len() < self.slot.len() / 4 {
+            // A few records: a stable sort keeps the records of one particle in the order they
+            // were made.
+            self.particles.sort_by_key(|p| p.0);
+            self.particles.dedup_by_key(|p| p.0);
+            for (k, &(i, ..)) in self.particles.iter().enumerate() {
+                self.slot[i as usize] = k as u32;
+            }
+            return;
         }
+        // Many (a payment records every free particle): each particle's first record, found
+        // through `slot` (unrecorded particles hold u32::MAX there), then the particles in
+        // order; the same list as the sort's, without comparisons.
+        for (k, &(i, ..)) in self.particles.iter().enumerate() {
+            let s = &mut self.slot[i as usize];
+            if *s == u32::MAX {
+                *s = k as u32;
+            }
+        }
+        self.sorted.clear();
+        for s in &mut self.slot {
+            if *s != u32::MAX {
+                let k = std::mem::replace(s, self.sorted.len() as u32);
+                self.sorted.push(self.particles[k as usize]);
+            }
+        }
+        std::mem::swap(&mut self.particles, &mut self.sorted);
     }
 
     /// The recorded particles (after [`Changes::finish`]) that are not exactly where they were
