@@ -403,6 +403,36 @@ mod tests {
     use super::*;
 
     #[test]
+    fn finish_keeps_each_particles_first_record_in_particle_order() {
+        // Few records (the sort) and many (through `slot`), with repeats in any order, against
+        // a stable sort and dedup; then cleared and used again.
+        let mut changes = Changes::default();
+        let mut seed = 7u64;
+        for (count, particles) in [(5, 100), (300, 100), (40, 64), (64, 64), (0, 10)] {
+            changes.clear();
+            let mut expected = Vec::new();
+            for k in 0..count {
+                seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+                let i = (seed >> 33) as usize % particles;
+                let r = (i as u32, DVec3::splat(k as f64), DVec3::splat(-(k as f64)));
+                changes.record(i, r.1, r.2);
+                expected.push(r);
+            }
+            expected.sort_by_key(|p| p.0);
+            expected.dedup_by_key(|p| p.0);
+            changes.finish(particles);
+            assert_eq!(
+                changes.particles, expected,
+                "{count} records of {particles}"
+            );
+            for i in 0..particles {
+                let want = expected.iter().find(|r| r.0 as usize == i);
+                assert_eq!(changes.of(i), want, "particle {i}");
+            }
+        }
+    }
+
+    #[test]
     fn near_any_marks_what_some_collider_may_touch() {
         // Every kind of collider, alone and together, against particles on a grid through
         // them (inside, near, far), a NaN position and a count that is not a whole word.
