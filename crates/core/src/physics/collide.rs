@@ -154,6 +154,7 @@ pub use force::{ContactParams, contact_forces, contact_power};
 pub(crate) use geometry::Broad;
 use geometry::distance_and_direction;
 pub use geometry::{Collider, Contact};
+pub(crate) use response::calm;
 pub use response::{Changes, after_step, resolve, resolve_logged, spheres_energy, take_kinetic};
 use response::{keep_verlet_history, pay, respond};
 pub use spheres::{

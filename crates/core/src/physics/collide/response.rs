@@ -207,6 +207,8 @@ pub struct Changes {
     /// After [`Changes::finish`]: `slot[i]` is the index of particle `i` in `particles`, or
     /// `u32::MAX` when it did not change (grown to the particle count on first use).
     slot: Vec<u32>,
+    /// Scratch of [`Changes::finish`] (reused).
+    sorted: Vec<(u32, DVec3, DVec3)>,
 }
 
 impl Changes {
@@ -228,15 +230,57 @@ impl Changes {
     /// Sorts the records by particle and keeps each particle's first (its state before any
     /// change); `particles` is the system's particle count.
     pub fn finish(&mut self, particles: usize) {
-        // A stable sort keeps the records of one particle in the order they were made.
-        self.particles.sort_by_key(|p| p.0);
-        self.particles.dedup_by_key(|p| p.0);
         if self.slot.len() < particles {
             self.slot.resize(particles, u32::MAX);
         }
-        for (k, &(i, ..)) in self.particles.iter().enumerate() {
-            self.slot[i as usize] = k as u32;
+        if self.particles.len() < self.slot.len() / 4 {
+            // A few records: a stable sort keeps the records of one particle in the order they
+            // were made.
+            self.particles.sort_by_key(|p| p.0);
+            self.particles.dedup_by_key(|p| p.0);
+            for (k, &(i, ..)) in self.particles.iter().enumerate() {
+                self.slot[i as usize] = k as u32;
+            }
+            return;
         }
+        // Many (a payment records every free particle): each particle's first record, found
+        // through `slot` (unrecorded particles hold u32::MAX there), then the particles in
+        // order; the same list as the sort's, without comparisons.
+        for (k, &(i, ..)) in self.particles.iter().enumerate() {
+            let s = &mut self.slot[i as usize];
+            if *s == u32::MAX {
+                *s = k as u32;
+            }
+        }
+        self.sorted.clear();
+        for s in &mut self.slot {
+            if *s != u32::MAX {
+                let k = std::mem::replace(s, self.sorted.len() as u32);
+                self.sorted.push(self.particles[k as usize]);
+            }
+        }
+        std::mem::swap(&mut self.particles, &mut self.sorted);
+    }
+
+    /// The recorded particles (after [`Changes::finish`]) that are not exactly where they were
+    /// before, now at `x`, or are not [`calm`] there, as bits: bit `i % 64` of word `i / 64`.
+    /// A spring between two particles outside this set (the second one calm) has the same
+    /// finite energy as before.
+    pub(crate) fn moved(&self, x: &[DVec3]) -> Vec<u64> {
+        let mut bits = vec![0u64; x.len().div_ceil(64)];
+        for &(i, x_old, _) in &self.particles {
+            let i = i as usize;
+            if x[i] != x_old || !calm(x[i]) {
+                bits[i / 64] |= 1 << (i % 64);
+            }
+        }
+        bits
+    }
+
+    /// Kinetic and gravitational energy of the non-kinematic spheres before the responses (J).
+    #[must_use]
+    pub fn spheres_before(&self) -> f64 {
+        self.spheres_before
     }
 
     /// The record of particle `i`, if it changed.
@@ -244,6 +288,13 @@ impl Changes {
         let k = *self.slot.get(i)?;
         self.particles.get(k as usize)
     }
+}
+
+/// True when every coordinate of `p` is below 1e50 m in size (false for NaN and ±∞): a spring
+/// between two calm points has a finite elastic energy for any stiffness below 1e200 N/m.
+#[must_use]
+pub(crate) fn calm(p: DVec3) -> bool {
+    p.abs().cmplt(DVec3::splat(1e50)).all()
 }
 
 /// Kinetic and gravitational energy of the non-kinematic dynamic `spheres` under `gravity`
@@ -350,6 +401,36 @@ pub fn after_step<'a, 'b>(model: impl Into<World<'a>>, state: impl Into<Bodies<'
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn finish_keeps_each_particles_first_record_in_particle_order() {
+        // Few records (the sort) and many (through `slot`), with repeats in any order, against
+        // a stable sort and dedup; then cleared and used again.
+        let mut changes = Changes::default();
+        let mut seed = 7u64;
+        for (count, particles) in [(5, 100), (300, 100), (40, 64), (64, 64), (0, 10)] {
+            changes.clear();
+            let mut expected = Vec::new();
+            for k in 0..count {
+                seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+                let i = (seed >> 33) as usize % particles;
+                let r = (i as u32, DVec3::splat(k as f64), DVec3::splat(-(k as f64)));
+                changes.record(i, r.1, r.2);
+                expected.push(r);
+            }
+            expected.sort_by_key(|p| p.0);
+            expected.dedup_by_key(|p| p.0);
+            changes.finish(particles);
+            assert_eq!(
+                changes.particles, expected,
+                "{count} records of {particles}"
+            );
+            for i in 0..particles {
+                let want = expected.iter().find(|r| r.0 as usize == i);
+                assert_eq!(changes.of(i), want, "particle {i}");
+            }
+        }
+    }
 
     #[test]
     fn near_any_marks_what_some_collider_may_touch() {
