@@ -159,7 +159,7 @@ pub(super) unsafe fn springs_avx512(
     i: usize,
     p: usize,
 ) -> (Forces<Avx512>, Avx512) {
-    use std::arch::x86_64::{_mm512_loadu_pd, _mm512_set1_pd};
+    use std::arch::x86_64::_mm512_loadu_pd;
     let j = i + g.delta;
     debug_assert!(j + LANES <= w.x[0].len() && p + LANES <= g.rest_length.len());
     // SAFETY (the intrinsics): the caller guarantees AVX-512F, and that LANES = 8 values exist
@@ -175,18 +175,40 @@ pub(super) unsafe fn springs_avx512(
             load(w.v[1], j),
             load(w.v[2], j),
         ];
-        // Written out, not with `map`: its closure would not be inlined, and neither would the
-        // AVX-512 operations inside it.
-        let first = [
-            first[0].0, first[1].0, first[2].0, first[3].0, first[4].0, first[5].0,
-        ];
+        springs_avx512_of(g, first, &second, p)
+    }
+}
+
+/// The springs of `g` starting at `p` from their first and second ends (`[x, y, z, v_x, v_y,
+/// v_z]`, m and m/s): the group's constants loaded, then [`spring_lanes_avx512`].
+///
+/// # Safety
+/// The CPU must support AVX-512F, and `p + LANES` must be at most the length of
+/// `g.rest_length` (`LANES` times that of `g.present`). Not checked in release builds.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn springs_avx512_of(
+    g: &Group,
+    first: &[Avx512; 6],
+    second: &[std::arch::x86_64::__m512d; 6],
+    p: usize,
+) -> (Forces<Avx512>, Avx512) {
+    use std::arch::x86_64::{_mm512_loadu_pd, _mm512_set1_pd};
+    debug_assert!(p + LANES <= g.rest_length.len());
+    // Written out, not with `map`: its closure would not be inlined, and neither would the
+    // AVX-512 operations inside it.
+    let first = [
+        first[0].0, first[1].0, first[2].0, first[3].0, first[4].0, first[5].0,
+    ];
+    // SAFETY: the caller guarantees AVX-512F and the group's arrays from `p`
+    // (`p + LANES <= rest_length.len() = LANES present.len()`).
+    unsafe {
         let ([fx, fy, fz], power) = spring_lanes_avx512(
             &first,
-            &second,
+            second,
             _mm512_set1_pd(g.stiffness),
             _mm512_set1_pd(g.damping),
-            load(&g.rest_length, p),
-            // The caller guarantees `p + LANES <= rest_length.len() = LANES present.len()`.
+            _mm512_loadu_pd(g.rest_length.as_ptr().add(p)),
             *g.present.get_unchecked(p / LANES),
         );
         ([Avx512(fx), Avx512(fy), Avx512(fz)], Avx512(power))
@@ -210,7 +232,7 @@ pub(super) unsafe fn springs_avx512_strided(
     i: usize,
     p: usize,
 ) -> (Forces<Avx512>, Avx512) {
-    use std::arch::x86_64::{_mm512_loadu_pd, _mm512_set1_pd};
+    use std::arch::x86_64::_mm512_loadu_pd;
     let j = i + g.delta;
     debug_assert!(j + LANES <= w.x[0].len() && p + LANES <= g.rest_length.len());
     // SAFETY (the intrinsics and the pointers): the caller guarantees AVX-512F, the layout
@@ -230,18 +252,7 @@ pub(super) unsafe fn springs_avx512_strided(
             _mm512_loadu_pd(at.add(4 * stride)),
             _mm512_loadu_pd(at.add(5 * stride)),
         ];
-        let first = [
-            first[0].0, first[1].0, first[2].0, first[3].0, first[4].0, first[5].0,
-        ];
-        let ([fx, fy, fz], power) = spring_lanes_avx512(
-            &first,
-            &second,
-            _mm512_set1_pd(g.stiffness),
-            _mm512_set1_pd(g.damping),
-            _mm512_loadu_pd(g.rest_length.as_ptr().add(p)),
-            *g.present.get_unchecked(p / LANES),
-        );
-        ([Avx512(fx), Avx512(fy), Avx512(fz)], Avx512(power))
+        springs_avx512_of(g, first, &second, p)
     }
 }
 
