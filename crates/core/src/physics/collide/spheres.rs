@@ -160,91 +160,98 @@ pub fn collide_spheres_logged<'a, 'b>(
     let n = x.len().min(model.particle_count());
     // Where every particle was before the separations: a particle's springs are measured
     // against these (as in `resolve`), so that no answer depends on the order.
-    let before: Vec<DVec3> = x[..n].to_vec();
-    OWN.with(|own| {
-        let own = &mut *own.borrow_mut();
-        own.clear();
-        own.spheres_before = spheres_before;
-        BOXES.with(|boxes| {
-            let boxes = &mut *boxes.borrow_mut();
-            boxes.clear();
-            boxes.extend(x[..n].chunks(BOX).map(Aabb::of));
-            for s in spheres.iter_mut() {
-                let ws = s.inv_mass();
-                // A particle at |x - c|² ≥ r² (with a margin against rounding) does not touch and
-                // needs no square root.
-                let reach2 = s.radius * s.radius * (1.0 + 1e-9);
-                for (chunk, bounds) in boxes.iter_mut().enumerate() {
-                    if bounds.distance_squared(s.center) >= reach2 {
-                        continue;
-                    }
-                    for i in chunk * BOX..((chunk + 1) * BOX).min(n) {
-                        if (x[i] - s.center).length_squared() >= reach2 {
+    BEFORE.with(|before| {
+        let before = &mut *before.borrow_mut();
+        before.clear();
+        before.extend_from_slice(&x[..n]);
+        let before = &before[..];
+        OWN.with(|own| {
+            let own = &mut *own.borrow_mut();
+            own.clear();
+            own.spheres_before = spheres_before;
+            BOXES.with(|boxes| {
+                let boxes = &mut *boxes.borrow_mut();
+                boxes.clear();
+                boxes.extend(x[..n].chunks(BOX).map(Aabb::of));
+                for s in spheres.iter_mut() {
+                    let ws = s.inv_mass();
+                    // A particle at |x - c|² ≥ r² (with a margin against rounding) does not touch and
+                    // needs no square root.
+                    let reach2 = s.radius * s.radius * (1.0 + 1e-9);
+                    for (chunk, bounds) in boxes.iter_mut().enumerate() {
+                        if bounds.distance_squared(s.center) >= reach2 {
                             continue;
                         }
-                        let (x_old, v_old) = (x[i], v[i]);
-                        let w = model.inv_mass[i];
-                        // The separation's potential energy (J): gravity on both, and the
-                        // springs at i (neighbours where they were) where they gain.
-                        let rise = |dx_s: DVec3, dx: DVec3| {
-                            let elastic = if w == 0.0 {
-                                0.0
-                            } else {
-                                model.elastic_at(&before, i, x_old + dx)
-                                    - model.elastic_at(&before, i, x_old)
-                            };
-                            if ws == 0.0 {
-                                // A kinematic sphere is driven: its pushes are not paid.
-                                return 0.0;
+                        for i in chunk * BOX..((chunk + 1) * BOX).min(n) {
+                            if (x[i] - s.center).length_squared() >= reach2 {
+                                continue;
                             }
-                            lift(dx_s, ws) + lift(dx, w) + elastic.max(0.0)
-                        };
-                        let touched = impulse_pair(
-                            Side {
-                                x: &mut s.center,
-                                v: &mut s.velocity,
-                                w: ws,
-                            },
-                            Side {
-                                x: &mut x[i],
-                                v: &mut v[i],
-                                w,
-                            },
-                            s.radius,
-                            params.sphere_particle_restitution,
-                            &rise,
-                        );
-                        if touched.is_some() {
-                            bounds.include(x[i]);
-                            keep_verlet_history(history_valid, &mut x_prev[i], x[i], v[i], dt);
-                            own.record(i, x_old, v_old);
-                            if let Some(log) = log.as_deref_mut() {
-                                log.record(i, x_old, v_old);
+                            let (x_old, v_old) = (x[i], v[i]);
+                            let w = model.inv_mass[i];
+                            // The separation's potential energy (J): gravity on both, and the
+                            // springs at i (neighbours where they were) where they gain.
+                            let rise = |dx_s: DVec3, dx: DVec3| {
+                                let elastic = if w == 0.0 {
+                                    0.0
+                                } else {
+                                    model.elastic_at(before, i, x_old + dx)
+                                        - model.elastic_at(before, i, x_old)
+                                };
+                                if ws == 0.0 {
+                                    // A kinematic sphere is driven: its pushes are not paid.
+                                    return 0.0;
+                                }
+                                lift(dx_s, ws) + lift(dx, w) + elastic.max(0.0)
+                            };
+                            let touched = impulse_pair(
+                                Side {
+                                    x: &mut s.center,
+                                    v: &mut s.velocity,
+                                    w: ws,
+                                },
+                                Side {
+                                    x: &mut x[i],
+                                    v: &mut v[i],
+                                    w,
+                                },
+                                s.radius,
+                                params.sphere_particle_restitution,
+                                &rise,
+                            );
+                            if touched.is_some() {
+                                bounds.include(x[i]);
+                                keep_verlet_history(history_valid, &mut x_prev[i], x[i], v[i], dt);
+                                own.record(i, x_old, v_old);
+                                if let Some(log) = log.as_deref_mut() {
+                                    log.record(i, x_old, v_old);
+                                }
                             }
                         }
                     }
                 }
+            });
+            // What the pairs could not pay, and the springs between two separated particles,
+            // exactly; the system pays it from its kinetic energy (`budget`). Not with a kinematic
+            // sphere: driven from outside, it may do work on the cloth.
+            own.finish(n);
+            let (rise, size) = energy_rise(&model, x, v, Some(spheres), own);
+            if above_rounding(rise, size) && spheres.iter().all(|s| !s.kinematic) {
+                let mut bodies = Bodies {
+                    x,
+                    v,
+                    x_prev,
+                    history_valid,
+                    spheres,
+                };
+                pay(model, &mut bodies, rise, dt, log);
             }
         });
-        // What the pairs could not pay, and the springs between two separated particles,
-        // exactly; the system pays it from its kinetic energy (`budget`). Not with a kinematic
-        // sphere: driven from outside, it may do work on the cloth.
-        own.finish(n);
-        let (rise, size) = energy_rise(&model, x, v, Some(spheres), own);
-        if above_rounding(rise, size) && spheres.iter().all(|s| !s.kinematic) {
-            let mut bodies = Bodies {
-                x,
-                v,
-                x_prev,
-                history_valid,
-                spheres,
-            };
-            pay(model, &mut bodies, rise, dt, log);
-        }
     });
 }
 
 thread_local! {
+    /// Where every particle was before the separations of one call (reused).
+    static BEFORE: std::cell::RefCell<Vec<DVec3>> = const { std::cell::RefCell::new(Vec::new()) };
     /// The particles one call of [`collide_spheres_logged`] changed (reused).
     static OWN: std::cell::RefCell<Changes> = std::cell::RefCell::new(Changes::default());
 }
@@ -265,16 +272,22 @@ struct Aabb {
 }
 
 impl Aabb {
-    /// The box of `points` (NaN coordinates make it cover everything).
+    /// The box of `points` (NaN coordinates make it cover everything on their axis), the same
+    /// box as [`Aabb::include`] of every point in turn: `min` and `max` pass over a NaN, and a
+    /// NaN anywhere on an axis makes that axis infinite at the end (one dependent operation per
+    /// point and axis instead of two).
     fn of(points: &[DVec3]) -> Aabb {
-        let mut b = Aabb {
-            lo: DVec3::INFINITY,
-            hi: DVec3::NEG_INFINITY,
-        };
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        let mut nan = glam::BVec3::FALSE;
         for &p in points {
-            b.include(p);
+            lo = lo.min(p);
+            hi = hi.max(p);
+            nan |= p.is_nan_mask();
         }
-        b
+        Aabb {
+            lo: DVec3::select(nan, DVec3::NEG_INFINITY, lo),
+            hi: DVec3::select(nan, DVec3::INFINITY, hi),
+        }
     }
 
     /// Grows the box to hold `p`; a NaN coordinate makes it infinite on that axis.
@@ -345,4 +358,47 @@ fn impulse_pair(
     *a.v -= (a.w * j) * d;
     *b.v += (b.w * j) * d;
     Some(debt)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `Aabb::of` gives the box that including every point in turn gives, bit for bit, with
+    /// NaN coordinates anywhere (first, middle, last, several axes) and signed zeros.
+    #[test]
+    fn the_box_of_points_is_the_box_grown_point_by_point() {
+        let nan = f64::NAN;
+        let base = [
+            DVec3::new(0.5, -0.0, 2.0),
+            DVec3::new(-1.5, 0.0, 2.0),
+            DVec3::new(3.0, 1e-300, -7.25),
+            DVec3::new(0.0, -4.0, 1e300),
+        ];
+        let mut cases: Vec<Vec<DVec3>> = vec![Vec::new(), base.to_vec()];
+        for at in 0..base.len() {
+            for poison in [
+                DVec3::new(nan, 1.0, 1.0),
+                DVec3::new(1.0, nan, nan),
+                DVec3::splat(nan),
+            ] {
+                let mut points = base.to_vec();
+                points[at] = poison;
+                cases.push(points);
+            }
+        }
+        let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+        for points in cases {
+            let mut grown = Aabb {
+                lo: DVec3::INFINITY,
+                hi: DVec3::NEG_INFINITY,
+            };
+            for &p in &points {
+                grown.include(p);
+            }
+            let of = Aabb::of(&points);
+            assert_eq!(bits(of.lo), bits(grown.lo), "{points:?}");
+            assert_eq!(bits(of.hi), bits(grown.hi), "{points:?}");
+        }
+    }
 }
