@@ -137,12 +137,11 @@ pub(super) fn step_fused(
     // x_2 and x_4 share a buffer: pass 3 reads x_3.
     let [x3, v2, v3, v4] = kx;
     let dynamics = model.dynamics(true);
-    let stage = |h: f64| Output::Step {
+    // Every stage starts from (x_n, v_n): the first from its own input (the same numbers, read
+    // where the pass has them already), the others from the state.
+    let stage = |h: f64, base| Output::Step {
         dynamics,
-        update: Update::Euler {
-            h,
-            base: Base::Slices(&state.x, &state.v),
-        },
+        update: Update::Euler { h, base },
         after: None,
     };
     let p1 = fused_pass(
@@ -150,7 +149,7 @@ pub(super) fn step_fused(
         &state.x,
         &state.v,
         [x_stage, v2, k1v],
-        stage(half),
+        stage(half, Base::Input),
         account,
         power_f,
     );
@@ -159,7 +158,7 @@ pub(super) fn step_fused(
         x_stage,
         v2,
         [x3, v3, k2v],
-        stage(half),
+        stage(half, Base::Slices(&state.x, &state.v)),
         account,
         power_f,
     );
@@ -168,7 +167,7 @@ pub(super) fn step_fused(
         x3,
         v3,
         [x_stage, v4, k3v],
-        stage(dt),
+        stage(dt, Base::Slices(&state.x, &state.v)),
         account,
         power_f,
     );
@@ -219,22 +218,20 @@ pub(super) fn steps(
     // The buffers of `step_fused`, by index: the state (0, 1), x_2 and x_4 (2), x_3 (3),
     // v_2, v_3, v_4 (4, 5, 6), k1v, k2v, k3v (7, 8, 9). With accounting, pass j of step s
     // of a batch writes its power into slot 4 s + j.
-    let stage = |x, v, outs, h| Pass {
+    // The first stage's base is its own input, the state (as in `step_fused`).
+    let stage = |x, v, outs, h, base| Pass {
         x,
         v,
         outs,
         dynamics,
-        update: TeamUpdate::Euler {
-            h,
-            base: Some([0, 1]),
-        },
+        update: TeamUpdate::Euler { h, base },
         after: None,
         power: None,
     };
     let passes = [
-        stage(0, 1, [Some(2), Some(4), Some(7)], half),
-        stage(2, 4, [Some(3), Some(5), Some(8)], half),
-        stage(3, 5, [Some(2), Some(6), Some(9)], dt),
+        stage(0, 1, [Some(2), Some(4), Some(7)], half, None),
+        stage(2, 4, [Some(3), Some(5), Some(8)], half, Some([0, 1])),
+        stage(3, 5, [Some(2), Some(6), Some(9)], dt, Some([0, 1])),
         Pass {
             x: 2,
             v: 6,
