@@ -118,8 +118,7 @@ pub enum Command {
 #[must_use]
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
-    let kernel = std::env::var(crate::physics::stencil::KERNEL_ENV).ok();
-    if let Err(e) = crate::physics::stencil::Kernel::from_env(kernel.as_deref()) {
+    if let Err(e) = crate::physics::stencil::Kernel::from_environment() {
         eprintln!("springlab: {e}");
         return ExitCode::FAILURE;
     }

@@ -187,11 +187,20 @@ impl Kernel {
     pub fn best() -> Kernel {
         static CHOSEN: std::sync::OnceLock<Kernel> = std::sync::OnceLock::new();
         *CHOSEN.get_or_init(|| {
-            Kernel::from_env(std::env::var(KERNEL_ENV).ok().as_deref())
+            Kernel::from_environment()
                 .ok()
                 .flatten()
                 .unwrap_or_else(Kernel::fastest)
         })
+    }
+
+    /// [`Kernel::from_env`] of this process's [`KERNEL_ENV`] (the command line checks it once
+    /// at start, so that a bad value is an error, not a silent fallback).
+    ///
+    /// # Errors
+    /// As [`Kernel::from_env`].
+    pub fn from_environment() -> Result<Option<Kernel>, String> {
+        Kernel::from_env(std::env::var(KERNEL_ENV).ok().as_deref())
     }
 
     /// The fastest kernel this CPU can run.

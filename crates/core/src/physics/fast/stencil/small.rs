@@ -527,24 +527,41 @@ unsafe fn fused_steps(
         s.load(st, d, x, v);
         // SAFETY: the caller guarantees AVX-512F; `load` sized the arrays for `st`.
         unsafe {
-            match (st.groups.len(), powers) {
-                (1, None) => fused_avx512::<1, false>(st, s, d, dt, steps, &mut Vec::new()),
-                (2, None) => fused_avx512::<2, false>(st, s, d, dt, steps, &mut Vec::new()),
-                (3, None) => fused_avx512::<3, false>(st, s, d, dt, steps, &mut Vec::new()),
-                (4, None) => fused_avx512::<4, false>(st, s, d, dt, steps, &mut Vec::new()),
-                (5, None) => fused_avx512::<5, false>(st, s, d, dt, steps, &mut Vec::new()),
-                (_, None) => fused_avx512::<6, false>(st, s, d, dt, steps, &mut Vec::new()),
-                (1, Some(p)) => fused_avx512::<1, true>(st, s, d, dt, steps, p),
-                (2, Some(p)) => fused_avx512::<2, true>(st, s, d, dt, steps, p),
-                (3, Some(p)) => fused_avx512::<3, true>(st, s, d, dt, steps, p),
-                (4, Some(p)) => fused_avx512::<4, true>(st, s, d, dt, steps, p),
-                (5, Some(p)) => fused_avx512::<5, true>(st, s, d, dt, steps, p),
-                (_, Some(p)) => fused_avx512::<6, true>(st, s, d, dt, steps, p),
+            match powers {
+                None => fused_groups::<false>(st, s, d, dt, steps, &mut Vec::new()),
+                Some(p) => fused_groups::<true>(st, s, d, dt, steps, p),
             }
         }
         s.store(x, v);
     });
     true
+}
+
+/// [`fused_avx512`] with the group count `G` of `st` (1 to `FUSED_GROUPS`) as a constant.
+///
+/// # Safety
+/// As [`fused_avx512`].
+#[cfg(target_arch = "x86_64")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn fused_groups<const POWER: bool>(
+    st: &Stencil,
+    s: &mut FusedScratch,
+    d: &Dynamics,
+    dt: f64,
+    steps: u64,
+    powers: &mut Vec<(f64, f64)>,
+) {
+    // SAFETY: as the caller's.
+    unsafe {
+        match st.groups.len() {
+            1 => fused_avx512::<1, POWER>(st, s, d, dt, steps, powers),
+            2 => fused_avx512::<2, POWER>(st, s, d, dt, steps, powers),
+            3 => fused_avx512::<3, POWER>(st, s, d, dt, steps, powers),
+            4 => fused_avx512::<4, POWER>(st, s, d, dt, steps, powers),
+            5 => fused_avx512::<5, POWER>(st, s, d, dt, steps, powers),
+            _ => fused_avx512::<6, POWER>(st, s, d, dt, steps, powers),
+        }
+    }
 }
 
 /// The constants of one group in the fused loop.
