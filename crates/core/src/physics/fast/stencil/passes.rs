@@ -285,27 +285,47 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
             plus[c] = sum;
             spring_power[c] = power;
         }
-        // Pass 2, chunk by chunk: minus the springs that end here (they started δ earlier).
-        // The ring of δ holds at least the last δ + TILE + LANES forces.
-        for (c, q) in (t0..t1).step_by(LANES).enumerate() {
-            let mut minus = [V::zero(); 3];
+        // Pass 2: minus the springs that end here (they started δ earlier). The ring of δ
+        // holds at least the last δ + TILE + LANES forces. A whole tile at least the reach
+        // from particle 0 (every lane has its spring's first end) goes offset by offset, the
+        // tile's chunks side by side: each chunk's sum still adds the offsets in their order.
+        let mut minus = [[V::zero(); 3]; CHUNKS];
+        let whole_tile = t1 - t0 == TILE && t0 >= st.reach;
+        if whole_tile {
             for g in &st.groups {
-                // SAFETY: as above.
-                let mut f: Forces<V> = unsafe { ring_load(ring, g, q.wrapping_sub(g.delta)) };
-                if q < g.delta {
-                    // Near particle 0 the first lanes have no such spring (it would start
-                    // before particle 0); their ring slots hold other values.
-                    let k = g.delta - q;
-                    f = [
-                        f[0].clear_below(k),
-                        f[1].clear_below(k),
-                        f[2].clear_below(k),
-                    ];
-                }
-                for (total, part) in minus.iter_mut().zip(f) {
-                    *total = total.add(part);
+                for (c, sum) in minus.iter_mut().enumerate() {
+                    // SAFETY: as above.
+                    let f: Forces<V> = unsafe { ring_load(ring, g, t0 + c * LANES - g.delta) };
+                    for (total, part) in sum.iter_mut().zip(f) {
+                        *total = total.add(part);
+                    }
                 }
             }
+        }
+        for (c, q) in (t0..t1).step_by(LANES).enumerate() {
+            let minus = if whole_tile {
+                minus[c]
+            } else {
+                let mut minus = [V::zero(); 3];
+                for g in &st.groups {
+                    // SAFETY: as above.
+                    let mut f: Forces<V> = unsafe { ring_load(ring, g, q.wrapping_sub(g.delta)) };
+                    if q < g.delta {
+                        // Near particle 0 the first lanes have no such spring (it would start
+                        // before particle 0); their ring slots hold other values.
+                        let k = g.delta - q;
+                        f = [
+                            f[0].clear_below(k),
+                            f[1].clear_below(k),
+                            f[2].clear_below(k),
+                        ];
+                    }
+                    for (total, part) in minus.iter_mut().zip(f) {
+                        *total = total.add(part);
+                    }
+                }
+                minus
+            };
             let sum = [
                 plus[c][0].sub(minus[0]),
                 plus[c][1].sub(minus[1]),
