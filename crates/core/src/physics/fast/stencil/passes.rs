@@ -249,7 +249,6 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
             unsafe { ring_store(ring, g, p, f) };
         }
     }
-    const CHUNKS: usize = TILE / LANES;
     for t0 in (q0..q1).step_by(TILE) {
         let t1 = (t0 + TILE).min(q1);
         copy::<V>(x, v, base, &mut xs, &mut vs, &mut copied, need(t1));
@@ -285,47 +284,18 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
             plus[c] = sum;
             spring_power[c] = power;
         }
-        // Pass 2: minus the springs that end here (they started δ earlier). The ring of δ
-        // holds at least the last δ + TILE + LANES forces. A whole tile at least the reach
-        // from particle 0 (every lane has its spring's first end) goes offset by offset, the
-        // tile's chunks side by side: each chunk's sum still adds the offsets in their order.
-        let mut minus = [[V::zero(); 3]; CHUNKS];
-        let whole_tile = t1 - t0 == TILE && t0 >= st.reach;
-        if whole_tile {
-            for g in &st.groups {
-                for (c, sum) in minus.iter_mut().enumerate() {
-                    // SAFETY: as above.
-                    let f: Forces<V> = unsafe { ring_load(ring, g, t0 + c * LANES - g.delta) };
-                    for (total, part) in sum.iter_mut().zip(f) {
-                        *total = total.add(part);
-                    }
-                }
-            }
-        }
+        // Pass 2: minus the springs that end here (they started δ earlier), gathered offset
+        // by offset for the tile's chunks side by side (each chunk's sum adds the offsets in
+        // their order). The ring of δ holds at least the last δ + TILE + LANES forces.
+        let minus = if t0 >= st.reach {
+            // SAFETY: `ring` is `ring_len` long, which holds every group's ring.
+            unsafe { second_ends::<V, false>(st, ring, t0) }
+        } else {
+            // SAFETY: as above.
+            unsafe { second_ends::<V, true>(st, ring, t0) }
+        };
         for (c, q) in (t0..t1).step_by(LANES).enumerate() {
-            let minus = if whole_tile {
-                minus[c]
-            } else {
-                let mut minus = [V::zero(); 3];
-                for g in &st.groups {
-                    // SAFETY: as above.
-                    let mut f: Forces<V> = unsafe { ring_load(ring, g, q.wrapping_sub(g.delta)) };
-                    if q < g.delta {
-                        // Near particle 0 the first lanes have no such spring (it would start
-                        // before particle 0); their ring slots hold other values.
-                        let k = g.delta - q;
-                        f = [
-                            f[0].clear_below(k),
-                            f[1].clear_below(k),
-                            f[2].clear_below(k),
-                        ];
-                    }
-                    for (total, part) in minus.iter_mut().zip(f) {
-                        *total = total.add(part);
-                    }
-                }
-                minus
-            };
+            let minus = minus[c];
             let sum = [
                 plus[c][0].sub(minus[0]),
                 plus[c][1].sub(minus[1]),
@@ -350,6 +320,46 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
             after(&mut xo[a..b], &mut vo[a..b]);
         }
     }
+}
+
+/// Chunks of `LANES` particles per tile.
+const CHUNKS: usize = TILE / LANES;
+
+/// Pass 2's sums for the tile from particle `t0`: for each of its [`CHUNKS`] chunks `q`, the
+/// forces of the springs that end there, `Σ_δ ring_δ[q-δ..q-δ+8]`, added offset by offset in
+/// the groups' order (chunks past the end of the range are computed too, from whatever their
+/// ring slots hold, and not used). `NEAR_START`: some `q < δ`, whose first `δ - q` lanes have
+/// no spring (it would start before particle 0) and are cleared.
+///
+/// # Safety
+/// As [`ring_load`]: `ring` holds every group's ring.
+#[inline(always)]
+unsafe fn second_ends<V: Lanes, const NEAR_START: bool>(
+    st: &Stencil,
+    ring: &[f64],
+    t0: usize,
+) -> [Forces<V>; CHUNKS] {
+    let mut minus = [[V::zero(); 3]; CHUNKS];
+    for g in &st.groups {
+        for (c, sum) in minus.iter_mut().enumerate() {
+            let q = t0 + c * LANES;
+            // SAFETY: the caller guarantees the group's ring.
+            let mut f: Forces<V> = unsafe { ring_load(ring, g, q.wrapping_sub(g.delta)) };
+            if NEAR_START && q < g.delta {
+                // Their ring slots hold other values.
+                let k = g.delta - q;
+                f = [
+                    f[0].clear_below(k),
+                    f[1].clear_below(k),
+                    f[2].clear_below(k),
+                ];
+            }
+            for (total, part) in sum.iter_mut().zip(f) {
+                *total = total.add(part);
+            }
+        }
+    }
+    minus
 }
 
 /// Semi-implicit Euler on a chunk: `v' = v + dt a`, then `x' = x + dt v'` (positions in m,
