@@ -93,6 +93,19 @@ pub(crate) trait Lanes: Copy {
     fn load_vectors(vectors: &[DVec3; LANES]) -> [Self; 3] {
         to_lanes(vectors)
     }
+    /// Whether [`Lanes::funnel`] is one instruction on registers (then the stencil's pass 2
+    /// reads its force rings with aligned loads and funnels them; else with unaligned loads).
+    const FUNNEL: bool = false;
+    /// Lanes `r..LANES` of `self` followed by lanes `0..r` of `next` (`r < LANES`): the
+    /// `LANES` values from index `r` of the two chunks one after the other.
+    #[inline(always)]
+    fn funnel(self, next: Self, r: usize) -> Self {
+        let mut both = [0.0; 2 * LANES];
+        let (a, b) = both.split_at_mut(LANES);
+        self.store(a.try_into().expect("a chunk"));
+        next.store(b.try_into().expect("a chunk"));
+        Self::load(lanes(&both, r))
+    }
     /// Lanes `[x, y, z]` into eight vectors.
     #[inline(always)]
     fn store_vectors(lanes: [Self; 3], vectors: &mut [DVec3; LANES]) {
@@ -320,6 +333,22 @@ impl Lanes for Avx512 {
         use std::arch::x86_64::{_CMP_UNORD_Q, _mm512_cmp_pd_mask};
         // SAFETY: AVX-512F, see the type's docs.
         unsafe { _mm512_cmp_pd_mask::<_CMP_UNORD_Q>(self.0, self.0) }
+    }
+    const FUNNEL: bool = true;
+    #[inline(always)]
+    fn funnel(self, next: Avx512, r: usize) -> Avx512 {
+        use std::arch::x86_64::{
+            _mm512_add_epi64, _mm512_permutex2var_pd, _mm512_set1_epi64, _mm512_setr_epi64,
+        };
+        // Index i < 8: lane i of `self`, i ≥ 8: lane i - 8 of `next`.
+        // SAFETY: AVX-512F, see the type's docs.
+        unsafe {
+            let index = _mm512_add_epi64(
+                _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7),
+                _mm512_set1_epi64(r as i64),
+            );
+            Avx512(_mm512_permutex2var_pd(self.0, index, next.0))
+        }
     }
     #[inline(always)]
     fn load_vectors(vectors: &[DVec3; LANES]) -> [Avx512; 3] {
@@ -684,5 +713,45 @@ mod tests {
         }
         // SAFETY: AVX2 is available (checked above).
         unsafe { check() }
+    }
+
+    /// The AVX-512 funnel (one permute) gives the lanes of the plain one (through memory), bit
+    /// for bit, for every shift: lanes `r..8` of the first chunk, then `0..r` of the second.
+    #[test]
+    fn the_avx512_funnel_moves_every_bit_as_the_plain_lanes() {
+        let values: [f64; 2 * LANES] = std::array::from_fn(|i| match i {
+            3 => -0.0,
+            7 => f64::from_bits(0x7ff8_0000_0000_1234),
+            8 => f64::NEG_INFINITY,
+            _ => i as f64 + 0.25,
+        });
+        let (low, high) = (lanes(&values, 0), lanes(&values, LANES));
+        for r in 0..LANES {
+            let plain = Plain(*low).funnel(Plain(*high), r).0;
+            assert_eq!(
+                plain.map(f64::to_bits),
+                lanes(&values, r).map(f64::to_bits),
+                "plain funnel {r}"
+            );
+        }
+        if !std::arch::is_x86_feature_detected!("avx512f") {
+            return;
+        }
+        #[target_feature(enable = "avx512f")]
+        fn check(low: &[f64; LANES], high: &[f64; LANES], values: &[f64; 2 * LANES]) {
+            for r in 0..LANES {
+                let mut got = [0.0; LANES];
+                Avx512::load(low)
+                    .funnel(Avx512::load(high), r)
+                    .store(&mut got);
+                assert_eq!(
+                    got.map(f64::to_bits),
+                    lanes(values, r).map(f64::to_bits),
+                    "AVX-512 funnel {r}"
+                );
+            }
+        }
+        // SAFETY: AVX-512F is available (checked above).
+        unsafe { check(low, high, &values) }
     }
 }

@@ -340,6 +340,52 @@ unsafe fn second_ends<V: Lanes, const NEAR_START: bool>(
     t0: usize,
 ) -> [Forces<V>; CHUNKS] {
     let mut minus = [[V::zero(); 3]; CHUNKS];
+    if V::FUNNEL {
+        for g in &st.groups {
+            // The chunks start r values into whole chunks of the ring: load those, aligned
+            // (each read by two neighbouring chunks), and funnel each pair.
+            let start = t0.wrapping_sub(g.delta);
+            let r = start % LANES;
+            if r == 0 && !NEAR_START {
+                // Whole chunks already (δ a multiple of LANES).
+                for (c, sum) in minus.iter_mut().enumerate() {
+                    // SAFETY: the caller guarantees the group's ring.
+                    let f: Forces<V> = unsafe { ring_load(ring, g, start.wrapping_add(c * LANES)) };
+                    for (total, part) in sum.iter_mut().zip(f) {
+                        *total = total.add(part);
+                    }
+                }
+                continue;
+            }
+            let aligned = start.wrapping_sub(r);
+            // SAFETY: as above.
+            let mut low: Forces<V> = unsafe { ring_load(ring, g, aligned) };
+            for (c, sum) in minus.iter_mut().enumerate() {
+                let q = t0 + c * LANES;
+                // SAFETY: as above.
+                let high: Forces<V> =
+                    unsafe { ring_load(ring, g, aligned.wrapping_add((c + 1) * LANES)) };
+                let mut f = [
+                    low[0].funnel(high[0], r),
+                    low[1].funnel(high[1], r),
+                    low[2].funnel(high[2], r),
+                ];
+                low = high;
+                if NEAR_START && q < g.delta {
+                    let k = g.delta - q;
+                    f = [
+                        f[0].clear_below(k),
+                        f[1].clear_below(k),
+                        f[2].clear_below(k),
+                    ];
+                }
+                for (total, part) in sum.iter_mut().zip(f) {
+                    *total = total.add(part);
+                }
+            }
+        }
+        return minus;
+    }
     for g in &st.groups {
         for (c, sum) in minus.iter_mut().enumerate() {
             let q = t0 + c * LANES;
@@ -558,7 +604,10 @@ pub(super) fn weight_drag_springs<V: Lanes>(
 }
 
 /// Keeps the forces of the chunk of springs starting at `p` (a multiple of `LANES`) in the
-/// ring of `g`: component `c` of particle `p` at `ring_offset + c (R + LANES) + p mod R`.
+/// ring of `g`: component `c` of particle `p` at `ring_offset + c (R + LANES) + p mod R`; and,
+/// for lanes without [`Lanes::FUNNEL`] (whose pass 2 reads chunks that start anywhere), the
+/// first chunk again after the end (the mirror), so that a read can run across the wrap. With
+/// a funnel pass 2 reads whole chunks only and needs no mirror, nor its branch.
 ///
 /// Unchecked (the streaming loop calls it for every chunk of every group, where a bounds check
 /// is several instructions besides the three stores).
@@ -578,8 +627,9 @@ pub(super) unsafe fn ring_store<V: Lanes>(ring: &mut [f64], g: &Group, p: usize,
         // SAFETY: `at + LANES <= 3 * stride` because `c <= 2` and `slot < R`, inside the
         // group's components; `Lanes::store` writes exactly LANES values.
         part.store(unsafe { &mut *ring.add(at).cast::<[f64; LANES]>() });
-        if slot == 0 {
-            // The mirror after the end, so that reads can run across the wrap.
+        if slot == 0 && !V::FUNNEL {
+            // The mirror after the end, so that unaligned reads can run across the wrap (the
+            // funnelling lanes read whole chunks only: `second_ends`).
             let mirror = c * stride + g.ring;
             // SAFETY: `mirror + LANES = (c + 1) * stride`, inside the group's components.
             part.store(unsafe { &mut *ring.add(mirror).cast::<[f64; LANES]>() });
@@ -587,8 +637,9 @@ pub(super) unsafe fn ring_store<V: Lanes>(ring: &mut [f64], g: &Group, p: usize,
     }
 }
 
-/// The forces of the `LANES` springs of `g` starting at `p` (any `p`, taken modulo `R`), from
-/// the ring. Unchecked, as [`ring_store`].
+/// The forces of the `LANES` springs of `g` starting at `p` (taken modulo `R`), from the ring:
+/// any `p` where the ring keeps its mirror, a multiple of `LANES` where it does not (lanes with
+/// [`Lanes::FUNNEL`], see [`ring_store`]). Unchecked, as [`ring_store`].
 ///
 /// # Safety
 /// As [`ring_store`]: `g.ring_offset + 3 (g.ring + LANES) <= ring.len()`.
