@@ -525,8 +525,14 @@ struct ResponseLog {
 fn response(dt: f64, account: bool, log: Arc<Mutex<ResponseLog>>) -> Response {
     let prepared = Arc::new(Prepared::default());
     let parts = Arc::clone(&prepared);
+    // The spheres' broad phase needs boxes; a body without spheres only the colliders' test.
+    let with_boxes = !log
+        .lock()
+        .unwrap_or_else(PoisonError::into_inner)
+        .spheres
+        .is_empty();
     let prepare = move |model: &Model, k: usize, q0: usize, x: &[DVec3], _: &[DVec3]| {
-        parts.prepare(model, k, q0, x);
+        parts.prepare(model, k, q0, x, with_boxes);
     };
     let respond = move |model: &Model, x: &mut [DVec3], v: &mut [DVec3]| {
         let mut log = log.lock().unwrap_or_else(PoisonError::into_inner);
@@ -547,7 +553,7 @@ fn response(dt: f64, account: bool, log: Arc<Mutex<ResponseLog>>) -> Response {
                 (taken.parts(), calm)
             }
             None => {
-                whole.sum_up(model, 0, &x[..n]);
+                whole.sum_up(model, 0, &x[..n], with_boxes);
                 let calm = whole.calm();
                 (std::slice::from_mut(whole), calm)
             }

@@ -28,9 +28,11 @@ use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use glam::DVec3;
 
+#[cfg(test)]
+use super::response::near_any;
 use super::response::near_any_into;
 use super::{Broad, World, calm};
-use crate::physics::fast::bounds::boxes;
+use crate::physics::fast::bounds::{boxes, plane_bits};
 
 /// Particles per box of the sphere–particle broad phase.
 pub(super) const BOX: usize = 32;
@@ -96,18 +98,39 @@ pub struct PartBounds {
 }
 
 impl PartBounds {
-    /// Sums up particles `start..start + x.len()` at positions `x` (m); `near` for the
-    /// colliders' `broads` (none: left empty).
-    pub(super) fn fill(&mut self, broads: &[Broad], start: usize, x: &[DVec3]) {
+    /// Sums up particles `start..start + x.len()` at positions `x` (m): the boxes when
+    /// `with_boxes` (the body has spheres), `near` for the colliders' `broads` (none: left
+    /// empty), `calm` always. Planes' bounds and the calm test go eight points at a time
+    /// (`fast::bounds::plane_bits`, the same answers), other colliders' one by one.
+    pub(super) fn fill(&mut self, broads: &[Broad], start: usize, x: &[DVec3], with_boxes: bool) {
         self.start = start;
         self.end = start + x.len();
-        boxes(x, BOX, &mut self.boxes, |lo, hi| Aabb { lo, hi });
-        self.calm = self.boxes.iter().all(|b| calm(b.lo) && calm(b.hi));
+        self.boxes.clear();
         self.near.clear();
-        if broads.is_empty() {
-            return;
+        let mut calm_known = None;
+        if with_boxes {
+            boxes(x, BOX, &mut self.boxes, |lo, hi| Aabb { lo, hi });
+            calm_known = Some(self.boxes.iter().all(|b| calm(b.lo) && calm(b.hi)));
         }
-        near_any_into(broads, x, &mut self.bits);
+        self.bits.clear();
+        self.bits.resize(x.len().div_ceil(64), 0);
+        let planes = broads.iter().all(|b| matches!(b, Broad::Plane { .. }));
+        if planes {
+            for broad in broads {
+                if let Broad::Plane {
+                    point,
+                    normal,
+                    phi_max,
+                } = *broad
+                {
+                    let all_calm = plane_bits(x, point, normal, phi_max, &mut self.bits);
+                    calm_known = calm_known.or(Some(all_calm));
+                }
+            }
+        } else {
+            near_any_into(broads, x, &mut self.bits);
+        }
+        self.calm = calm_known.unwrap_or_else(|| x.iter().all(|p| calm(*p)));
         for (k, &word) in self.bits.iter().enumerate() {
             let mut bits = word;
             while bits != 0 {
@@ -119,13 +142,19 @@ impl PartBounds {
     }
 
     /// Sums up particles `start..start + x.len()` at positions `x` (m) for the colliders of
-    /// `world`.
-    pub fn sum_up<'a>(&mut self, world: impl Into<World<'a>>, start: usize, x: &[DVec3]) {
+    /// `world`, with the boxes of the spheres' broad phase when `with_boxes`.
+    pub fn sum_up<'a>(
+        &mut self,
+        world: impl Into<World<'a>>,
+        start: usize,
+        x: &[DVec3],
+        with_boxes: bool,
+    ) {
         let world = world.into();
         let broads: Vec<Broad> = (world.colliders.iter())
             .map(|c| c.broad(world.contact.epsilon))
             .collect();
-        self.fill(&broads, start, x);
+        self.fill(&broads, start, x, with_boxes);
     }
 
     /// Every position was calm when the part was summed up.
@@ -158,11 +187,18 @@ pub struct Prepared {
 
 impl Prepared {
     /// Sums up part `k`, particles `start..start + x.len()` at positions `x` (m) after a step,
-    /// for the colliders of `world`.
-    pub fn prepare<'a>(&self, world: impl Into<World<'a>>, k: usize, start: usize, x: &[DVec3]) {
+    /// for the colliders of `world`, with boxes when `with_boxes` ([`PartBounds::sum_up`]).
+    pub fn prepare<'a>(
+        &self,
+        world: impl Into<World<'a>>,
+        k: usize,
+        start: usize,
+        x: &[DVec3],
+        with_boxes: bool,
+    ) {
         MAKING.with(|making| {
             let making = &mut *making.borrow_mut();
-            making.sum_up(world, start, x);
+            making.sum_up(world, start, x, with_boxes);
             making.fresh = true;
             let mut parts = self.parts.lock().unwrap_or_else(PoisonError::into_inner);
             if parts.len() <= k {
@@ -258,6 +294,62 @@ mod tests {
                     let of = Aabb::of(chunk);
                     assert_eq!(b.lo, of.lo, "{chunk:?}");
                     assert_eq!(b.hi, of.hi, "{chunk:?}");
+                }
+            }
+        }
+    }
+
+    /// A summary's particles near planes (`fast::bounds::plane_bits`, eight at a time) are
+    /// those `near_any` (one by one, `Broad::may_touch`) marks, and its `calm` is every
+    /// position's `calm`: points on a grid through two planes, a hair from their bounds, NaN,
+    /// infinite and huge coordinates, counts that are not whole words or chunks, with and
+    /// without boxes.
+    #[test]
+    fn the_planes_summary_is_the_scan_of_every_particle() {
+        let planes = [
+            crate::physics::collide::Collider::Plane {
+                point: DVec3::new(0.0, -0.5, 0.0),
+                normal: DVec3::new(0.3, 1.0, -0.2).normalize(),
+            },
+            crate::physics::collide::Collider::Plane {
+                point: DVec3::new(0.25, 0.0, 0.0),
+                normal: DVec3::X,
+            },
+        ];
+        let broads: Vec<Broad> = planes.iter().map(|c| c.broad(0.01)).collect();
+        let mut x: Vec<DVec3> = (0..203)
+            .map(|i| {
+                let f = f64::from(i);
+                DVec3::new(0.013 * f - 1.0, (0.37 * f).sin(), 0.5 - 0.007 * f)
+            })
+            .collect();
+        x.push(DVec3::new(0.25 + 0.01 - 1e-12, 3.0, 0.0));
+        for (count, poison) in [
+            (64, None),
+            (197, None),
+            (204, Some(DVec3::new(f64::NAN, 0.0, 0.0))),
+            (150, Some(DVec3::new(0.0, f64::INFINITY, 0.0))),
+            (9, Some(DVec3::new(0.0, 0.0, -2e50))),
+        ] {
+            let mut x = x[..count].to_vec();
+            if let Some(p) = poison {
+                x[count / 2] = p;
+            }
+            let scan = near_any(&broads, &x);
+            let expected: Vec<u32> = (0..x.len() as u32)
+                .filter(|&i| scan[i as usize / 64] >> (i % 64) & 1 == 1)
+                .collect();
+            for with_boxes in [false, true] {
+                let mut part = PartBounds::default();
+                part.fill(&broads, 100, &x, with_boxes);
+                let near: Vec<u32> = part.near.iter().map(|&i| i - 100).collect();
+                assert_eq!(near, expected, "{count} {poison:?}");
+                assert_eq!(part.calm, x.iter().all(|p| calm(*p)), "{count} {poison:?}");
+                if count > 64 {
+                    assert!(
+                        !near.is_empty() && near.len() < x.len(),
+                        "{count}: {near:?}"
+                    );
                 }
             }
         }

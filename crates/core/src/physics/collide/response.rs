@@ -140,7 +140,7 @@ pub fn resolve_prepared<'a, 'b>(
 /// `i % 64` of word `i / 64`. One loop per collider over all the particles, without a branch
 /// per particle (the plane's and the sphere's tests called in loops of their own), so that
 /// a body resting on a collider costs a few operations per particle far from it.
-fn near_any(broads: &[Broad], x: &[DVec3]) -> Vec<u64> {
+pub(super) fn near_any(broads: &[Broad], x: &[DVec3]) -> Vec<u64> {
     let mut near = Vec::new();
     near_any_into(broads, x, &mut near);
     near

@@ -180,7 +180,7 @@ pub fn collide_spheres_prepared<'a, 'b>(
             let parts = match parts {
                 Some(parts) => parts,
                 None => {
-                    whole.fill(&[], 0, &x[..n]);
+                    whole.fill(&[], 0, &x[..n], true);
                     std::slice::from_mut(whole)
                 }
             };

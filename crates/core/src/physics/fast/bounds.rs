@@ -14,6 +14,10 @@
 
 use glam::DVec3;
 
+#[cfg(target_arch = "x86_64")]
+use super::lanes::Avx512;
+use super::lanes::{LANES, Lanes, Plain, first_lanes, load_chunk};
+
 /// Pushes `make(lo, hi)` onto `out` for the box (m) of points `len k .. len (k + 1)` of
 /// `points`, `k = 0, 1, …` (the last box may hold fewer); `len` a multiple of eight.
 ///
@@ -143,3 +147,70 @@ fn boxes_avx512<T>(
         ));
     }
 }
+
+/// Sets bit `i mod 64` of `bits[i / 64]` for every point `i` of `x` whose height over a plane
+/// is below a bound or NaN, `(x_i - point)·normal < phi_max` (m), the test of
+/// `Broad::plane_may_touch` (the same operations, so the same answers: tested in
+/// `collide/prepared.rs`), eight points at a time; and returns whether every point is calm
+/// (every coordinate inside (-1e50, 1e50) m, `collide::calm`).
+///
+/// # Panics
+/// If `bits` holds fewer than `x.len()` bits.
+pub(crate) fn plane_bits(
+    x: &[DVec3],
+    point: DVec3,
+    normal: DVec3,
+    phi_max: f64,
+    bits: &mut [u64],
+) -> bool {
+    assert!(bits.len() * 64 >= x.len(), "a bit for every point");
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        // SAFETY: the CPU supports AVX-512F (checked above).
+        return unsafe { plane_bits_avx512(x, point, normal, phi_max, bits) };
+    }
+    plane_bits_lanes::<Plain>(x, point, normal, phi_max, bits)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn plane_bits_avx512(
+    x: &[DVec3],
+    point: DVec3,
+    normal: DVec3,
+    phi_max: f64,
+    bits: &mut [u64],
+) -> bool {
+    plane_bits_lanes::<Avx512>(x, point, normal, phi_max, bits)
+}
+
+/// [`plane_bits`] with lanes `V`.
+#[inline(always)]
+fn plane_bits_lanes<V: Lanes>(
+    x: &[DVec3],
+    point: DVec3,
+    normal: DVec3,
+    phi_max: f64,
+    bits: &mut [u64],
+) -> bool {
+    let (bound, low, high) = (V::splat(phi_max), V::splat(-CALM), V::splat(CALM));
+    let mut calm = u8::MAX;
+    for (k, chunk) in x.chunks(LANES).enumerate() {
+        let count = chunk.len();
+        let p = load_chunk::<V>(chunk, count);
+        // (x - point)·normal, as `DVec3::dot` adds it: (x n_x + y n_y) + z n_z.
+        let phi = (p[0].sub(V::splat(point.x)).mul(V::splat(normal.x)))
+            .add(p[1].sub(V::splat(point.y)).mul(V::splat(normal.y)))
+            .add(p[2].sub(V::splat(point.z)).mul(V::splat(normal.z)));
+        let lanes = first_lanes(count);
+        let near = (phi.less_than(bound) | phi.nan_lanes()) & lanes;
+        bits[k / 8] |= u64::from(near) << (8 * (k % 8));
+        for c in p {
+            calm &= (low.less_than(c) & c.less_than(high)) | !lanes;
+        }
+    }
+    calm == u8::MAX
+}
+
+/// The size of a calm coordinate (m): below it in magnitude (`collide::calm`).
+const CALM: f64 = 1e50;
