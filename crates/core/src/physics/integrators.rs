@@ -630,6 +630,22 @@ fn steps_per_team(stencil: &Stencil, account: bool, passes: usize, n: u64) -> u6
     n.min(fit.max(1) as u64)
 }
 
+/// The powers of slots `0..count` of a team's power buffer, each as [`slot_power`] sums it,
+/// the slots shared out between the pool's threads (after the team, whose threads would
+/// otherwise wait while one sums them all).
+fn slot_powers(stencil: &Stencil, slots: &[f64], count: usize) -> Vec<Power> {
+    let mut powers = vec![Power::default(); count];
+    let mut unused = vec![(); count];
+    let pool = crate::physics::pool::Pool::global();
+    let parts = pool.threads().min(count);
+    pool.for_each_part(&mut powers, &mut unused, parts, |start, piece, _| {
+        for (j, power) in piece.iter_mut().enumerate() {
+            *power = slot_power(stencil, slots, start + j);
+        }
+    });
+    powers
+}
+
 /// The power of slot `k` of a team's power buffer ([`Stencil::team_with_power`]).
 fn slot_power(stencil: &Stencil, slots: &[f64], k: usize) -> Power {
     let len = stencil.power_len();

@@ -38,7 +38,7 @@
 use crate::physics::energy::{Dissipated, Power};
 use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, polynomial};
-use crate::physics::integrators::{explicit_step, Response, Workspace, after, fused_pass, power_if, slot_power, steps_per_team, team};
+use crate::physics::integrators::{explicit_step, Response, Workspace, after, fused_pass, power_if, slot_powers, steps_per_team, team};
 use crate::physics::particles::State;
 use crate::physics::stencil::{Base, Output, PartFn, Pass, Stencil, TeamUpdate, Update};
 use glam::DVec3;
@@ -304,8 +304,9 @@ pub(super) fn steps(
             }
         });
         if account {
+            let powers = slot_powers(stencil, power_slots, 4 * count as usize);
             for s in 0..count as usize {
-                let p = |j| slot_power(stencil, power_slots, 4 * s + j);
+                let p = |j| powers[4 * s + j];
                 // D_{n+1} = D_n + dt/6 (P1 + 2 P2 + 2 P3 + P4), as `step_fused` adds it.
                 let power = Power::default()
                     .plus(1.0, p(0))

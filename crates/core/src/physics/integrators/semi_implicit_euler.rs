@@ -32,7 +32,7 @@
 use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, one_evaluation};
 use crate::physics::energy::{Dissipated, Power};
-use crate::physics::integrators::{explicit_step, Response, Workspace, after, fused, one_pass_step, power_if, slot_power, steps_per_team, team};
+use crate::physics::integrators::{explicit_step, Response, Workspace, after, fused, one_pass_step, power_if, slot_powers, steps_per_team, team};
 use crate::physics::particles::State;
 use glam::DVec3;
 use crate::physics::stencil::{PartFn, Pass, Stencil, TeamUpdate, Update};
@@ -182,9 +182,8 @@ pub(super) fn steps(
             }
         });
         if account {
-            for k in 0..count as usize {
-                step_dissipated.push(per_step(slot_power(stencil, power_slots, k)));
-            }
+            let powers = slot_powers(stencil, power_slots, count as usize);
+            step_dissipated.extend(powers.into_iter().map(per_step));
         }
         done += count;
     }
