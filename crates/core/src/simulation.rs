@@ -78,8 +78,10 @@ pub use report::{BodyReport, RunReport, SolverReport, SphereReport};
 pub const MAX_HALVINGS: u32 = 5;
 
 /// Steps per fused call of [`Simulation::advance`]: enough to amortise starting the thread
-/// team, few enough that a chunk taken again step by step costs little.
-pub const CHUNK: u64 = 64;
+/// team and a chunk's fixed costs (the states saved, the response's set-up, the speed test at
+/// the end; 64 left a few per cent of a 1000-particle jelly's run there), few enough that a
+/// chunk taken again step by step costs little.
+pub const CHUNK: u64 = 256;
 
 /// A scene of fewer particles and springs than this takes longer fused chunks than [`CHUNK`]
 /// (up to [`CHUNK_MAX`]), so that a chunk holds about as much work
