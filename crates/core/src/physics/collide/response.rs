@@ -439,6 +439,32 @@ pub fn after_step<'a, 'b>(model: impl Into<World<'a>>, state: impl Into<Bodies<'
 mod tests {
     use super::*;
 
+    /// While records are made (before `finish`), `of` gives each particle's first record, and
+    /// nothing for a particle not recorded (the spheres' separations read their neighbours'
+    /// positions before the call through it); after `finish` and `clear` as before.
+    #[test]
+    fn of_gives_the_first_record_while_recording() {
+        let mut changes = Changes::default();
+        let p = |k: f64| DVec3::splat(k);
+        for round in 0..2 {
+            changes.clear();
+            changes.record(5, p(1.0), p(-1.0));
+            changes.record(2, p(2.0), p(-2.0));
+            changes.record(5, p(3.0), p(-3.0));
+            changes.record(40, p(4.0), p(-4.0));
+            assert_eq!(changes.of(5).map(|r| r.1), Some(p(1.0)), "round {round}");
+            assert_eq!(changes.of(2).map(|r| r.2), Some(p(-2.0)));
+            assert_eq!(changes.of(40).map(|r| r.1), Some(p(4.0)));
+            assert!(changes.of(3).is_none() && changes.of(41).is_none());
+            changes.finish(50);
+            assert_eq!(changes.of(5).map(|r| r.1), Some(p(1.0)));
+            assert_eq!(changes.particles.len(), 3);
+            assert!(changes.of(3).is_none());
+        }
+        changes.clear();
+        assert!(changes.of(5).is_none() && changes.of(2).is_none() && changes.of(40).is_none());
+    }
+
     #[test]
     fn finish_keeps_each_particles_first_record_in_particle_order() {
         // Few records (the sort) and many (through `slot`), with repeats in any order, against
