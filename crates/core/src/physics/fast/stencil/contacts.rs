@@ -1,6 +1,9 @@
 //! Contacts inside pass 2 of the stencil: a broad phase on a whole chunk in registers
-//! (`may_touch`, no square roots) and the scalar contact code of [`super::super::collide`] for
-//! the few particles that may touch (`contact_lanes`).
+//! (`may_touch`, no square roots), then the contact force of [`super::super::collide`] for the
+//! particles that may touch (`contact_lanes`): against planes alone all eight lanes at once with
+//! the scalar code's operations (`plane_lanes`, the same bits: a plane's contact is a few dot
+//! products, and a body resting on its plane has a whole layer of particles in the band every
+//! step), against other colliders the scalar code lane by lane.
 
 #[allow(clippy::wildcard_imports)]
 use super::*;

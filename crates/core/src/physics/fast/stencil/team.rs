@@ -31,7 +31,10 @@
 //! **A serial stage.** Between two passes the body may call [`Crew::serial`]: the first thread
 //! to come runs a function on whole buffers (the collision response after a step, which reads
 //! any particle and may scale every velocity), the others wait for it as at a barrier, and the
-//! team goes on with the next pass without handing the work back to the pool.
+//! team goes on with the next pass without handing the work back to the pool. What that
+//! function would ask of every particle, each thread can answer for its own part right after a
+//! pass ([`Crew::pass_then`]: the thread that wrote the part, while it is in its cache), so that
+//! the serial stage reads one summary per part instead.
 //!
 //! **Stealing.** Every thread of the team has a home part, which it claims first in every pass
 //! (so a part's particles stay in one core's cache from pass to pass). A thread that has
