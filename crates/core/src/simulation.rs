@@ -62,8 +62,8 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use glam::DVec3;
 
-use crate::physics::collide::{Bodies, Changes, DynamicSphere};
-use crate::physics::energy::{energy_change, energy_change_of};
+use crate::physics::collide::{Bodies, Changes, DynamicSphere, PartBounds, Prepared};
+use crate::physics::energy::{energy_change, energy_change_calm};
 use crate::physics::integrators::{Response, guard_energy, guard_start_energy};
 use crate::physics::{
     Dissipated, Divergence, Energy, Method, Model, SolveStats, State, Workspace, collide, diverge,
@@ -78,8 +78,10 @@ pub use report::{BodyReport, RunReport, SolverReport, SphereReport};
 pub const MAX_HALVINGS: u32 = 5;
 
 /// Steps per fused call of [`Simulation::advance`]: enough to amortise starting the thread
-/// team, few enough that a chunk taken again step by step costs little.
-pub const CHUNK: u64 = 64;
+/// team and a chunk's fixed costs (the states saved, the response's set-up, the speed test at
+/// the end; 64 left a few per cent of a 1000-particle jelly's run there), few enough that a
+/// chunk taken again step by step costs little.
+pub const CHUNK: u64 = 256;
 
 /// A scene of fewer particles and springs than this takes longer fused chunks than [`CHUNK`]
 /// (up to [`CHUNK_MAX`]), so that a chunk holds about as much work
@@ -512,42 +514,92 @@ struct ResponseLog {
     /// The body's dynamic spheres, moved by the responses (the methods' steps do not read
     /// them), back into the state after the chunk.
     spheres: Vec<DynamicSphere>,
+    /// The whole body's summary for the response's broad phase, when the parts made none.
+    whole: PartBounds,
 }
 
 /// The contact part of `plain_step` (the spheres move, then every response happens) as a rule
 /// between the steps of [`Method::steps`], the same calls on the same numbers, on the spheres
-/// of `log`: with `account` it records each step's change of energy in `log`.
+/// of `log`: with `account` it records each step's change of energy in `log`. Where a team of
+/// threads takes the steps, each thread sums up its part for the response's broad phase
+/// ([`collide::Prepared`]: boxes, calm positions, particles near a collider) right after
+/// writing it, and the response reads those summaries instead of every particle.
 fn response(dt: f64, account: bool, log: Arc<Mutex<ResponseLog>>) -> Response {
-    Response(Arc::new(
-        move |model: &Model, x: &mut [DVec3], v: &mut [DVec3]| {
-            let mut log = log.lock().unwrap_or_else(PoisonError::into_inner);
-            let ResponseLog {
-                contacts,
-                changes,
-                x_prev,
-                spheres,
-            } = &mut *log;
-            x_prev.resize(x.len(), DVec3::ZERO);
-            let mut bodies = Bodies {
-                x: &mut *x,
-                v: &mut *v,
-                x_prev,
-                history_valid: false,
-                spheres,
-            };
-            collide::advance_spheres(model, bodies.reborrow(), dt);
-            if !account {
-                collide::collide_spheres(model, bodies.reborrow(), dt);
-                collide::resolve(model, bodies, dt);
-                return;
+    let prepared = Arc::new(Prepared::default());
+    let parts = Arc::clone(&prepared);
+    // The spheres' broad phase needs boxes; a body without spheres only the colliders' test.
+    let with_boxes = !log
+        .lock()
+        .unwrap_or_else(PoisonError::into_inner)
+        .spheres
+        .is_empty();
+    let prepare = move |model: &Model, k: usize, q0: usize, x: &[DVec3], _: &[DVec3]| {
+        parts.prepare(model, k, q0, x, with_boxes);
+    };
+    let respond = move |model: &Model, x: &mut [DVec3], v: &mut [DVec3]| {
+        let mut log = log.lock().unwrap_or_else(PoisonError::into_inner);
+        let ResponseLog {
+            contacts,
+            changes,
+            x_prev,
+            spheres,
+            whole,
+        } = &mut *log;
+        x_prev.resize(x.len(), DVec3::ZERO);
+        // The parts' summaries of this step, else one of the whole body made here.
+        let n = x.len().min(model.particle_count());
+        let mut taken = prepared.take(n);
+        let (parts, calm) = match taken.as_mut() {
+            Some(taken) => {
+                let calm = taken.calm();
+                (taken.parts(), calm)
             }
-            changes.clear();
-            collide::collide_spheres_logged(model, bodies.reborrow(), dt, Some(changes));
-            collide::resolve_logged(model, bodies, dt, Some(changes));
-            changes.finish(model.particle_count());
-            contacts.push(energy_change_of(model, x, v, spheres, changes));
-        },
-    ))
+            None => {
+                whole.sum_up(model, 0, &x[..n], with_boxes);
+                let calm = whole.calm();
+                (std::slice::from_mut(whole), calm)
+            }
+        };
+        let mut bodies = Bodies {
+            x: &mut *x,
+            v: &mut *v,
+            x_prev,
+            history_valid: false,
+            spheres,
+        };
+        collide::advance_spheres(model, bodies.reborrow(), dt);
+        // The colliders' candidates of the summaries hold while no sphere has moved a particle.
+        let no_spheres = bodies.spheres.is_empty();
+        if !account {
+            collide::collide_spheres_prepared(
+                model,
+                bodies.reborrow(),
+                dt,
+                None,
+                Some(&mut *parts),
+            );
+            collide::resolve_prepared(model, bodies, dt, None, no_spheres.then_some(parts));
+            return;
+        }
+        changes.clear();
+        collide::collide_spheres_prepared(
+            model,
+            bodies.reborrow(),
+            dt,
+            Some(changes),
+            Some(&mut *parts),
+        );
+        collide::resolve_prepared(
+            model,
+            bodies,
+            dt,
+            Some(changes),
+            no_spheres.then_some(parts),
+        );
+        changes.finish(model.particle_count());
+        contacts.push(energy_change_calm(model, x, v, spheres, changes, calm));
+    };
+    Response(Arc::new(respond), Some(Arc::new(prepare)))
 }
 
 /// The log of a finished chunk, taken out of its lock.

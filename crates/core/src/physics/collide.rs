@@ -144,21 +144,26 @@ use super::springs::Spring;
 mod budget;
 mod force;
 mod geometry;
+mod prepared;
 mod response;
 mod spheres;
 
 pub use budget::take_kinetic_with_spheres;
 use budget::{above_rounding, energy_rise};
-pub(crate) use force::contact_force;
 pub use force::{ContactParams, contact_forces, contact_power};
+pub(crate) use force::{ROUNDING_SPEED, contact_force};
 pub(crate) use geometry::Broad;
 use geometry::distance_and_direction;
 pub use geometry::{Collider, Contact};
+pub use prepared::{PartBounds, Prepared, Taken};
 pub(crate) use response::calm;
-pub use response::{Changes, after_step, resolve, resolve_logged, spheres_energy, take_kinetic};
+pub use response::{
+    Changes, after_step, resolve, resolve_logged, resolve_prepared, spheres_energy, take_kinetic,
+};
 use response::{keep_verlet_history, pay, respond};
 pub use spheres::{
-    DynamicSphere, advance_spheres, collide_spheres, collide_spheres_logged, step_spheres,
+    DynamicSphere, advance_spheres, collide_spheres, collide_spheres_logged,
+    collide_spheres_prepared, step_spheres,
 };
 
 /// What the colliders read of the system: a view of the model, so that this module imports
@@ -202,6 +207,12 @@ impl World<'_> {
     /// end where `x` has it: the part of `E_elastic` that moving `i` alone changes.
     #[must_use]
     pub fn elastic_at(&self, x: &[DVec3], i: usize, at: DVec3) -> f64 {
+        self.elastic_at_with(|j| x[j], i, at)
+    }
+
+    /// [`World::elastic_at`] with every other end `j` at `x(j)` (m).
+    #[must_use]
+    pub fn elastic_at_with(&self, x: impl Fn(usize) -> DVec3, i: usize, at: DVec3) -> f64 {
         let (Some(&start), Some(&end)) =
             (self.incident_start.get(i), self.incident_start.get(i + 1))
         else {
@@ -212,7 +223,7 @@ impl World<'_> {
             .map(|&k| {
                 let s = &self.springs[k as usize];
                 let other = if s.a as usize == i { s.b } else { s.a } as usize;
-                s.energy_between(at, x[other])
+                s.energy_between(at, x(other))
             })
             .sum()
     }

@@ -14,6 +14,7 @@
 //! - `implicit_lattice`: implicit Euler's Newton step on a lattice in structure-of-arrays form.
 //! - `implicit_constraint`: a contact constraint of implicit Euler's solve (both paths read it).
 //! - `chain`: Verlet's red-black projection of a chain, eight rods at a time.
+//! - `bounds`: the boxes of the collision response's broad phase, eight points at a time.
 //! - `energy`: the kinetic and gravitational terms of Verlet's energy accounting, a block of
 //!   particles at a time with the widest vectors.
 //!
@@ -21,6 +22,7 @@
 //! buffers); `Cargo.toml` denies it everywhere else.
 #![allow(unsafe_code)]
 
+pub(crate) mod bounds;
 pub(crate) mod chain;
 pub(crate) mod energy;
 pub(crate) mod implicit_constraint;

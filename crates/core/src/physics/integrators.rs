@@ -349,11 +349,21 @@ impl std::fmt::Debug for Projection {
 /// each step of [`Method::steps`] (see [`Workspace::response`]). Unlike a [`Projection`] it may
 /// read any particle (a collision response that measures the springs, or pays from the body's
 /// kinetic energy); it runs on one thread at a time, in step order.
+///
+/// The second function, if given, prepares it part by part: where a team of threads runs the
+/// steps ([`crate::physics::stencil::Crew::pass_then`]), each thread calls it on the particles of its own
+/// part right after the step's last pass wrote them, `(model, part, first particle, x, v)`, so
+/// that the response can read a summary of each part (its broad phase) instead of scanning
+/// every particle on one thread. The response must give the same result with or without it.
 #[derive(Clone)]
-pub struct Response(pub Arc<ResponseFn>);
+pub struct Response(pub Arc<ResponseFn>, pub Option<Arc<PrepareFn>>);
 
 /// The function of a [`Response`].
 pub type ResponseFn = dyn Fn(&Model, &mut [DVec3], &mut [DVec3]) + Send + Sync;
+
+/// The preparing function of a [`Response`]: model, part, its first particle, its new positions
+/// (m) and velocities (m/s).
+pub type PrepareFn = dyn Fn(&Model, usize, usize, &[DVec3], &[DVec3]) + Send + Sync;
 
 impl std::fmt::Debug for Response {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -618,6 +628,22 @@ fn steps_per_team(stencil: &Stencil, account: bool, passes: usize, n: u64) -> u6
     }
     let fit = POWER_SLOT_VALUES / (passes * stencil.power_len()).max(1);
     n.min(fit.max(1) as u64)
+}
+
+/// The powers of slots `0..count` of a team's power buffer, each as [`slot_power`] sums it,
+/// the slots shared out between the pool's threads (after the team, whose threads would
+/// otherwise wait while one sums them all).
+fn slot_powers(stencil: &Stencil, slots: &[f64], count: usize) -> Vec<Power> {
+    let mut powers = vec![Power::default(); count];
+    let mut unused = vec![(); count];
+    let pool = crate::physics::pool::Pool::global();
+    let parts = pool.threads().min(count);
+    pool.for_each_part(&mut powers, &mut unused, parts, |start, piece, _| {
+        for (j, power) in piece.iter_mut().enumerate() {
+            *power = slot_power(stencil, slots, start + j);
+        }
+    });
+    powers
 }
 
 /// The power of slot `k` of a team's power buffer ([`Stencil::team_with_power`]).

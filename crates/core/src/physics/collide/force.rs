@@ -6,7 +6,7 @@ use super::{Collider, Contact, World};
 
 /// `v·N` (m/s) up to which a particle counts as not moving away, so that the contact force still
 /// holds it: the velocity response sets `v·N = 0`, which rounding may turn into `+1e-17`.
-const ROUNDING_SPEED: f64 = 1e-9;
+pub(crate) const ROUNDING_SPEED: f64 = 1e-9;
 
 /// Coefficients of contact and collision.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -4,7 +4,9 @@
 use glam::DVec3;
 
 use super::budget::take_kinetic_with_spheres;
-use super::{Bodies, Broad, Collider, Contact, ContactParams, DynamicSphere, World, step_spheres};
+use super::{
+    Bodies, Broad, Collider, Contact, ContactParams, DynamicSphere, PartBounds, World, step_spheres,
+};
 
 /// Velocity response and positional projection of every free particle against the model's
 /// colliders, after a step of `dt` seconds (module docs). Keeps position Verlet's history
@@ -21,7 +23,20 @@ pub fn resolve_logged<'a, 'b>(
     model: impl Into<World<'a>>,
     state: impl Into<Bodies<'b>>,
     dt: f64,
+    log: Option<&mut Changes>,
+) {
+    resolve_prepared(model, state, dt, log, None);
+}
+
+/// [`resolve_logged`] with the particles that may touch a collider taken from the parts'
+/// summaries `parts` (made at the positions the state has now, `prepared.rs`) instead of a
+/// scan of every particle: the same result.
+pub fn resolve_prepared<'a, 'b>(
+    model: impl Into<World<'a>>,
+    state: impl Into<Bodies<'b>>,
+    dt: f64,
     mut log: Option<&mut Changes>,
+    parts: Option<&[PartBounds]>,
 ) {
     let (model, state) = (model.into(), state.into());
     if model.colliders.is_empty() {
@@ -45,8 +60,12 @@ pub fn resolve_logged<'a, 'b>(
         .collect();
     // Far from every collider (most particles of a body resting on one): nothing to do. The
     // others, in index order.
-    let near = near_any(&broads, before);
-    let candidates = near.iter().enumerate().flat_map(|(k, &word)| {
+    let near = if parts.is_some() {
+        Vec::new()
+    } else {
+        near_any(&broads, before)
+    };
+    let scanned = near.iter().enumerate().flat_map(|(k, &word)| {
         let mut bits = word;
         std::iter::from_fn(move || {
             (bits != 0).then(|| {
@@ -56,6 +75,9 @@ pub fn resolve_logged<'a, 'b>(
             })
         })
     });
+    let summed =
+        (parts.unwrap_or_default().iter()).flat_map(|p| p.near.iter().map(|&i| i as usize));
+    let candidates = scanned.chain(summed);
     let mut owed = 0.0;
     for i in candidates {
         let w = model.inv_mass[i];
@@ -118,8 +140,16 @@ pub fn resolve_logged<'a, 'b>(
 /// `i % 64` of word `i / 64`. One loop per collider over all the particles, without a branch
 /// per particle (the plane's and the sphere's tests called in loops of their own), so that
 /// a body resting on a collider costs a few operations per particle far from it.
-fn near_any(broads: &[Broad], x: &[DVec3]) -> Vec<u64> {
-    let mut near = vec![0u64; x.len().div_ceil(64)];
+pub(super) fn near_any(broads: &[Broad], x: &[DVec3]) -> Vec<u64> {
+    let mut near = Vec::new();
+    near_any_into(broads, x, &mut near);
+    near
+}
+
+/// [`near_any`] into `near` (its allocation reused).
+pub(super) fn near_any_into(broads: &[Broad], x: &[DVec3], near: &mut Vec<u64>) {
+    near.clear();
+    near.resize(x.len().div_ceil(64), 0);
     for broad in broads {
         for (word, xs) in near.iter_mut().zip(x.chunks(64)) {
             let mut bits = 0u64;
@@ -147,7 +177,6 @@ fn near_any(broads: &[Broad], x: &[DVec3]) -> Vec<u64> {
             *word |= bits;
         }
     }
-    near
 }
 
 /// The body pays `amount` J from its kinetic energy ([`take_kinetic_with_spheres`]); every
@@ -223,7 +252,15 @@ impl Changes {
         self.spheres_before = 0.0;
     }
 
+    /// Records particle `i` at `x` (m), `v` (m/s) before a change; its first record is
+    /// [`Changes::of`] it from now on.
     pub(super) fn record(&mut self, i: usize, x: DVec3, v: DVec3) {
+        if self.slot.len() <= i {
+            self.slot.resize(i + 1, u32::MAX);
+        }
+        if self.slot[i] == u32::MAX {
+            self.slot[i] = self.particles.len() as u32;
+        }
         self.particles.push((i as u32, x, v));
     }
 
@@ -283,7 +320,7 @@ impl Changes {
         self.spheres_before
     }
 
-    /// The record of particle `i`, if it changed.
+    /// The record of particle `i` (its first), if it changed.
     pub(crate) fn of(&self, i: usize) -> Option<&(u32, DVec3, DVec3)> {
         let k = *self.slot.get(i)?;
         self.particles.get(k as usize)
@@ -401,6 +438,32 @@ pub fn after_step<'a, 'b>(model: impl Into<World<'a>>, state: impl Into<Bodies<'
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// While records are made (before `finish`), `of` gives each particle's first record, and
+    /// nothing for a particle not recorded (the spheres' separations read their neighbours'
+    /// positions before the call through it); after `finish` and `clear` as before.
+    #[test]
+    fn of_gives_the_first_record_while_recording() {
+        let mut changes = Changes::default();
+        let p = |k: f64| DVec3::splat(k);
+        for round in 0..2 {
+            changes.clear();
+            changes.record(5, p(1.0), p(-1.0));
+            changes.record(2, p(2.0), p(-2.0));
+            changes.record(5, p(3.0), p(-3.0));
+            changes.record(40, p(4.0), p(-4.0));
+            assert_eq!(changes.of(5).map(|r| r.1), Some(p(1.0)), "round {round}");
+            assert_eq!(changes.of(2).map(|r| r.2), Some(p(-2.0)));
+            assert_eq!(changes.of(40).map(|r| r.1), Some(p(4.0)));
+            assert!(changes.of(3).is_none() && changes.of(41).is_none());
+            changes.finish(50);
+            assert_eq!(changes.of(5).map(|r| r.1), Some(p(1.0)));
+            assert_eq!(changes.particles.len(), 3);
+            assert!(changes.of(3).is_none());
+        }
+        changes.clear();
+        assert!(changes.of(5).is_none() && changes.of(2).is_none() && changes.of(40).is_none());
+    }
 
     #[test]
     fn finish_keeps_each_particles_first_record_in_particle_order() {

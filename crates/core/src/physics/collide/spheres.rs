@@ -95,7 +95,20 @@ pub fn collide_spheres_logged<'a, 'b>(
     model: impl Into<World<'a>>,
     state: impl Into<Bodies<'b>>,
     dt: f64,
+    log: Option<&mut Changes>,
+) {
+    collide_spheres_prepared(model, state, dt, log, None);
+}
+
+/// [`collide_spheres_logged`] with the broad phase's boxes taken from the parts' summaries
+/// `parts` (made at the positions the state has now, `prepared.rs`) instead of boxes of every
+/// particle made here: the same result.
+pub fn collide_spheres_prepared<'a, 'b>(
+    model: impl Into<World<'a>>,
+    state: impl Into<Bodies<'b>>,
+    dt: f64,
     mut log: Option<&mut Changes>,
+    parts: Option<&mut [PartBounds]>,
 ) {
     let (model, state) = (model.into(), state.into());
     if state.spheres.is_empty() {
@@ -156,152 +169,110 @@ pub fn collide_spheres_logged<'a, 'b>(
         }
     }
     // Broad phase by bounds: the box of every chunk of `BOX` particles, grown when a particle
-    // is pushed, so that a sphere skips the chunks it cannot reach.
+    // is pushed, so that a sphere skips the chunks it cannot reach (`prepared.rs`).
     let n = x.len().min(model.particle_count());
-    // Where every particle was before the separations: a particle's springs are measured
-    // against these (as in `resolve`), so that no answer depends on the order.
-    BEFORE.with(|before| {
-        let before = &mut *before.borrow_mut();
-        before.clear();
-        before.extend_from_slice(&x[..n]);
-        let before = &before[..];
-        OWN.with(|own| {
-            let own = &mut *own.borrow_mut();
-            own.clear();
-            own.spheres_before = spheres_before;
-            BOXES.with(|boxes| {
-                let boxes = &mut *boxes.borrow_mut();
-                boxes.clear();
-                boxes.extend(x[..n].chunks(BOX).map(Aabb::of));
-                for s in spheres.iter_mut() {
-                    let ws = s.inv_mass();
-                    // A particle at |x - c|² ≥ r² (with a margin against rounding) does not touch and
-                    // needs no square root.
-                    let reach2 = s.radius * s.radius * (1.0 + 1e-9);
-                    for (chunk, bounds) in boxes.iter_mut().enumerate() {
-                        if bounds.distance_squared(s.center) >= reach2 {
+    OWN.with(|own| {
+        let own = &mut *own.borrow_mut();
+        own.clear();
+        own.spheres_before = spheres_before;
+        WHOLE.with(|whole| {
+            let whole = &mut *whole.borrow_mut();
+            let parts = match parts {
+                Some(parts) => parts,
+                None => {
+                    whole.fill(&[], 0, &x[..n], true);
+                    std::slice::from_mut(whole)
+                }
+            };
+            for s in spheres.iter_mut() {
+                let ws = s.inv_mass();
+                // A particle at |x - c|² ≥ r² (with a margin against rounding) does not touch and
+                // needs no square root.
+                let reach2 = s.radius * s.radius * (1.0 + 1e-9);
+                for (range, bounds) in parts.iter_mut().flat_map(PartBounds::boxes_mut) {
+                    if bounds.distance_squared(s.center) >= reach2 {
+                        continue;
+                    }
+                    for i in range {
+                        if (x[i] - s.center).length_squared() >= reach2 {
                             continue;
                         }
-                        for i in chunk * BOX..((chunk + 1) * BOX).min(n) {
-                            if (x[i] - s.center).length_squared() >= reach2 {
-                                continue;
-                            }
-                            let (x_old, v_old) = (x[i], v[i]);
-                            let w = model.inv_mass[i];
-                            // The separation's potential energy (J): gravity on both, and the
-                            // springs at i (neighbours where they were) where they gain.
-                            let rise = |dx_s: DVec3, dx: DVec3| {
-                                let elastic = if w == 0.0 {
-                                    0.0
-                                } else {
-                                    model.elastic_at(before, i, x_old + dx)
-                                        - model.elastic_at(before, i, x_old)
-                                };
-                                if ws == 0.0 {
-                                    // A kinematic sphere is driven: its pushes are not paid.
-                                    return 0.0;
-                                }
-                                lift(dx_s, ws) + lift(dx, w) + elastic.max(0.0)
+                        let (x_old, v_old) = (x[i], v[i]);
+                        let (mut x_new, mut v_new) = (x_old, v_old);
+                        let w = model.inv_mass[i];
+                        // Where a particle was before the separations (its first record, else
+                        // where it is): a particle's springs are measured against these (as in
+                        // `resolve`), so that no answer depends on the order.
+                        let x_shared: &[DVec3] = x;
+                        let own_shared: &Changes = own;
+                        let before = |j: usize| own_shared.of(j).map_or(x_shared[j], |c| c.1);
+                        // The separation's potential energy (J): gravity on both, and the
+                        // springs at i (neighbours where they were) where they gain.
+                        let rise = |dx_s: DVec3, dx: DVec3| {
+                            let elastic = if w == 0.0 {
+                                0.0
+                            } else {
+                                model.elastic_at_with(before, i, x_old + dx)
+                                    - model.elastic_at_with(before, i, x_old)
                             };
-                            let touched = impulse_pair(
-                                Side {
-                                    x: &mut s.center,
-                                    v: &mut s.velocity,
-                                    w: ws,
-                                },
-                                Side {
-                                    x: &mut x[i],
-                                    v: &mut v[i],
-                                    w,
-                                },
-                                s.radius,
-                                params.sphere_particle_restitution,
-                                &rise,
-                            );
-                            if touched.is_some() {
-                                bounds.include(x[i]);
-                                keep_verlet_history(history_valid, &mut x_prev[i], x[i], v[i], dt);
-                                own.record(i, x_old, v_old);
-                                if let Some(log) = log.as_deref_mut() {
-                                    log.record(i, x_old, v_old);
-                                }
+                            if ws == 0.0 {
+                                // A kinematic sphere is driven: its pushes are not paid.
+                                return 0.0;
+                            }
+                            lift(dx_s, ws) + lift(dx, w) + elastic.max(0.0)
+                        };
+                        let touched = impulse_pair(
+                            Side {
+                                x: &mut s.center,
+                                v: &mut s.velocity,
+                                w: ws,
+                            },
+                            Side {
+                                x: &mut x_new,
+                                v: &mut v_new,
+                                w,
+                            },
+                            s.radius,
+                            params.sphere_particle_restitution,
+                            &rise,
+                        );
+                        if touched.is_some() {
+                            (x[i], v[i]) = (x_new, v_new);
+                            bounds.include(x[i]);
+                            keep_verlet_history(history_valid, &mut x_prev[i], x[i], v[i], dt);
+                            own.record(i, x_old, v_old);
+                            if let Some(log) = log.as_deref_mut() {
+                                log.record(i, x_old, v_old);
                             }
                         }
                     }
                 }
-            });
-            // What the pairs could not pay, and the springs between two separated particles,
-            // exactly; the system pays it from its kinetic energy (`budget`). Not with a kinematic
-            // sphere: driven from outside, it may do work on the cloth.
-            own.finish(n);
-            let (rise, size) = energy_rise(&model, x, v, Some(spheres), own);
-            if above_rounding(rise, size) && spheres.iter().all(|s| !s.kinematic) {
-                let mut bodies = Bodies {
-                    x,
-                    v,
-                    x_prev,
-                    history_valid,
-                    spheres,
-                };
-                pay(model, &mut bodies, rise, dt, log);
             }
         });
+        // What the pairs could not pay, and the springs between two separated particles,
+        // exactly; the system pays it from its kinetic energy (`budget`). Not with a kinematic
+        // sphere: driven from outside, it may do work on the cloth.
+        own.finish(n);
+        let (rise, size) = energy_rise(&model, x, v, Some(spheres), own);
+        if above_rounding(rise, size) && spheres.iter().all(|s| !s.kinematic) {
+            let mut bodies = Bodies {
+                x,
+                v,
+                x_prev,
+                history_valid,
+                spheres,
+            };
+            pay(model, &mut bodies, rise, dt, log);
+        }
     });
 }
 
 thread_local! {
-    /// Where every particle was before the separations of one call (reused).
-    static BEFORE: std::cell::RefCell<Vec<DVec3>> = const { std::cell::RefCell::new(Vec::new()) };
     /// The particles one call of [`collide_spheres_logged`] changed (reused).
     static OWN: std::cell::RefCell<Changes> = std::cell::RefCell::new(Changes::default());
-}
-
-/// Particles per box of the sphere–particle broad phase.
-const BOX: usize = 16;
-
-thread_local! {
-    /// The boxes of the broad phase (reused, so steps do not allocate).
-    static BOXES: std::cell::RefCell<Vec<Aabb>> = const { std::cell::RefCell::new(Vec::new()) };
-}
-
-/// An axis-aligned bounding box (m).
-#[derive(Clone, Copy, Debug)]
-struct Aabb {
-    lo: DVec3,
-    hi: DVec3,
-}
-
-impl Aabb {
-    /// The box of `points` (NaN coordinates make it cover everything on their axis), the same
-    /// box as [`Aabb::include`] of every point in turn: `min` and `max` pass over a NaN, and a
-    /// NaN anywhere on an axis makes that axis infinite at the end (one dependent operation per
-    /// point and axis instead of two).
-    fn of(points: &[DVec3]) -> Aabb {
-        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-        let mut nan = glam::BVec3::FALSE;
-        for &p in points {
-            lo = lo.min(p);
-            hi = hi.max(p);
-            nan |= p.is_nan_mask();
-        }
-        Aabb {
-            lo: DVec3::select(nan, DVec3::NEG_INFINITY, lo),
-            hi: DVec3::select(nan, DVec3::INFINITY, hi),
-        }
-    }
-
-    /// Grows the box to hold `p`; a NaN coordinate makes it infinite on that axis.
-    fn include(&mut self, p: DVec3) {
-        let nan = p.is_nan_mask();
-        self.lo = DVec3::select(nan, DVec3::NEG_INFINITY, self.lo.min(p));
-        self.hi = DVec3::select(nan, DVec3::INFINITY, self.hi.max(p));
-    }
-
-    /// The squared distance (m²) from `c` to the nearest point of the box (0 inside).
-    fn distance_squared(&self, c: DVec3) -> f64 {
-        let d = (self.lo - c).max(c - self.hi).max(DVec3::ZERO);
-        d.length_squared()
-    }
+    /// The boxes of the whole body when no parts' summaries are given (reused, so steps do not
+    /// allocate).
+    static WHOLE: std::cell::RefCell<PartBounds> = std::cell::RefCell::new(PartBounds::default());
 }
 
 /// One side of a two-body contact: position (m), velocity (m/s), inverse mass (1/kg).
@@ -358,47 +329,4 @@ fn impulse_pair(
     *a.v -= (a.w * j) * d;
     *b.v += (b.w * j) * d;
     Some(debt)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// `Aabb::of` gives the box that including every point in turn gives, bit for bit, with
-    /// NaN coordinates anywhere (first, middle, last, several axes) and signed zeros.
-    #[test]
-    fn the_box_of_points_is_the_box_grown_point_by_point() {
-        let nan = f64::NAN;
-        let base = [
-            DVec3::new(0.5, -0.0, 2.0),
-            DVec3::new(-1.5, 0.0, 2.0),
-            DVec3::new(3.0, 1e-300, -7.25),
-            DVec3::new(0.0, -4.0, 1e300),
-        ];
-        let mut cases: Vec<Vec<DVec3>> = vec![Vec::new(), base.to_vec()];
-        for at in 0..base.len() {
-            for poison in [
-                DVec3::new(nan, 1.0, 1.0),
-                DVec3::new(1.0, nan, nan),
-                DVec3::splat(nan),
-            ] {
-                let mut points = base.to_vec();
-                points[at] = poison;
-                cases.push(points);
-            }
-        }
-        let bits = |v: DVec3| v.to_array().map(f64::to_bits);
-        for points in cases {
-            let mut grown = Aabb {
-                lo: DVec3::INFINITY,
-                hi: DVec3::NEG_INFINITY,
-            };
-            for &p in &points {
-                grown.include(p);
-            }
-            let of = Aabb::of(&points);
-            assert_eq!(bits(of.lo), bits(grown.lo), "{points:?}");
-            assert_eq!(bits(of.hi), bits(grown.hi), "{points:?}");
-        }
-    }
 }

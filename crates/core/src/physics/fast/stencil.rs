@@ -129,7 +129,7 @@ use kernels::range_portable;
 #[cfg(target_arch = "x86_64")]
 use kernels::{range_avx2, range_avx512};
 use passes::{Part, SCRATCH, Scratch, cut, take};
-pub use team::{Crew, Pass, TeamUpdate};
+pub use team::{Crew, PartFn, Pass, TeamUpdate};
 
 /// At most this many offset groups: more would make the passes slower than the spring list.
 const MAX_GROUPS: usize = 32;

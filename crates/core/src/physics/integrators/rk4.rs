@@ -38,9 +38,10 @@
 use crate::physics::energy::{Dissipated, Power};
 use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, polynomial};
-use crate::physics::integrators::{explicit_step, Workspace, after, fused_pass, power_if, slot_power, steps_per_team, team};
+use crate::physics::integrators::{explicit_step, Response, Workspace, after, fused_pass, power_if, slot_powers, steps_per_team, team};
 use crate::physics::particles::State;
-use crate::physics::stencil::{Base, Output, Pass, Stencil, TeamUpdate, Update};
+use crate::physics::stencil::{Base, Output, PartFn, Pass, Stencil, TeamUpdate, Update};
+use glam::DVec3;
 
 /// The method as the formula writes it: four force evaluations, the stage loops between them.
 pub(super) fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
@@ -256,6 +257,15 @@ pub(super) fn steps(
         ..
     } = work;
     let response = response.as_ref();
+    // The response's summary of each part, made by the thread that wrote it.
+    let prepare_part = |k: usize, q0: usize, x: &[DVec3], v: &[DVec3]| {
+        if let Some(Response(_, Some(prepare))) = response {
+            prepare(model, k, q0, x, v);
+        }
+    };
+    let prepare: Option<PartFn> = response
+        .is_some_and(|r| r.1.is_some())
+        .then_some(&prepare_part);
     let [k1v, k2v, k3v, _] = k;
     let [x3, v2, v3, v4] = kx;
     let mut buffers = [
@@ -284,7 +294,8 @@ pub(super) fn steps(
                 for (j, pass) in passes.iter().enumerate() {
                     let mut pass = *pass;
                     pass.power = account.then_some(4 * s + j);
-                    crew.pass(&pass);
+                    // The last pass writes the state, which the response's summary reads.
+                    crew.pass_then(&pass, if j == 3 { prepare } else { None });
                 }
                 if let Some(response) = response {
                     // The step's last pass wrote the state (buffers 0 and 1).
@@ -293,8 +304,9 @@ pub(super) fn steps(
             }
         });
         if account {
+            let powers = slot_powers(stencil, power_slots, 4 * count as usize);
             for s in 0..count as usize {
-                let p = |j| slot_power(stencil, power_slots, 4 * s + j);
+                let p = |j| powers[4 * s + j];
                 // D_{n+1} = D_n + dt/6 (P1 + 2 P2 + 2 P3 + P4), as `step_fused` adds it.
                 let power = Power::default()
                     .plus(1.0, p(0))

@@ -32,9 +32,10 @@
 use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, one_evaluation};
 use crate::physics::energy::{Dissipated, Power};
-use crate::physics::integrators::{explicit_step, Workspace, after, fused, one_pass_step, power_if, slot_power, steps_per_team, team};
+use crate::physics::integrators::{explicit_step, Response, Workspace, after, fused, one_pass_step, power_if, slot_powers, steps_per_team, team};
 use crate::physics::particles::State;
-use crate::physics::stencil::{Pass, Stencil, TeamUpdate, Update};
+use glam::DVec3;
+use crate::physics::stencil::{PartFn, Pass, Stencil, TeamUpdate, Update};
 
 /// The method as the formula writes it: one force evaluation, then the two lines.
 pub(super) fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
@@ -146,6 +147,15 @@ pub(super) fn steps(
         ..
     } = work;
     let response = response.as_ref();
+    // The response's summary of each part, made by the thread that wrote it.
+    let prepare_part = |k: usize, q0: usize, x: &[DVec3], v: &[DVec3]| {
+        if let Some(Response(_, Some(prepare))) = response {
+            prepare(model, k, q0, x, v);
+        }
+    };
+    let prepare: Option<PartFn> = response
+        .is_some_and(|r| r.1.is_some())
+        .then_some(&prepare_part);
     let slots = if account {
         stencil.power_len() * batch as usize
     } else {
@@ -163,7 +173,7 @@ pub(super) fn steps(
         let count = batch.min(n - done);
         stencil.team_with_power(parts, &mut buffers, power_slots, &|crew| {
             for s in done..done + count {
-                crew.pass(&pass(s, (s - done) as usize));
+                crew.pass_then(&pass(s, (s - done) as usize), prepare);
                 if let Some(response) = response {
                     // Between this step and the next, on the buffers the step wrote.
                     let to = if s.is_multiple_of(2) { 2 } else { 0 };
@@ -172,9 +182,8 @@ pub(super) fn steps(
             }
         });
         if account {
-            for k in 0..count as usize {
-                step_dissipated.push(per_step(slot_power(stencil, power_slots, k)));
-            }
+            let powers = slot_powers(stencil, power_slots, count as usize);
+            step_dissipated.extend(powers.into_iter().map(per_step));
         }
         done += count;
     }

@@ -1,10 +1,13 @@
 //! Contacts inside pass 2 of the stencil: a broad phase on a whole chunk in registers
-//! (`may_touch`, no square roots) and the scalar contact code of [`super::super::collide`] for
-//! the few particles that may touch (`contact_lanes`).
+//! (`may_touch`, no square roots), then the contact force of [`super::super::collide`] for the
+//! particles that may touch (`contact_lanes`): against planes alone all eight lanes at once with
+//! the scalar code's operations (`plane_lanes`, the same bits: a plane's contact is a few dot
+//! products, and a body resting on its plane has a whole layer of particles in the band every
+//! step), against other colliders the scalar code lane by lane.
 
 #[allow(clippy::wildcard_imports)]
 use super::*;
-use crate::physics::collide::Broad;
+use crate::physics::collide::{Broad, ROUNDING_SPEED};
 
 /// The chunk's particles (bit `l` for lane `l`) that may touch one of `colliders` (closer than
 /// `epsilon`, m, or inside): the bounds of [`Collider::broad`], eight particles at a time, so
@@ -97,6 +100,12 @@ pub(super) fn contact_lanes<V: Lanes>(
     f: [V; 3],
     candidates: u8,
 ) -> ([V; 3], V) {
+    if d.colliders
+        .iter()
+        .all(|c| matches!(c, Collider::Plane { .. }))
+    {
+        return plane_lanes(d, x, v, f, candidates);
+    }
     let unpack = |lanes: [V; 3]| {
         let mut values = [[0.0; LANES]; 3];
         for (c, lane) in lanes.into_iter().enumerate() {
@@ -121,6 +130,82 @@ pub(super) fn contact_lanes<V: Lanes>(
         [V::load(&fs[0]), V::load(&fs[1]), V::load(&fs[2])],
         V::load(&power),
     )
+}
+
+/// [`contact_lanes`] when every collider is a plane: [`contact_force`]'s operations lane by
+/// lane, each branch a mask and both sides computed (`blend` keeps the bits of the side a lane
+/// takes), so the same forces and power bit for bit (tested): for each plane in turn, with
+/// `φ = (x - p)·N`, `push = N·f`, `v_N = N·v`, the lanes that may touch, are not clear of the
+/// band (`φ ≥ ε`), are not pushed away (`push ≥ 0`) and do not leave (`v_N > 10⁻⁹` m/s) get
+/// `f += λ N + f_f` with `λ = -push` and the friction `f_f` of `collide/force.rs`.
+#[inline(always)]
+fn plane_lanes<V: Lanes>(
+    d: &Dynamics,
+    x: [V; 3],
+    v: [V; 3],
+    f: [V; 3],
+    candidates: u8,
+) -> ([V; 3], V) {
+    let neg = |a: V| a.mul(V::splat(-1.0));
+    let scale = |s: V, a: [V; 3]| [s.mul(a[0]), s.mul(a[1]), s.mul(a[2])];
+    let sub = |a: [V; 3], b: [V; 3]| [a[0].sub(b[0]), a[1].sub(b[1]), a[2].sub(b[2])];
+    let add = |a: [V; 3], b: [V; 3]| [a[0].add(b[0]), a[1].add(b[1]), a[2].add(b[2])];
+    let dot3 = |a: [V; 3], b: [V; 3]| a[0].mul(b[0]).add(a[1].mul(b[1])).add(a[2].mul(b[2]));
+    let blend3 = |a: [V; 3], b: [V; 3], m: u8| {
+        [
+            a[0].blend(b[0], m),
+            a[1].blend(b[1], m),
+            a[2].blend(b[2], m),
+        ]
+    };
+    let params = d.contact;
+    let (epsilon, rest) = (V::splat(params.epsilon), V::splat(params.rest_speed));
+    let mut total = f;
+    let mut touched = 0u8;
+    for collider in d.colliders {
+        let Collider::Plane { point, normal } = *collider else {
+            continue;
+        };
+        let n = [V::splat(normal.x), V::splat(normal.y), V::splat(normal.z)];
+        let phi = dot(minus(x, point), normal);
+        // `normal.dot(f)`, `normal.dot(v)`: N's component times the vector's, in axis order.
+        let push = dot3(n, total);
+        let v_n = dot3(n, v);
+        let active = candidates
+            & (phi.less_than(epsilon) | phi.nan_lanes())
+            & (push.less_than(V::zero()) | push.nan_lanes())
+            & !V::splat(ROUNDING_SPEED).less_than(v_n);
+        if active == 0 {
+            continue;
+        }
+        let load = neg(push);
+        let f_t = sub(total, scale(push, n));
+        let v_t = sub(v, scale(v_n, n));
+        let limit = V::splat(params.friction).mul(load);
+        // Friction (`friction_force`): kinetic where |v_T| > 0 and |v_T| ≥ v_rest.
+        let speed = dot3(v_t, v_t).sqrt();
+        let kinetic = V::zero().less_than(speed) & !speed.less_than(rest);
+        let sliding = scale(neg(limit).div(speed), v_t);
+        let damping = if params.rest_speed > 0.0 {
+            limit.div(rest)
+        } else {
+            V::zero()
+        };
+        let mut f_f = sub([neg(f_t[0]), neg(f_t[1]), neg(f_t[2])], scale(damping, v_t));
+        let magnitude = dot3(f_f, f_f).sqrt();
+        let over = limit.less_than(magnitude);
+        f_f = blend3(scale(limit.div(magnitude), f_f), f_f, over);
+        let along = dot3(f_f, v_t);
+        let forward = V::zero().less_than(along);
+        let back = scale(along.div(speed.mul(speed)), v_t);
+        f_f = blend3(sub(f_f, back), f_f, forward);
+        let f_f = blend3(sliding, f_f, kinetic);
+        total = blend3(add(total, add(scale(load, n), f_f)), total, active);
+        touched |= active;
+    }
+    // P = -f_contact · v on the lanes a plane pushed (`collide::contact_power`), 0 elsewhere.
+    let power = neg(dot3(sub(total, f), v)).blend(V::zero(), touched);
+    (total, power)
 }
 
 #[cfg(test)]
@@ -208,5 +293,102 @@ mod tests {
                 "{collider:?}: {ruled_out} ruled out"
             );
         }
+    }
+}
+
+#[cfg(test)]
+mod plane_tests {
+    use super::*;
+    use crate::physics::fast::lanes::load_chunk;
+
+    /// The planes' lanes give `contact_force`'s forces and power bit for bit, lane by lane:
+    /// one and two planes, with and without friction and a resting speed, particles inside,
+    /// in the band and clear of it, pushed in and pulled out, sliding fast, slowly and not at
+    /// all, moving away, signed zeros and a NaN; lanes that are not candidates unchanged.
+    #[test]
+    fn the_planes_lanes_are_the_scalar_contact_force() {
+        let planes = [
+            Collider::Plane {
+                point: DVec3::new(0.0, -0.5, 0.0),
+                normal: DVec3::Y,
+            },
+            Collider::Plane {
+                point: DVec3::new(0.2, 0.0, 0.1),
+                normal: DVec3::new(1.0, 0.4, -0.3).normalize(),
+            },
+        ];
+        let bits = |a: DVec3| a.to_array().map(f64::to_bits);
+        let mut checked = 0;
+        for count in [1, 2] {
+            for (friction, rest_speed) in [(0.0, 0.0), (0.0, 0.05), (0.3, 0.0), (0.2, 0.01)] {
+                let params = ContactParams {
+                    friction,
+                    rest_speed,
+                    ..ContactParams::course_2021()
+                };
+                let colliders = &planes[..count];
+                let (mass, inv_mass) = ([1.0; LANES], [1.0; LANES]);
+                let d = Dynamics {
+                    mass: &mass,
+                    inv_mass: &inv_mass,
+                    gravity: DVec3::new(0.0, -9.8, 0.0),
+                    drag: 0.0,
+                    colliders,
+                    contact: &params,
+                };
+                for seed in 0..200u32 {
+                    let r = |k: u32| {
+                        let t =
+                            f64::from(seed.wrapping_mul(2_654_435_761).wrapping_add(k * 97)) * 1e-4;
+                        (t.sin() * 1e4).fract()
+                    };
+                    let mut x = [DVec3::ZERO; LANES];
+                    let mut v = [DVec3::ZERO; LANES];
+                    let mut f = [DVec3::ZERO; LANES];
+                    for l in 0..LANES {
+                        let k = 10 * l as u32;
+                        x[l] = DVec3::new(0.3 * r(k), -0.5 + 0.02 * r(k + 1), 0.3 * r(k + 2));
+                        v[l] = DVec3::new(r(k + 3), 0.1 * r(k + 4), r(k + 5))
+                            * [1.0, 0.01, 0.0][l % 3];
+                        f[l] = DVec3::new(r(k + 6), -1.0 + r(k + 7), r(k + 8));
+                    }
+                    v[1] = DVec3::new(-0.0, 0.0, 0.0);
+                    f[2] = DVec3::new(0.0, -0.0, 0.0);
+                    x[3].y = -0.51;
+                    v[4].y = 2e-9;
+                    if seed == 7 {
+                        x[5] = DVec3::new(f64::NAN, 0.0, 0.0);
+                    }
+                    let candidates = (seed as u8) | 0b1010_1010;
+                    let lanes = |a: &[DVec3; LANES]| load_chunk::<Plain>(a, LANES);
+                    let (total, power) =
+                        contact_lanes(&d, lanes(&x), lanes(&v), lanes(&f), candidates);
+                    let mut out = [[0.0; LANES]; 3];
+                    for (c, lane) in total.into_iter().enumerate() {
+                        lane.store(&mut out[c]);
+                    }
+                    let mut p = [0.0; LANES];
+                    power.store(&mut p);
+                    for l in 0..LANES {
+                        let got = DVec3::new(out[0][l], out[1][l], out[2][l]);
+                        let scalar = (candidates & (1 << l) != 0)
+                            .then(|| contact_force(colliders, &params, x[l], v[l], f[l]))
+                            .flatten();
+                        let (want, want_power) = match scalar {
+                            Some(t) => (t, -(t - f[l]).dot(v[l])),
+                            None => (f[l], 0.0),
+                        };
+                        checked += usize::from(scalar.is_some());
+                        if want.is_nan() {
+                            assert!(got.is_nan(), "lane {l}");
+                            continue;
+                        }
+                        assert_eq!(bits(got), bits(want), "lane {l}: {got} {want}");
+                        assert_eq!(p[l].to_bits(), want_power.to_bits(), "lane {l} power");
+                    }
+                }
+            }
+        }
+        assert!(checked > 1000, "{checked} lanes touched");
     }
 }

@@ -31,7 +31,10 @@
 //! **A serial stage.** Between two passes the body may call [`Crew::serial`]: the first thread
 //! to come runs a function on whole buffers (the collision response after a step, which reads
 //! any particle and may scale every velocity), the others wait for it as at a barrier, and the
-//! team goes on with the next pass without handing the work back to the pool.
+//! team goes on with the next pass without handing the work back to the pool. What that
+//! function would ask of every particle, each thread can answer for its own part right after a
+//! pass ([`Crew::pass_then`]: the thread that wrote the part, while it is in its cache), so that
+//! the serial stage reads one summary per part instead.
 //!
 //! **Stealing.** Every thread of the team has a home part, which it claims first in every pass
 //! (so a part's particles stay in one core's cache from pass to pass). A thread that has
@@ -109,6 +112,10 @@ pub struct Pass<'a> {
     /// writes its power buffer, for [`Stencil::sum_power`]); `None` computes none.
     pub power: Option<usize>,
 }
+
+/// What [`Crew::pass_then`] calls after each part: part `k`, its first particle `q0`, its new
+/// positions (m) and velocities (m/s).
+pub type PartFn<'a> = &'a (dyn Fn(usize, usize, &[DVec3], &[DVec3]) + Sync);
 
 /// [`Update`] with buffers named by index (see [`Pass`]).
 #[derive(Clone, Copy, Debug)]
@@ -222,8 +229,9 @@ impl Common<'_> {
             .all(|d| d.0.load(Ordering::Acquire) > s)
     }
 
-    /// Runs part `k` of `pass` (the `s`-th pass), claimed by this thread, and marks it done.
-    fn run_part(&self, k: usize, s: u64, pass: &Pass) {
+    /// Runs part `k` of `pass` (the `s`-th pass), claimed by this thread, then `then` on the
+    /// part's new positions and velocities, and marks it done.
+    fn run_part(&self, k: usize, s: u64, pass: &Pass, then: Option<PartFn>) {
         let n = self.stencil.particles;
         let (q0, q1) = (self.bounds[k], self.bounds[k + 1]);
         // SAFETY (all reads and pieces below): `Crew::pass` checked that the outputs are
@@ -291,6 +299,10 @@ impl Common<'_> {
             self.stencil
                 .range(scratch, x, v, q0, q1, &mut part, &output);
         });
+        if let Some(then) = then {
+            let [xs, vs, _] = &part.outs;
+            then(k, q0, xs, vs);
+        }
         self.done[k].0.store(s + 1, Ordering::Release);
     }
 }
@@ -323,6 +335,18 @@ impl Crew<'_> {
     /// If a buffer index is out of range, a pass reads one of its own outputs or writes one
     /// twice, or another thread of the team panicked.
     pub fn pass(&self, pass: &Pass) {
+        self.pass_then(pass, None);
+    }
+
+    /// [`Crew::pass`], and after each part of it `then(k, q0, x, v)` on the thread that ran
+    /// the part, with `x` and `v` the part's new positions and velocities (`outs[0]`,
+    /// `outs[1]`, particles `q0..`) while they are in its cache: a summary of each part that a
+    /// following [`Crew::serial`] reads instead of scanning every particle itself (the
+    /// collision response's broad phase). `then` writes only what belongs to part `k`.
+    ///
+    /// # Panics
+    /// As [`Crew::pass`].
+    pub fn pass_then(&self, pass: &Pass, then: Option<PartFn>) {
         let c = self.common;
         let outs = pass.outs;
         let written = outs.iter().flatten();
@@ -346,12 +370,12 @@ impl Crew<'_> {
         let s = self.passes.get();
         self.passes.set(s + 1);
         if c.claim(self.home, s) {
-            c.run_part(self.home, s, pass);
+            c.run_part(self.home, s, pass, then);
         }
         // Parts without a thread of their own: at once.
         for k in c.homes..c.parts {
             if c.claim(k, s) {
-                c.run_part(k, s, pass);
+                c.run_part(k, s, pass, then);
             }
         }
         let start = Instant::now();
@@ -371,7 +395,7 @@ impl Crew<'_> {
             if self.alone.get() || waited >= PATIENCE {
                 for k in 0..c.homes {
                     if c.claim(k, s) {
-                        c.run_part(k, s, pass);
+                        c.run_part(k, s, pass, then);
                         stole = true;
                     }
                 }

@@ -1,0 +1,386 @@
+//! The collision response's broad phase, prepared part by part while the particles are in the
+//! cache of the thread that stepped them.
+//!
+//! The response after a step ([`super::resolve`], [`super::collide_spheres`]) first asks which
+//! particles may touch something, and the energy ledger asks whether every position is calm
+//! ([`super::calm`]): questions about every particle, whose answers are the same whichever
+//! thread computes them. When a team of threads steps a body in parts
+//! (`physics::fast::stencil`'s team), each thread answers them for its own part right after
+//! writing it ([`Prepared::prepare`]); the response, on one thread, then reads one summary per
+//! part instead of every particle, whose cache lines would otherwise move to its core at every
+//! step. For a part of particles `q0..q1` at positions `x`:
+//!
+//! ```text
+//! box_j  = [min x_i, max x_i]   over i in q0 + B j .. min(q0 + B (j + 1), q1)   (m)
+//!          (an axis with a NaN coordinate: (-∞, ∞))
+//! calm   = every x_i calm (|coordinate| < 1e50 m)  ⟺  every box_j inside (-1e50, 1e50)³
+//! near   = { i : some collider's bounds may hold x_i }    (Broad::may_touch), in index order
+//! ```
+//! where `B` is [`BOX`] particles (`fast::bounds`, eight points at a time). A box only lets the sphere–particle test skip particles it
+//! cannot reach, and `near` only the colliders' test: both rule out exactly the particles the
+//! exact tests would leave alone, so the response's result is the same bit for bit whether its
+//! boxes are one part's or the whole body's (any split). The response uses a summary only when
+//! every part of the body has one from the step just taken ([`Prepared::take`]); otherwise it
+//! scans the particles itself, as without a team.
+
+use std::cell::RefCell;
+use std::sync::{Mutex, MutexGuard, PoisonError};
+
+use glam::DVec3;
+
+#[cfg(test)]
+use super::response::near_any;
+use super::response::near_any_into;
+use super::{Broad, World, calm};
+use crate::physics::fast::bounds::{boxes, plane_bits};
+
+/// Particles per box of the sphere–particle broad phase.
+pub(super) const BOX: usize = 32;
+
+/// An axis-aligned bounding box (m).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Aabb {
+    pub(super) lo: DVec3,
+    pub(super) hi: DVec3,
+}
+
+impl Aabb {
+    /// The box of `points` (NaN coordinates make it cover everything on their axis), the same
+    /// box as [`Aabb::include`] of every point in turn: `min` and `max` pass over a NaN, and a
+    /// NaN anywhere on an axis makes that axis infinite at the end (one dependent operation per
+    /// point and axis instead of two). The textbook form of `fast::bounds::boxes`, which
+    /// [`PartBounds`] uses.
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub(super) fn of(points: &[DVec3]) -> Aabb {
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        let mut nan = glam::BVec3::FALSE;
+        for &p in points {
+            lo = lo.min(p);
+            hi = hi.max(p);
+            nan |= p.is_nan_mask();
+        }
+        Aabb {
+            lo: DVec3::select(nan, DVec3::NEG_INFINITY, lo),
+            hi: DVec3::select(nan, DVec3::INFINITY, hi),
+        }
+    }
+
+    /// Grows the box to hold `p`; a NaN coordinate makes it infinite on that axis.
+    pub(super) fn include(&mut self, p: DVec3) {
+        let nan = p.is_nan_mask();
+        self.lo = DVec3::select(nan, DVec3::NEG_INFINITY, self.lo.min(p));
+        self.hi = DVec3::select(nan, DVec3::INFINITY, self.hi.max(p));
+    }
+
+    /// The squared distance (m²) from `c` to the nearest point of the box (0 inside).
+    pub(super) fn distance_squared(&self, c: DVec3) -> f64 {
+        let d = (self.lo - c).max(c - self.hi).max(DVec3::ZERO);
+        d.length_squared()
+    }
+}
+
+/// One part's summary (module docs).
+#[derive(Clone, Debug, Default)]
+pub struct PartBounds {
+    /// The part is particles `start..end`.
+    pub(super) start: usize,
+    pub(super) end: usize,
+    /// The box of every [`BOX`] particles from `start` (the last may hold fewer).
+    pub(super) boxes: Vec<Aabb>,
+    /// Every position of the part calm when it was summed up.
+    pub(super) calm: bool,
+    /// The particles some collider may touch, in index order.
+    pub(super) near: Vec<u32>,
+    /// Bits of `near` before they become indices (scratch).
+    bits: Vec<u64>,
+    /// Made after the last [`Prepared::take`].
+    fresh: bool,
+}
+
+impl PartBounds {
+    /// Sums up particles `start..start + x.len()` at positions `x` (m): the boxes when
+    /// `with_boxes` (the body has spheres), `near` for the colliders' `broads` (none: left
+    /// empty), `calm` always. Planes' bounds and the calm test go eight points at a time
+    /// (`fast::bounds::plane_bits`, the same answers), other colliders' one by one.
+    pub(super) fn fill(&mut self, broads: &[Broad], start: usize, x: &[DVec3], with_boxes: bool) {
+        self.start = start;
+        self.end = start + x.len();
+        self.boxes.clear();
+        self.near.clear();
+        let mut calm_known = None;
+        if with_boxes {
+            boxes(x, BOX, &mut self.boxes, |lo, hi| Aabb { lo, hi });
+            calm_known = Some(self.boxes.iter().all(|b| calm(b.lo) && calm(b.hi)));
+        }
+        self.bits.clear();
+        self.bits.resize(x.len().div_ceil(64), 0);
+        let planes = broads.iter().all(|b| matches!(b, Broad::Plane { .. }));
+        if planes {
+            for broad in broads {
+                if let Broad::Plane {
+                    point,
+                    normal,
+                    phi_max,
+                } = *broad
+                {
+                    let all_calm = plane_bits(x, point, normal, phi_max, &mut self.bits);
+                    calm_known = calm_known.or(Some(all_calm));
+                }
+            }
+        } else {
+            near_any_into(broads, x, &mut self.bits);
+        }
+        self.calm = calm_known.unwrap_or_else(|| x.iter().all(|p| calm(*p)));
+        for (k, &word) in self.bits.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                self.near
+                    .push((start + 64 * k + bits.trailing_zeros() as usize) as u32);
+                bits &= bits - 1;
+            }
+        }
+    }
+
+    /// Sums up particles `start..start + x.len()` at positions `x` (m) for the colliders of
+    /// `world`, with the boxes of the spheres' broad phase when `with_boxes`.
+    pub fn sum_up<'a>(
+        &mut self,
+        world: impl Into<World<'a>>,
+        start: usize,
+        x: &[DVec3],
+        with_boxes: bool,
+    ) {
+        let world = world.into();
+        let broads: Vec<Broad> = (world.colliders.iter())
+            .map(|c| c.broad(world.contact.epsilon))
+            .collect();
+        self.fill(&broads, start, x, with_boxes);
+    }
+
+    /// Every position was calm when the part was summed up.
+    #[must_use]
+    pub fn calm(&self) -> bool {
+        self.calm
+    }
+
+    /// The boxes with the particles each holds.
+    pub(super) fn boxes_mut(
+        &mut self,
+    ) -> impl Iterator<Item = (std::ops::Range<usize>, &mut Aabb)> + '_ {
+        let (start, end) = (self.start, self.end);
+        (self.boxes.iter_mut().enumerate())
+            .map(move |(j, b)| (start + j * BOX..(start + (j + 1) * BOX).min(end), b))
+    }
+}
+
+thread_local! {
+    /// A thread's summary in the making (swapped with the shared one, so no step allocates).
+    static MAKING: RefCell<PartBounds> = RefCell::new(PartBounds::default());
+}
+
+/// Every part's summary of one body: written by the threads that step the parts, read by the
+/// response (module docs).
+#[derive(Debug, Default)]
+pub struct Prepared {
+    parts: Mutex<Vec<PartBounds>>,
+}
+
+impl Prepared {
+    /// Sums up part `k`, particles `start..start + x.len()` at positions `x` (m) after a step,
+    /// for the colliders of `world`, with boxes when `with_boxes` ([`PartBounds::sum_up`]).
+    pub fn prepare<'a>(
+        &self,
+        world: impl Into<World<'a>>,
+        k: usize,
+        start: usize,
+        x: &[DVec3],
+        with_boxes: bool,
+    ) {
+        MAKING.with(|making| {
+            let making = &mut *making.borrow_mut();
+            making.sum_up(world, start, x, with_boxes);
+            making.fresh = true;
+            let mut parts = self.parts.lock().unwrap_or_else(PoisonError::into_inner);
+            if parts.len() <= k {
+                parts.resize_with(k + 1, PartBounds::default);
+            }
+            std::mem::swap(&mut parts[k], making);
+        });
+    }
+
+    /// The summaries of the step just taken, when they cover particles `0..n` part after part
+    /// (else `None`: the response scans itself); either way every summary is used up.
+    pub fn take(&self, n: usize) -> Option<Taken<'_>> {
+        let mut parts = self.parts.lock().unwrap_or_else(PoisonError::into_inner);
+        let mut end = 0;
+        let mut count = 0;
+        for p in parts.iter() {
+            if end == n || !p.fresh || p.start != end {
+                break;
+            }
+            end = p.end;
+            count += 1;
+        }
+        for p in parts.iter_mut() {
+            p.fresh = false;
+        }
+        (end == n && count > 0).then_some(Taken { parts, count })
+    }
+}
+
+/// The summaries [`Prepared::take`] found complete.
+pub struct Taken<'a> {
+    parts: MutexGuard<'a, Vec<PartBounds>>,
+    count: usize,
+}
+
+impl Taken<'_> {
+    /// The parts in order.
+    pub fn parts(&mut self) -> &mut [PartBounds] {
+        &mut self.parts[..self.count]
+    }
+
+    /// Every position was calm when the parts were summed up.
+    #[must_use]
+    pub fn calm(&self) -> bool {
+        self.parts[..self.count].iter().all(|p| p.calm)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `Aabb::of` gives the box that including every point in turn gives, bit for bit, with
+    /// NaN coordinates anywhere (first, middle, last, several axes) and signed zeros.
+    #[test]
+    fn the_box_of_points_is_the_box_grown_point_by_point() {
+        let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+        for points in cases() {
+            let mut grown = Aabb {
+                lo: DVec3::INFINITY,
+                hi: DVec3::NEG_INFINITY,
+            };
+            for &p in &points {
+                grown.include(p);
+            }
+            let of = Aabb::of(&points);
+            assert_eq!(bits(of.lo), bits(grown.lo), "{points:?}");
+            assert_eq!(bits(of.hi), bits(grown.hi), "{points:?}");
+        }
+    }
+
+    /// The fast boxes (`fast::bounds`, every eighth point in one of eight running boxes) hold
+    /// the same values as `Aabb::of` of each box's points (`==`: a zero's sign aside), with NaN
+    /// and infinite coordinates anywhere, boxes of 8, 16 and 32 points and a last box that is
+    /// not full.
+    #[test]
+    fn the_fast_boxes_are_the_boxes_of_their_points() {
+        for points in cases() {
+            // Longer lists: the case's points repeated, moved a little each time.
+            let mut long = Vec::new();
+            for k in 0..5 {
+                long.extend(
+                    points
+                        .iter()
+                        .map(|&p| p + DVec3::splat(0.125 * f64::from(k))),
+                );
+            }
+            for len in [8, 16, 32] {
+                let mut fast = Vec::new();
+                boxes(&long, len, &mut fast, |lo, hi| Aabb { lo, hi });
+                assert_eq!(fast.len(), long.len().div_ceil(len));
+                for (b, chunk) in fast.iter().zip(long.chunks(len)) {
+                    let of = Aabb::of(chunk);
+                    assert_eq!(b.lo, of.lo, "{chunk:?}");
+                    assert_eq!(b.hi, of.hi, "{chunk:?}");
+                }
+            }
+        }
+    }
+
+    /// A summary's particles near planes (`fast::bounds::plane_bits`, eight at a time) are
+    /// those `near_any` (one by one, `Broad::may_touch`) marks, and its `calm` is every
+    /// position's `calm`: points on a grid through two planes, a hair from their bounds, NaN,
+    /// infinite and huge coordinates, counts that are not whole words or chunks, with and
+    /// without boxes.
+    #[test]
+    fn the_planes_summary_is_the_scan_of_every_particle() {
+        let planes = [
+            crate::physics::collide::Collider::Plane {
+                point: DVec3::new(0.0, -0.5, 0.0),
+                normal: DVec3::new(0.3, 1.0, -0.2).normalize(),
+            },
+            crate::physics::collide::Collider::Plane {
+                point: DVec3::new(0.25, 0.0, 0.0),
+                normal: DVec3::X,
+            },
+        ];
+        let broads: Vec<Broad> = planes.iter().map(|c| c.broad(0.01)).collect();
+        let mut x: Vec<DVec3> = (0..203)
+            .map(|i| {
+                let f = f64::from(i);
+                DVec3::new(0.013 * f - 1.0, (0.37 * f).sin(), 0.5 - 0.007 * f)
+            })
+            .collect();
+        x.push(DVec3::new(0.25 + 0.01 - 1e-12, 3.0, 0.0));
+        for (count, poison) in [
+            (64, None),
+            (197, None),
+            (204, Some(DVec3::new(f64::NAN, 0.0, 0.0))),
+            (150, Some(DVec3::new(0.0, f64::INFINITY, 0.0))),
+            (9, Some(DVec3::new(0.0, 0.0, -2e50))),
+        ] {
+            let mut x = x[..count].to_vec();
+            if let Some(p) = poison {
+                x[count / 2] = p;
+            }
+            let scan = near_any(&broads, &x);
+            let expected: Vec<u32> = (0..x.len() as u32)
+                .filter(|&i| scan[i as usize / 64] >> (i % 64) & 1 == 1)
+                .collect();
+            for with_boxes in [false, true] {
+                let mut part = PartBounds::default();
+                part.fill(&broads, 100, &x, with_boxes);
+                let near: Vec<u32> = part.near.iter().map(|&i| i - 100).collect();
+                assert_eq!(near, expected, "{count} {poison:?}");
+                assert_eq!(part.calm, x.iter().all(|p| calm(*p)), "{count} {poison:?}");
+                if count > 64 {
+                    assert!(
+                        !near.is_empty() && near.len() < x.len(),
+                        "{count}: {near:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// Points with NaN or infinite coordinates anywhere (first, middle, last, several axes),
+    /// signed zeros and values across the range of f64.
+    fn cases() -> Vec<Vec<DVec3>> {
+        let nan = f64::NAN;
+        let base = [
+            DVec3::new(0.5, -0.0, 2.0),
+            DVec3::new(-1.5, 0.0, 2.0),
+            DVec3::new(3.0, 1e-300, -7.25),
+            DVec3::new(0.0, -4.0, 1e300),
+            DVec3::new(-2.0, 5.0, 0.25),
+            DVec3::new(1.0, -0.0, -8.0),
+            DVec3::new(0.75, 2.0, 3.0),
+        ];
+        let mut cases: Vec<Vec<DVec3>> = vec![Vec::new(), base.to_vec(), base[..3].to_vec()];
+        for at in 0..base.len() {
+            for poison in [
+                DVec3::new(nan, 1.0, 1.0),
+                DVec3::new(1.0, nan, nan),
+                DVec3::splat(nan),
+                DVec3::new(1.0, f64::INFINITY, f64::NEG_INFINITY),
+            ] {
+                let mut points = base.to_vec();
+                points[at] = poison;
+                cases.push(points);
+            }
+        }
+        cases
+    }
+}
