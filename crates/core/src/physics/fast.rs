@@ -16,6 +16,8 @@
 //! - `chain`: Verlet's red-black projection of a chain, eight rods at a time.
 //! - `energy`: the kinetic and gravitational terms of Verlet's energy accounting, a block of
 //!   particles at a time with the widest vectors.
+//! - [`quadratic`]: the stability study's sum over springs (a perturbation's elastic energy), a
+//!   block of springs at a time with the widest vectors.
 //!
 //! This is the only part of the crate allowed `unsafe` (the intrinsics and the pool's shared
 //! buffers); `Cargo.toml` denies it everywhere else.
@@ -27,4 +29,5 @@ pub(crate) mod implicit_constraint;
 pub(crate) mod implicit_lattice;
 pub(crate) mod lanes;
 pub mod pool;
+pub mod quadratic;
 pub mod stencil;
