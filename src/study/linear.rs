@@ -57,10 +57,11 @@
 
 use std::f64::consts::PI;
 
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 use serde::Serialize;
 
-use super::modes::stiffness_blocks;
+use super::modes::Blocks;
+use crate::physics::fast::quadratic;
 use crate::physics::{Method, MethodParams, Model, State, Workspace};
 use crate::random::XorShift64Star;
 
@@ -96,8 +97,10 @@ pub struct Growth {
 pub struct Linearisation {
     model: Model,
     base: State,
-    blocks: Vec<DMat3>,
+    blocks: Blocks,
     free: Vec<bool>,
+    /// `½ m_i` (the perturbation's kinetic energy).
+    half_mass: Vec<f64>,
     /// Rigid modes (translations and rotations) when no particle is pinned: M-orthonormal.
     rigid: Vec<Vec<DVec3>>,
     length: f64,
@@ -117,7 +120,8 @@ impl Linearisation {
         base.v.fill(DVec3::ZERO);
         let n = model.particle_count();
         let free: Vec<bool> = (0..n).map(|i| !model.is_pinned(i)).collect();
-        let blocks = stiffness_blocks(&model, &base.x);
+        let blocks = Blocks::new(&model, &base.x);
+        let half_mass = model.mass.iter().map(|m| 0.5 * m).collect();
         let length = if model.springs().is_empty() {
             1.0
         } else {
@@ -135,33 +139,34 @@ impl Linearisation {
             base,
             blocks,
             free,
+            half_mass,
             rigid,
             length,
             omega: if omega_max > 0.0 { omega_max } else { 1.0 },
         }
     }
 
-    /// The perturbation's energy `E(δ)` (module docs).
-    fn energy(&self, dx: &[DVec3], dv: &[DVec3]) -> f64 {
-        let mut e = 0.0;
-        for i in 0..dx.len() {
-            if self.free[i] {
-                e += 0.5 * self.model.mass[i] * dv[i].length_squared();
-            }
+    /// Adds `½ m_i |δv_i|²` to `e` when particle `i` is free (the perturbation's kinetic
+    /// energy, summed in index order).
+    #[inline(always)]
+    fn add_kinetic(&self, e: &mut f64, i: usize, dv: DVec3) {
+        if self.free[i] {
+            *e += self.half_mass[i] * dv.length_squared();
         }
-        for (s, k) in self.model.springs().iter().zip(&self.blocks) {
-            let d = dx[s.b as usize] - dx[s.a as usize];
-            e += 0.5 * d.dot(*k * d);
-        }
-        e
+    }
+
+    /// `e + Σ_s ½ δx_sᵀ K_s δx_s` (`δx_s = δx_b - δx_a`), added in spring order
+    /// ([`quadratic::spring_energy`]: the terms a block of springs at a time).
+    fn elastic(&self, e: f64, dx: &[DVec3]) -> f64 {
+        quadratic::spring_energy(e, &self.blocks.ends, self.blocks.six(), dx)
     }
 
     /// `u ← M⁻¹ K_0 u` (zero on pinned particles).
     fn stiffness_times(&self, u: &mut [DVec3]) {
         let mut y = vec![DVec3::ZERO; u.len()];
-        for (s, k) in self.model.springs().iter().zip(&self.blocks) {
-            let (a, b) = (s.a as usize, s.b as usize);
-            let f = *k * (u[a] - u[b]);
+        for (s, &[a, b]) in self.blocks.ends.iter().enumerate() {
+            let (a, b) = (a as usize, b as usize);
+            let f = Blocks::mul(&self.blocks.at(s), u[a] - u[b]);
             y[a] += f;
             y[b] -= f;
         }
@@ -174,18 +179,81 @@ impl Linearisation {
         }
     }
 
-    /// Removes the rigid components of `(dx, dv)` (M-orthogonal projection).
-    fn remove_rigid(&self, dx: &mut [DVec3], dv: &mut [DVec3]) {
-        for mode in &self.rigid {
-            for u in [&mut *dx, &mut *dv] {
-                let c: f64 = (0..u.len())
-                    .map(|i| self.model.mass[i] * u[i].dot(mode[i]))
-                    .sum();
-                for i in 0..u.len() {
-                    u[i] -= c * mode[i];
+    /// `fill(i, δx_i, δv_i)` sets the new perturbation, then its rigid components are removed
+    /// (M-orthogonal projection); returns its kinetic energy `Σ ½ m_i |δv_i|²` (J per s²).
+    ///
+    /// The textbook order is one mode and one vector at a time (`c = Σ_i m_i u_i·e_k`, then
+    /// `u -= c e_k`), the kinetic energy after the last mode. Here pass `k` subtracts mode
+    /// `k - 1` and sums the components along mode `k` (after the last mode: the kinetic energy),
+    /// for `δx` and `δv` together: the same sums in the same order, so the same bits, in one
+    /// pass per mode.
+    fn project(
+        &self,
+        dx: &mut [DVec3],
+        dv: &mut [DVec3],
+        mut fill: impl FnMut(usize, &mut DVec3, &mut DVec3),
+    ) -> f64 {
+        let mass = &self.model.mass;
+        let mut kinetic = 0.0;
+        // The components along the first mode (none: the kinetic energy).
+        let (mut cx, mut cv) = (-0.0, -0.0);
+        match self.rigid.first() {
+            Some(first) => {
+                for i in 0..dx.len() {
+                    fill(i, &mut dx[i], &mut dv[i]);
+                    cx += mass[i] * dx[i].dot(first[i]);
+                    cv += mass[i] * dv[i].dot(first[i]);
+                }
+            }
+            None => {
+                for i in 0..dx.len() {
+                    fill(i, &mut dx[i], &mut dv[i]);
+                    self.add_kinetic(&mut kinetic, i, dv[i]);
                 }
             }
         }
+        for (k, mode) in self.rigid.iter().enumerate() {
+            match self.rigid.get(k + 1) {
+                Some(next) => {
+                    let (mut nx, mut nv) = (-0.0, -0.0);
+                    for i in 0..dx.len() {
+                        dx[i] -= cx * mode[i];
+                        dv[i] -= cv * mode[i];
+                        nx += mass[i] * dx[i].dot(next[i]);
+                        nv += mass[i] * dv[i].dot(next[i]);
+                    }
+                    (cx, cv) = (nx, nv);
+                }
+                None => {
+                    for i in 0..dx.len() {
+                        dx[i] -= cx * mode[i];
+                        dv[i] -= cv * mode[i];
+                        self.add_kinetic(&mut kinetic, i, dv[i]);
+                    }
+                }
+            }
+        }
+        kinetic
+    }
+
+    /// `δ ← δ / root`, and the scale of the finite differences: the largest `|δx|` or `|δv|/ω`
+    /// component of a free particle.
+    fn normalise(&self, dx: &mut [DVec3], dv: &mut [DVec3], root: f64) -> f64 {
+        let mut scale = 0.0;
+        for i in 0..dx.len() {
+            dx[i] /= root;
+            dv[i] /= root;
+            if self.free[i] {
+                scale = f64::max(
+                    scale,
+                    dx[i]
+                        .abs()
+                        .max_element()
+                        .max(dv[i].abs().max_element() / self.omega),
+                );
+            }
+        }
+        scale
     }
 
     /// The growth of a perturbation under `method` with `params` at `dt` (s) over `steps`
@@ -200,8 +268,8 @@ impl Linearisation {
         // linearly and drown the rest in rounding.
         self.stiffness_times(&mut dx);
         self.stiffness_times(&mut dv);
-        self.remove_rigid(&mut dx, &mut dv);
-        let e = self.energy(&dx, &dv);
+        let kinetic = self.project(&mut dx, &mut dv, |_, _, _| {});
+        let e = self.elastic(kinetic, &dx);
         if e.is_nan() || e <= 0.0 {
             return Growth {
                 steps: 0,
@@ -211,11 +279,8 @@ impl Linearisation {
                 stopped: "decayed",
             };
         }
-        let norm = e.sqrt();
-        for i in 0..n {
-            dx[i] /= norm;
-            dv[i] /= norm;
-        }
+        // δ is divided by this at the top of each power step.
+        let mut root = e.sqrt();
         let mut work = Workspace::new();
         let mut plus = self.base.clone();
         let mut minus = self.base.clone();
@@ -230,36 +295,30 @@ impl Linearisation {
         };
         for k in 0..2 * w {
             // s such that the largest position (or velocity / ω) component is FD_SIZE L.
-            let scale = (0..n)
-                .filter(|&i| self.free[i])
-                .map(|i| {
-                    dx[i]
-                        .abs()
-                        .max_element()
-                        .max(dv[i].abs().max_element() / self.omega)
-                })
-                .fold(0.0, f64::max);
+            let scale = self.normalise(&mut dx, &mut dv, root);
             if !(scale > 0.0 && scale.is_finite()) {
                 return stop(k, log_e, false, "not finite");
             }
             let s = FD_SIZE * self.length / scale;
-            for (state, sign) in [(&mut plus, 1.0), (&mut minus, -1.0)] {
-                for i in 0..n {
-                    state.x[i] = self.base.x[i] + sign * s * dx[i];
-                    state.v[i] = self.base.v[i] + sign * s * dv[i];
+            let (s_plus, s_minus) = (s, -s);
+            for i in 0..n {
+                for (state, s) in [(&mut plus, s_plus), (&mut minus, s_minus)] {
+                    state.x[i] = self.base.x[i] + s * dx[i];
+                    state.v[i] = self.base.v[i] + s * dv[i];
                     // Verlet's history: the displacement that the velocity implies.
                     state.x_prev[i] = state.x[i] - dt * state.v[i];
                 }
+            }
+            for state in [&mut plus, &mut minus] {
                 state.history_valid = true;
                 method.step(&self.model, state, dt, params, &mut work);
             }
             let inv = 0.5 / s;
-            for i in 0..n {
-                dx[i] = (plus.x[i] - minus.x[i]) * inv;
-                dv[i] = (plus.v[i] - minus.v[i]) * inv;
-            }
-            self.remove_rigid(&mut dx, &mut dv);
-            let g = self.energy(&dx, &dv);
+            let kinetic = self.project(&mut dx, &mut dv, |i, dx, dv| {
+                *dx = (plus.x[i] - minus.x[i]) * inv;
+                *dv = (plus.v[i] - minus.v[i]) * inv;
+            });
+            let g = self.elastic(kinetic, &dx);
             if !(g.is_finite() && g > 0.0) {
                 if g == 0.0 {
                     return stop(k + 1, log_e, true, "decayed");
@@ -267,11 +326,7 @@ impl Linearisation {
                 return stop(k + 1, log_e, false, "not finite");
             }
             log_e += g.ln();
-            let root = g.sqrt();
-            for i in 0..n {
-                dx[i] /= root;
-                dv[i] /= root;
-            }
+            root = g.sqrt();
             if log_e > GROWTH_STOP.ln() {
                 return stop(k + 1, log_e, false, "grew");
             }

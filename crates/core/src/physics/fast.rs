@@ -17,6 +17,8 @@
 //! - `bounds`: the boxes of the collision response's broad phase, eight points at a time.
 //! - `energy`: the kinetic and gravitational terms of Verlet's energy accounting, a block of
 //!   particles at a time with the widest vectors.
+//! - [`quadratic`]: the stability study's sum over springs (a perturbation's elastic energy), a
+//!   block of springs at a time with the widest vectors.
 //!
 //! This is the only part of the crate allowed `unsafe` (the intrinsics and the pool's shared
 //! buffers); `Cargo.toml` denies it everywhere else.
@@ -29,4 +31,5 @@ pub(crate) mod implicit_constraint;
 pub(crate) mod implicit_lattice;
 pub(crate) mod lanes;
 pub mod pool;
+pub mod quadratic;
 pub mod stencil;

@@ -138,8 +138,8 @@ pub fn resolve_prepared<'a, 'b>(
 
 /// The particles at `x` that one of `broads` may touch ([`Broad::may_touch`]), as bits: bit
 /// `i % 64` of word `i / 64`. One loop per collider over all the particles, without a branch
-/// per particle (the plane's and the sphere's tests called in loops of their own), so that
-/// a body resting on a collider costs a few operations per particle far from it.
+/// per particle ([`Broad::marks`]), so that a body resting on a collider costs a few
+/// operations per particle far from it.
 pub(super) fn near_any(broads: &[Broad], x: &[DVec3]) -> Vec<u64> {
     let mut near = Vec::new();
     near_any_into(broads, x, &mut near);
@@ -152,29 +152,7 @@ pub(super) fn near_any_into(broads: &[Broad], x: &[DVec3], near: &mut Vec<u64>) 
     near.resize(x.len().div_ceil(64), 0);
     for broad in broads {
         for (word, xs) in near.iter_mut().zip(x.chunks(64)) {
-            let mut bits = 0u64;
-            match *broad {
-                Broad::Plane {
-                    point,
-                    normal,
-                    phi_max,
-                } => {
-                    for (k, p) in xs.iter().enumerate() {
-                        bits |= u64::from(Broad::plane_may_touch(*p, point, normal, phi_max)) << k;
-                    }
-                }
-                Broad::Sphere { center, d2_max } => {
-                    for (k, p) in xs.iter().enumerate() {
-                        bits |= u64::from(Broad::sphere_may_touch(*p, center, d2_max)) << k;
-                    }
-                }
-                _ => {
-                    for (k, p) in xs.iter().enumerate() {
-                        bits |= u64::from(broad.may_touch(*p)) << k;
-                    }
-                }
-            }
-            *word |= bits;
+            *word |= broad.marks(xs);
         }
     }
 }
