@@ -365,6 +365,21 @@ pub type ResponseFn = dyn Fn(&Model, &mut [DVec3], &mut [DVec3]) + Send + Sync;
 /// (m) and velocities (m/s).
 pub type PrepareFn = dyn Fn(&Model, usize, usize, &[DVec3], &[DVec3]) + Send + Sync;
 
+impl Response {
+    /// The preparing function bound to `model`, as a team's threads call it on each part they
+    /// wrote (part, its first particle, its new positions (m) and velocities (m/s)); `None`
+    /// when the response prepares nothing.
+    // The returned closure's type is `PartFn`'s (`stencil/team.rs`) without the reference.
+    #[allow(clippy::type_complexity)]
+    pub(crate) fn part_summary<'a>(
+        &'a self,
+        model: &'a Model,
+    ) -> Option<impl Fn(usize, usize, &[DVec3], &[DVec3]) + Sync + 'a> {
+        let prepare = self.1.as_deref()?;
+        Some(move |k: usize, q0: usize, x: &[DVec3], v: &[DVec3]| prepare(model, k, q0, x, v))
+    }
+}
+
 impl std::fmt::Debug for Response {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str("Response")

@@ -38,10 +38,9 @@
 use crate::physics::energy::{Dissipated, Power};
 use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, polynomial};
-use crate::physics::integrators::{explicit_step, Response, Workspace, after, fused_pass, power_if, slot_powers, steps_per_team, team};
+use crate::physics::integrators::{explicit_step, Workspace, after, fused_pass, power_if, slot_powers, steps_per_team, team};
 use crate::physics::particles::State;
 use crate::physics::stencil::{Base, Output, PartFn, Pass, Stencil, TeamUpdate, Update};
-use glam::DVec3;
 
 /// The method as the formula writes it: four force evaluations, the stage loops between them.
 pub(super) fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
@@ -258,14 +257,8 @@ pub(super) fn steps(
     } = work;
     let response = response.as_ref();
     // The response's summary of each part, made by the thread that wrote it.
-    let prepare_part = |k: usize, q0: usize, x: &[DVec3], v: &[DVec3]| {
-        if let Some(Response(_, Some(prepare))) = response {
-            prepare(model, k, q0, x, v);
-        }
-    };
-    let prepare: Option<PartFn> = response
-        .is_some_and(|r| r.1.is_some())
-        .then_some(&prepare_part);
+    let prepare_part = response.and_then(|r| r.part_summary(model));
+    let prepare: Option<PartFn> = prepare_part.as_ref().map(|f| f as PartFn);
     let [k1v, k2v, k3v, _] = k;
     let [x3, v2, v3, v4] = kx;
     let mut buffers = [

@@ -32,9 +32,8 @@
 use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, one_evaluation};
 use crate::physics::energy::{Dissipated, Power};
-use crate::physics::integrators::{explicit_step, Response, Workspace, after, fused, one_pass_step, power_if, slot_powers, steps_per_team, team};
+use crate::physics::integrators::{explicit_step, Workspace, after, fused, one_pass_step, power_if, slot_powers, steps_per_team, team};
 use crate::physics::particles::State;
-use glam::DVec3;
 use crate::physics::stencil::{PartFn, Pass, Stencil, TeamUpdate, Update};
 
 /// The method as the formula writes it: one force evaluation, then the two lines.
@@ -148,14 +147,8 @@ pub(super) fn steps(
     } = work;
     let response = response.as_ref();
     // The response's summary of each part, made by the thread that wrote it.
-    let prepare_part = |k: usize, q0: usize, x: &[DVec3], v: &[DVec3]| {
-        if let Some(Response(_, Some(prepare))) = response {
-            prepare(model, k, q0, x, v);
-        }
-    };
-    let prepare: Option<PartFn> = response
-        .is_some_and(|r| r.1.is_some())
-        .then_some(&prepare_part);
+    let prepare_part = response.and_then(|r| r.part_summary(model));
+    let prepare: Option<PartFn> = prepare_part.as_ref().map(|f| f as PartFn);
     let slots = if account {
         stencil.power_len() * batch as usize
     } else {
