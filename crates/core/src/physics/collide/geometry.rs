@@ -3,6 +3,8 @@
 
 use glam::DVec3;
 
+use crate::physics::fast::bounds::plane_bits;
+
 /// Relative margin on a bowl's rim circle (`ρ² ≤ a² (1 + margin)`): points on the circle up to
 /// rounding still belong to the bowl (see [`Collider::contact`]).
 const RIM_MARGIN: f64 = 1e-9;
@@ -424,9 +426,10 @@ impl Broad {
                 normal,
                 phi_max,
             } => {
-                for (k, p) in xs.iter().enumerate() {
-                    bits |= u64::from(Self::plane_may_touch(*p, point, normal, phi_max)) << k;
-                }
+                // Eight points at a time, the same operations (`fast::bounds`).
+                let mut word = [0];
+                plane_bits(xs, point, normal, phi_max, &mut word);
+                bits = word[0];
             }
             Broad::Sphere { center, d2_max } => {
                 for (k, p) in xs.iter().enumerate() {

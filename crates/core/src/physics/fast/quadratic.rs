@@ -36,14 +36,7 @@ pub type SymBlocks<'a> = [&'a [f64]; 6];
 #[must_use]
 pub fn spring_energy(e: f64, ends: &[[u32; 2]], k: SymBlocks, u: &[DVec3]) -> f64 {
     let m = ends.len();
-    let k = [
-        &k[0][..m],
-        &k[1][..m],
-        &k[2][..m],
-        &k[3][..m],
-        &k[4][..m],
-        &k[5][..m],
-    ];
+    let k = k.map(|a| &a[..m]);
     match Kernel::best() {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `Kernel::best` chooses `Avx512` only on a CPU with AVX-512F.
@@ -84,14 +77,7 @@ fn gather(ends: &[[u32; 2]], u: &[DVec3], from: usize, d: &mut [[f64; BLOCK]; 3]
 #[inline(always)]
 fn forces(k: [&[f64]; 6], d: &[[f64; BLOCK]; 3], f: &mut [[f64; BLOCK]; 3]) {
     let m = k[0].len();
-    let (k0, k1, k2, k3, k4, k5) = (
-        &k[0][..m],
-        &k[1][..m],
-        &k[2][..m],
-        &k[3][..m],
-        &k[4][..m],
-        &k[5][..m],
-    );
+    let [k0, k1, k2, k3, k4, k5] = k.map(|a| &a[..m]);
     for j in 0..m {
         let (x, y, z) = (d[0][j], d[1][j], d[2][j]);
         f[0][j] = k0[j] * x + k1[j] * y + k2[j] * z;

@@ -373,11 +373,7 @@ unsafe fn second_ends<V: Lanes, const NEAR_START: bool>(
                 low = high;
                 if NEAR_START && q < g.delta {
                     let k = g.delta - q;
-                    f = [
-                        f[0].clear_below(k),
-                        f[1].clear_below(k),
-                        f[2].clear_below(k),
-                    ];
+                    f = f.map(|c| c.clear_below(k));
                 }
                 for (total, part) in sum.iter_mut().zip(f) {
                     *total = total.add(part);
@@ -394,11 +390,7 @@ unsafe fn second_ends<V: Lanes, const NEAR_START: bool>(
             if NEAR_START && q < g.delta {
                 // Their ring slots hold other values.
                 let k = g.delta - q;
-                f = [
-                    f[0].clear_below(k),
-                    f[1].clear_below(k),
-                    f[2].clear_below(k),
-                ];
+                f = f.map(|c| c.clear_below(k));
             }
             for (total, part) in sum.iter_mut().zip(f) {
                 *total = total.add(part);
