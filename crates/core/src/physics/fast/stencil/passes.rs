@@ -309,7 +309,11 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
                 x: components(w.x, i),
                 v: components(w.v, i),
             };
-            finish::<V, POWER>(output, &chunk, sum, spring_power[c], part);
+            if chunk.count == LANES {
+                finish::<V, POWER, true>(output, &chunk, sum, spring_power[c], part);
+            } else {
+                finish::<V, POWER, false>(output, &chunk, sum, spring_power[c], part);
+            }
         }
         if let Output::Step {
             after: Some(after), ..
@@ -433,9 +437,10 @@ pub(super) struct Chunk<V> {
 }
 
 /// Pass 2's end for one chunk: from the spring forces `sum` (N) to what `output` asks for,
-/// and the chunk's dissipated power when `POWER`.
+/// and the chunk's dissipated power when `POWER`. `WHOLE`: the chunk has `LANES` particles
+/// (`chunk.count` is then not read).
 #[inline(always)]
-pub(super) fn finish<V: Lanes, const POWER: bool>(
+pub(super) fn finish<V: Lanes, const POWER: bool, const WHOLE: bool>(
     output: &Output,
     chunk: &Chunk<V>,
     sum: [V; 3],
@@ -443,6 +448,9 @@ pub(super) fn finish<V: Lanes, const POWER: bool>(
     part: &mut Part,
 ) {
     let Chunk { q, at, count, x, v } = *chunk;
+    // A whole chunk (every one but a range's last): its loads and stores without the test for
+    // a short chunk.
+    let count = if WHOLE { LANES } else { count };
     let d = match *output {
         Output::Add => {
             let out = &mut part.outs[0][at..];
