@@ -51,7 +51,9 @@ impl Energy {
 /// The energy of `state` under `model`.
 #[must_use]
 pub fn energy(model: &Model, state: &State) -> Energy {
-    let elastic: f64 = model.springs.iter().map(|s| s.energy(&state.x)).sum();
+    // Σ_springs ½ k (L - L0)², `model.springs.iter().map(|s| s.energy(&state.x)).sum()`: the
+    // same sum in the same order, its terms a block at a time (`fast/elastic.rs`).
+    let elastic = super::fast::elastic::elastic(&model.springs, &state.x);
     energy_with_elastic(model, state, elastic)
 }
 
@@ -116,22 +118,32 @@ pub fn energy_change_calm(
 ) -> f64 {
     // The position of particle j before the response.
     let before = |j: usize| changes.of(j).map_or(x[j], |c| c.1);
+    let records = &changes.particles;
     // A spring whose two ends are where they were adds `E_s - E_s`, exactly 0 J when its
     // energy is finite (ends at calm, equal positions): most of the records are velocities the
     // body's payment scaled, so most springs are left out without changing a bit of the sum
     // (which never holds -0, so adding +0 does nothing). `moved` marks the recorded particles
     // that moved or are not calm; only they and their neighbours have springs to visit (all
     // particles when some position is not calm).
-    let moved = changes.moved(x);
+    let mut moved = vec![0u64; x.len().div_ceil(64)];
+    let mut records_calm = true;
+    for &(i, x_old, _) in records {
+        let i = i as usize;
+        let here = calm(x[i]);
+        records_calm &= here;
+        if x[i] != x_old || !here {
+            moved[i / 64] |= 1 << (i % 64);
+        }
+    }
     let moved = |j: usize| moved.get(j / 64).is_none_or(|w| w >> (j % 64) & 1 == 1);
     let mut visit = vec![0u64; x.len().div_ceil(64)];
     let all_calm = if calm_elsewhere {
-        (changes.particles.iter()).all(|&(i, ..)| calm(x[i as usize]))
+        records_calm
     } else {
         x.iter().all(|p| calm(*p))
     };
     if all_calm {
-        for &(j, ..) in &changes.particles {
+        for &(j, ..) in records {
             let j = j as usize;
             if !moved(j) {
                 continue;
@@ -146,14 +158,26 @@ pub fn energy_change_calm(
     } else {
         visit.fill(u64::MAX);
     }
+    // Each record's kinetic and gravitational terms first, independent of each other; then
+    // the sum in record order, the springs of a visited record after its terms (the same
+    // operations in the same order as one loop, so the same bits; the sum alone keeps its
+    // register, where one loop spilled it for the springs' work).
     let gravity = model.gravity;
+    let terms: Vec<[f64; 2]> = (records.iter())
+        .map(|&(i, x_old, v_old)| {
+            let i = i as usize;
+            let m = model.mass[i];
+            [
+                0.5 * m * (v[i].length_squared() - v_old.length_squared()),
+                m * gravity.dot(x[i] - x_old),
+            ]
+        })
+        .collect();
     let mut delta = 0.0;
-    for &(i, x_old, v_old) in &changes.particles {
+    for (&(i, ..), &[kinetic, lift]) in records.iter().zip(&terms) {
+        delta += kinetic;
+        delta -= lift;
         let i = i as usize;
-        let m = model.mass[i];
-        let (x_new, v) = (x[i], v[i]);
-        delta += 0.5 * m * (v.length_squared() - v_old.length_squared());
-        delta -= m * gravity.dot(x_new - x_old);
         if visit[i / 64] >> (i % 64) & 1 == 0 {
             // Every spring at i has both ends where they were: 0 J.
             continue;

@@ -17,6 +17,8 @@
 //! - `bounds`: the boxes of the collision response's broad phase, eight points at a time.
 //! - `energy`: the kinetic and gravitational terms of Verlet's energy accounting, a block of
 //!   particles at a time with the widest vectors.
+//! - `elastic`: the elastic energy `Σ ½ k (L - L0)²` of `physics/energy.rs`, a block of springs
+//!   at a time with the widest vectors, added in spring order.
 //! - [`quadratic`]: the stability study's sum over springs (a perturbation's elastic energy), a
 //!   block of springs at a time with the widest vectors.
 //!
@@ -26,6 +28,7 @@
 
 pub(crate) mod bounds;
 pub(crate) mod chain;
+pub(crate) mod elastic;
 pub(crate) mod energy;
 pub(crate) mod implicit_constraint;
 pub(crate) mod implicit_lattice;

@@ -119,9 +119,7 @@ pub fn resolve_prepared<'a, 'b>(
         // Every particle's velocity changes: record them all (the records made above come first
         // and are the ones kept).
         if let Some(log) = log {
-            for i in (0..n).filter(|&i| model.inv_mass[i] != 0.0) {
-                log.record(i, state.x[i], state.v[i]);
-            }
+            log.record_free(model.inv_mass, &state.x[..n], &state.v[..n]);
         }
         take_kinetic(model.inv_mass, &mut state.v[..n], owed);
         for i in (0..n).filter(|&i| model.inv_mass[i] != 0.0) {
@@ -170,9 +168,7 @@ pub(super) fn pay(
     let n = state.x.len().min(world.particle_count());
     let free = || (0..n).filter(|&i| world.inv_mass[i] != 0.0);
     if let Some(log) = log {
-        for i in free() {
-            log.record(i, state.x[i], state.v[i]);
-        }
+        log.record_free(world.inv_mass, &state.x[..n], &state.v[..n]);
     }
     take_kinetic_with_spheres(world.inv_mass, &mut state.v[..n], state.spheres, amount);
     for i in free() {
@@ -216,6 +212,12 @@ pub struct Changes {
     slot: Vec<u32>,
     /// Scratch of [`Changes::finish`] (reused).
     sorted: Vec<(u32, DVec3, DVec3)>,
+    /// False when `particles` may hold a particle twice or out of order; true while it is
+    /// already what [`Changes::finish`] makes of it (sorted by particle, each once, `slot`
+    /// pointing at each): records made in increasing particle order, or [`Changes::record_free`].
+    /// Then a record of a particle already recorded is left out (the first is the one kept) and
+    /// `finish` has nothing to do.
+    disordered: bool,
 }
 
 impl Changes {
@@ -228,18 +230,77 @@ impl Changes {
         }
         self.particles.clear();
         self.spheres_before = 0.0;
+        self.disordered = false;
     }
 
     /// Records particle `i` at `x` (m), `v` (m/s) before a change; its first record is
     /// [`Changes::of`] it from now on.
+    #[inline]
     pub(super) fn record(&mut self, i: usize, x: DVec3, v: DVec3) {
         if self.slot.len() <= i {
             self.slot.resize(i + 1, u32::MAX);
         }
         if self.slot[i] == u32::MAX {
             self.slot[i] = self.particles.len() as u32;
+        } else if !self.disordered {
+            // Recorded before, and the list is in order: the first record is the one kept.
+            return;
+        }
+        if self
+            .particles
+            .last()
+            .is_some_and(|last| last.0 as usize >= i)
+        {
+            self.disordered = true;
         }
         self.particles.push((i as u32, x, v));
+    }
+
+    /// Records every free particle (`inv_mass` not zero) at `x` (m), `v` (m/s) before a change
+    /// of them all (the body's payment): the same as [`Changes::record`] of each in turn, with
+    /// the list left as [`Changes::finish`] makes it (each particle's first record, in order).
+    pub(super) fn record_free(&mut self, inv_mass: &[f64], x: &[DVec3], v: &[DVec3]) {
+        let n = x.len().min(v.len()).min(inv_mass.len());
+        if self.particles.iter().any(|p| p.0 as usize >= n) {
+            // Records beyond the particles given (none in the callers): one at a time.
+            for i in (0..n).filter(|&i| inv_mass[i] != 0.0) {
+                self.record(i, x[i], v[i]);
+            }
+            return;
+        }
+        if self.slot.len() < n {
+            self.slot.resize(n, u32::MAX);
+        }
+        // Each record written field by field into its place: a tuple put together first went
+        // through the stack in pieces of other sizes than it was read back in, a stalled load
+        // per record and most of this loop's time (measured).
+        // Grown by copies of a blank slice (`resize` put each blank together on the stack too).
+        const BLANK: [(u32, DVec3, DVec3); 64] = [(0, DVec3::ZERO, DVec3::ZERO); 64];
+        self.sorted.truncate(n);
+        while self.sorted.len() < n {
+            let more = (n - self.sorted.len()).min(BLANK.len());
+            self.sorted.extend_from_slice(&BLANK[..more]);
+        }
+        let (slot, earlier) = (&mut self.slot[..n], &self.particles);
+        let mut k = 0;
+        for i in 0..n {
+            let first = slot[i];
+            let record = &mut self.sorted[k];
+            if first != u32::MAX {
+                // Its first record, made before.
+                let (j, x, v) = &earlier[first as usize];
+                (record.0, record.1, record.2) = (*j, *x, *v);
+            } else if inv_mass[i] != 0.0 {
+                (record.0, record.1, record.2) = (i as u32, x[i], v[i]);
+            } else {
+                continue;
+            }
+            slot[i] = k as u32;
+            k += 1;
+        }
+        self.sorted.truncate(k);
+        std::mem::swap(&mut self.particles, &mut self.sorted);
+        self.disordered = false;
     }
 
     /// Sorts the records by particle and keeps each particle's first (its state before any
@@ -248,6 +309,11 @@ impl Changes {
         if self.slot.len() < particles {
             self.slot.resize(particles, u32::MAX);
         }
+        if !self.disordered {
+            // Already in order, each particle once.
+            return;
+        }
+        self.disordered = false;
         if self.particles.len() < self.slot.len() / 4 {
             // A few records: a stable sort keeps the records of one particle in the order they
             // were made.
@@ -275,21 +341,6 @@ impl Changes {
             }
         }
         std::mem::swap(&mut self.particles, &mut self.sorted);
-    }
-
-    /// The recorded particles (after [`Changes::finish`]) that are not exactly where they were
-    /// before, now at `x`, or are not [`calm`] there, as bits: bit `i % 64` of word `i / 64`.
-    /// A spring between two particles outside this set (the second one calm) has the same
-    /// finite energy as before.
-    pub(crate) fn moved(&self, x: &[DVec3]) -> Vec<u64> {
-        let mut bits = vec![0u64; x.len().div_ceil(64)];
-        for &(i, x_old, _) in &self.particles {
-            let i = i as usize;
-            if x[i] != x_old || !calm(x[i]) {
-                bits[i / 64] |= 1 << (i % 64);
-            }
-        }
-        bits
     }
 
     /// Kinetic and gravitational energy of the non-kinematic spheres before the responses (J).
@@ -469,6 +520,57 @@ mod tests {
             for i in 0..particles {
                 let want = expected.iter().find(|r| r.0 as usize == i);
                 assert_eq!(changes.of(i), want, "particle {i}");
+            }
+        }
+    }
+
+    #[test]
+    fn record_free_is_a_record_of_every_free_particle() {
+        // Records before (in order, out of order, repeated), the payment's records of every
+        // free particle, and records after it (a free particle again, a pinned one out of
+        // order): the list `finish` ends with is the stable sort and dedup of all the records
+        // made one at a time, as before `record_free` and `finish`'s shortcut existed; `of`
+        // agrees while recording and after.
+        let n = 150;
+        let inv_mass: Vec<f64> = (0..n).map(|i| if i % 7 == 3 { 0.0 } else { 0.5 }).collect();
+        let p = |k: usize| DVec3::new(k as f64, -(k as f64), 0.25 * k as f64);
+        let x: Vec<DVec3> = (0..n).map(|i| p(1000 + i)).collect();
+        let v: Vec<DVec3> = (0..n).map(|i| p(2000 + i)).collect();
+        let before: [&[usize]; 4] = [&[], &[4, 9, 70], &[70, 4, 9, 4, 3], &[149, 0, 3]];
+        let after: [&[usize]; 3] = [&[], &[5, 9], &[140, 10, 17]];
+        let mut changes = Changes::default();
+        for (b, first) in before.iter().enumerate() {
+            for (a, last) in after.iter().enumerate() {
+                changes.clear();
+                let mut all = Vec::new();
+                let record = |changes: &mut Changes, all: &mut Vec<_>, i: usize, k: usize| {
+                    changes.record(i, p(k), p(k + 1));
+                    all.push((i as u32, p(k), p(k + 1)));
+                };
+                for (k, &i) in first.iter().enumerate() {
+                    record(&mut changes, &mut all, i, 10 * k);
+                }
+                changes.record_free(&inv_mass, &x, &v);
+                all.extend(
+                    (0..n)
+                        .filter(|&i| inv_mass[i] != 0.0)
+                        .map(|i| (i as u32, x[i], v[i])),
+                );
+                for i in 0..n {
+                    let want = all.iter().find(|r| r.0 as usize == i);
+                    assert_eq!(changes.of(i), want, "{b} {a}: particle {i} while recording");
+                }
+                for (k, &i) in last.iter().enumerate() {
+                    record(&mut changes, &mut all, i, 500 + 10 * k);
+                }
+                changes.finish(n);
+                all.sort_by_key(|r| r.0);
+                all.dedup_by_key(|r| r.0);
+                assert_eq!(changes.particles, all, "{b} {a}");
+                for i in 0..n {
+                    let want = all.iter().find(|r| r.0 as usize == i);
+                    assert_eq!(changes.of(i), want, "{b} {a}: particle {i}");
+                }
             }
         }
     }
