@@ -53,6 +53,9 @@ pub struct Ahead<'f, K, R> {
     /// Whether there are helpers: then every run steps on its own thread alone
     /// ([`crate::physics::pool::alone`]), since the search and its helpers share the cores.
     shared: bool,
+    /// Helpers start a guess only while fewer computations than this run (the search's
+    /// included): one per core, so that a long list of hints never oversubscribes the cores.
+    slots: usize,
 }
 
 impl<K: Clone + Eq + Hash + Send, R: Clone + Send> Ahead<'_, K, R> {
@@ -97,6 +100,11 @@ impl<K: Clone + Eq + Hash + Send, R: Clone + Send> Ahead<'_, K, R> {
         result
     }
 
+    /// The result for `key` when it has been computed, without computing or waiting for it.
+    pub fn peek(&self, key: &K) -> Option<R> {
+        self.lock().done.get(key).cloned()
+    }
+
     /// The runs the search will probably ask for next, most likely first; replaces the last
     /// hints and stops the guesses no longer among them.
     pub fn hint(&self, keys: Vec<K>) {
@@ -125,12 +133,12 @@ impl<K: Clone + Eq + Hash + Send, R: Clone + Send> Ahead<'_, K, R> {
                     .find(|k| !memo.done.contains_key(*k) && !memo.running.contains_key(*k))
                     .cloned();
                 if let Some(key) = next {
-                    if (self.idle)() {
+                    if memo.running.len() < self.slots && (self.idle)() {
                         let cancel = Arc::new(Cancel::new(false));
                         memo.running.insert(key.clone(), Arc::clone(&cancel));
                         break (key, cancel);
                     }
-                    // No core free yet: look again soon.
+                    // No core free yet: look again soon (a computation that ends notifies).
                     memo = self
                         .changed
                         .wait_timeout(memo, IDLE_POLL)
@@ -221,6 +229,38 @@ where
     K: Clone + Eq + Hash + Send,
     R: Clone + Send,
 {
+    run_with(helpers, usize::MAX, compute, idle, search)
+}
+
+/// [`with_helpers`] for a search that hints many runs at once (advise: the next halving, the
+/// verification, the next methods' and models' first runs): `cores` helpers, but at most `cores`
+/// computations at a time, the search's own included, each helper taking the first hint nobody
+/// has started, so the cores stay busy with the likeliest runs and are never oversubscribed.
+/// With `cores < 2` the search computes every run itself.
+pub fn with_cores<K, R, T>(
+    cores: usize,
+    compute: &(dyn Fn(&K, &Cancel) -> Option<R> + Sync),
+    search: impl FnOnce(&Ahead<'_, K, R>) -> T,
+) -> T
+where
+    K: Clone + Eq + Hash + Send,
+    R: Clone + Send,
+{
+    let helpers = if cores < 2 { 0 } else { cores };
+    run_with(helpers, cores.max(1), compute, &|| true, search)
+}
+
+fn run_with<K, R, T>(
+    helpers: usize,
+    slots: usize,
+    compute: &(dyn Fn(&K, &Cancel) -> Option<R> + Sync),
+    idle: &(dyn Fn() -> bool + Sync),
+    search: impl FnOnce(&Ahead<'_, K, R>) -> T,
+) -> T
+where
+    K: Clone + Eq + Hash + Send,
+    R: Clone + Send,
+{
     let ahead = Ahead {
         memo: Mutex::new(Memo {
             done: HashMap::new(),
@@ -233,6 +273,7 @@ where
         compute,
         idle,
         shared: helpers > 0,
+        slots,
     };
     std::thread::scope(|scope| {
         for _ in 0..helpers {

@@ -12,12 +12,14 @@ fn search_order(methods: &[Method]) -> Vec<Method> {
     m
 }
 
-/// The margin limit of `method` on `scene`: `(limit dt, kind)`; `None` for no stable dt.
+/// The margin limit of `method` on `scene`, whose damped-theory limit is `theory`:
+/// `(limit dt, kind)`; `None` for no stable dt.
 fn margin_limit(
     scene: &Scene,
     method: Method,
+    theory: TheoryDt,
 ) -> Result<Option<(Option<f64>, MarginKind)>, StudyError> {
-    Ok(match theory_dt(scene, method) {
+    Ok(match theory {
         TheoryDt::Conditional { dt } => Some((Some(dt), MarginKind::Theory)),
         TheoryDt::Unconditional => Some((None, MarginKind::Unconditional)),
         TheoryDt::None => None,
@@ -50,71 +52,231 @@ fn command(plan: &Plan, c: &Candidate) -> String {
     line
 }
 
-/// A verification's two runs, side by side on two cores where there are two (each the same
-/// whichever thread runs it): the candidate at `dt/2` with the energy accounting on, and the
-/// confirmation of the whole scene at 1.5 × dt over the run's time.
-fn verify(
-    scene: &Scene,
-    method: Method,
-    dt: f64,
-    steps: u64,
-    time: f64,
-) -> (Measurement, Confirmation) {
+/// The confirmation of a verification: the whole scene at 1.5 × `dt` over the run's time.
+fn confirm(scene: &Scene, method: Method, dt: f64, time: f64) -> Confirmation {
     let confirm_dt = MARGIN * dt;
     let confirm_count = ((time / confirm_dt).ceil() as u64).max(stability::CONFIRM_MIN_STEPS);
-    let confirm = || {
-        stability::confirm_steps(
-            scene,
-            method,
-            confirm_dt,
-            confirm_count,
-            stability::energy_scale(scene),
-        )
-    };
-    let half = || observe::measure_accounted(scene, method, dt / 2.0, 2 * steps);
-    if crate::physics::pool::Pool::global().threads() < 2 {
-        return (half(), confirm());
-    }
-    // Two runs beside each other, each on its own thread alone (the same bits): a pool worker
-    // woken for one run's passes would take time from the other.
-    use crate::physics::pool::alone;
-    std::thread::scope(|scope| {
-        let confirmation = scope.spawn(|| alone(confirm));
-        let run = alone(half);
-        let confirmation = confirmation
-            .join()
-            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        (run, confirmation)
-    })
+    stability::confirm_steps(
+        scene,
+        method,
+        confirm_dt,
+        confirm_count,
+        stability::energy_scale(scene),
+    )
 }
 
-/// A run of the search: (model index, method, steps); its `dt` is `T / steps`.
-type RunKey = (usize, Method, u64);
+/// A computation of the search, a deterministic function of its key: a run of a model by a
+/// method for `steps` steps of `T / steps` (with the energy accounting on or off: the same
+/// motion), or a verification's confirmation of the candidate of `steps` steps.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+enum Job {
+    Run {
+        model: usize,
+        method: Method,
+        steps: u64,
+        accounted: bool,
+    },
+    Confirm {
+        model: usize,
+        method: Method,
+        steps: u64,
+    },
+}
+
+/// What a [`Job`] gives.
+#[derive(Clone, Debug)]
+enum Outcome {
+    Run(Measurement),
+    Confirm(Confirmation),
+}
+
+/// The search's run at halving `k` of its method: from the first halving on with the energy
+/// accounting on, so that the run after an accepted one is also the verification's check at
+/// `dt/2` ([`Verification`]), computed ahead while the accepted one runs.
+fn run_job(model: usize, method: Method, steps: u64, k: u32) -> Job {
+    Job::Run {
+        model,
+        method,
+        steps,
+        accounted: k >= 1,
+    }
+}
+
+/// The two computations that verify the candidate of `steps` steps: its run at `dt/2` (energy
+/// accounting on) and the confirmation at 1.5 × dt.
+fn verification_jobs(model: usize, method: Method, steps: u64) -> [Job; 2] {
+    [
+        Job::Run {
+            model,
+            method,
+            steps: 2 * steps,
+            accounted: true,
+        },
+        Job::Confirm {
+            model,
+            method,
+            steps,
+        },
+    ]
+}
+
+/// The measurement a [`Job::Run`] gives.
+fn measured(runs: &ahead::Ahead<'_, Job, Outcome>, job: &Job) -> Measurement {
+    match runs.get(job) {
+        Outcome::Run(m) => m,
+        Outcome::Confirm(_) => unreachable!("a run's job gives a measurement"),
+    }
+}
 
 /// Runs the plan (module docs). `progress` is called before every run.
 ///
-/// The search is sequential (each run decides the next), but its next run is usually the next
-/// halving of `dt`: with more than one thread, helpers compute the hinted runs ahead
-/// ([`super::super::ahead`]); the search takes the same decisions and reports the same numbers.
+/// The search is sequential (each run decides the next), but its runs are deterministic
+/// functions of their keys and mostly predictable: with more than one thread, helpers compute
+/// the runs it hints ([`super::super::ahead`]) — the next halving unless its cost would skip it,
+/// the verification of the cheapest accepted candidate, then the first runs of the methods and
+/// models still ahead — at most one computation per core; the search takes the same decisions
+/// and reports the same numbers.
 ///
 /// # Errors
 /// A confirmed stability study that fails (for methods the theory does not cover).
 pub fn advise(plan: &Plan, progress: &mut dyn FnMut(&Stage)) -> Result<AdviseReport, StudyError> {
-    let compute = |&(model, method, steps): &RunKey, cancel: &ahead::Cancel| {
-        let scene = &plan.models[model].scene;
-        observe::measure_unless(scene, method, plan.time / steps as f64, steps, cancel)
+    let compute = |job: &Job, cancel: &ahead::Cancel| match *job {
+        Job::Run {
+            model,
+            method,
+            steps,
+            accounted,
+        } => {
+            let scene = &plan.models[model].scene;
+            let dt = plan.time / steps as f64;
+            observe::measure_with_unless(scene, method, dt, steps, accounted, cancel)
+                .map(Outcome::Run)
+        }
+        Job::Confirm {
+            model,
+            method,
+            steps,
+        } => {
+            let scene = &plan.models[model].scene;
+            let dt = plan.time / steps as f64;
+            Some(Outcome::Confirm(confirm(scene, method, dt, plan.time)))
+        }
     };
     let threads = crate::physics::pool::Pool::global().threads();
-    let helpers = if threads < 2 { 0 } else { threads };
-    ahead::with_helpers(helpers, &compute, |runs| search(plan, progress, runs))
+    ahead::with_cores(threads, &compute, |runs| search(plan, progress, runs))
+}
+
+/// What the search expects to run next, for its hints: each model's damped-theory limits
+/// (one spectrum per model, computed on first use) and the first runs of every method.
+struct Outlook<'p> {
+    plan: &'p Plan,
+    /// The methods in search order.
+    order: Vec<Method>,
+    /// Each model's [`TheoryDt`] per method of `order`.
+    theory: Vec<std::cell::OnceCell<Vec<TheoryDt>>>,
+}
+
+/// Halvings hinted ahead of a method the search has not reached: a model's first method (which
+/// judges whether the model is too coarse for the rest), the other methods of the model being
+/// searched, and those of the reference model (the finest, never judged too coarse, whose runs
+/// are the longest: the ones worth starting early).
+const AHEAD_FIRST: u32 = 2;
+const AHEAD_OTHERS: u32 = 3;
+const AHEAD_REFERENCE: u32 = 3;
+
+impl<'p> Outlook<'p> {
+    fn new(plan: &'p Plan) -> Outlook<'p> {
+        Outlook {
+            plan,
+            order: search_order(&plan.options.methods),
+            theory: plan
+                .models
+                .iter()
+                .map(|_| std::cell::OnceCell::new())
+                .collect(),
+        }
+    }
+
+    fn theory(&self, model: usize, j: usize) -> TheoryDt {
+        self.theory[model].get_or_init(|| {
+            super::super::resolution::theory_dts(&self.plan.models[model].scene, &self.order)
+        })[j]
+    }
+
+    /// The predicted cost of a run (what the search predicts before running).
+    fn cost(&self, model: usize, method: Method, steps: u64) -> f64 {
+        steps as f64 * budget::updates_per_step(&self.plan.models[model].scene, Some(method))
+    }
+
+    /// The steps of the first run of the `j`-th method on `model`, when the theory gives its
+    /// limit (a method it does not cover needs the confirmed study: not guessed ahead).
+    fn first_steps(&self, model: usize, j: usize) -> Option<u64> {
+        let time = self.plan.time;
+        let dt_max = match self.theory(model, j) {
+            TheoryDt::Conditional { dt } => (dt / MARGIN).min(time),
+            TheoryDt::Unconditional => time / observe::SAMPLES as f64,
+            TheoryDt::None | TheoryDt::NotCovered => return None,
+        };
+        Some(observe::steps_for(time, dt_max))
+    }
+
+    /// The first runs of the methods after the `j`-th on `model` (every one when `from` is
+    /// `None`), each below `bound` in cost: of a model not yet reached only its first method's,
+    /// unless it is the reference model. Likeliest first: every method's first run in search
+    /// order, then every second run, and so on (a deeper halving is needed only when the ones
+    /// before it fail).
+    fn after(&self, from: Option<(usize, usize)>, bound: f64) -> Vec<Job> {
+        // (model, method, first steps, halvings to hint)
+        let mut ahead = Vec::new();
+        let (m0, j0) = from.map_or((0, 0), |(m, j)| (m, j + 1));
+        for model in m0..self.plan.models.len() {
+            let j_start = if model == m0 { j0 } else { 0 };
+            for j in j_start..self.order.len() {
+                let method = self.order[j];
+                let depth = if model == self.plan.reference {
+                    if method == Method::Rk4 {
+                        continue; // the reference chain's runs
+                    }
+                    AHEAD_REFERENCE
+                } else if j == 0 {
+                    AHEAD_FIRST
+                } else if from.is_some() && model == m0 {
+                    AHEAD_OTHERS
+                } else {
+                    break;
+                };
+                if let Some(first) = self.first_steps(model, j) {
+                    ahead.push((model, method, first, depth));
+                }
+            }
+        }
+        let mut jobs = Vec::new();
+        for k in 0..AHEAD_FIRST.max(AHEAD_OTHERS).max(AHEAD_REFERENCE) {
+            for &(model, method, first, depth) in &ahead {
+                let steps = first << k;
+                // A run costlier than the bound is skipped, and so is every later halving.
+                if k < depth && (0..=k).all(|i| self.cost(model, method, first << i) < bound) {
+                    jobs.push(run_job(model, method, steps, k));
+                }
+            }
+        }
+        jobs
+    }
 }
 
 /// [`advise`] with its runs from `runs`.
 fn search(
     plan: &Plan,
     progress: &mut dyn FnMut(&Stage),
-    runs: &ahead::Ahead<'_, RunKey, Measurement>,
+    runs: &ahead::Ahead<'_, Job, Outcome>,
 ) -> Result<AdviseReport, StudyError> {
+    let outlook = Outlook::new(plan);
+    let chain_job = |steps: u64| Job::Run {
+        model: plan.reference,
+        method: Method::Rk4,
+        steps,
+        accounted: false,
+    };
     let start = Instant::now();
     let time = plan.time;
     let x = plan.options.tolerance;
@@ -128,12 +290,23 @@ fn search(
         let steps = plan.reference_steps << k;
         let dt = time / steps as f64;
         progress(&Stage::Reference(dt));
-        runs.hint(if k < REFERENCE_HALVINGS {
-            vec![(plan.reference, Method::Rk4, steps << 1)]
-        } else {
-            Vec::new()
-        });
-        let run = runs.get(&(plan.reference, Method::Rk4, steps));
+        // Hints: this run and the next, then (while the chain's runs keep a core busy) the
+        // search's first runs; the first hint goes out before the spectra they need.
+        let mut hints = vec![chain_job(steps)];
+        if k < REFERENCE_HALVINGS {
+            hints.push(chain_job(steps << 1));
+        }
+        if k == 0 {
+            runs.hint(hints.clone());
+        }
+        let chain_bound = outlook.cost(
+            plan.reference,
+            Method::Rk4,
+            plan.reference_steps << REFERENCE_HALVINGS,
+        );
+        hints.extend(outlook.after(None, chain_bound));
+        runs.hint(hints);
+        let run = measured(runs, &chain_job(steps));
         debug_assert_eq!(run.dt, dt);
         let change = chain_runs
             .last()
@@ -177,6 +350,8 @@ fn search(
     let mut left_out = Vec::new();
     // The accepted runs' snapshots, by candidate index, for the verification's comparison.
     let mut accepted_runs: Vec<(usize, Vec<observe::Observation>)> = Vec::new();
+    // The verification of the cheapest accepted candidate so far: `(cost, particles, jobs)`.
+    let mut to_verify: Option<(f64, usize, [Job; 2])> = None;
     if !plan.options.methods.contains(&Method::Xpbd) {
         left_out.push((
             Method::Xpbd,
@@ -201,7 +376,7 @@ fn search(
     for (index, model) in plan.models.iter().enumerate() {
         let is_reference = index == plan.reference;
         let mut too_coarse = false;
-        for method in search_order(&plan.options.methods) {
+        for (j, &method) in outlook.order.iter().enumerate() {
             let base = Candidate {
                 model: index,
                 n: model.n,
@@ -224,7 +399,9 @@ fn search(
                 // The model was judged with a cheaper method: nothing to run.
                 continue;
             }
-            let Some((limit, margin_kind)) = margin_limit(&model.scene, method)? else {
+            let Some((limit, margin_kind)) =
+                margin_limit(&model.scene, method, outlook.theory(index, j))?
+            else {
                 candidates.push(base);
                 continue;
             };
@@ -276,9 +453,23 @@ fn search(
                             method,
                             dt,
                         });
-                        let next = (k < MAX_HALVINGS).then_some((index, method, steps << 1));
-                        runs.hint(next.into_iter().collect());
-                        let r = runs.get(&(index, method, steps));
+                        // Hints: this run, the next halving unless its predicted cost would
+                        // skip it, the cheapest accepted candidate's verification, then the
+                        // first runs of the methods and models ahead.
+                        let bound = best.min(reference_run.cost);
+                        let this = run_job(index, method, steps, k);
+                        let mut hints = vec![this.clone()];
+                        let nominal = outlook.cost(index, method, steps);
+                        if k < MAX_HALVINGS && 2.0 * nominal < bound && work + 3.0 * nominal <= cap
+                        {
+                            hints.push(run_job(index, method, steps << 1, k + 1));
+                        }
+                        if let Some((_, _, jobs)) = &to_verify {
+                            hints.extend(jobs.iter().cloned());
+                        }
+                        hints.extend(outlook.after(Some((index, j)), bound));
+                        runs.hint(hints);
+                        let r = measured(runs, &this);
                         work += r.cost;
                         r
                     }
@@ -318,6 +509,14 @@ fn search(
                 candidates.push(c);
                 if meets {
                     best = best.min(run.cost);
+                    let particles = model.scene.particle_count();
+                    if to_verify
+                        .as_ref()
+                        .is_none_or(|(cost, p, _)| (run.cost, particles) < (*cost, *p))
+                    {
+                        to_verify =
+                            Some((run.cost, particles, verification_jobs(index, method, steps)));
+                    }
                     accepted_runs.push((candidates.len() - 1, run.snapshots));
                     break;
                 }
@@ -371,9 +570,16 @@ fn search(
     let mut recommended = None;
     for &i in accepted_order.iter().take(MAX_VERIFICATIONS) {
         let c = &candidates[i];
-        let model = &plan.models[c.model];
         progress(&Stage::Verify(c.method, c.dt));
-        let (run, confirmation) = verify(&model.scene, c.method, c.dt, c.steps, time);
+        // Its two runs side by side where there are two cores (the run at dt/2 usually
+        // computed already, ahead of the search's end).
+        let jobs = verification_jobs(c.model, c.method, c.steps);
+        runs.hint(jobs.to_vec());
+        let [half, check] = jobs;
+        let run = measured(runs, &half);
+        let Outcome::Confirm(confirmation) = runs.get(&check) else {
+            unreachable!("a confirmation's job gives a confirmation")
+        };
         let energy_residual = run.energy_residual.unwrap_or(f64::NAN);
         let error = observe::history_difference(&run.snapshots, &reference_run.snapshots, time);
         let error_at_t = run.difference(&reference_obs, time);
