@@ -76,6 +76,7 @@ use crate::budget::{self, Limits};
 use crate::physics::Method;
 use crate::scene::{self, Scene};
 
+mod outlook;
 mod search;
 pub use search::advise;
 

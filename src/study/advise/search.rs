@@ -1,10 +1,11 @@
 //! The search: candidates in order of cost, the reference run, the verifications and the report.
 
+use super::outlook::{Job, Outcome, Outlook, measured, verification_jobs};
 use super::*;
 use crate::study::ahead;
 
 /// Methods by cost per step, cheapest first (ties in teaching order).
-fn search_order(methods: &[Method]) -> Vec<Method> {
+pub(super) fn search_order(methods: &[Method]) -> Vec<Method> {
     let mut m = methods.to_vec();
     let cost =
         |m: &Method| budget::evaluations_per_step(*m, &crate::physics::MethodParams::default());
@@ -65,67 +66,60 @@ fn confirm(scene: &Scene, method: Method, dt: f64, time: f64) -> Confirmation {
     )
 }
 
-/// A computation of the search, a deterministic function of its key: a run of a model by a
-/// method for `steps` steps of `T / steps` (with the energy accounting on or off: the same
-/// motion), or a verification's confirmation of the candidate of `steps` steps.
-#[derive(Clone, Debug, PartialEq, Eq, Hash)]
-enum Job {
-    Run {
-        model: usize,
-        method: Method,
-        steps: u64,
-        accounted: bool,
-    },
-    Confirm {
-        model: usize,
-        method: Method,
-        steps: u64,
-    },
+/// What the search compares a run with: the reference's snapshots, its own error, `X` and `T`.
+pub(super) struct Against<'r> {
+    snapshots: &'r [observe::Observation],
+    e_ref: &'r Difference,
+    x: f64,
+    time: f64,
 }
 
-/// What a [`Job`] gives.
-#[derive(Clone, Debug)]
-enum Outcome {
-    Run(Measurement),
-    Confirm(Confirmation),
-}
-
-/// The search's run at halving `k` of its method: from the first halving on with the energy
-/// accounting on, so that the run after an accepted one is also the verification's check at
-/// `dt/2` ([`Verification`]), computed ahead while the accepted one runs.
-fn run_job(model: usize, method: Method, steps: u64, k: u32) -> Job {
-    Job::Run {
-        model,
-        method,
-        steps,
-        accounted: k >= 1,
+/// The search's verdict on a run of a model by a method (module docs), given the run at the
+/// halving before (`previous`) and the cost `bound` (the cheapest accepted, or the reference's):
+/// `Diverged` or `TooInaccurate` (halve again), `Meets`, `ModelTooCoarse` (skip the model) or
+/// `ProjectedCostlier` (stop the method); with the error over the run when it did not diverge.
+pub(super) fn judge(
+    run: &Measurement,
+    previous: Option<&Measurement>,
+    against: &Against<'_>,
+    is_reference: bool,
+    bound: f64,
+) -> (Verdict, Option<Difference>) {
+    let Against {
+        snapshots,
+        e_ref,
+        x,
+        time,
+    } = *against;
+    if run.observation.is_none() {
+        return (Verdict::Diverged, None);
     }
-}
-
-/// The two computations that verify the candidate of `steps` steps: its run at `dt/2` (energy
-/// accounting on) and the confirmation at 1.5 × dt.
-fn verification_jobs(model: usize, method: Method, steps: u64) -> [Job; 2] {
-    [
-        Job::Run {
-            model,
-            method,
-            steps: 2 * steps,
-            accounted: true,
-        },
-        Job::Confirm {
-            model,
-            method,
-            steps,
-        },
-    ]
-}
-
-/// The measurement a [`Job::Run`] gives.
-fn measured(runs: &ahead::Ahead<'_, Job, Outcome>, job: &Job) -> Measurement {
-    match runs.get(job) {
-        Outcome::Run(m) => m,
-        Outcome::Confirm(_) => unreachable!("a run's job gives a measurement"),
+    // The error over the run: the observable at each of the 20 sample instants.
+    let error = observe::history_difference(&run.snapshots, snapshots, time);
+    let previous = previous.filter(|p| p.observation.is_some());
+    if accepted(&error, e_ref, x) {
+        return (Verdict::Meets, Some(error));
     }
+    let coarse = !is_reference
+        && previous.is_some_and(|p| {
+            let step = observe::history_difference(&run.snapshots, &p.snapshots, time);
+            error.metres - 2.0 * step.metres > x || error.seconds - 2.0 * step.seconds > x
+        });
+    if coarse {
+        return (Verdict::ModelTooCoarse, Some(error));
+    }
+    // The error's trend: halvings still needed, and what they would cost.
+    if let Some(p) = previous {
+        let before = observe::history_difference(&p.snapshots, snapshots, time).worst();
+        let now = error.worst();
+        if now > 0.0 && before / now >= PROJECTION_RATIO {
+            let halvings = ((now / x).ln() / (before / now).ln()).max(0.0);
+            if run.cost * 2f64.powf(halvings) >= bound {
+                return (Verdict::ProjectedCostlier, Some(error));
+            }
+        }
+    }
+    (Verdict::TooInaccurate, Some(error))
 }
 
 /// Runs the plan (module docs). `progress` is called before every run.
@@ -163,114 +157,19 @@ pub fn advise(plan: &Plan, progress: &mut dyn FnMut(&Stage)) -> Result<AdviseRep
         }
     };
     let threads = crate::physics::pool::Pool::global().threads();
-    ahead::with_cores(threads, &compute, |runs| search(plan, progress, runs))
+    ahead::with_cores(threads, &compute, |runs| {
+        search(plan, progress, runs, threads >= 2)
+    })
 }
 
-/// What the search expects to run next, for its hints: each model's damped-theory limits
-/// (one spectrum per model, computed on first use) and the first runs of every method.
-struct Outlook<'p> {
-    plan: &'p Plan,
-    /// The methods in search order.
-    order: Vec<Method>,
-    /// Each model's [`TheoryDt`] per method of `order`.
-    theory: Vec<std::cell::OnceCell<Vec<TheoryDt>>>,
-}
-
-/// Halvings hinted ahead of a method the search has not reached: a model's first method (which
-/// judges whether the model is too coarse for the rest), the other methods of the model being
-/// searched, and those of the reference model (the finest, never judged too coarse, whose runs
-/// are the longest: the ones worth starting early).
-const AHEAD_FIRST: u32 = 2;
-const AHEAD_OTHERS: u32 = 3;
-const AHEAD_REFERENCE: u32 = 3;
-
-impl<'p> Outlook<'p> {
-    fn new(plan: &'p Plan) -> Outlook<'p> {
-        Outlook {
-            plan,
-            order: search_order(&plan.options.methods),
-            theory: plan
-                .models
-                .iter()
-                .map(|_| std::cell::OnceCell::new())
-                .collect(),
-        }
-    }
-
-    fn theory(&self, model: usize, j: usize) -> TheoryDt {
-        self.theory[model].get_or_init(|| {
-            super::super::resolution::theory_dts(&self.plan.models[model].scene, &self.order)
-        })[j]
-    }
-
-    /// The predicted cost of a run (what the search predicts before running).
-    fn cost(&self, model: usize, method: Method, steps: u64) -> f64 {
-        steps as f64 * budget::updates_per_step(&self.plan.models[model].scene, Some(method))
-    }
-
-    /// The steps of the first run of the `j`-th method on `model`, when the theory gives its
-    /// limit (a method it does not cover needs the confirmed study: not guessed ahead).
-    fn first_steps(&self, model: usize, j: usize) -> Option<u64> {
-        let time = self.plan.time;
-        let dt_max = match self.theory(model, j) {
-            TheoryDt::Conditional { dt } => (dt / MARGIN).min(time),
-            TheoryDt::Unconditional => time / observe::SAMPLES as f64,
-            TheoryDt::None | TheoryDt::NotCovered => return None,
-        };
-        Some(observe::steps_for(time, dt_max))
-    }
-
-    /// The first runs of the methods after the `j`-th on `model` (every one when `from` is
-    /// `None`), each below `bound` in cost: of a model not yet reached only its first method's,
-    /// unless it is the reference model. Likeliest first: every method's first run in search
-    /// order, then every second run, and so on (a deeper halving is needed only when the ones
-    /// before it fail).
-    fn after(&self, from: Option<(usize, usize)>, bound: f64) -> Vec<Job> {
-        // (model, method, first steps, halvings to hint)
-        let mut ahead = Vec::new();
-        let (m0, j0) = from.map_or((0, 0), |(m, j)| (m, j + 1));
-        for model in m0..self.plan.models.len() {
-            let j_start = if model == m0 { j0 } else { 0 };
-            for j in j_start..self.order.len() {
-                let method = self.order[j];
-                let depth = if model == self.plan.reference {
-                    if method == Method::Rk4 {
-                        continue; // the reference chain's runs
-                    }
-                    AHEAD_REFERENCE
-                } else if j == 0 {
-                    AHEAD_FIRST
-                } else if from.is_some() && model == m0 {
-                    AHEAD_OTHERS
-                } else {
-                    break;
-                };
-                if let Some(first) = self.first_steps(model, j) {
-                    ahead.push((model, method, first, depth));
-                }
-            }
-        }
-        let mut jobs = Vec::new();
-        for k in 0..AHEAD_FIRST.max(AHEAD_OTHERS).max(AHEAD_REFERENCE) {
-            for &(model, method, first, depth) in &ahead {
-                let steps = first << k;
-                // A run costlier than the bound is skipped, and so is every later halving.
-                if k < depth && (0..=k).all(|i| self.cost(model, method, first << i) < bound) {
-                    jobs.push(run_job(model, method, steps, k));
-                }
-            }
-        }
-        jobs
-    }
-}
-
-/// [`advise`] with its runs from `runs`.
+/// [`advise`] with its runs from `runs` (`helped`: computed ahead by helpers).
 fn search(
     plan: &Plan,
     progress: &mut dyn FnMut(&Stage),
     runs: &ahead::Ahead<'_, Job, Outcome>,
+    helped: bool,
 ) -> Result<AdviseReport, StudyError> {
-    let outlook = Outlook::new(plan);
+    let outlook = Outlook::new(plan, helped);
     let chain_job = |steps: u64| Job::Run {
         model: plan.reference,
         method: Method::Rk4,
@@ -304,7 +203,7 @@ fn search(
             Method::Rk4,
             plan.reference_steps << REFERENCE_HALVINGS,
         );
-        hints.extend(outlook.after(None, chain_bound));
+        hints.extend(outlook.after(None, chain_bound, None));
         runs.hint(hints);
         let run = measured(runs, &chain_job(steps));
         debug_assert_eq!(run.dt, dt);
@@ -372,6 +271,12 @@ fn search(
             left_out,
             start,
         ));
+    };
+    let against = Against {
+        snapshots: &reference_run.snapshots,
+        e_ref: &e_ref,
+        x,
+        time,
     };
     for (index, model) in plan.models.iter().enumerate() {
         let is_reference = index == plan.reference;
@@ -457,17 +362,21 @@ fn search(
                         // skip it, the cheapest accepted candidate's verification, then the
                         // first runs of the methods and models ahead.
                         let bound = best.min(reference_run.cost);
-                        let this = run_job(index, method, steps, k);
+                        let this = outlook.run_job(index, method, steps, k);
                         let mut hints = vec![this.clone()];
                         let nominal = outlook.cost(index, method, steps);
                         if k < MAX_HALVINGS && 2.0 * nominal < bound && work + 3.0 * nominal <= cap
                         {
-                            hints.push(run_job(index, method, steps << 1, k + 1));
+                            hints.push(outlook.run_job(index, method, steps << 1, k + 1));
                         }
                         if let Some((_, _, jobs)) = &to_verify {
                             hints.extend(jobs.iter().cloned());
                         }
-                        hints.extend(outlook.after(Some((index, j)), bound));
+                        hints.extend(outlook.after(
+                            Some((index, j)),
+                            bound,
+                            Some((runs, &against)),
+                        ));
                         runs.hint(hints);
                         let r = measured(runs, &this);
                         work += r.cost;
@@ -483,73 +392,36 @@ fn search(
                     previous = Some(run);
                     continue;
                 };
-                // The error over the run: the observable at each of the 20 sample instants.
-                let error =
-                    observe::history_difference(&run.snapshots, &reference_run.snapshots, time);
-                let meets = accepted(&error, &e_ref, x);
-                let coarse = !is_reference
-                    && previous
-                        .as_ref()
-                        .filter(|p| p.observation.is_some())
-                        .is_some_and(|p| {
-                            let step =
-                                observe::history_difference(&run.snapshots, &p.snapshots, time);
-                            error.metres - 2.0 * step.metres > x
-                                || error.seconds - 2.0 * step.seconds > x
-                        });
-                c.error_at_t = Some(obs.difference(&reference_obs, time));
-                c.error = Some(error);
-                c.verdict = if meets {
-                    Verdict::Meets
-                } else if coarse {
-                    Verdict::ModelTooCoarse
-                } else {
-                    Verdict::TooInaccurate
-                };
-                candidates.push(c);
-                if meets {
-                    best = best.min(run.cost);
-                    let particles = model.scene.particle_count();
-                    if to_verify
-                        .as_ref()
-                        .is_none_or(|(cost, p, _)| (run.cost, particles) < (*cost, *p))
-                    {
-                        to_verify =
-                            Some((run.cost, particles, verification_jobs(index, method, steps)));
-                    }
-                    accepted_runs.push((candidates.len() - 1, run.snapshots));
-                    break;
-                }
-                if coarse {
-                    too_coarse = true;
-                    break;
-                }
-                // The error's trend: halvings still needed, and what they would cost.
                 let bound = best.min(reference_run.cost);
-                let trend = previous
-                    .as_ref()
-                    .filter(|p| p.observation.is_some())
-                    .map(|p| {
-                        observe::history_difference(&p.snapshots, &reference_run.snapshots, time)
-                            .worst()
-                    })
-                    .zip(
-                        candidates
-                            .last()
-                            .and_then(|c| c.error.as_ref())
-                            .map(Difference::worst),
-                    );
-                if let Some((before, now)) = trend
-                    && now > 0.0
-                    && before / now >= PROJECTION_RATIO
-                {
-                    let halvings = ((now / x).ln() / (before / now).ln()).max(0.0);
-                    if run.cost * 2f64.powf(halvings) >= bound
-                        && let Some(last) = candidates.last_mut()
-                    {
-                        last.verdict = Verdict::ProjectedCostlier;
+                let (verdict, error) =
+                    judge(&run, previous.as_ref(), &against, is_reference, bound);
+                c.error_at_t = Some(obs.difference(&reference_obs, time));
+                c.error = error;
+                c.verdict = verdict;
+                candidates.push(c);
+                match verdict {
+                    Verdict::Meets => {
+                        best = best.min(run.cost);
+                        let particles = model.scene.particle_count();
+                        if to_verify
+                            .as_ref()
+                            .is_none_or(|(cost, p, _)| (run.cost, particles) < (*cost, *p))
+                        {
+                            to_verify = Some((
+                                run.cost,
+                                particles,
+                                verification_jobs(index, method, steps),
+                            ));
+                        }
+                        accepted_runs.push((candidates.len() - 1, run.snapshots));
                         break;
                     }
+                    Verdict::ModelTooCoarse => {
+                        too_coarse = true;
+                        break;
+                    }
+                    Verdict::ProjectedCostlier => break,
+                    _ => {}
                 }
                 previous = Some(run);
             }
