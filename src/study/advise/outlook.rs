@@ -109,7 +109,16 @@ impl<'p> Outlook<'p> {
 
     pub(super) fn theory(&self, model: usize, j: usize) -> TheoryDt {
         self.theory[model].get_or_init(|| {
-            super::super::resolution::theory_dts(&self.plan.models[model].scene, &self.order)
+            let plan = self.plan;
+            if model == plan.reference {
+                // Computed once for the plan.
+                let of = |m: Method| plan.reference_theory.iter().find(|(n, _)| *n == m);
+                if let Some(known) = (self.order.iter().map(|&m| of(m).map(|&(_, t)| t))).collect()
+                {
+                    return known;
+                }
+            }
+            super::super::resolution::theory_dts(&plan.models[model].scene, &self.order)
         })[j]
     }
 

@@ -189,12 +189,13 @@ fn search(
         let steps = plan.reference_steps << k;
         let dt = time / steps as f64;
         progress(&Stage::Reference(dt));
-        // Hints: this run and the next, then (while the chain's runs keep a core busy) the
-        // search's first runs; the first hint goes out before the spectra they need.
-        let mut hints = vec![chain_job(steps)];
-        if k < REFERENCE_HALVINGS {
-            hints.push(chain_job(steps << 1));
-        }
+        // Hints: this run and the next (at the start also the third, so that both cores have
+        // a chain run while the search computes the spectra the other hints need), then the
+        // search's first runs.
+        let ahead = if k == 0 { 2 } else { 1 };
+        let mut hints: Vec<Job> = (0..=ahead.min(REFERENCE_HALVINGS - k))
+            .map(|i| chain_job(steps << i))
+            .collect();
         if k == 0 {
             runs.hint(hints.clone());
         }
