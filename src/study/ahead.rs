@@ -329,4 +329,52 @@ mod tests {
             assert!(computed.load(Ordering::SeqCst) >= 12);
         }
     }
+
+    /// While the search computes a run itself, with `with_cores(2)` only one helper computes
+    /// beside it, however many runs are hinted; the answers are those of the search alone.
+    #[test]
+    fn with_cores_keeps_to_its_cores() {
+        use std::time::{Duration, Instant};
+        let busy = AtomicUsize::new(0);
+        let most = AtomicUsize::new(0);
+        let spin = |d: Duration, mut each: Box<dyn FnMut(Duration) + '_>| {
+            let start = Instant::now();
+            while start.elapsed() < d {
+                each(start.elapsed());
+                std::hint::spin_loop();
+            }
+        };
+        let compute = |k: &u64, _: &Cancel| {
+            busy.fetch_add(1, Ordering::SeqCst);
+            if *k == 0 {
+                // The search's own run: after its first 40 ms (the guesses helpers may have
+                // started before it began are over), count the computations beside it.
+                spin(
+                    Duration::from_millis(120),
+                    Box::new(|t| {
+                        if t > Duration::from_millis(40) {
+                            most.fetch_max(busy.load(Ordering::SeqCst), Ordering::SeqCst);
+                        }
+                    }),
+                );
+            } else {
+                spin(Duration::from_millis(1), Box::new(|_| {}));
+            }
+            busy.fetch_sub(1, Ordering::SeqCst);
+            Some(k * k)
+        };
+        let search = |ahead: &Ahead<'_, u64, u64>| {
+            // Many short runs hinted, then a long one not hinted: the search computes it.
+            ahead.hint((1..1000).collect());
+            let mut out = vec![ahead.get(&0)];
+            out.extend((1..5).map(|k| ahead.get(&k)));
+            out
+        };
+        let alone = with_cores(1, &compute, search);
+        assert_eq!(alone, vec![0, 1, 4, 9, 16]);
+        most.store(0, Ordering::SeqCst);
+        assert_eq!(with_cores(2, &compute, search), alone);
+        let most = most.load(Ordering::SeqCst);
+        assert!(most <= 2, "{most} computations at once on two cores");
+    }
 }
