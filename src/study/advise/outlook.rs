@@ -70,10 +70,11 @@ pub(super) struct Outlook<'p> {
     ahead: bool,
 }
 
-/// Halvings hinted ahead of a method the search has not reached: a model's first method (which
-/// judges whether the model is too coarse for the rest), the other methods of the model being
-/// searched, and those of the reference model (the finest, never judged too coarse, whose runs
-/// are the longest: the ones worth starting early).
+/// Halvings hinted ahead of a method the search has not reached while the reference chain runs
+/// (before its end nothing can be judged): a model's first method (which judges whether the
+/// model is too coarse for the rest), the other methods of the model being searched, and those
+/// of the reference model (the finest, never judged too coarse, whose runs are the longest: the
+/// ones worth starting early).
 const AHEAD_FIRST: u32 = 2;
 const AHEAD_OTHERS: u32 = 3;
 const AHEAD_REFERENCE: u32 = 3;
