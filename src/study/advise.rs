@@ -70,12 +70,13 @@ use serde::Serialize;
 
 use super::StudyError;
 use super::observe::{self, Difference, Measurement, Observable};
-use super::resolution::{Kinds, Refinement, TheoryDt, theory_dt};
+use super::resolution::{Kinds, Refinement, TheoryDt, theory_dts};
 use super::stability::{self, Confirmation};
 use crate::budget::{self, Limits};
 use crate::physics::Method;
 use crate::scene::{self, Scene};
 
+mod outlook;
 mod search;
 pub use search::advise;
 
@@ -167,6 +168,9 @@ pub struct Plan {
     pub options: AdviseOptions,
     /// The steps of the reference chain's first run.
     pub reference_steps: u64,
+    /// The damped theory's limit of each considered method and of RK4 on the reference model
+    /// (one spectrum, computed once for the plan and the search).
+    pub reference_theory: Vec<(Method, TheoryDt)>,
 }
 
 /// Validates the options and builds every model within `limits`.
@@ -259,7 +263,20 @@ pub fn plan(
         .iter()
         .rposition(|m| m.kinds == Kinds::All)
         .unwrap_or(0);
-    let reference_steps = match theory_dt(&models[reference].scene, Method::Rk4) {
+    let mut theory_methods = search::search_order(&options.methods);
+    if !theory_methods.contains(&Method::Rk4) {
+        theory_methods.push(Method::Rk4);
+    }
+    let reference_theory: Vec<(Method, TheoryDt)> = theory_methods
+        .iter()
+        .copied()
+        .zip(theory_dts(&models[reference].scene, &theory_methods))
+        .collect();
+    let rk4_theory = reference_theory
+        .iter()
+        .find(|(m, _)| *m == Method::Rk4)
+        .map_or(TheoryDt::None, |&(_, t)| t);
+    let reference_steps = match rk4_theory {
         TheoryDt::Conditional { dt } => observe::steps_for(time, (dt / MARGIN).min(time)),
         TheoryDt::None => {
             return Err(StudyError::Scene(scene::SceneError::Invalid(format!(
@@ -278,6 +295,7 @@ pub fn plan(
         time,
         options: options.clone(),
         reference_steps,
+        reference_theory,
     })
 }
 

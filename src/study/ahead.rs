@@ -53,6 +53,9 @@ pub struct Ahead<'f, K, R> {
     /// Whether there are helpers: then every run steps on its own thread alone
     /// ([`crate::physics::pool::alone`]), since the search and its helpers share the cores.
     shared: bool,
+    /// Helpers start a guess only while fewer computations than this run (the search's
+    /// included): one per core, so that a long list of hints never oversubscribes the cores.
+    slots: usize,
 }
 
 impl<K: Clone + Eq + Hash + Send, R: Clone + Send> Ahead<'_, K, R> {
@@ -97,6 +100,11 @@ impl<K: Clone + Eq + Hash + Send, R: Clone + Send> Ahead<'_, K, R> {
         result
     }
 
+    /// The result for `key` when it has been computed, without computing or waiting for it.
+    pub fn peek(&self, key: &K) -> Option<R> {
+        self.lock().done.get(key).cloned()
+    }
+
     /// The runs the search will probably ask for next, most likely first; replaces the last
     /// hints and stops the guesses no longer among them.
     pub fn hint(&self, keys: Vec<K>) {
@@ -125,12 +133,12 @@ impl<K: Clone + Eq + Hash + Send, R: Clone + Send> Ahead<'_, K, R> {
                     .find(|k| !memo.done.contains_key(*k) && !memo.running.contains_key(*k))
                     .cloned();
                 if let Some(key) = next {
-                    if (self.idle)() {
+                    if memo.running.len() < self.slots && (self.idle)() {
                         let cancel = Arc::new(Cancel::new(false));
                         memo.running.insert(key.clone(), Arc::clone(&cancel));
                         break (key, cancel);
                     }
-                    // No core free yet: look again soon.
+                    // No core free yet: look again soon (a computation that ends notifies).
                     memo = self
                         .changed
                         .wait_timeout(memo, IDLE_POLL)
@@ -221,6 +229,38 @@ where
     K: Clone + Eq + Hash + Send,
     R: Clone + Send,
 {
+    run_with(helpers, usize::MAX, compute, idle, search)
+}
+
+/// [`with_helpers`] for a search that hints many runs at once (advise: the next halving, the
+/// verification, the next methods' and models' first runs): `cores` helpers, but at most `cores`
+/// computations at a time, the search's own included, each helper taking the first hint nobody
+/// has started, so the cores stay busy with the likeliest runs and are never oversubscribed.
+/// With `cores < 2` the search computes every run itself.
+pub fn with_cores<K, R, T>(
+    cores: usize,
+    compute: &(dyn Fn(&K, &Cancel) -> Option<R> + Sync),
+    search: impl FnOnce(&Ahead<'_, K, R>) -> T,
+) -> T
+where
+    K: Clone + Eq + Hash + Send,
+    R: Clone + Send,
+{
+    let helpers = if cores < 2 { 0 } else { cores };
+    run_with(helpers, cores.max(1), compute, &|| true, search)
+}
+
+fn run_with<K, R, T>(
+    helpers: usize,
+    slots: usize,
+    compute: &(dyn Fn(&K, &Cancel) -> Option<R> + Sync),
+    idle: &(dyn Fn() -> bool + Sync),
+    search: impl FnOnce(&Ahead<'_, K, R>) -> T,
+) -> T
+where
+    K: Clone + Eq + Hash + Send,
+    R: Clone + Send,
+{
     let ahead = Ahead {
         memo: Mutex::new(Memo {
             done: HashMap::new(),
@@ -233,6 +273,7 @@ where
         compute,
         idle,
         shared: helpers > 0,
+        slots,
     };
     std::thread::scope(|scope| {
         for _ in 0..helpers {
@@ -287,5 +328,53 @@ mod tests {
             assert_eq!(results, expected, "{helpers} helpers");
             assert!(computed.load(Ordering::SeqCst) >= 12);
         }
+    }
+
+    /// While the search computes a run itself, with `with_cores(2)` only one helper computes
+    /// beside it, however many runs are hinted; the answers are those of the search alone.
+    #[test]
+    fn with_cores_keeps_to_its_cores() {
+        use std::time::{Duration, Instant};
+        let busy = AtomicUsize::new(0);
+        let most = AtomicUsize::new(0);
+        let spin = |d: Duration, mut each: Box<dyn FnMut(Duration) + '_>| {
+            let start = Instant::now();
+            while start.elapsed() < d {
+                each(start.elapsed());
+                std::hint::spin_loop();
+            }
+        };
+        let compute = |k: &u64, _: &Cancel| {
+            busy.fetch_add(1, Ordering::SeqCst);
+            if *k == 0 {
+                // The search's own run: after its first 40 ms (the guesses helpers may have
+                // started before it began are over), count the computations beside it.
+                spin(
+                    Duration::from_millis(120),
+                    Box::new(|t| {
+                        if t > Duration::from_millis(40) {
+                            most.fetch_max(busy.load(Ordering::SeqCst), Ordering::SeqCst);
+                        }
+                    }),
+                );
+            } else {
+                spin(Duration::from_millis(1), Box::new(|_| {}));
+            }
+            busy.fetch_sub(1, Ordering::SeqCst);
+            Some(k * k)
+        };
+        let search = |ahead: &Ahead<'_, u64, u64>| {
+            // Many short runs hinted, then a long one not hinted: the search computes it.
+            ahead.hint((1..1000).collect());
+            let mut out = vec![ahead.get(&0)];
+            out.extend((1..5).map(|k| ahead.get(&k)));
+            out
+        };
+        let alone = with_cores(1, &compute, search);
+        assert_eq!(alone, vec![0, 1, 4, 9, 16]);
+        most.store(0, Ordering::SeqCst);
+        assert_eq!(with_cores(2, &compute, search), alone);
+        let most = most.load(Ordering::SeqCst);
+        assert!(most <= 2, "{most} computations at once on two cores");
     }
 }

@@ -583,6 +583,21 @@ pub fn measure_unless(
     run(scene, method, dt, steps, false, Some(cancel))
 }
 
+/// [`measure_unless`] with the energy accounting on or off: the same motion either way (the
+/// accounting only adds up what leaves), so one run serves a search that compares the motion
+/// and a check that also reads the energy residual.
+#[must_use]
+pub fn measure_with_unless(
+    scene: &Scene,
+    method: Method,
+    dt: f64,
+    steps: u64,
+    accounting: bool,
+    cancel: &std::sync::atomic::AtomicBool,
+) -> Option<Measurement> {
+    run(scene, method, dt, steps, accounting, Some(cancel))
+}
+
 /// [`measure`] with the energy accounting on, as `springlab run` runs: the same motion, and
 /// the energy residual at the end.
 #[must_use]

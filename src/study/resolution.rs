@@ -92,25 +92,34 @@ pub enum TheoryDt {
 /// iteration per body, no simulation.
 #[must_use]
 pub fn theory_dt(scene: &Scene, method: Method) -> TheoryDt {
-    let mut result = TheoryDt::Unconditional;
+    theory_dts(scene, &[method])[0]
+}
+
+/// [`theory_dt`] of each of `methods`, in order, from one spectrum per body (the spectrum
+/// does not depend on the method: one power iteration instead of one per method).
+#[must_use]
+pub fn theory_dts(scene: &Scene, methods: &[Method]) -> Vec<TheoryDt> {
+    let mut results = vec![TheoryDt::Unconditional; methods.len()];
     for b in &scene.bodies {
         let omega = omega_max(&b.model, &b.state).omega;
         if !(omega > 0.0 && omega.is_finite()) {
             continue;
         }
         let spectrum = super::theory::spectrum(&b.model, &b.state, omega);
-        let limit = super::theory::limit(method, &b.params, &spectrum);
-        result = match (result, limit.stability, limit.dt) {
-            (TheoryDt::None, _, _) | (_, "none", _) => TheoryDt::None,
-            (TheoryDt::NotCovered, _, _) | (_, "not covered", _) => TheoryDt::NotCovered,
-            (TheoryDt::Conditional { dt: a }, "conditional", Some(b)) => {
-                TheoryDt::Conditional { dt: a.min(b) }
-            }
-            (_, "conditional", Some(b)) => TheoryDt::Conditional { dt: b },
-            (r, _, _) => r,
-        };
+        for (result, &method) in results.iter_mut().zip(methods) {
+            let limit = super::theory::limit(method, &b.params, &spectrum);
+            *result = match (*result, limit.stability, limit.dt) {
+                (TheoryDt::None, _, _) | (_, "none", _) => TheoryDt::None,
+                (TheoryDt::NotCovered, _, _) | (_, "not covered", _) => TheoryDt::NotCovered,
+                (TheoryDt::Conditional { dt: a }, "conditional", Some(b)) => {
+                    TheoryDt::Conditional { dt: a.min(b) }
+                }
+                (_, "conditional", Some(b)) => TheoryDt::Conditional { dt: b },
+                (r, _, _) => r,
+            };
+        }
     }
-    result
+    results
 }
 
 /// Options of [`resolution`].

@@ -1,10 +1,11 @@
 //! The search: candidates in order of cost, the reference run, the verifications and the report.
 
+use super::outlook::{Job, Outcome, Outlook, measured, verification_jobs};
 use super::*;
 use crate::study::ahead;
 
 /// Methods by cost per step, cheapest first (ties in teaching order).
-fn search_order(methods: &[Method]) -> Vec<Method> {
+pub(super) fn search_order(methods: &[Method]) -> Vec<Method> {
     let mut m = methods.to_vec();
     let cost =
         |m: &Method| budget::evaluations_per_step(*m, &crate::physics::MethodParams::default());
@@ -12,12 +13,14 @@ fn search_order(methods: &[Method]) -> Vec<Method> {
     m
 }
 
-/// The margin limit of `method` on `scene`: `(limit dt, kind)`; `None` for no stable dt.
+/// The margin limit of `method` on `scene`, whose damped-theory limit is `theory`:
+/// `(limit dt, kind)`; `None` for no stable dt.
 fn margin_limit(
     scene: &Scene,
     method: Method,
+    theory: TheoryDt,
 ) -> Result<Option<(Option<f64>, MarginKind)>, StudyError> {
-    Ok(match theory_dt(scene, method) {
+    Ok(match theory {
         TheoryDt::Conditional { dt } => Some((Some(dt), MarginKind::Theory)),
         TheoryDt::Unconditional => Some((None, MarginKind::Unconditional)),
         TheoryDt::None => None,
@@ -50,71 +53,129 @@ fn command(plan: &Plan, c: &Candidate) -> String {
     line
 }
 
-/// A verification's two runs, side by side on two cores where there are two (each the same
-/// whichever thread runs it): the candidate at `dt/2` with the energy accounting on, and the
-/// confirmation of the whole scene at 1.5 × dt over the run's time.
-fn verify(
-    scene: &Scene,
-    method: Method,
-    dt: f64,
-    steps: u64,
-    time: f64,
-) -> (Measurement, Confirmation) {
+/// The confirmation of a verification: the whole scene at 1.5 × `dt` over the run's time.
+fn confirm(scene: &Scene, method: Method, dt: f64, time: f64) -> Confirmation {
     let confirm_dt = MARGIN * dt;
     let confirm_count = ((time / confirm_dt).ceil() as u64).max(stability::CONFIRM_MIN_STEPS);
-    let confirm = || {
-        stability::confirm_steps(
-            scene,
-            method,
-            confirm_dt,
-            confirm_count,
-            stability::energy_scale(scene),
-        )
-    };
-    let half = || observe::measure_accounted(scene, method, dt / 2.0, 2 * steps);
-    if crate::physics::pool::Pool::global().threads() < 2 {
-        return (half(), confirm());
-    }
-    // Two runs beside each other, each on its own thread alone (the same bits): a pool worker
-    // woken for one run's passes would take time from the other.
-    use crate::physics::pool::alone;
-    std::thread::scope(|scope| {
-        let confirmation = scope.spawn(|| alone(confirm));
-        let run = alone(half);
-        let confirmation = confirmation
-            .join()
-            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        (run, confirmation)
-    })
+    stability::confirm_steps(
+        scene,
+        method,
+        confirm_dt,
+        confirm_count,
+        stability::energy_scale(scene),
+    )
 }
 
-/// A run of the search: (model index, method, steps); its `dt` is `T / steps`.
-type RunKey = (usize, Method, u64);
+/// What the search compares a run with: the reference's snapshots, its own error, `X` and `T`.
+pub(super) struct Against<'r> {
+    snapshots: &'r [observe::Observation],
+    e_ref: &'r Difference,
+    x: f64,
+    time: f64,
+}
+
+/// The search's verdict on a run of a model by a method (module docs), given the run at the
+/// halving before (`previous`) and the cost `bound` (the cheapest accepted, or the reference's):
+/// `Diverged` or `TooInaccurate` (halve again), `Meets`, `ModelTooCoarse` (skip the model) or
+/// `ProjectedCostlier` (stop the method); with the error over the run when it did not diverge.
+pub(super) fn judge(
+    run: &Measurement,
+    previous: Option<&Measurement>,
+    against: &Against<'_>,
+    is_reference: bool,
+    bound: f64,
+) -> (Verdict, Option<Difference>) {
+    let Against {
+        snapshots,
+        e_ref,
+        x,
+        time,
+    } = *against;
+    if run.observation.is_none() {
+        return (Verdict::Diverged, None);
+    }
+    // The error over the run: the observable at each of the 20 sample instants.
+    let error = observe::history_difference(&run.snapshots, snapshots, time);
+    let previous = previous.filter(|p| p.observation.is_some());
+    if accepted(&error, e_ref, x) {
+        return (Verdict::Meets, Some(error));
+    }
+    let coarse = !is_reference
+        && previous.is_some_and(|p| {
+            let step = observe::history_difference(&run.snapshots, &p.snapshots, time);
+            error.metres - 2.0 * step.metres > x || error.seconds - 2.0 * step.seconds > x
+        });
+    if coarse {
+        return (Verdict::ModelTooCoarse, Some(error));
+    }
+    // The error's trend: halvings still needed, and what they would cost.
+    if let Some(p) = previous {
+        let before = observe::history_difference(&p.snapshots, snapshots, time).worst();
+        let now = error.worst();
+        if now > 0.0 && before / now >= PROJECTION_RATIO {
+            let halvings = ((now / x).ln() / (before / now).ln()).max(0.0);
+            if run.cost * 2f64.powf(halvings) >= bound {
+                return (Verdict::ProjectedCostlier, Some(error));
+            }
+        }
+    }
+    (Verdict::TooInaccurate, Some(error))
+}
 
 /// Runs the plan (module docs). `progress` is called before every run.
 ///
-/// The search is sequential (each run decides the next), but its next run is usually the next
-/// halving of `dt`: with more than one thread, helpers compute the hinted runs ahead
-/// ([`super::super::ahead`]); the search takes the same decisions and reports the same numbers.
+/// The search is sequential (each run decides the next), but its runs are deterministic
+/// functions of their keys and mostly predictable: with more than one thread, helpers compute
+/// the runs it hints ([`super::super::ahead`]) — the next halving unless its cost would skip it,
+/// the verification of the cheapest accepted candidate, then the first runs of the methods and
+/// models still ahead — at most one computation per core; the search takes the same decisions
+/// and reports the same numbers.
 ///
 /// # Errors
 /// A confirmed stability study that fails (for methods the theory does not cover).
 pub fn advise(plan: &Plan, progress: &mut dyn FnMut(&Stage)) -> Result<AdviseReport, StudyError> {
-    let compute = |&(model, method, steps): &RunKey, cancel: &ahead::Cancel| {
-        let scene = &plan.models[model].scene;
-        observe::measure_unless(scene, method, plan.time / steps as f64, steps, cancel)
+    let compute = |job: &Job, cancel: &ahead::Cancel| match *job {
+        Job::Run {
+            model,
+            method,
+            steps,
+            accounted,
+        } => {
+            let scene = &plan.models[model].scene;
+            let dt = plan.time / steps as f64;
+            observe::measure_with_unless(scene, method, dt, steps, accounted, cancel)
+                .map(Outcome::Run)
+        }
+        Job::Confirm {
+            model,
+            method,
+            steps,
+        } => {
+            let scene = &plan.models[model].scene;
+            let dt = plan.time / steps as f64;
+            Some(Outcome::Confirm(confirm(scene, method, dt, plan.time)))
+        }
     };
     let threads = crate::physics::pool::Pool::global().threads();
-    let helpers = if threads < 2 { 0 } else { threads };
-    ahead::with_helpers(helpers, &compute, |runs| search(plan, progress, runs))
+    ahead::with_cores(threads, &compute, |runs| {
+        search(plan, progress, runs, threads >= 2)
+    })
 }
 
-/// [`advise`] with its runs from `runs`.
+/// [`advise`] with its runs from `runs` (`helped`: computed ahead by helpers).
 fn search(
     plan: &Plan,
     progress: &mut dyn FnMut(&Stage),
-    runs: &ahead::Ahead<'_, RunKey, Measurement>,
+    runs: &ahead::Ahead<'_, Job, Outcome>,
+    helped: bool,
 ) -> Result<AdviseReport, StudyError> {
+    let outlook = Outlook::new(plan, helped);
+    let chain_job = |steps: u64| Job::Run {
+        model: plan.reference,
+        method: Method::Rk4,
+        steps,
+        accounted: false,
+    };
     let start = Instant::now();
     let time = plan.time;
     let x = plan.options.tolerance;
@@ -128,12 +189,24 @@ fn search(
         let steps = plan.reference_steps << k;
         let dt = time / steps as f64;
         progress(&Stage::Reference(dt));
-        runs.hint(if k < REFERENCE_HALVINGS {
-            vec![(plan.reference, Method::Rk4, steps << 1)]
-        } else {
-            Vec::new()
-        });
-        let run = runs.get(&(plan.reference, Method::Rk4, steps));
+        // Hints: this run and the next (at the start also the third, so that both cores have
+        // a chain run while the search computes the spectra the other hints need), then the
+        // search's first runs.
+        let ahead = if k == 0 { 2 } else { 1 };
+        let mut hints: Vec<Job> = (0..=ahead.min(REFERENCE_HALVINGS - k))
+            .map(|i| chain_job(steps << i))
+            .collect();
+        if k == 0 {
+            runs.hint(hints.clone());
+        }
+        let chain_bound = outlook.cost(
+            plan.reference,
+            Method::Rk4,
+            plan.reference_steps << REFERENCE_HALVINGS,
+        );
+        hints.extend(outlook.after(None, chain_bound, None));
+        runs.hint(hints);
+        let run = measured(runs, &chain_job(steps));
         debug_assert_eq!(run.dt, dt);
         let change = chain_runs
             .last()
@@ -177,6 +250,8 @@ fn search(
     let mut left_out = Vec::new();
     // The accepted runs' snapshots, by candidate index, for the verification's comparison.
     let mut accepted_runs: Vec<(usize, Vec<observe::Observation>)> = Vec::new();
+    // The verification of the cheapest accepted candidate so far: `(cost, particles, jobs)`.
+    let mut to_verify: Option<(f64, usize, [Job; 2])> = None;
     if !plan.options.methods.contains(&Method::Xpbd) {
         left_out.push((
             Method::Xpbd,
@@ -198,10 +273,16 @@ fn search(
             start,
         ));
     };
+    let against = Against {
+        snapshots: &reference_run.snapshots,
+        e_ref: &e_ref,
+        x,
+        time,
+    };
     for (index, model) in plan.models.iter().enumerate() {
         let is_reference = index == plan.reference;
         let mut too_coarse = false;
-        for method in search_order(&plan.options.methods) {
+        for (j, &method) in outlook.order.iter().enumerate() {
             let base = Candidate {
                 model: index,
                 n: model.n,
@@ -224,7 +305,9 @@ fn search(
                 // The model was judged with a cheaper method: nothing to run.
                 continue;
             }
-            let Some((limit, margin_kind)) = margin_limit(&model.scene, method)? else {
+            let Some((limit, margin_kind)) =
+                margin_limit(&model.scene, method, outlook.theory(index, j))?
+            else {
                 candidates.push(base);
                 continue;
             };
@@ -276,9 +359,27 @@ fn search(
                             method,
                             dt,
                         });
-                        let next = (k < MAX_HALVINGS).then_some((index, method, steps << 1));
-                        runs.hint(next.into_iter().collect());
-                        let r = runs.get(&(index, method, steps));
+                        // Hints: this run, the next halving unless its predicted cost would
+                        // skip it, the cheapest accepted candidate's verification, then the
+                        // first runs of the methods and models ahead.
+                        let bound = best.min(reference_run.cost);
+                        let this = outlook.run_job(index, method, steps, k);
+                        let mut hints = vec![this.clone()];
+                        let nominal = outlook.cost(index, method, steps);
+                        if k < MAX_HALVINGS && 2.0 * nominal < bound && work + 3.0 * nominal <= cap
+                        {
+                            hints.push(outlook.run_job(index, method, steps << 1, k + 1));
+                        }
+                        if let Some((_, _, jobs)) = &to_verify {
+                            hints.extend(jobs.iter().cloned());
+                        }
+                        hints.extend(outlook.after(
+                            Some((index, j)),
+                            bound,
+                            Some((runs, &against)),
+                        ));
+                        runs.hint(hints);
+                        let r = measured(runs, &this);
                         work += r.cost;
                         r
                     }
@@ -292,65 +393,36 @@ fn search(
                     previous = Some(run);
                     continue;
                 };
-                // The error over the run: the observable at each of the 20 sample instants.
-                let error =
-                    observe::history_difference(&run.snapshots, &reference_run.snapshots, time);
-                let meets = accepted(&error, &e_ref, x);
-                let coarse = !is_reference
-                    && previous
-                        .as_ref()
-                        .filter(|p| p.observation.is_some())
-                        .is_some_and(|p| {
-                            let step =
-                                observe::history_difference(&run.snapshots, &p.snapshots, time);
-                            error.metres - 2.0 * step.metres > x
-                                || error.seconds - 2.0 * step.seconds > x
-                        });
-                c.error_at_t = Some(obs.difference(&reference_obs, time));
-                c.error = Some(error);
-                c.verdict = if meets {
-                    Verdict::Meets
-                } else if coarse {
-                    Verdict::ModelTooCoarse
-                } else {
-                    Verdict::TooInaccurate
-                };
-                candidates.push(c);
-                if meets {
-                    best = best.min(run.cost);
-                    accepted_runs.push((candidates.len() - 1, run.snapshots));
-                    break;
-                }
-                if coarse {
-                    too_coarse = true;
-                    break;
-                }
-                // The error's trend: halvings still needed, and what they would cost.
                 let bound = best.min(reference_run.cost);
-                let trend = previous
-                    .as_ref()
-                    .filter(|p| p.observation.is_some())
-                    .map(|p| {
-                        observe::history_difference(&p.snapshots, &reference_run.snapshots, time)
-                            .worst()
-                    })
-                    .zip(
-                        candidates
-                            .last()
-                            .and_then(|c| c.error.as_ref())
-                            .map(Difference::worst),
-                    );
-                if let Some((before, now)) = trend
-                    && now > 0.0
-                    && before / now >= PROJECTION_RATIO
-                {
-                    let halvings = ((now / x).ln() / (before / now).ln()).max(0.0);
-                    if run.cost * 2f64.powf(halvings) >= bound
-                        && let Some(last) = candidates.last_mut()
-                    {
-                        last.verdict = Verdict::ProjectedCostlier;
+                let (verdict, error) =
+                    judge(&run, previous.as_ref(), &against, is_reference, bound);
+                c.error_at_t = Some(obs.difference(&reference_obs, time));
+                c.error = error;
+                c.verdict = verdict;
+                candidates.push(c);
+                match verdict {
+                    Verdict::Meets => {
+                        best = best.min(run.cost);
+                        let particles = model.scene.particle_count();
+                        if to_verify
+                            .as_ref()
+                            .is_none_or(|(cost, p, _)| (run.cost, particles) < (*cost, *p))
+                        {
+                            to_verify = Some((
+                                run.cost,
+                                particles,
+                                verification_jobs(index, method, steps),
+                            ));
+                        }
+                        accepted_runs.push((candidates.len() - 1, run.snapshots));
                         break;
                     }
+                    Verdict::ModelTooCoarse => {
+                        too_coarse = true;
+                        break;
+                    }
+                    Verdict::ProjectedCostlier => break,
+                    _ => {}
                 }
                 previous = Some(run);
             }
@@ -371,9 +443,16 @@ fn search(
     let mut recommended = None;
     for &i in accepted_order.iter().take(MAX_VERIFICATIONS) {
         let c = &candidates[i];
-        let model = &plan.models[c.model];
         progress(&Stage::Verify(c.method, c.dt));
-        let (run, confirmation) = verify(&model.scene, c.method, c.dt, c.steps, time);
+        // Its two runs side by side where there are two cores (the run at dt/2 usually
+        // computed already, ahead of the search's end).
+        let jobs = verification_jobs(c.model, c.method, c.steps);
+        runs.hint(jobs.to_vec());
+        let [half, check] = jobs;
+        let run = measured(runs, &half);
+        let Outcome::Confirm(confirmation) = runs.get(&check) else {
+            unreachable!("a confirmation's job gives a confirmation")
+        };
         let energy_residual = run.energy_residual.unwrap_or(f64::NAN);
         let error = observe::history_difference(&run.snapshots, &reference_run.snapshots, time);
         let error_at_t = run.difference(&reference_obs, time);
