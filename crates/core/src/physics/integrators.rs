@@ -136,7 +136,7 @@ impl Method {
             && !work.projected
         {
             // The method has no fused last pass (or took the textbook loops): project here.
-            (projection.0)(&mut state.x, &mut state.v);
+            (projection.0)(0, &mut state.x, &mut state.v);
         }
         evals
     }
@@ -331,13 +331,14 @@ pub struct Workspace {
 }
 
 /// A per-particle rule on positions and velocities (m, m/s) applied at the end of every step
-/// (see [`Workspace::projection`]). It must treat every particle on its own: it may be applied
-/// to any split of the particles, in any order.
+/// (see [`Workspace::projection`]), `(q, x, v)` with `q` the index of the first particle of `x`
+/// and `v`. It must treat every particle on its own: it may be applied to any split of the
+/// particles, in any order.
 #[derive(Clone)]
 pub struct Projection(pub Arc<ProjectionFn>);
 
 /// The function of a [`Projection`].
-pub type ProjectionFn = dyn Fn(&mut [DVec3], &mut [DVec3]) + Send + Sync;
+pub type ProjectionFn = dyn Fn(usize, &mut [DVec3], &mut [DVec3]) + Send + Sync;
 
 impl std::fmt::Debug for Projection {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
