@@ -355,9 +355,16 @@ impl std::fmt::Debug for Projection {
 /// steps ([`crate::physics::stencil::Crew::pass_then`]), each thread calls it on the particles of its own
 /// part right after the step's last pass wrote them, `(model, part, first particle, x, v)`, so
 /// that the response can read a summary of each part (its broad phase) instead of scanning
-/// every particle on one thread. The response must give the same result with or without it.
+/// every particle on one thread. The third, if given, is called before it on each tile of the
+/// part as the stencil writes it (the stencil's per-tile hook, `(first particle, x, v)`, while
+/// the tile is in the first-level cache: the summary's boxes); it only reads. The response must
+/// give the same result with or without them.
 #[derive(Clone)]
-pub struct Response(pub Arc<ResponseFn>, pub Option<Arc<PrepareFn>>);
+pub struct Response(
+    pub Arc<ResponseFn>,
+    pub Option<Arc<PrepareFn>>,
+    pub Option<Arc<ProjectionFn>>,
+);
 
 /// The function of a [`Response`].
 pub type ResponseFn = dyn Fn(&Model, &mut [DVec3], &mut [DVec3]) + Send + Sync;
@@ -378,6 +385,12 @@ impl Response {
     ) -> Option<impl Fn(usize, usize, &[DVec3], &[DVec3]) + Sync + 'a> {
         let prepare = self.1.as_deref()?;
         Some(move |k: usize, q0: usize, x: &[DVec3], v: &[DVec3]| prepare(model, k, q0, x, v))
+    }
+
+    /// The summary's per-tile hook, for the pass whose parts [`Response::part_summary`]
+    /// prepares (`None` when there is none).
+    pub(crate) fn tile_summary(&self) -> Option<After<'_>> {
+        self.2.as_deref().map(|f| f as After)
     }
 }
 
