@@ -117,7 +117,7 @@ fn a_team_fails_loudly() {
     let (mut x, mut v) = (r.state.x.clone(), r.state.v.clone());
     let (mut x2, mut v2) = (x.clone(), v.clone());
     // The last particle is in the last part; a rule that fails on it fails that part.
-    fn marked(_: usize, x: &mut [DVec3], _: &mut [DVec3]) {
+    fn marked(x: &mut [DVec3], _: &mut [DVec3]) {
         assert!(x.iter().all(|p| p.x < 1e29), "the marked particle");
     }
     for parts in [2, 3] {

@@ -455,10 +455,10 @@ impl Contact {
     fn projection(self) -> Option<Projection> {
         match self {
             Contact::None => None,
-            Contact::Ground { restitution } => Some(Projection(Arc::new(move |_, x, v| {
+            Contact::Ground { restitution } => Some(Projection(Arc::new(move |x, v| {
                 ground(x, v, restitution);
             }))),
-            Contact::Sphere { centre, radius } => Some(Projection(Arc::new(move |_, x, v| {
+            Contact::Sphere { centre, radius } => Some(Projection(Arc::new(move |x, v| {
                 sphere(x, v, centre, radius);
             }))),
         }

@@ -64,7 +64,7 @@ use glam::DVec3;
 
 use crate::physics::collide::{Bodies, Changes, DynamicSphere, PartBounds, Prepared};
 use crate::physics::energy::{energy_change, energy_change_calm};
-use crate::physics::integrators::{ProjectionFn, Response, guard_energy, guard_start_energy};
+use crate::physics::integrators::{Response, guard_energy, guard_start_energy};
 use crate::physics::{
     Dissipated, Divergence, Energy, Method, Model, SolveStats, State, Workspace, collide, diverge,
     energy,
@@ -523,8 +523,7 @@ struct ResponseLog {
 /// of `log`: with `account` it records each step's change of energy in `log`. Where a team of
 /// threads takes the steps, each thread sums up its part for the response's broad phase
 /// ([`collide::Prepared`]: boxes, calm positions, particles near a collider) right after
-/// writing it (the boxes tile by tile, as the stencil writes each tile), and the response reads
-/// those summaries instead of every particle.
+/// writing it, and the response reads those summaries instead of every particle.
 fn response(dt: f64, account: bool, log: Arc<Mutex<ResponseLog>>) -> Response {
     let prepared = Arc::new(Prepared::default());
     let parts = Arc::clone(&prepared);
@@ -600,10 +599,7 @@ fn response(dt: f64, account: bool, log: Arc<Mutex<ResponseLog>>) -> Response {
         changes.finish(model.particle_count());
         contacts.push(energy_change_calm(model, x, v, spheres, changes, calm));
     };
-    // The boxes of each tile as it is written (only the spheres' broad phase needs boxes).
-    let tile = move |q: usize, x: &mut [DVec3], _: &mut [DVec3]| Prepared::tile(q, x);
-    let tile: Option<Arc<ProjectionFn>> = with_boxes.then(|| Arc::new(tile) as _);
-    Response(Arc::new(respond), Some(Arc::new(prepare)), tile)
+    Response(Arc::new(respond), Some(Arc::new(prepare)))
 }
 
 /// The log of a finished chunk, taken out of its lock.

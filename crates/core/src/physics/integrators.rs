@@ -136,7 +136,7 @@ impl Method {
             && !work.projected
         {
             // The method has no fused last pass (or took the textbook loops): project here.
-            (projection.0)(0, &mut state.x, &mut state.v);
+            (projection.0)(&mut state.x, &mut state.v);
         }
         evals
     }
@@ -331,14 +331,13 @@ pub struct Workspace {
 }
 
 /// A per-particle rule on positions and velocities (m, m/s) applied at the end of every step
-/// (see [`Workspace::projection`]), `(q, x, v)` with `q` the index of the first particle of `x`
-/// and `v`. It must treat every particle on its own: it may be applied to any split of the
-/// particles, in any order.
+/// (see [`Workspace::projection`]). It must treat every particle on its own: it may be applied
+/// to any split of the particles, in any order.
 #[derive(Clone)]
 pub struct Projection(pub Arc<ProjectionFn>);
 
 /// The function of a [`Projection`].
-pub type ProjectionFn = dyn Fn(usize, &mut [DVec3], &mut [DVec3]) + Send + Sync;
+pub type ProjectionFn = dyn Fn(&mut [DVec3], &mut [DVec3]) + Send + Sync;
 
 impl std::fmt::Debug for Projection {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -355,16 +354,9 @@ impl std::fmt::Debug for Projection {
 /// steps ([`crate::physics::stencil::Crew::pass_then`]), each thread calls it on the particles of its own
 /// part right after the step's last pass wrote them, `(model, part, first particle, x, v)`, so
 /// that the response can read a summary of each part (its broad phase) instead of scanning
-/// every particle on one thread. The third, if given, is called before it on each tile of the
-/// part as the stencil writes it (the stencil's per-tile hook, `(first particle, x, v)`, while
-/// the tile is in the first-level cache: the summary's boxes); it only reads. The response must
-/// give the same result with or without them.
+/// every particle on one thread. The response must give the same result with or without it.
 #[derive(Clone)]
-pub struct Response(
-    pub Arc<ResponseFn>,
-    pub Option<Arc<PrepareFn>>,
-    pub Option<Arc<ProjectionFn>>,
-);
+pub struct Response(pub Arc<ResponseFn>, pub Option<Arc<PrepareFn>>);
 
 /// The function of a [`Response`].
 pub type ResponseFn = dyn Fn(&Model, &mut [DVec3], &mut [DVec3]) + Send + Sync;
@@ -385,12 +377,6 @@ impl Response {
     ) -> Option<impl Fn(usize, usize, &[DVec3], &[DVec3]) + Sync + 'a> {
         let prepare = self.1.as_deref()?;
         Some(move |k: usize, q0: usize, x: &[DVec3], v: &[DVec3]| prepare(model, k, q0, x, v))
-    }
-
-    /// The summary's per-tile hook, for the pass whose parts [`Response::part_summary`]
-    /// prepares (`None` when there is none).
-    pub(crate) fn tile_summary(&self) -> Option<After<'_>> {
-        self.2.as_deref().map(|f| f as After)
     }
 }
 

@@ -16,12 +16,7 @@
 //! calm   = every x_i calm (|coordinate| < 1e50 m)  ⟺  every box_j inside (-1e50, 1e50)³
 //! near   = { i : some collider's bounds may hold x_i }    (Broad::may_touch), in index order
 //! ```
-//! where `B` is [`BOX`] particles (`fast::bounds`, eight points at a time). The stencil writes a
-//! part tile by tile, each tile a whole number of boxes but the last: where it calls
-//! [`Prepared::tile`] on each tile as it is written (its per-tile hook), the boxes are made
-//! there, while the tile is in the first-level cache, and the part's summary takes them instead
-//! of reading every position again (the same boxes: the same function on the same points).
-//! A box only lets the sphere–particle test skip particles it
+//! where `B` is [`BOX`] particles (`fast::bounds`, eight points at a time). A box only lets the sphere–particle test skip particles it
 //! cannot reach, and `near` only the colliders' test: both rule out exactly the particles the
 //! exact tests would leave alone, so the response's result is the same bit for bit whether its
 //! boxes are one part's or the whole body's (any split). The response uses a summary only when
@@ -37,7 +32,7 @@ use glam::DVec3;
 use super::response::near_any;
 use super::response::near_any_into;
 use super::{Broad, World, calm};
-use crate::physics::fast::bounds::{boxes, extend_boxes, plane_bits};
+use crate::physics::fast::bounds::{boxes, plane_bits};
 
 /// Particles per box of the sphere–particle broad phase.
 pub(super) const BOX: usize = 32;
@@ -100,9 +95,6 @@ pub struct PartBounds {
     bits: Vec<u64>,
     /// Made after the last [`Prepared::take`].
     fresh: bool,
-    /// `boxes` hold the boxes of particles `tiles.0..tiles.1`, made tile by tile
-    /// ([`PartBounds::add_tile`]) and not yet taken by [`PartBounds::fill`].
-    tiles: Option<(usize, usize)>,
 }
 
 impl PartBounds {
@@ -113,17 +105,11 @@ impl PartBounds {
     pub(super) fn fill(&mut self, broads: &[Broad], start: usize, x: &[DVec3], with_boxes: bool) {
         self.start = start;
         self.end = start + x.len();
+        self.boxes.clear();
         self.near.clear();
         let mut calm_known = None;
-        // The boxes made tile by tile cover exactly these particles, or they are made here.
-        let tiled = self.tiles.take() == Some((self.start, self.end));
-        if !(with_boxes && tiled) {
-            self.boxes.clear();
-        }
         if with_boxes {
-            if !tiled {
-                boxes(x, BOX, &mut self.boxes, |lo, hi| Aabb { lo, hi });
-            }
+            boxes(x, BOX, &mut self.boxes, |lo, hi| Aabb { lo, hi });
             calm_known = Some(self.boxes.iter().all(|b| calm(b.lo) && calm(b.hi)));
         }
         self.bits.clear();
@@ -177,20 +163,6 @@ impl PartBounds {
         self.calm
     }
 
-    /// Adds the boxes of particles `q..q + x.len()` at positions `x` (m) after those of the
-    /// tiles before, when they end at `q` on a whole box; else starts again from `q`.
-    fn add_tile(&mut self, q: usize, x: &[DVec3]) {
-        let start = match self.tiles {
-            Some((start, end)) if end == q && (q - start).is_multiple_of(BOX) => start,
-            _ => {
-                self.boxes.clear();
-                q
-            }
-        };
-        extend_boxes(x, BOX, &mut self.boxes, |lo, hi| Aabb { lo, hi });
-        self.tiles = Some((start, q + x.len()));
-    }
-
     /// The boxes with the particles each holds.
     pub(super) fn boxes_mut(
         &mut self,
@@ -214,14 +186,6 @@ pub struct Prepared {
 }
 
 impl Prepared {
-    /// Makes the boxes of a tile of particles `q..q + x.len()` at positions `x` (m) just
-    /// written, on the thread that wrote them, for its part's [`Prepared::prepare`] that
-    /// follows on the same thread (module docs). Boxes that do not end up covering exactly a
-    /// part are not used.
-    pub fn tile(q: usize, x: &[DVec3]) {
-        MAKING.with(|making| making.borrow_mut().add_tile(q, x));
-    }
-
     /// Sums up part `k`, particles `start..start + x.len()` at positions `x` (m) after a step,
     /// for the colliders of `world`, with boxes when `with_boxes` ([`PartBounds::sum_up`]).
     pub fn prepare<'a>(
@@ -388,66 +352,6 @@ mod tests {
                     );
                 }
             }
-        }
-    }
-
-    /// A part's boxes made tile by tile (`Prepared::tile`, as the stencil calls it) are the
-    /// boxes the part's summary makes from all its positions, and tiles that do not cover
-    /// exactly the part (another part's, a gap, a tile that does not end on a whole box, none)
-    /// are not used: the summary is then the same, made from the positions.
-    #[test]
-    fn boxes_made_tile_by_tile_are_the_parts_boxes() {
-        let x: Vec<DVec3> = (0..203)
-            .map(|i| {
-                let f = f64::from(i);
-                DVec3::new((0.11 * f).cos(), 0.02 * f - 1.0, (0.37 * f).sin())
-            })
-            .collect();
-        let broads: Vec<Broad> = [crate::physics::collide::Collider::Sphere {
-            center: DVec3::new(0.2, 0.0, 0.1),
-            radius: 0.5,
-        }]
-        .iter()
-        .map(|c| c.broad(0.01))
-        .collect();
-        let key = |p: &PartBounds| {
-            let b: Vec<[u64; 6]> = (p.boxes.iter())
-                .map(|b| {
-                    let (lo, hi) = (b.lo.to_array(), b.hi.to_array());
-                    [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]].map(f64::to_bits)
-                })
-                .collect();
-            (p.start, p.end, b, p.calm, p.near.clone())
-        };
-        let (start, part) = (40, &x[40..203]);
-        let mut made = PartBounds::default();
-        made.fill(&broads, start, part, true);
-        let expected = key(&made);
-        assert_eq!(expected.2.len(), part.len().div_ceil(BOX));
-        // Tiles of 32 from the part's start, the last shorter; then other cuts.
-        let tiles = |cuts: &[usize]| -> Vec<(usize, usize)> {
-            cuts.windows(2).map(|w| (w[0], w[1])).collect()
-        };
-        let whole: Vec<usize> = (start..203).step_by(32).chain([203]).collect();
-        let cases: [(Vec<(usize, usize)>, bool); 6] = [
-            (tiles(&whole), true),
-            // An earlier part's tiles first: started again at the part's start.
-            ([(0, 32), (32, 40)].into_iter().chain(tiles(&whole)).collect(), true),
-            // A gap, a tile that does not end on a whole box, another range, none.
-            (tiles(&[40, 72, 104]).into_iter().chain(tiles(&[136, 203])).collect(), false),
-            (tiles(&[40, 60, 92, 203]), false),
-            (tiles(&[40, 72, 104, 136, 168, 200]), false),
-            (Vec::new(), false),
-        ];
-        for (cut, used) in cases {
-            let mut p = PartBounds::default();
-            for &(a, b) in &cut {
-                p.add_tile(a, &x[a..b]);
-            }
-            assert_eq!(p.tiles == Some((start, 203)), used, "{cut:?}");
-            p.fill(&broads, start, part, true);
-            assert_eq!(key(&p), expected, "{cut:?}");
-            assert_eq!(p.tiles, None, "the tiles are used up");
         }
     }
 

@@ -18,8 +18,8 @@ use glam::DVec3;
 use super::lanes::Avx512;
 use super::lanes::{LANES, Lanes, Plain, first_lanes, load_chunk};
 
-/// Makes `out` `make(lo, hi)` for the box (m) of points `len k .. len (k + 1)` of `points`,
-/// `k = 0, 1, …` (the last box may hold fewer); `len` a multiple of eight.
+/// Pushes `make(lo, hi)` onto `out` for the box (m) of points `len k .. len (k + 1)` of
+/// `points`, `k = 0, 1, …` (the last box may hold fewer); `len` a multiple of eight.
 ///
 /// # Panics
 /// If `len` is not a positive multiple of eight.
@@ -29,22 +29,8 @@ pub(crate) fn boxes<T>(
     out: &mut Vec<T>,
     make: impl Fn(DVec3, DVec3) -> T,
 ) {
-    out.clear();
-    extend_boxes(points, len, out, make);
-}
-
-/// [`boxes`] pushed after what `out` holds (a part's boxes tile by tile, each tile a whole
-/// number of boxes but the last).
-///
-/// # Panics
-/// If `len` is not a positive multiple of eight.
-pub(crate) fn extend_boxes<T>(
-    points: &[DVec3],
-    len: usize,
-    out: &mut Vec<T>,
-    make: impl Fn(DVec3, DVec3) -> T,
-) {
     assert!(len > 0 && len.is_multiple_of(8), "boxes of whole groups");
+    out.clear();
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx512f") {
         // SAFETY: the CPU supports AVX-512F (checked above).

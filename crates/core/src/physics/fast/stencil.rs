@@ -286,11 +286,9 @@ pub struct Dynamics<'a> {
 }
 
 /// A per-particle rule applied to positions and velocities (m, m/s) at the end of a step, such
-/// as the benchmark's contact projections, `after(q, x, v)` with `q` the index of the first
-/// particle of `x` and `v`: it must treat every particle on its own, so that applying it to any
-/// split of the particles gives the same result (or only read them: the collision response's
-/// boxes made tile by tile, `collide::Prepared::tile`).
-pub type After<'a> = &'a (dyn Fn(usize, &mut [DVec3], &mut [DVec3]) + Sync);
+/// as the benchmark's contact projections: it must treat every particle on its own, so that
+/// applying it to any split of the particles gives the same result.
+pub type After<'a> = &'a (dyn Fn(&mut [DVec3], &mut [DVec3]) + Sync);
 
 /// What the stencil writes for each particle `q`, given its spring force `F_springs[q]` (N),
 /// into the outputs `outs` of [`Stencil::write`]. Every variant does the same operations in

@@ -38,7 +38,7 @@
 use crate::physics::energy::{Dissipated, Power};
 use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, polynomial};
-use crate::physics::integrators::{explicit_step, Response, Workspace, after, fused_pass, power_if, slot_powers, steps_per_team, team};
+use crate::physics::integrators::{explicit_step, Workspace, after, fused_pass, power_if, slot_powers, steps_per_team, team};
 use crate::physics::particles::State;
 use crate::physics::stencil::{Base, Output, PartFn, Pass, Stencil, TeamUpdate, Update};
 
@@ -214,9 +214,7 @@ pub(super) fn steps(
     let dynamics = model.dynamics(true);
     let account = work.account;
     let batch = steps_per_team(stencil, account, 4, n);
-    // Each tile of the last pass: the projection, else the response's summary of it (boxes).
-    let response = work.response.as_ref();
-    let after = after(&work.projection).or_else(|| response.and_then(Response::tile_summary));
+    let after = after(&work.projection);
     // The buffers of `step_fused`, by index: the state (0, 1), x_2 and x_4 (2), x_3 (3),
     // v_2, v_3, v_4 (4, 5, 6), k1v, k2v, k3v (7, 8, 9). With accounting, pass j of step s
     // of a batch writes its power into slot 4 s + j.
@@ -254,8 +252,10 @@ pub(super) fn steps(
         kx,
         power_slots,
         step_dissipated,
+        response,
         ..
     } = work;
+    let response = response.as_ref();
     // The response's summary of each part, made by the thread that wrote it.
     let prepare_part = response.and_then(|r| r.part_summary(model));
     let prepare: Option<PartFn> = prepare_part.as_ref().map(|f| f as PartFn);

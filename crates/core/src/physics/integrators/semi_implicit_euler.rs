@@ -32,7 +32,7 @@
 use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, one_evaluation};
 use crate::physics::energy::{Dissipated, Power};
-use crate::physics::integrators::{explicit_step, Response, Workspace, after, fused, one_pass_step, power_if, slot_powers, steps_per_team, team};
+use crate::physics::integrators::{explicit_step, Workspace, after, fused, one_pass_step, power_if, slot_powers, steps_per_team, team};
 use crate::physics::particles::State;
 use crate::physics::stencil::{PartFn, Pass, Stencil, TeamUpdate, Update};
 
@@ -123,19 +123,6 @@ pub(super) fn steps(
     }
     let (stencil, parts) = team(model, work)?;
     let batch = steps_per_team(stencil, account, 1, n);
-    let Workspace {
-        x_stage,
-        v_stage,
-        power_slots,
-        step_dissipated,
-        response,
-        projection,
-        projected,
-        ..
-    } = work;
-    let response = response.as_ref();
-    // Each tile: the projection, else the response's summary of it (boxes).
-    let after = after(projection).or_else(|| response.and_then(Response::tile_summary));
     // Buffers 0, 1: the state; 2, 3: the stage. Step s reads one pair and writes the other;
     // with accounting its power goes to slot s of the batch.
     let pass = |s: u64, slot: usize| {
@@ -146,10 +133,19 @@ pub(super) fn steps(
             outs: [Some(to), Some(to + 1), None],
             dynamics,
             update: TeamUpdate::SemiImplicitEuler { dt },
-            after,
+            after: after(&work.projection),
             power: account.then_some(slot),
         }
     };
+    let Workspace {
+        x_stage,
+        v_stage,
+        power_slots,
+        step_dissipated,
+        response,
+        ..
+    } = work;
+    let response = response.as_ref();
     // The response's summary of each part, made by the thread that wrote it.
     let prepare_part = response.and_then(|r| r.part_summary(model));
     let prepare: Option<PartFn> = prepare_part.as_ref().map(|f| f as PartFn);
@@ -188,7 +184,7 @@ pub(super) fn steps(
         std::mem::swap(&mut state.x, x_stage);
         std::mem::swap(&mut state.v, v_stage);
     }
-    *projected = true;
+    work.projected = true;
     state.history_valid = false;
     Some(n)
 }

@@ -317,7 +317,7 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
         {
             let (a, b) = (t0 - q0, t1 - q0);
             let [xo, vo, _] = &mut part.outs;
-            after(t0, &mut xo[a..b], &mut vo[a..b]);
+            after(&mut xo[a..b], &mut vo[a..b]);
         }
     }
 }
