@@ -67,7 +67,7 @@ fn boxes_avx512<T>(
 ) {
     use std::arch::x86_64::{
         _CMP_UNORD_Q, _mm512_cmp_pd_mask, _mm512_loadu_pd, _mm512_max_pd, _mm512_min_pd,
-        _mm512_set1_pd,
+        _mm512_set1_pd, _mm512_storeu_pd,
     };
     // Bits of the lanes of register r that hold axis c: AXIS[r][c].
     const fn axis_bits(r: usize, c: usize) -> u8 {
@@ -110,12 +110,28 @@ fn boxes_avx512<T>(
                 nan[r] |= _mm512_cmp_pd_mask::<_CMP_UNORD_Q>(v, v);
             }
         }
-        // Axis c is lanes c, c + 3, … c + 21 of the three registers (never NaN: the minima and
-        // maxima passed over every NaN), folded in registers: the lanes of the second and
-        // third registers (values 8 + j, j < 16, of axis (8 + j) mod 3) permuted onto the
-        // first's pattern (lane s of axis s mod 3) in three registers that together hold all
-        // sixteen, then lanes 3.. and 6.. onto lanes 0, 1, 2.
-        let (box_lo, box_hi) = (fold::<false>(lo), fold::<true>(hi));
+        let mut l = [0.0; 24];
+        let mut h = [0.0; 24];
+        for r in 0..3 {
+            // SAFETY: eight f64 into eight of an array of 24.
+            unsafe {
+                _mm512_storeu_pd(l.as_mut_ptr().add(8 * r), lo[r]);
+                _mm512_storeu_pd(h.as_mut_ptr().add(8 * r), hi[r]);
+            }
+        }
+        // Axis c is lanes c, c + 3, … c + 21 (never NaN: the minima and maxima passed over
+        // every NaN), folded in registers.
+        let mut box_lo = [0.0; 3];
+        let mut box_hi = [0.0; 3];
+        for c in 0..3 {
+            let (mut a, mut b) = (l[c], h[c]);
+            for k in 1..8 {
+                let (x, y) = (l[c + 3 * k], h[c + 3 * k]);
+                a = if x < a { x } else { a };
+                b = if y > b { y } else { b };
+            }
+            (box_lo[c], box_hi[c]) = (a, b);
+        }
         let mut nan_axis = glam::BVec3::FALSE;
         for c in 0..3 {
             nan_axis.set(
@@ -129,50 +145,6 @@ fn boxes_avx512<T>(
             DVec3::select(nan_axis, DVec3::NEG_INFINITY, lo),
             DVec3::select(nan_axis, DVec3::INFINITY, hi),
         ));
-    }
-}
-
-/// The three lanes of axis 0, 1, 2 (lane `l` of register `r` is axis `(8 r + l) mod 3`) of
-/// `regs` folded by their minimum, or with `MAX` their maximum (`vminpd`, `vmaxpd`, on values
-/// without NaN: the same value as any order of folding, but for the sign of a zero).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-#[inline]
-fn fold<const MAX: bool>(regs: [std::arch::x86_64::__m512d; 3]) -> [f64; 3] {
-    use std::arch::x86_64::{
-        __m512d, _mm512_loadu_si512, _mm512_max_pd, _mm512_min_pd, _mm512_permutex2var_pd,
-        _mm512_permutexvar_pd, _mm512_storeu_pd,
-    };
-    let pick = |a: __m512d, b: __m512d| {
-        if MAX {
-            _mm512_max_pd(a, b)
-        } else {
-            _mm512_min_pd(a, b)
-        }
-    };
-    // Slot s of each takes value 8 + j (j < 8: the second register's lane j, else the third's
-    // lane j - 8) of axis s mod 3; every j appears in one of the three.
-    const FROM: [[i64; 8]; 3] = [
-        [1, 2, 0, 4, 5, 3, 7, 8],
-        [10, 11, 6, 13, 14, 9, 1, 2],
-        [4, 5, 12, 7, 8, 15, 10, 11],
-    ];
-    // Lanes 3, 4, 5 and 6, 7, (2) onto 0, 1, 2.
-    const SHIFT: [[i64; 8]; 2] = [[3, 4, 5, 0, 0, 0, 0, 0], [6, 7, 2, 0, 0, 0, 0, 0]];
-    // SAFETY: AVX-512F (this function's target feature); the index arrays hold eight values
-    // and the output array eight.
-    unsafe {
-        let index = |a: &[i64; 8]| _mm512_loadu_si512(a.as_ptr().cast());
-        let t: [_; 3] =
-            std::array::from_fn(|k| _mm512_permutex2var_pd(regs[1], index(&FROM[k]), regs[2]));
-        let m = pick(pick(regs[0], t[0]), pick(t[1], t[2]));
-        let m = pick(
-            pick(m, _mm512_permutexvar_pd(index(&SHIFT[0]), m)),
-            _mm512_permutexvar_pd(index(&SHIFT[1]), m),
-        );
-        let mut out = [0.0; 8];
-        _mm512_storeu_pd(out.as_mut_ptr(), m);
-        [out[0], out[1], out[2]]
     }
 }
 
