@@ -103,7 +103,7 @@ fn assembled() -> (Lattice, Stencil) {
 
 fn field(sys: &Lattice, seed: u64) -> Soa {
     let mut rng = XorShift64Star::new(seed);
-    let mut a: Soa = std::array::from_fn(|_| vec![0.0; sys.len]);
+    let mut a: Soa = std::array::from_fn(|_| Aligned::zeros(sys.len));
     for a in &mut a {
         for value in &mut a[sys.front..sys.front + sys.n] {
             *value = rng.symmetric();
@@ -121,10 +121,10 @@ fn the_product_without_bounds_checks_is_the_checked_product_bit_for_bit() {
     let (sys, _) = assembled();
     assert_eq!(sys.groups.len(), 6, "the 2022 cloth has six offsets");
     let p = field(&sys, 1_000_000);
-    let mut out_ref: Soa = std::array::from_fn(|_| vec![0.0; sys.len]);
+    let mut out_ref: Soa = std::array::from_fn(|_| Aligned::zeros(sys.len));
     let sum_ref = apply_checked::<Plain>(&sys, &p, &mut out_ref);
     // Margins zero, as `resize` leaves them; NaN where the product must write.
-    let mut out: Soa = std::array::from_fn(|_| vec![0.0; sys.len]);
+    let mut out: Soa = std::array::from_fn(|_| Aligned::zeros(sys.len));
     for c in &mut out {
         c[sys.front..sys.front + sys.n].fill(f64::NAN);
     }
@@ -286,4 +286,31 @@ fn the_particles_inside_the_spheres_are_the_ones_the_scalar_test_finds_on_every_
         inside_spheres(kernel, &state.x, &state.v, &dv, dt, &ends, &mut found);
         assert_eq!(found, expected, "{kernel:?}");
     }
+}
+
+#[test]
+fn every_array_of_the_system_starts_a_cache_line_and_a_clone_keeps_the_values() {
+    let (sys, _) = assembled();
+    let starts = |a: &Aligned| (a.as_ptr() as usize).is_multiple_of(64) && a.len() == sys.len;
+    let vectors = [
+        &sys.x, &sys.v, &sys.rhs, &sys.dv, &sys.r, &sys.p, &sys.ap, &sys.z,
+    ];
+    assert!(vectors.iter().all(|soa| soa.iter().all(starts)));
+    assert!(sys.diag_inv.iter().all(starts) && starts(&sys.mass) && starts(&sys.free));
+    for g in &sys.groups {
+        assert!(g.kv.iter().all(starts));
+        assert!((g.b.as_ptr() as usize).is_multiple_of(64) && g.b.len() == BLOCK * sys.len);
+    }
+    // The rows of a group's blocks start lines too (`len` is a multiple of LANES).
+    assert_eq!(sys.len % LANES, 0);
+    let copy = sys.clone();
+    assert!(copy.diag_inv.iter().all(starts));
+    for (a, b) in copy.diag_inv.iter().zip(&sys.diag_inv) {
+        assert!(
+            a.iter()
+                .zip(b.iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        );
+    }
+    assert!(sys.diag_inv[0].iter().any(|&d| d != 0.0));
 }
