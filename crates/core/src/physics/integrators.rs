@@ -471,7 +471,8 @@ fn stencil_power(
         output,
         parts,
     );
-    let (dampers_and_drag, contact) = Stencil::sum_power(&scratch.chunks);
+    let contact = !model.colliders.is_empty();
+    let (dampers_and_drag, contact) = Stencil::sum_power(&scratch.chunks, contact);
     Power {
         dampers_and_drag,
         contact,
@@ -536,7 +537,8 @@ fn fused_pass(
         return Power::default();
     }
     stencil.write(x, v, outs, scratch.chunks(stencil), output);
-    let (dampers_and_drag, contact) = Stencil::sum_power(&scratch.chunks);
+    let contact = output.dynamics().is_some_and(|d| !d.colliders.is_empty());
+    let (dampers_and_drag, contact) = Stencil::sum_power(&scratch.chunks, contact);
     Power {
         dampers_and_drag,
         contact,
@@ -648,23 +650,24 @@ fn steps_per_team(stencil: &Stencil, account: bool, passes: usize, n: u64) -> u6
 /// The powers of slots `0..count` of a team's power buffer, each as [`slot_power`] sums it,
 /// the slots shared out between the pool's threads (after the team, whose threads would
 /// otherwise wait while one sums them all).
-fn slot_powers(stencil: &Stencil, slots: &[f64], count: usize) -> Vec<Power> {
+fn slot_powers(stencil: &Stencil, slots: &[f64], count: usize, contact: bool) -> Vec<Power> {
     let mut powers = vec![Power::default(); count];
     let mut unused = vec![(); count];
     let pool = crate::physics::pool::Pool::global();
     let parts = pool.threads().min(count);
     pool.for_each_part(&mut powers, &mut unused, parts, |start, piece, _| {
         for (j, power) in piece.iter_mut().enumerate() {
-            *power = slot_power(stencil, slots, start + j);
+            *power = slot_power(stencil, slots, start + j, contact);
         }
     });
     powers
 }
 
-/// The power of slot `k` of a team's power buffer ([`Stencil::team_with_power`]).
-fn slot_power(stencil: &Stencil, slots: &[f64], k: usize) -> Power {
+/// The power of slot `k` of a team's power buffer ([`Stencil::team_with_power`]), written by
+/// passes with colliders when `contact` ([`Stencil::sum_power`]).
+fn slot_power(stencil: &Stencil, slots: &[f64], k: usize, contact: bool) -> Power {
     let len = stencil.power_len();
-    let (dampers_and_drag, contact) = Stencil::sum_power(&slots[k * len..(k + 1) * len]);
+    let (dampers_and_drag, contact) = Stencil::sum_power(&slots[k * len..(k + 1) * len], contact);
     Power {
         dampers_and_drag,
         contact,

@@ -315,6 +315,18 @@ pub enum Output<'a> {
     },
 }
 
+impl<'a> Output<'a> {
+    /// The weight, drag, contact and masses the output reads, if any.
+    #[must_use]
+    pub fn dynamics(&self) -> Option<&Dynamics<'a>> {
+        match self {
+            Output::Add => None,
+            Output::Forces(d) | Output::Accelerations(d) | Output::Power(d) => Some(d),
+            Output::Step { dynamics, .. } => Some(dynamics),
+        }
+    }
+}
+
 /// What a stage writes, from the input `(x, v)` of the pass and its accelerations `a` (m/s²).
 /// Positions go to `outs[0]`, velocities to `outs[1]`. Outputs that are not written in place
 /// must not be the inputs themselves: other threads still read those.
@@ -561,17 +573,26 @@ impl Stencil {
 
     /// The dissipated power in a buffer written by [`Stencil::write`]: `(dampers and drag,
     /// contact)` (W), added chunk by chunk in a fixed order (so the same for any split).
+    /// `contact`: the pass had colliders ([`Dynamics::colliders`]). Without, the pass writes
+    /// no contact values (they would all be `+0`, whose sum is `+0`): the contact power is
+    /// `+0` and only the dampers' half of the buffer is read.
     #[must_use]
-    pub fn sum_power(power: &[f64]) -> (f64, f64) {
+    pub fn sum_power(power: &[f64], contact: bool) -> (f64, f64) {
         let mut sums = [[0.0; LANES]; 2];
+        let columns = if contact { 2 } else { 1 };
         for chunk in power.chunks_exact(2 * LANES) {
-            for (sum, part) in sums.iter_mut().zip(chunk.chunks_exact(LANES)) {
+            for (sum, part) in sums.iter_mut().zip(chunk.chunks_exact(LANES)).take(columns) {
                 for (s, p) in sum.iter_mut().zip(part) {
                     *s += p;
                 }
             }
         }
-        (Self::lanes_total(&sums[0]), Self::lanes_total(&sums[1]))
+        let contact = if contact {
+            Self::lanes_total(&sums[1])
+        } else {
+            0.0
+        };
+        (Self::lanes_total(&sums[0]), contact)
     }
 
     /// The last sum of [`Stencil::sum_power`]: its lane sums added in lane order.

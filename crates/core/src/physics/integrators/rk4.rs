@@ -297,7 +297,8 @@ pub(super) fn steps(
             }
         });
         if account {
-            let powers = slot_powers(stencil, power_slots, 4 * count as usize);
+            let contact = !model.colliders.is_empty();
+            let powers = slot_powers(stencil, power_slots, 4 * count as usize, contact);
             for s in 0..count as usize {
                 let p = |j| powers[4 * s + j];
                 // D_{n+1} = D_n + dt/6 (P1 + 2 P2 + 2 P3 + P4), as `step_fused` adds it.

@@ -175,7 +175,8 @@ pub(super) fn steps(
             }
         });
         if account {
-            let powers = slot_powers(stencil, power_slots, count as usize);
+            let contact = !dynamics.colliders.is_empty();
+            let powers = slot_powers(stencil, power_slots, count as usize, contact);
             step_dissipated.extend(powers.into_iter().map(per_step));
         }
         done += count;

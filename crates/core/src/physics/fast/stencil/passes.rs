@@ -488,7 +488,10 @@ pub(super) fn finish<V: Lanes, const POWER: bool, const WHOLE: bool>(
         spring_power
             .add(drag)
             .store(dampers.try_into().expect("a chunk"));
-        contact_power.store(contact.try_into().expect("a chunk"));
+        // Without colliders no contact values (`Stencil::sum_power` reads none then).
+        if !d.colliders.is_empty() {
+            contact_power.store(contact.try_into().expect("a chunk"));
+        }
     }
     let a = [f[0].mul(w), f[1].mul(w), f[2].mul(w)];
     match *output {
