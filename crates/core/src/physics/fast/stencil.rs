@@ -129,7 +129,7 @@ use kernels::range_portable;
 #[cfg(target_arch = "x86_64")]
 use kernels::{range_avx2, range_avx512};
 use passes::{Part, SCRATCH, Scratch, cut, take};
-pub use team::{Crew, PartFn, Pass, TeamUpdate};
+pub use team::{Crew, PartFn, Pass, TeamPower, TeamUpdate};
 
 /// At most this many offset groups: more would make the passes slower than the spring list.
 const MAX_GROUPS: usize = 32;
@@ -579,6 +579,13 @@ impl Stencil {
     #[must_use]
     pub fn sum_power(power: &[f64], contact: bool) -> (f64, f64) {
         let mut sums = [[0.0; LANES]; 2];
+        Self::add_power(&mut sums, power, contact);
+        Self::power_total(&sums, contact)
+    }
+
+    /// [`Stencil::sum_power`]'s running sums: the chunks of `power` added lane by lane to
+    /// `sums` (dampers, contact), chunk after chunk.
+    pub(super) fn add_power(sums: &mut [[f64; LANES]; 2], power: &[f64], contact: bool) {
         let columns = if contact { 2 } else { 1 };
         for chunk in power.chunks_exact(2 * LANES) {
             for (sum, part) in sums.iter_mut().zip(chunk.chunks_exact(LANES)).take(columns) {
@@ -587,6 +594,10 @@ impl Stencil {
                 }
             }
         }
+    }
+
+    /// [`Stencil::sum_power`]'s result from its running sums.
+    pub(super) fn power_total(sums: &[[f64; LANES]; 2], contact: bool) -> (f64, f64) {
         let contact = if contact {
             Self::lanes_total(&sums[1])
         } else {
