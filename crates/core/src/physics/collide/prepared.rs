@@ -448,9 +448,9 @@ mod tests {
             .map(|i| (start + i) as u32)
             .collect();
         let mut bounds = PartBounds::default();
-        bounds.sum_up(&world, start, &x, None, false);
+        bounds.sum_up(world, start, &x, None, false);
         let mut part = PartBounds::default();
-        part.sum_up(&world, start, &x, Some(&v), false);
+        part.sum_up(world, start, &x, Some(&v), false);
         assert_eq!(part.near, expected);
         assert!(!expected.is_empty() && expected.len() < bounds.near.len());
         assert!(expected.iter().all(|i| bounds.near.contains(i)));
