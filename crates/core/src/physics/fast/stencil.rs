@@ -315,18 +315,6 @@ pub enum Output<'a> {
     },
 }
 
-impl<'a> Output<'a> {
-    /// The weight, drag, contact and masses the output reads, if any.
-    #[must_use]
-    pub fn dynamics(&self) -> Option<&Dynamics<'a>> {
-        match self {
-            Output::Add => None,
-            Output::Forces(d) | Output::Accelerations(d) | Output::Power(d) => Some(d),
-            Output::Step { dynamics, .. } => Some(dynamics),
-        }
-    }
-}
-
 /// What a stage writes, from the input `(x, v)` of the pass and its accelerations `a` (m/s²).
 /// Positions go to `outs[0]`, velocities to `outs[1]`. Outputs that are not written in place
 /// must not be the inputs themselves: other threads still read those.
@@ -581,29 +569,6 @@ impl Stencil {
         let mut sums = [[0.0; LANES]; 2];
         Self::add_power(&mut sums, power, contact);
         Self::power_total(&sums, contact)
-    }
-
-    /// [`Stencil::sum_power`]'s running sums: the chunks of `power` added lane by lane to
-    /// `sums` (dampers, contact), chunk after chunk.
-    pub(super) fn add_power(sums: &mut [[f64; LANES]; 2], power: &[f64], contact: bool) {
-        let columns = if contact { 2 } else { 1 };
-        for chunk in power.chunks_exact(2 * LANES) {
-            for (sum, part) in sums.iter_mut().zip(chunk.chunks_exact(LANES)).take(columns) {
-                for (s, p) in sum.iter_mut().zip(part) {
-                    *s += p;
-                }
-            }
-        }
-    }
-
-    /// [`Stencil::sum_power`]'s result from its running sums.
-    pub(super) fn power_total(sums: &[[f64; LANES]; 2], contact: bool) -> (f64, f64) {
-        let contact = if contact {
-            Self::lanes_total(&sums[1])
-        } else {
-            0.0
-        };
-        (Self::lanes_total(&sums[0]), contact)
     }
 
     /// The last sum of [`Stencil::sum_power`]: its lane sums added in lane order.

@@ -659,3 +659,15 @@ pub(super) unsafe fn ring_load<V: Lanes>(ring: &[f64], g: &Group, p: usize) -> F
     };
     [load(0), load(1), load(2)]
 }
+
+impl<'a> Output<'a> {
+    /// The weight, drag, contact and masses the output reads, if any.
+    #[must_use]
+    pub fn dynamics(&self) -> Option<&Dynamics<'a>> {
+        match self {
+            Output::Add => None,
+            Output::Forces(d) | Output::Accelerations(d) | Output::Power(d) => Some(d),
+            Output::Step { dynamics, .. } => Some(dynamics),
+        }
+    }
+}

@@ -687,6 +687,29 @@ impl Stencil {
         }
     }
 
+    /// [`Stencil::sum_power`]'s running sums: the chunks of `power` added lane by lane to
+    /// `sums` (dampers, contact), chunk after chunk.
+    pub(super) fn add_power(sums: &mut [[f64; LANES]; 2], power: &[f64], contact: bool) {
+        let columns = if contact { 2 } else { 1 };
+        for chunk in power.chunks_exact(2 * LANES) {
+            for (sum, part) in sums.iter_mut().zip(chunk.chunks_exact(LANES)).take(columns) {
+                for (s, p) in sum.iter_mut().zip(part) {
+                    *s += p;
+                }
+            }
+        }
+    }
+
+    /// [`Stencil::sum_power`]'s result from its running sums.
+    pub(super) fn power_total(sums: &[[f64; LANES]; 2], contact: bool) -> (f64, f64) {
+        let contact = if contact {
+            Self::lanes_total(&sums[1])
+        } else {
+            0.0
+        };
+        (Self::lanes_total(&sums[0]), contact)
+    }
+
     /// The values of a team's power ring ([`TeamPower::ring`]) for `parts` parts.
     #[must_use]
     pub fn power_ring_len(&self, parts: usize) -> usize {
