@@ -5,7 +5,8 @@
 //!
 //! Many steps in one call (`Method::steps`, which runs them as one team of threads on a large
 //! lattice) give the same bits as one step at a time, the simulator's collision response between
-//! a team's steps too; a team's misuse and a panicking part end with a panic, never a hang.
+//! a team's steps too, and so is the dissipated power a team sums while it runs; a team's
+//! misuse and a panicking part end with a panic, never a hang.
 //!
 //! Only one test of this file touches the process-wide pool, on purpose: it sizes the pool
 //! through `SPRINGLAB_THREADS` before anything starts it, which no other test may race.
@@ -63,6 +64,7 @@ fn lattice_runs_are_bit_identical_for_1_2_3_4_and_8_threads() {
     a_landing_cube_is_the_same_on_any_number_of_threads(pool);
     pool.set_threads(8);
     a_team_fails_loudly();
+    a_teams_power_is_the_single_passes_power();
 }
 
 /// `Simulation::advance` with the plane's response between two steps of its fused chunks (a
@@ -164,6 +166,84 @@ fn a_team_fails_loudly() {
         Method::SemiImplicitEuler.step(&r.model, &mut state, 1e-4, &params, &mut work);
     }
     assert!(x == state.x && v == state.v);
+}
+
+/// A team's power totals (its ring of slots, each summed part by part in later passes) are
+/// bit for bit `Stencil::sum_power` of the power buffer of the same pass run alone
+/// (`Stencil::write`), for 1, 2, 3 and 5 parts and more passes than the ring has slots,
+/// without colliders and with a plane the cube moves into (a contact column to sum); the
+/// states too.
+fn a_teams_power_is_the_single_passes_power() {
+    use glam::DVec3;
+    use springlab::physics::collide::Collider;
+    use springlab::physics::stencil::{Output, Stencil, TeamPower, Update};
+    let mut r = Run::new(Workload::JellySe);
+    let stencil = r.model.stencil().expect("a lattice").clone();
+    // The cube moving down through a plane a little above its lowest layer.
+    let lowest = r.state.x.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+    for v in &mut r.state.v {
+        *v = DVec3::new(0.1, -0.5, 0.05);
+    }
+    for contact in [false, true] {
+        if contact {
+            r.model.contact = springlab::physics::collide::ContactParams::course_2021();
+            r.model.colliders = vec![Collider::Plane {
+                point: DVec3::new(0.0, lowest + 0.004, 0.0),
+                normal: DVec3::Y,
+            }];
+        }
+        let dynamics = r.model.dynamics(true);
+        let steps = 7;
+        // Step by step: each pass's power buffer summed.
+        let (mut x, mut v) = (r.state.x.clone(), r.state.v.clone());
+        let mut want = Vec::new();
+        let mut power = vec![0.0; stencil.power_len()];
+        for _ in 0..steps {
+            let (mut x1, mut v1) = (x.clone(), v.clone());
+            let output = Output::Step {
+                dynamics,
+                update: Update::SemiImplicitEuler { dt: 1e-4 },
+                after: None,
+            };
+            stencil.write(&x, &v, [&mut x1, &mut v1, &mut []], &mut power, output);
+            want.push(Stencil::sum_power(&power, contact));
+            (x, v) = (x1, v1);
+        }
+        assert_eq!(
+            want.iter().any(|p| p.1 != 0.0),
+            contact,
+            "the plane's contact power"
+        );
+        for parts in [1, 2, 3, 5] {
+            let (mut x0, mut v0) = (r.state.x.clone(), r.state.v.clone());
+            let (mut x2, mut v2) = (x0.clone(), v0.clone());
+            let mut buffers = [&mut x0[..], &mut v0[..], &mut x2[..], &mut v2[..]];
+            let mut ring = vec![f64::NAN; stencil.power_ring_len(parts)];
+            let mut totals = vec![(f64::NAN, f64::NAN); steps];
+            let power = TeamPower {
+                ring: &mut ring,
+                totals: &mut totals,
+                contact,
+            };
+            stencil.team_with_power(parts, &mut buffers, power, &|crew| {
+                for s in 0..steps {
+                    let mut pass = step_pass(s, dynamics, None);
+                    pass.power = Some(s);
+                    crew.pass(&pass);
+                }
+            });
+            let bits = |p: &[(f64, f64)]| -> Vec<[u64; 2]> {
+                p.iter().map(|p| [p.0.to_bits(), p.1.to_bits()]).collect()
+            };
+            assert_eq!(
+                bits(&totals),
+                bits(&want),
+                "{parts} parts, contact {contact}"
+            );
+            // An odd count of steps ends in the second pair of buffers.
+            assert!(x2 == x && v2 == v, "{parts} parts: states");
+        }
+    }
 }
 
 /// Step `s` of semi-implicit Euler in a team whose buffers 0, 1 and 2, 3 hold two states.

@@ -533,8 +533,8 @@ fn response(dt: f64, account: bool, log: Arc<Mutex<ResponseLog>>) -> Response {
         .unwrap_or_else(PoisonError::into_inner)
         .spheres
         .is_empty();
-    let prepare = move |model: &Model, k: usize, q0: usize, x: &[DVec3], _: &[DVec3]| {
-        parts.prepare(model, k, q0, x, with_boxes);
+    let prepare = move |model: &Model, k: usize, q0: usize, x: &[DVec3], v: &[DVec3]| {
+        parts.prepare(model, k, q0, x, Some(v), with_boxes);
     };
     let respond = move |model: &Model, x: &mut [DVec3], v: &mut [DVec3]| {
         let mut log = log.lock().unwrap_or_else(PoisonError::into_inner);
@@ -555,7 +555,7 @@ fn response(dt: f64, account: bool, log: Arc<Mutex<ResponseLog>>) -> Response {
                 (taken.parts(), calm)
             }
             None => {
-                whole.sum_up(model, 0, &x[..n], with_boxes);
+                whole.sum_up(model, 0, &x[..n], Some(&v[..n]), with_boxes);
                 let calm = whole.calm();
                 (std::slice::from_mut(whole), calm)
             }

@@ -272,6 +272,9 @@ pub struct Workspace {
     pub(crate) rods: Vec<crate::physics::constraints::Rod>,
     /// Verlet: a chain's rods and particles laid out for the fast projection.
     pub(crate) chain: crate::physics::constraints::ChainScratch,
+    /// Verlet's accounting: the kinetic and gravitational term of each particle before the
+    /// projection (J, `fast::energy::kinetic_gravity_terms`).
+    pub(crate) energy_terms: Vec<f64>,
     /// Statistics of the last implicit solve.
     pub last_solve: SolveStats,
     /// Implicit Euler: the contact constraints of the current step.
@@ -293,8 +296,8 @@ pub struct Workspace {
     pub(crate) power_f: PowerScratch,
     /// With `account`: what each step of the last [`Method::steps`] dissipated, in order.
     pub(crate) step_dissipated: Vec<Dissipated>,
-    /// Scratch of the many-step paths: each step's power `(dampers and drag, contact)` (W),
-    /// and the power slots of a team ([`Stencil::team_with_power`]).
+    /// Scratch of the many-step paths: each step's (or pass's) power `(dampers and drag,
+    /// contact)` (W), and the power ring of a team ([`Stencil::team_with_power`]).
     pub(crate) step_powers: Vec<(f64, f64)>,
     pub(crate) power_slots: Vec<f64>,
     /// When true, every method runs its textbook loops even on a lattice, where it otherwise
@@ -471,7 +474,8 @@ fn stencil_power(
         output,
         parts,
     );
-    let (dampers_and_drag, contact) = Stencil::sum_power(&scratch.chunks);
+    let contact = !model.colliders.is_empty();
+    let (dampers_and_drag, contact) = Stencil::sum_power(&scratch.chunks, contact);
     Power {
         dampers_and_drag,
         contact,
@@ -536,7 +540,8 @@ fn fused_pass(
         return Power::default();
     }
     stencil.write(x, v, outs, scratch.chunks(stencil), output);
-    let (dampers_and_drag, contact) = Stencil::sum_power(&scratch.chunks);
+    let contact = output.dynamics().is_some_and(|d| !d.colliders.is_empty());
+    let (dampers_and_drag, contact) = Stencil::sum_power(&scratch.chunks, contact);
     Power {
         dampers_and_drag,
         contact,
@@ -628,47 +633,6 @@ fn stage_then_step(
     *projected = true;
     state.history_valid = false;
     2
-}
-
-/// At most this many values of power slots in one team call (16 MiB); a many-step path with
-/// energy accounting runs its steps in batches of as many steps as fit
-/// ([`steps_per_team`]).
-const POWER_SLOT_VALUES: usize = 1 << 21;
-
-/// Steps per team call of a many-step path with `passes` passes per step: all `n` without
-/// accounting, else as many as [`POWER_SLOT_VALUES`] hold (at least one).
-fn steps_per_team(stencil: &Stencil, account: bool, passes: usize, n: u64) -> u64 {
-    if !account {
-        return n;
-    }
-    let fit = POWER_SLOT_VALUES / (passes * stencil.power_len()).max(1);
-    n.min(fit.max(1) as u64)
-}
-
-/// The powers of slots `0..count` of a team's power buffer, each as [`slot_power`] sums it,
-/// the slots shared out between the pool's threads (after the team, whose threads would
-/// otherwise wait while one sums them all).
-fn slot_powers(stencil: &Stencil, slots: &[f64], count: usize) -> Vec<Power> {
-    let mut powers = vec![Power::default(); count];
-    let mut unused = vec![(); count];
-    let pool = crate::physics::pool::Pool::global();
-    let parts = pool.threads().min(count);
-    pool.for_each_part(&mut powers, &mut unused, parts, |start, piece, _| {
-        for (j, power) in piece.iter_mut().enumerate() {
-            *power = slot_power(stencil, slots, start + j);
-        }
-    });
-    powers
-}
-
-/// The power of slot `k` of a team's power buffer ([`Stencil::team_with_power`]).
-fn slot_power(stencil: &Stencil, slots: &[f64], k: usize) -> Power {
-    let len = stencil.power_len();
-    let (dampers_and_drag, contact) = Stencil::sum_power(&slots[k * len..(k + 1) * len]);
-    Power {
-        dampers_and_drag,
-        contact,
-    }
 }
 
 /// The projection as the stencil's per-tile hook.

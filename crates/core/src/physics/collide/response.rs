@@ -387,16 +387,7 @@ pub(super) fn respond(
     x: &mut DVec3,
     v: &mut DVec3,
 ) -> Option<f64> {
-    if !collider.may_touch(*x, params.epsilon + offset) {
-        return None;
-    }
-    let Contact { phi, normal } = collider.contact(*x)?;
-    // A sphere touches when its centre is within its radius of the surface.
-    let phi = phi - offset;
-    let v_n = v.dot(normal);
-    if phi >= params.epsilon || (phi >= 0.0 && v_n >= 0.0) {
-        return None;
-    }
+    let (phi, normal, v_n) = touching(collider, offset, params, *x, *v)?;
     let mut v_t = *v - v_n * normal;
     // Squared normal speed at the surface: s² = v_N² - 2 Δu, with Δu = u(x + Δx) - u(x) and
     // Δx = -φ N.
@@ -439,6 +430,36 @@ pub(super) fn respond(
     }
     *v = v_t + v_n_new * normal;
     Some(debt)
+}
+
+/// The contact [`respond`] answers for a point at `x` (m) moving at `v` (m/s): its distance
+/// `φ` past the surface (m, less `offset`), the normal and the normal speed `v·N` (m/s); `None`
+/// when [`respond`] leaves the point as it is (out of reach, or within `ε` and not moving in).
+fn touching(
+    collider: &Collider,
+    offset: f64,
+    params: &ContactParams,
+    x: DVec3,
+    v: DVec3,
+) -> Option<(f64, DVec3, f64)> {
+    if !collider.may_touch(x, params.epsilon + offset) {
+        return None;
+    }
+    let Contact { phi, normal } = collider.contact(x)?;
+    // A sphere touches when its centre is within its radius of the surface.
+    let phi = phi - offset;
+    let v_n = v.dot(normal);
+    if phi >= params.epsilon || (phi >= 0.0 && v_n >= 0.0) {
+        return None;
+    }
+    Some((phi, normal, v_n))
+}
+
+/// True when [`respond`] would answer a particle at `x` (m) moving at `v` (m/s) with a change
+/// (its tests before it reads the body's springs): a particle for which this is false for
+/// every collider is one [`resolve`] leaves as it is.
+pub(super) fn responds(collider: &Collider, params: &ContactParams, x: DVec3, v: DVec3) -> bool {
+    touching(collider, 0.0, params, x, v).is_some()
 }
 
 /// After a particle's `x` or `v` changed outside the integrator: Verlet's implied velocity

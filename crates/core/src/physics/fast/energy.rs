@@ -13,6 +13,12 @@
 //! AVX-512), then added in particle order as the textbook loop adds them. The operations are
 //! the loop's (no fused multiply-add: Rust does not contract), so the sum is the same bits
 //! (tested).
+//!
+//! Verlet's accounting takes `E` before and after its projection (`x` moved, `x_prev` not):
+//! [`kinetic_gravity_terms`] keeps the terms before it, and [`kinetic_gravity_pair`] adds them
+//! up beside the terms after it, two independent sums in one loop (each in particle order, so
+//! the same bits), where two calls of [`kinetic_gravity`] wait twice for one chain of `n`
+//! dependent additions.
 
 use glam::DVec3;
 
@@ -26,6 +32,8 @@ const BLOCK: usize = 64;
 ///
 /// # Panics
 /// If `mass` or `x_prev` is shorter than `x`.
+// The one-sum form (the tests' reference for the pair; Verlet sums two at once).
+#[cfg_attr(not(test), allow(dead_code))]
 #[must_use]
 pub(crate) fn kinetic_gravity(
     mass: &[f64],
@@ -46,6 +54,8 @@ pub(crate) fn kinetic_gravity(
     }
 }
 
+// The one-sum form (the tests' reference for the pair; Verlet sums two at once).
+#[cfg_attr(not(test), allow(dead_code))]
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 fn kinetic_gravity_avx512(
@@ -58,6 +68,8 @@ fn kinetic_gravity_avx512(
     blocks(mass, gravity, x, x_prev, dt)
 }
 
+// The one-sum form (the tests' reference for the pair; Verlet sums two at once).
+#[cfg_attr(not(test), allow(dead_code))]
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn kinetic_gravity_avx2(
@@ -70,7 +82,135 @@ fn kinetic_gravity_avx2(
     blocks(mass, gravity, x, x_prev, dt)
 }
 
+/// The terms `t_i` of the module docs into `terms` (resized to `x.len()`), as
+/// [`kinetic_gravity`] computes them.
+///
+/// # Panics
+/// If `mass` or `x_prev` is shorter than `x`.
+pub(crate) fn kinetic_gravity_terms(
+    mass: &[f64],
+    gravity: DVec3,
+    x: &[DVec3],
+    x_prev: &[DVec3],
+    dt: f64,
+    terms: &mut Vec<f64>,
+) {
+    let (mass, x_prev) = (&mass[..x.len()], &x_prev[..x.len()]);
+    terms.resize(x.len(), 0.0);
+    match Kernel::best() {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `Kernel::best` chooses `Avx512` only on a CPU with AVX-512F.
+        Kernel::Avx512 => unsafe { terms_avx512(mass, gravity, x, x_prev, dt, terms) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as above, AVX2.
+        Kernel::Avx2 => unsafe { terms_avx2(mass, gravity, x, x_prev, dt, terms) },
+        _ => all_terms(mass, gravity, x, x_prev, dt, terms),
+    }
+}
+
+/// `(E_before, E)`: the sum of `before` (terms of [`kinetic_gravity_terms`]) and `E` of the
+/// module docs at `x`, each in particle order, in one loop (module docs): bit for bit the sum
+/// of `before` and [`kinetic_gravity`].
+///
+/// # Panics
+/// If `mass`, `x_prev` or `before` is shorter than `x`.
+pub(crate) fn kinetic_gravity_pair(
+    mass: &[f64],
+    gravity: DVec3,
+    x: &[DVec3],
+    x_prev: &[DVec3],
+    dt: f64,
+    before: &[f64],
+) -> (f64, f64) {
+    let (mass, x_prev, before) = (&mass[..x.len()], &x_prev[..x.len()], &before[..x.len()]);
+    match Kernel::best() {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as in `kinetic_gravity_terms`.
+        Kernel::Avx512 => unsafe { pair_avx512(mass, gravity, x, x_prev, dt, before) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as above, AVX2.
+        Kernel::Avx2 => unsafe { pair_avx2(mass, gravity, x, x_prev, dt, before) },
+        _ => pair(mass, gravity, x, x_prev, dt, before),
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn terms_avx512(m: &[f64], g: DVec3, x: &[DVec3], xp: &[DVec3], dt: f64, t: &mut [f64]) {
+    all_terms(m, g, x, xp, dt, t);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn terms_avx2(m: &[f64], g: DVec3, x: &[DVec3], xp: &[DVec3], dt: f64, t: &mut [f64]) {
+    all_terms(m, g, x, xp, dt, t);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn pair_avx512(m: &[f64], g: DVec3, x: &[DVec3], xp: &[DVec3], dt: f64, b: &[f64]) -> (f64, f64) {
+    pair(m, g, x, xp, dt, b)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn pair_avx2(m: &[f64], g: DVec3, x: &[DVec3], xp: &[DVec3], dt: f64, b: &[f64]) -> (f64, f64) {
+    pair(m, g, x, xp, dt, b)
+}
+
+/// One particle's term `t_i` (module docs).
+#[inline(always)]
+fn term(m: f64, gravity: DVec3, x: DVec3, x_prev: DVec3, dt: f64) -> f64 {
+    let v = (x - x_prev) / dt;
+    0.5 * m * v.length_squared() - m * gravity.dot(x)
+}
+
+/// Every term into `terms`.
+#[inline(always)]
+fn all_terms(
+    mass: &[f64],
+    gravity: DVec3,
+    x: &[DVec3],
+    x_prev: &[DVec3],
+    dt: f64,
+    terms: &mut [f64],
+) {
+    for (((t, &m), &x), &x_prev) in terms.iter_mut().zip(mass).zip(x).zip(x_prev) {
+        *t = term(m, gravity, x, x_prev, dt);
+    }
+}
+
+/// The terms at `x` a block at a time, then their sum beside the sum of `before`.
+#[inline(always)]
+fn pair(
+    mass: &[f64],
+    gravity: DVec3,
+    x: &[DVec3],
+    x_prev: &[DVec3],
+    dt: f64,
+    before: &[f64],
+) -> (f64, f64) {
+    let (mut e_before, mut e) = (0.0, 0.0);
+    let mut terms = [0.0; BLOCK];
+    for (((m, x), x_prev), before) in mass
+        .chunks(BLOCK)
+        .zip(x.chunks(BLOCK))
+        .zip(x_prev.chunks(BLOCK))
+        .zip(before.chunks(BLOCK))
+    {
+        let terms = &mut terms[..x.len()];
+        all_terms(m, gravity, x, x_prev, dt, terms);
+        for (t, b) in terms.iter().zip(before) {
+            e_before += b;
+            e += t;
+        }
+    }
+    (e_before, e)
+}
+
 /// The terms of a block, then their sum (module docs).
+// The one-sum form (the tests' reference for the pair; Verlet sums two at once).
+#[cfg_attr(not(test), allow(dead_code))]
 #[inline(always)]
 fn blocks(mass: &[f64], gravity: DVec3, x: &[DVec3], x_prev: &[DVec3], dt: f64) -> f64 {
     let mut e = 0.0;
@@ -81,10 +221,7 @@ fn blocks(mass: &[f64], gravity: DVec3, x: &[DVec3], x_prev: &[DVec3], dt: f64) 
         .zip(x_prev.chunks(BLOCK))
     {
         let terms = &mut terms[..x.len()];
-        for (((t, &m), &x), &x_prev) in terms.iter_mut().zip(m).zip(x).zip(x_prev) {
-            let v = (x - x_prev) / dt;
-            *t = 0.5 * m * v.length_squared() - m * gravity.dot(x);
-        }
+        all_terms(m, gravity, x, x_prev, dt, terms);
         for t in terms.iter() {
             e += t;
         }
@@ -129,6 +266,14 @@ mod tests {
                     want.to_bits(),
                     "n = {n}, dt = {dt}"
                 );
+                // The pair: the terms at one position set, summed beside the sum at another.
+                let moved: Vec<DVec3> = x.iter().map(|p| *p * 0.75 + DVec3::splat(1e-3)).collect();
+                let mut before = Vec::new();
+                kinetic_gravity_terms(&mass, gravity, &moved, &x_prev, dt, &mut before);
+                let (e_moved, e) = kinetic_gravity_pair(&mass, gravity, &x, &x_prev, dt, &before);
+                let want_moved = textbook(&mass, gravity, &moved, &x_prev, dt);
+                assert_eq!(e_moved.to_bits(), want_moved.to_bits(), "pair, n = {n}");
+                assert_eq!(e.to_bits(), want.to_bits(), "pair, n = {n}");
                 #[cfg(target_arch = "x86_64")]
                 for (kernel, f) in [
                     (

@@ -129,7 +129,7 @@ use kernels::range_portable;
 #[cfg(target_arch = "x86_64")]
 use kernels::{range_avx2, range_avx512};
 use passes::{Part, SCRATCH, Scratch, cut, take};
-pub use team::{Crew, PartFn, Pass, TeamUpdate};
+pub use team::{Crew, PartFn, Pass, TeamPower, TeamUpdate};
 
 /// At most this many offset groups: more would make the passes slower than the spring list.
 const MAX_GROUPS: usize = 32;
@@ -561,17 +561,14 @@ impl Stencil {
 
     /// The dissipated power in a buffer written by [`Stencil::write`]: `(dampers and drag,
     /// contact)` (W), added chunk by chunk in a fixed order (so the same for any split).
+    /// `contact`: the pass had colliders ([`Dynamics::colliders`]). Without, the pass writes
+    /// no contact values (they would all be `+0`, whose sum is `+0`): the contact power is
+    /// `+0` and only the dampers' half of the buffer is read.
     #[must_use]
-    pub fn sum_power(power: &[f64]) -> (f64, f64) {
+    pub fn sum_power(power: &[f64], contact: bool) -> (f64, f64) {
         let mut sums = [[0.0; LANES]; 2];
-        for chunk in power.chunks_exact(2 * LANES) {
-            for (sum, part) in sums.iter_mut().zip(chunk.chunks_exact(LANES)) {
-                for (s, p) in sum.iter_mut().zip(part) {
-                    *s += p;
-                }
-            }
-        }
-        (Self::lanes_total(&sums[0]), Self::lanes_total(&sums[1]))
+        Self::add_power(&mut sums, power, contact);
+        Self::power_total(&sums, contact)
     }
 
     /// The last sum of [`Stencil::sum_power`]: its lane sums added in lane order.

@@ -38,9 +38,9 @@
 use crate::physics::energy::{Dissipated, Power};
 use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, polynomial};
-use crate::physics::integrators::{explicit_step, Workspace, after, fused_pass, power_if, slot_powers, steps_per_team, team};
+use crate::physics::integrators::{explicit_step, Workspace, after, fused_pass, power_if, team};
 use crate::physics::particles::State;
-use crate::physics::stencil::{Base, Output, PartFn, Pass, Stencil, TeamUpdate, Update};
+use crate::physics::stencil::{Base, Output, PartFn, Pass, Stencil, TeamPower, TeamUpdate, Update};
 
 /// The method as the formula writes it: four force evaluations, the stage loops between them.
 pub(super) fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
@@ -213,11 +213,10 @@ pub(super) fn steps(
     let (half, sixth) = (0.5 * dt, dt / 6.0);
     let dynamics = model.dynamics(true);
     let account = work.account;
-    let batch = steps_per_team(stencil, account, 4, n);
     let after = after(&work.projection);
     // The buffers of `step_fused`, by index: the state (0, 1), x_2 and x_4 (2), x_3 (3),
     // v_2, v_3, v_4 (4, 5, 6), k1v, k2v, k3v (7, 8, 9). With accounting, pass j of step s
-    // of a batch writes its power into slot 4 s + j.
+    // writes its power into slot 4 s + j.
     // The first stage's base is its own input, the state (as in `step_fused`).
     let stage = |x, v, outs, h, base| Pass {
         x,
@@ -251,6 +250,7 @@ pub(super) fn steps(
         k,
         kx,
         power_slots,
+        step_powers,
         step_dissipated,
         response,
         ..
@@ -273,45 +273,49 @@ pub(super) fn steps(
         &mut k2v[..],
         &mut k3v[..],
     ];
-    let slots = if account {
-        4 * stencil.power_len() * batch as usize
+    let (ring, totals) = if account {
+        (stencil.power_ring_len(parts), 4 * n as usize)
     } else {
-        0
+        (0, 0)
     };
-    power_slots.resize(slots, 0.0);
-    let mut done = 0;
-    while done < n {
-        let count = batch.min(n - done);
-        stencil.team_with_power(parts, &mut buffers, power_slots, &|crew| {
-            for s in 0..count as usize {
-                for (j, pass) in passes.iter().enumerate() {
-                    let mut pass = *pass;
-                    pass.power = account.then_some(4 * s + j);
-                    // The last pass writes the state, which the response's summary reads.
-                    crew.pass_then(&pass, if j == 3 { prepare } else { None });
-                }
-                if let Some(response) = response {
-                    // The step's last pass wrote the state (buffers 0 and 1).
-                    crew.serial(0, 1, &|x, v| (response.0)(model, x, v));
-                }
+    power_slots.resize(ring, 0.0);
+    step_powers.clear();
+    step_powers.resize(totals, (0.0, 0.0));
+    let power = TeamPower {
+        ring: power_slots,
+        totals: step_powers,
+        contact: !dynamics.colliders.is_empty(),
+    };
+    stencil.team_with_power(parts, &mut buffers, power, &|crew| {
+        for s in 0..n as usize {
+            for (j, pass) in passes.iter().enumerate() {
+                let mut pass = *pass;
+                pass.power = account.then_some(4 * s + j);
+                // The last pass writes the state, which the response's summary reads.
+                crew.pass_then(&pass, if j == 3 { prepare } else { None });
             }
-        });
-        if account {
-            let powers = slot_powers(stencil, power_slots, 4 * count as usize);
-            for s in 0..count as usize {
-                let p = |j| powers[4 * s + j];
-                // D_{n+1} = D_n + dt/6 (P1 + 2 P2 + 2 P3 + P4), as `step_fused` adds it.
-                let power = Power::default()
-                    .plus(1.0, p(0))
-                    .plus(2.0, p(1))
-                    .plus(2.0, p(2))
-                    .plus(1.0, p(3));
-                let mut d = Dissipated::default();
-                d.add_power(sixth, power);
-                step_dissipated.push(d.summed());
+            if let Some(response) = response {
+                // The step's last pass wrote the state (buffers 0 and 1).
+                crew.serial(0, 1, &|x, v| (response.0)(model, x, v));
             }
         }
-        done += count;
+    });
+    if account {
+        for powers in step_powers.chunks_exact(4) {
+            let p = |j: usize| Power {
+                dampers_and_drag: powers[j].0,
+                contact: powers[j].1,
+            };
+            // D_{n+1} = D_n + dt/6 (P1 + 2 P2 + 2 P3 + P4), as `step_fused` adds it.
+            let power = Power::default()
+                .plus(1.0, p(0))
+                .plus(2.0, p(1))
+                .plus(2.0, p(2))
+                .plus(1.0, p(3));
+            let mut d = Dissipated::default();
+            d.add_power(sixth, power);
+            step_dissipated.push(d.summed());
+        }
     }
     work.projected = true;
     state.history_valid = false;

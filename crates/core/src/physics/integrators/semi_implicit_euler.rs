@@ -32,9 +32,9 @@
 use crate::physics::forces::{Model, accelerations};
 use crate::physics::integrators::declaration::{Declaration, OscillatorLimit, Scratch, StabilityFunction, one_evaluation};
 use crate::physics::energy::{Dissipated, Power};
-use crate::physics::integrators::{explicit_step, Workspace, after, fused, one_pass_step, power_if, slot_powers, steps_per_team, team};
+use crate::physics::integrators::{explicit_step, Workspace, after, fused, one_pass_step, power_if, team};
 use crate::physics::particles::State;
-use crate::physics::stencil::{PartFn, Pass, Stencil, TeamUpdate, Update};
+use crate::physics::stencil::{PartFn, Pass, Stencil, TeamPower, TeamUpdate, Update};
 
 /// The method as the formula writes it: one force evaluation, then the two lines.
 pub(super) fn textbook(model: &Model, state: &mut State, dt: f64, work: &mut Workspace) -> u64 {
@@ -122,9 +122,8 @@ pub(super) fn steps(
         }
     }
     let (stencil, parts) = team(model, work)?;
-    let batch = steps_per_team(stencil, account, 1, n);
     // Buffers 0, 1: the state; 2, 3: the stage. Step s reads one pair and writes the other;
-    // with accounting its power goes to slot s of the batch.
+    // with accounting its power goes to slot s.
     let pass = |s: u64, slot: usize| {
         let (from, to) = if s.is_multiple_of(2) { (0, 2) } else { (2, 0) };
         Pass {
@@ -141,6 +140,7 @@ pub(super) fn steps(
         x_stage,
         v_stage,
         power_slots,
+        step_powers,
         step_dissipated,
         response,
         ..
@@ -149,36 +149,41 @@ pub(super) fn steps(
     // The response's summary of each part, made by the thread that wrote it.
     let prepare_part = response.and_then(|r| r.part_summary(model));
     let prepare: Option<PartFn> = prepare_part.as_ref().map(|f| f as PartFn);
-    let slots = if account {
-        stencil.power_len() * batch as usize
+    let (ring, totals) = if account {
+        (stencil.power_ring_len(parts), n as usize)
     } else {
-        0
+        (0, 0)
     };
-    power_slots.resize(slots, 0.0);
+    power_slots.resize(ring, 0.0);
+    step_powers.clear();
+    step_powers.resize(totals, (0.0, 0.0));
     let mut buffers = [
         &mut state.x[..],
         &mut state.v[..],
         &mut x_stage[..],
         &mut v_stage[..],
     ];
-    let mut done = 0;
-    while done < n {
-        let count = batch.min(n - done);
-        stencil.team_with_power(parts, &mut buffers, power_slots, &|crew| {
-            for s in done..done + count {
-                crew.pass_then(&pass(s, (s - done) as usize), prepare);
-                if let Some(response) = response {
-                    // Between this step and the next, on the buffers the step wrote.
-                    let to = if s.is_multiple_of(2) { 2 } else { 0 };
-                    crew.serial(to, to + 1, &|x, v| (response.0)(model, x, v));
-                }
+    let power = TeamPower {
+        ring: power_slots,
+        totals: step_powers,
+        contact: !dynamics.colliders.is_empty(),
+    };
+    stencil.team_with_power(parts, &mut buffers, power, &|crew| {
+        for s in 0..n {
+            crew.pass_then(&pass(s, s as usize), prepare);
+            if let Some(response) = response {
+                // Between this step and the next, on the buffers the step wrote.
+                let to = if s.is_multiple_of(2) { 2 } else { 0 };
+                crew.serial(to, to + 1, &|x, v| (response.0)(model, x, v));
             }
-        });
-        if account {
-            let powers = slot_powers(stencil, power_slots, count as usize);
-            step_dissipated.extend(powers.into_iter().map(per_step));
         }
-        done += count;
+    });
+    if account {
+        let powers = step_powers.iter().map(|&(dampers_and_drag, contact)| Power {
+            dampers_and_drag,
+            contact,
+        });
+        step_dissipated.extend(powers.map(per_step));
     }
     if !n.is_multiple_of(2) {
         std::mem::swap(&mut state.x, x_stage);

@@ -65,12 +65,15 @@
 use glam::DVec3;
 
 use crate::physics::constraints::{prepare_rods, project_distances, project_distances_fast};
+#[cfg(test)]
 use crate::physics::fast::energy::kinetic_gravity;
+use crate::physics::fast::energy::{kinetic_gravity_pair, kinetic_gravity_terms};
 use crate::physics::forces::{Model, accelerations};
 
 use crate::physics::integrators::declaration::{
     Declaration, OscillatorLimit, Scratch, StabilityFunction,
 };
+use crate::physics::energy::Power;
 use crate::physics::integrators::{MethodParams, Workspace, power_if};
 use crate::physics::particles::State;
 
@@ -124,6 +127,7 @@ fn step(
         account,
         dissipated,
         power_f,
+        energy_terms,
         ..
     } = work;
     let (account, textbook) = (*account, *textbook);
@@ -136,7 +140,20 @@ fn step(
         }
     }
     // The dampers and drag saw v_n = (x_n - x_{n-1})/dt: D += dt P(x_n, v_n), when accounting.
-    dissipated.add_power(dt, power_if(account, model, &state.x, &state.v, power_f));
+    // Without dampers, drag, colliders or a stencil's pass, `dissipated_power` adds nothing to
+    // its `+0` sums: `+0` (`Power::default`), found in the walk over the springs that tells
+    // rods (`spring_kinds`).
+    let kinds = account.then(|| spring_kinds(model));
+    let power = if kinds.is_some_and(|k| !k.dampers)
+        && model.drag == 0.0
+        && model.colliders.is_empty()
+        && model.stencil().is_none()
+    {
+        Power::default()
+    } else {
+        power_if(account, model, &state.x, &state.v, power_f)
+    };
+    dissipated.add_power(dt, power);
     let keep = 1.0 - params.verlet_damping;
     let rate = params.verlet_damping_rate;
     let inv_dt2 = 1.0 / dt2;
@@ -165,9 +182,20 @@ fn step(
         state.x_prev[i] = x_n;
     }
     if params.iterations > 0 {
-        let only_rods = account && rods_only(model);
-        let before = if account {
-            mechanical_energy(model, &state.x, &state.x_prev, dt, only_rods)
+        let only_rods = kinds.is_some_and(|k| k.rods);
+        // The energy before the projection: its elastic term now, its kinetic and
+        // gravitational terms kept and summed beside those after (`fast/energy.rs`), as
+        // `mechanical_energy` sums each.
+        let elastic_before = if account {
+            kinetic_gravity_terms(
+                &model.mass,
+                model.gravity,
+                &state.x,
+                &state.x_prev,
+                dt,
+                energy_terms,
+            );
+            elastic_energy(model, &state.x, only_rods)
         } else {
             0.0
         };
@@ -179,9 +207,18 @@ fn step(
             project_distances_fast(rods, &mut state.x, params.iterations, chain);
         }
         if account {
+            let (e_before, e) = kinetic_gravity_pair(
+                &model.mass,
+                model.gravity,
+                &state.x,
+                &state.x_prev,
+                dt,
+                energy_terms,
+            );
+            let before = e_before + elastic_before;
+            let after = e + elastic_energy(model, &state.x, only_rods);
             // Projection is inelastic: what it takes out (or, rarely, puts in).
-            dissipated.method +=
-                before - mechanical_energy(model, &state.x, &state.x_prev, dt, only_rods);
+            dissipated.method += before - after;
         }
     }
     let inv_dt = 1.0 / dt;
@@ -202,13 +239,20 @@ fn step(
 /// (`rods`, [`rods_only`]) and every coordinate is below [`BOUNDED`] in magnitude (so every
 /// `|x_b - x_a|² ≤ 3 (2·10¹⁵⁰)²` is finite), every term is `+0`, and the sum of them is the sum
 /// of one (the sum of none, `-0`, without springs): no spring is read.
+#[cfg(test)]
 fn mechanical_energy(model: &Model, x: &[DVec3], x_prev: &[DVec3], dt: f64, rods: bool) -> f64 {
     // e = Σ ½ m |(x - x_prev)/dt|² - m g·x in particle order, its terms a block at a time
     // with the widest vectors (`fast/energy.rs`, the same bits as the loop).
     let e = kinetic_gravity(&model.mass, model.gravity, x, x_prev, dt);
+    e + elastic_energy(model, x, rods)
+}
+
+/// The elastic term of [`mechanical_energy`] (J): the sum of the springs' energies in spring
+/// order, rods as `+0` (see there).
+fn elastic_energy(model: &Model, x: &[DVec3], rods: bool) -> f64 {
     if rods && bounded(x) {
         let zeros = std::iter::repeat_n(0.0, model.springs.len().min(1));
-        return e + zeros.sum::<f64>();
+        return zeros.sum::<f64>();
     }
     let elastic = model.springs.iter().map(|s| {
         let rod = s.stiffness == 0.0
@@ -218,7 +262,7 @@ fn mechanical_energy(model: &Model, x: &[DVec3], x_prev: &[DVec3], dt: f64, rods
                 .is_finite();
         if rod { 0.0 } else { s.energy(x) }
     });
-    e + elastic.sum::<f64>()
+    elastic.sum::<f64>()
 }
 
 /// A coordinate below this in magnitude (m) keeps a spring's squared length finite
@@ -227,8 +271,32 @@ const BOUNDED: f64 = 1e150;
 
 /// True when every spring of `model` is a rod of [`mechanical_energy`]: no stiffness, a finite
 /// rest length.
+#[cfg(test)]
 fn rods_only(model: &Model) -> bool {
-    (model.springs.iter()).all(|s| s.stiffness == 0.0 && s.rest_length.is_finite())
+    spring_kinds(model).rods
+}
+
+/// What the accounting asks of the springs, in one walk over them.
+#[derive(Clone, Copy)]
+struct SpringKinds {
+    /// Every spring is a rod ([`rods_only`]).
+    rods: bool,
+    /// Some spring has a damper.
+    dampers: bool,
+}
+
+/// [`SpringKinds`] of `model`'s springs.
+fn spring_kinds(model: &Model) -> SpringKinds {
+    (model.springs.iter()).fold(
+        SpringKinds {
+            rods: true,
+            dampers: false,
+        },
+        |k, s| SpringKinds {
+            rods: k.rods & (s.stiffness == 0.0) & s.rest_length.is_finite(),
+            dampers: k.dampers | (s.damping != 0.0),
+        },
+    )
 }
 
 /// True when every coordinate of `x` is below [`BOUNDED`] in magnitude (false for NaN).
@@ -262,6 +330,37 @@ mod tests {
             damping: 0.0,
             kind: SpringKind::Struct,
         }
+    }
+
+    /// The step's shortcut: without dampers, drag or colliders the dissipated power is
+    /// `Power::default()` bit for bit (positions and velocities with NaN, infinities and
+    /// signed zeros), and `spring_kinds` finds a damper wherever one is.
+    #[test]
+    fn without_dampers_the_power_is_zero_bit_for_bit() {
+        use crate::physics::energy::dissipated_power;
+        let x = vec![
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(f64::NAN, 0.9, -0.0),
+            DVec3::new(0.3, f64::INFINITY, -0.1),
+            DVec3::new(-0.2, 1.3, 0.4),
+        ];
+        let v = vec![DVec3::new(-0.0, 2.0, f64::NAN), DVec3::ZERO, DVec3::splat(-1.0), DVec3::X];
+        let springs = vec![spring(0, 1, 0.25, 0.0), spring(1, 2, 0.5, 100.0), spring(2, 3, 0.1, 0.0)];
+        let mut model = Model::new(
+            vec![0.1, 0.2, 0.3, 0.4],
+            &[true, false, false, false],
+            springs,
+            DVec3::new(0.0, -9.81, 0.0),
+            0.0,
+        );
+        assert!(!spring_kinds(&model).dampers && !spring_kinds(&model).rods);
+        let mut scratch = Vec::new();
+        let p = dissipated_power(&model, &x, &v, &mut scratch);
+        let zero = Power::default();
+        assert_eq!(p.dampers_and_drag.to_bits(), zero.dampers_and_drag.to_bits());
+        assert_eq!(p.contact.to_bits(), zero.contact.to_bits());
+        model.springs[2].damping = 0.5;
+        assert!(spring_kinds(&model).dampers);
     }
 
     #[test]

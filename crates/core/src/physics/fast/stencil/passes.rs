@@ -488,7 +488,10 @@ pub(super) fn finish<V: Lanes, const POWER: bool, const WHOLE: bool>(
         spring_power
             .add(drag)
             .store(dampers.try_into().expect("a chunk"));
-        contact_power.store(contact.try_into().expect("a chunk"));
+        // Without colliders no contact values (`Stencil::sum_power` reads none then).
+        if !d.colliders.is_empty() {
+            contact_power.store(contact.try_into().expect("a chunk"));
+        }
     }
     let a = [f[0].mul(w), f[1].mul(w), f[2].mul(w)];
     match *output {
@@ -655,4 +658,16 @@ pub(super) unsafe fn ring_load<V: Lanes>(ring: &[f64], g: &Group, p: usize) -> F
         V::load(&*ring.as_ptr().add(g.ring_offset + c * stride + slot).cast())
     };
     [load(0), load(1), load(2)]
+}
+
+impl<'a> Output<'a> {
+    /// The weight, drag, contact and masses the output reads, if any.
+    #[must_use]
+    pub fn dynamics(&self) -> Option<&Dynamics<'a>> {
+        match self {
+            Output::Add => None,
+            Output::Forces(d) | Output::Accelerations(d) | Output::Power(d) => Some(d),
+            Output::Step { dynamics, .. } => Some(dynamics),
+        }
+    }
 }

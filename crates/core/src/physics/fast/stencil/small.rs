@@ -393,11 +393,11 @@ fn small_body<V: Lanes, const POWER: bool>(
                     let v2 = v[0].mul(v[0]).add(v[1].mul(v[1])).add(v[2].mul(v[2]));
                     V::splat(d.drag).mul(v2).select(free)
                 };
-                let (dampers, contact) = power_buffer[2 * q..2 * q + 2 * LANES].split_at_mut(LANES);
+                let dampers = &mut power_buffer[2 * q..2 * q + LANES];
                 V::load(lanes(spring_power, q))
                     .add(drag)
                     .store(dampers.try_into().expect("a chunk"));
-                V::zero().store(contact.try_into().expect("a chunk"));
+                // No contact values: `Stencil::sum_power` reads none without colliders.
             }
             let a = [f[0].mul(w), f[1].mul(w), f[2].mul(w)];
             let (x_new, v_new) = semi_implicit_euler(x, v, a, dt_lanes);
@@ -411,7 +411,7 @@ fn small_body<V: Lanes, const POWER: bool>(
             }
         }
         if POWER {
-            powers.push(Stencil::sum_power(power_buffer));
+            powers.push(Stencil::sum_power(power_buffer, false));
         }
     }
 }

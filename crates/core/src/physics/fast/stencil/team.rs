@@ -22,11 +22,25 @@
 //! [`Stencil::write`] computes it with the same split, whichever thread runs it; so `n` steps in
 //! a team are bit for bit `n` single steps, for any number of parts and threads (tested).
 //!
-//! **Dissipated power.** A pass may name a slot of the team's power buffer
-//! ([`Stencil::team_with_power`], [`Pass::power`]): each part writes its piece of the slot as
-//! [`Stencil::write_in_parts`] cuts its power buffer, so [`Stencil::sum_power`] of the slot is
-//! the pass's power bit for bit. The slots are summed after the team, so they are never read
-//! while it runs (energy accounting in many steps at once, `Simulation::advance`).
+//! **Dissipated power.** A pass may name a slot for its dissipated power
+//! ([`Stencil::team_with_power`], [`Pass::power`]): each part writes its piece of the pass's
+//! power values as [`Stencil::write_in_parts`] cuts its power buffer, into a ring of `R` slots
+//! (slot `p` at `p mod R`), and the team sums them as [`Stencil::sum_power`] does, chunk after
+//! chunk into one running sum per lane, so that slot `p`'s total is the pass's power bit for
+//! bit (energy accounting in many steps at once, `Simulation::advance`):
+//!
+//! ```text
+//! pass s:  run part k; then add to the running sums of the slot written k passes ago
+//!          (pass s - k) its chunks of part k                 (part 0: this pass's slot, from 0)
+//! ```
+//! The chunks of part `k` of a slot are added after those of part `k - 1` (one pass earlier,
+//! behind a barrier) and before those of part `k + 1`: the order of one sum over the whole
+//! slot, whichever thread adds them. A slot is read until `parts - 1` passes after it was
+//! written, so a ring of `parts` slots is never overwritten before it is summed; the sums of
+//! the team's last passes are finished after it. So the power of many steps needs no more
+//! memory than a few passes' (a 128×128 cloth: 0.5 MB instead of 16 MB for 64 steps, which
+//! went out of the caches), and each part's values are added by the thread that has just
+//! written them or, a pass later, by a thread that still has them in its cache.
 //!
 //! **A serial stage.** Between two passes the body may call [`Crew::serial`]: the first thread
 //! to come runs a function on whole buffers (the collision response after a step, which reads
@@ -89,6 +103,30 @@ const PATIENCE: Duration = Duration::from_micros(5);
 /// How long a thread spins at the barrier before it starts giving its time slice away.
 const SPIN: Duration = Duration::from_micros(50);
 
+/// Spins at a barrier before a waiting thread first reads the clock: most waits end within
+/// them (a pass's parts end within a microsecond or two of each other), and reading the clock
+/// on a virtual machine costs as much as many spins (measured: 3 % of a two-thread jelly
+/// cube's samples in `clock_gettime`, from a clock read at the start of every wait).
+const QUIET_SPINS: u32 = 256;
+
+/// How long a thread has waited at a barrier after `spins` spins: nothing for the first
+/// [`QUIET_SPINS`], then the time since the clock was first read (into `start`).
+fn waited(start: &mut Option<Instant>, spins: u32) -> Duration {
+    if spins < QUIET_SPINS {
+        return Duration::ZERO;
+    }
+    start.get_or_insert_with(Instant::now).elapsed()
+}
+
+/// The running sums of one slot of the power ring (module docs): per lane, the dampers' and
+/// the contacts' values of the chunks added so far, the logical slot, and the next part.
+#[derive(Clone, Copy, Default)]
+struct Running {
+    sums: [[f64; LANES]; 2],
+    slot: usize,
+    next: usize,
+}
+
 /// One pass of a team: [`Output::Step`] at positions `buffers[x]` and velocities `buffers[v]`
 /// into `buffers[outs[..]]`, with buffers named by their index in the call of
 /// [`Stencil::team`].
@@ -107,9 +145,9 @@ pub struct Pass<'a> {
     pub update: TeamUpdate,
     /// Applied to each tile's new positions and velocities.
     pub after: Option<After<'a>>,
-    /// Where the pass writes its dissipated power: slot `k` of the power buffer of
-    /// [`Stencil::team_with_power`] (values `k · power_len ..` of it, as [`Stencil::write`]
-    /// writes its power buffer, for [`Stencil::sum_power`]); `None` computes none.
+    /// Where the pass's dissipated power goes: total `k` of [`Stencil::team_with_power`]
+    /// (its values in slot `k mod R` of the ring, module docs); `None` computes none. Passes
+    /// with power name the slots `0, 1, 2, …` in order.
     pub power: Option<usize>,
 }
 
@@ -175,11 +213,18 @@ struct Shared {
 #[derive(Default)]
 struct Padded(AtomicU64);
 
-/// The team's power buffer: a pointer and a length, valid while [`Stencil::team_with_power`]
+/// The team's power ring: a pointer, valid while [`Stencil::team_with_power`]
 /// runs (it holds the exclusive borrow).
 #[derive(Clone, Copy)]
 struct SharedPower {
     ptr: *mut f64,
+}
+
+/// Where the team writes each slot's power total: a pointer and a length, valid while
+/// [`Stencil::team_with_power`] runs (it holds the exclusive borrow).
+#[derive(Clone, Copy)]
+struct SharedTotals {
+    ptr: *mut (f64, f64),
     len: usize,
 }
 
@@ -193,8 +238,15 @@ struct Common<'b> {
     homes: usize,
     buffers: [Shared; MAX_BUFFERS],
     count: usize,
-    /// The power slots (each [`Stencil::power_len`] values).
+    /// The ring of power slots (each [`Stencil::power_len`] values), `ring` of them.
     power: SharedPower,
+    ring: usize,
+    /// Each slot's `(dampers and drag, contact)` power (W) once summed.
+    totals: SharedTotals,
+    /// The passes have colliders (a contact column to sum, [`Stencil::sum_power`]).
+    contact: bool,
+    /// The running sums of each slot of the ring.
+    running: [std::cell::UnsafeCell<Running>; MAX_PARTS],
     /// `claimed[k]`: passes of part `k` some thread has taken.
     claimed: [Padded; MAX_PARTS],
     /// `done[k]`: passes of part `k` finished.
@@ -207,8 +259,9 @@ struct Common<'b> {
     _borrow: PhantomData<&'b mut [DVec3]>,
 }
 
-// SAFETY: the raw pointers are only dereferenced in `Common::run_part` and `Crew::serial`
-// (which has the buffers to itself between two passes), under the barrier
+// SAFETY: the raw pointers and the running sums are only dereferenced in `Common::run_part`,
+// `Common::add_power` (each slot's sums by one part at a time, parts in successive passes) and
+// `Crew::serial` (which has the buffers to itself between two passes), under the barrier
 // discipline of the module docs (whole reads of buffers no one writes during the pass, writes
 // only of the running part's own disjoint piece); the rest is `Sync`.
 unsafe impl Sync for Common<'_> {}
@@ -230,8 +283,9 @@ impl Common<'_> {
     }
 
     /// Runs part `k` of `pass` (the `s`-th pass), claimed by this thread, then `then` on the
-    /// part's new positions and velocities, and marks it done.
-    fn run_part(&self, k: usize, s: u64, pass: &Pass, then: Option<PartFn>) {
+    /// part's new positions and velocities, adds part `k` of slot `sum` to its running sums
+    /// ([`Common::add_power`]), and marks it done.
+    fn run_part(&self, k: usize, s: u64, pass: &Pass, then: Option<PartFn>, sum: Option<usize>) {
         let n = self.stencil.particles;
         let (q0, q1) = (self.bounds[k], self.bounds[k + 1]);
         // SAFETY (all reads and pieces below): `Crew::pass` checked that the outputs are
@@ -278,11 +332,12 @@ impl Common<'_> {
             Some(slot) => {
                 let len = self.stencil.power_len();
                 let end = if k + 1 == self.parts { len } else { 2 * q1 };
-                // SAFETY: as above; `Crew::pass` checked that the slot is inside the buffer,
-                // and the parts' pieces of a slot are disjoint.
+                // SAFETY: as above; the ring holds `ring` slots (checked by
+                // `Stencil::team_with_power`), the parts' pieces of a slot are disjoint, and
+                // no slot being summed is written (`Crew::pass_then` checked).
                 unsafe {
                     std::slice::from_raw_parts_mut(
-                        self.power.ptr.add(slot * len + 2 * q0),
+                        self.power.ptr.add(slot % self.ring * len + 2 * q0),
                         end - 2 * q0,
                     )
                 }
@@ -303,7 +358,56 @@ impl Common<'_> {
             let [xs, vs, _] = &part.outs;
             then(k, q0, xs, vs);
         }
+        if let Some(slot) = sum {
+            self.add_power(k, slot);
+        }
         self.done[k].0.store(s + 1, Ordering::Release);
+    }
+
+    /// Adds part `k`'s chunks of power slot `slot` to the slot's running sums (module docs),
+    /// as [`Stencil::sum_power`] adds them; after the last part, the slot's total. The chunks
+    /// of part `k` are those from the first whole chunk at or after `2 bounds[k]` (the
+    /// parts' pieces of the ring, `run_part`) to the next part's first.
+    fn add_power(&self, k: usize, slot: usize) {
+        let len = self.stencil.power_len();
+        let from = |k: usize| match k {
+            0 => 0,
+            k if k == self.parts => len,
+            k => (2 * self.bounds[k]).next_multiple_of(2 * LANES).min(len),
+        };
+        let at = slot % self.ring;
+        // SAFETY: slot `at` of the ring was written by a pass every part of which is done (a
+        // barrier ago), and no pass writes it until its last part is added (`Crew::pass_then`
+        // checked); its running sums are touched by one part at a time, the parts in
+        // successive passes, each behind a barrier.
+        let (values, running) = unsafe {
+            (
+                std::slice::from_raw_parts(
+                    self.power.ptr.add(at * len + from(k)),
+                    from(k + 1) - from(k),
+                ),
+                &mut *self.running[at].get(),
+            )
+        };
+        if k == 0 {
+            *running = Running {
+                slot,
+                ..Running::default()
+            };
+        }
+        assert!(
+            running.slot == slot && running.next == k,
+            "power summed out of order"
+        );
+        Stencil::add_power(&mut running.sums, values, self.contact);
+        running.next = k + 1;
+        if k + 1 == self.parts {
+            assert!(slot < self.totals.len, "no power total {slot}");
+            // SAFETY: inside the totals (checked); each slot's total is written once.
+            unsafe {
+                *self.totals.ptr.add(slot) = Stencil::power_total(&running.sums, self.contact)
+            };
+        }
     }
 }
 
@@ -319,6 +423,8 @@ pub struct Crew<'t> {
     serials: Cell<u64>,
     /// The last pass needed a part whose owner did not come: take such parts at once.
     alone: Cell<bool>,
+    /// The power slot of each of the last passes, this one first (module docs).
+    written: Cell<[Option<usize>; MAX_PARTS]>,
 }
 
 impl Crew<'_> {
@@ -361,24 +467,30 @@ impl Crew<'_> {
             assert!(r < c.count, "no buffer {r}");
             assert!(!outs.contains(&Some(r)), "a pass reads its own output {r}");
         }
+        let mut written = self.written.get();
         if let Some(slot) = pass.power {
+            assert!(c.ring > 0 && slot < c.totals.len, "no power slot {slot}");
+            // Not over a slot whose sums are still being added (the last `parts - 1` passes').
             assert!(
-                (slot + 1) * c.stencil.power_len() <= c.power.len,
-                "no power slot {slot}"
+                (written[..c.parts - 1].iter().flatten()).all(|&w| w % c.ring != slot % c.ring),
+                "power slot {slot} overwrites one not summed yet"
             );
         }
+        written.copy_within(..MAX_PARTS - 1, 1);
+        written[0] = pass.power;
+        self.written.set(written);
         let s = self.passes.get();
         self.passes.set(s + 1);
         if c.claim(self.home, s) {
-            c.run_part(self.home, s, pass, then);
+            c.run_part(self.home, s, pass, then, written[self.home]);
         }
         // Parts without a thread of their own: at once.
         for k in c.homes..c.parts {
             if c.claim(k, s) {
-                c.run_part(k, s, pass, then);
+                c.run_part(k, s, pass, then, written[k]);
             }
         }
-        let start = Instant::now();
+        let mut start = None;
         let mut stole = false;
         let mut spins = 0u32;
         while !c.pass_done(s) {
@@ -391,11 +503,11 @@ impl Crew<'_> {
                 std::hint::spin_loop();
                 continue;
             }
-            let waited = start.elapsed();
+            let waited = waited(&mut start, spins);
             if self.alone.get() || waited >= PATIENCE {
                 for k in 0..c.homes {
                     if c.claim(k, s) {
-                        c.run_part(k, s, pass, then);
+                        c.run_part(k, s, pass, then, written[k]);
                         stole = true;
                     }
                 }
@@ -444,7 +556,7 @@ impl Crew<'_> {
             c.serial_done.0.store(s + 1, Ordering::Release);
             return;
         }
-        let start = Instant::now();
+        let mut start = None;
         let mut spins = 0u32;
         while c.serial_done.0.load(Ordering::Acquire) <= s {
             assert!(
@@ -452,7 +564,7 @@ impl Crew<'_> {
                 "another thread of the team panicked"
             );
             spins += 1;
-            if spins.is_multiple_of(32) && start.elapsed() >= SPIN {
+            if spins.is_multiple_of(32) && waited(&mut start, spins) >= SPIN {
                 std::thread::yield_now();
             } else {
                 std::hint::spin_loop();
@@ -483,24 +595,31 @@ impl Stencil {
     /// If there are more than [`MAX_BUFFERS`] buffers, one is shorter than the particle count,
     /// or `body` panics.
     pub fn team(&self, parts: usize, buffers: &mut [&mut [DVec3]], body: &(dyn Fn(&Crew) + Sync)) {
-        self.team_with_power(parts, buffers, &mut [], body);
+        self.team_with_power(parts, buffers, TeamPower::default(), body);
     }
 
-    /// [`Stencil::team`] with a power buffer of whole slots of [`Stencil::power_len`] values:
-    /// a pass with [`Pass::power`] `Some(k)` writes its dissipated power into slot `k`, the same
-    /// values [`Stencil::write`] writes into its power buffer (so [`Stencil::sum_power`] of a
-    /// slot is the pass's power, bit for bit).
+    /// [`Stencil::team`] with the passes' dissipated power: a pass with [`Pass::power`]
+    /// `Some(k)` writes the values [`Stencil::write`] writes into its power buffer into the
+    /// ring of `power`, and `power.totals[k]` receives their sum, bit for bit
+    /// [`Stencil::sum_power`] of them (module docs).
     ///
     /// # Panics
-    /// As [`Stencil::team`]; also when a pass names a slot past the end of `power`.
+    /// As [`Stencil::team`]; also when a pass names a total past the end of `power.totals`,
+    /// when the ring has fewer than `parts` slots, or when the passes with power do not name
+    /// their slots in order.
     pub fn team_with_power(
         &self,
         parts: usize,
         buffers: &mut [&mut [DVec3]],
-        power: &mut [f64],
+        power: TeamPower,
         body: &(dyn Fn(&Crew) + Sync),
     ) {
         let parts = parts.clamp(1, MAX_PARTS);
+        let ring = (power.ring.len() / self.power_len().max(1)).min(MAX_PARTS);
+        assert!(
+            power.totals.is_empty() || ring >= parts,
+            "a power ring of {ring} slots for {parts} parts"
+        );
         assert!(buffers.len() <= MAX_BUFFERS, "too many buffers");
         assert!(
             buffers.iter().all(|b| b.len() >= self.particles),
@@ -526,9 +645,15 @@ impl Stencil {
             buffers: shared,
             count: buffers.len(),
             power: SharedPower {
-                ptr: power.as_mut_ptr(),
-                len: power.len(),
+                ptr: power.ring.as_mut_ptr(),
             },
+            ring,
+            totals: SharedTotals {
+                ptr: power.totals.as_mut_ptr(),
+                len: power.totals.len(),
+            },
+            contact: power.contact,
+            running: std::array::from_fn(|_| std::cell::UnsafeCell::new(Running::default())),
             claimed: std::array::from_fn(|_| Padded::default()),
             done: std::array::from_fn(|_| Padded::default()),
             serial_claimed: Padded::default(),
@@ -547,7 +672,59 @@ impl Stencil {
                 passes: Cell::new(0),
                 serials: Cell::new(0),
                 alone: Cell::new(false),
+                written: Cell::new([None; MAX_PARTS]),
             });
         });
+        // The sums of the last passes' slots that the team did not reach, part after part.
+        for at in 0..ring {
+            // SAFETY: the team is over; this thread alone reads the running sums.
+            let Running { slot, next, .. } = unsafe { *common.running[at].get() };
+            if next > 0 {
+                for k in next..parts {
+                    common.add_power(k, slot);
+                }
+            }
+        }
     }
+
+    /// [`Stencil::sum_power`]'s running sums: the chunks of `power` added lane by lane to
+    /// `sums` (dampers, contact), chunk after chunk.
+    pub(super) fn add_power(sums: &mut [[f64; LANES]; 2], power: &[f64], contact: bool) {
+        let columns = if contact { 2 } else { 1 };
+        for chunk in power.chunks_exact(2 * LANES) {
+            for (sum, part) in sums.iter_mut().zip(chunk.chunks_exact(LANES)).take(columns) {
+                for (s, p) in sum.iter_mut().zip(part) {
+                    *s += p;
+                }
+            }
+        }
+    }
+
+    /// [`Stencil::sum_power`]'s result from its running sums.
+    pub(super) fn power_total(sums: &[[f64; LANES]; 2], contact: bool) -> (f64, f64) {
+        let contact = if contact {
+            Self::lanes_total(&sums[1])
+        } else {
+            0.0
+        };
+        (Self::lanes_total(&sums[0]), contact)
+    }
+
+    /// The values of a team's power ring ([`TeamPower::ring`]) for `parts` parts.
+    #[must_use]
+    pub fn power_ring_len(&self, parts: usize) -> usize {
+        parts.clamp(1, MAX_PARTS) * self.power_len()
+    }
+}
+
+/// The dissipated power of a team's passes ([`Stencil::team_with_power`]).
+#[derive(Default)]
+pub struct TeamPower<'a> {
+    /// The ring of slots the passes write (scratch): whole slots of [`Stencil::power_len`]
+    /// values, at least [`Stencil::power_ring_len`] values.
+    pub ring: &'a mut [f64],
+    /// Total `k`: `(dampers and drag, contact)` (W) of the pass with [`Pass::power`] `Some(k)`.
+    pub totals: &'a mut [(f64, f64)],
+    /// The passes have colliders ([`Stencil::sum_power`]'s `contact`).
+    pub contact: bool,
 }
