@@ -277,9 +277,16 @@ pub(crate) enum Broad {
     },
     /// `|x - c| - r < ε  ⇔  |x - c|² < (r + ε)²`: may touch when `|x - center|² < d2_max` (m²).
     Sphere { center: DVec3, d2_max: f64 },
-    /// `r - |x - c| < ε  ⇔  |x - c|² > (r - ε)²` (the rim is left to the exact test): may touch
-    /// when `|x - center|² ≥ d2_min` (m²).
-    Bowl { center: DVec3, d2_min: f64 },
+    /// `r - |x - c| < ε  ⇔  |x - c|² > (r - ε)²`, and not above the rim (the exact test's first
+    /// question, asked with the same comparison; the rim circle is left to it): may touch when
+    /// `|x - center|² ≥ d2_min` (m²) and not `y > rim` (m). A body falling towards the bowl from
+    /// above its rim is outside the sphere, but no particle of it is a candidate until it is
+    /// down in the bowl.
+    Bowl {
+        center: DVec3,
+        d2_min: f64,
+        rim: f64,
+    },
     /// Every contact has the height `h = (x - point)·normal < h_max`; below the floor
     /// (`h < h_floor`) only the shaft's wall band `ρ > R - ε` and the solid touch: `ρ² ≥
     /// rho2_min` (m²), `ρ` the distance from the hole's axis through `hole_center`.
@@ -314,11 +321,16 @@ impl Collider {
                     d2_max: reach * reach * (1.0 + MARGIN) + MARGIN,
                 }
             }
-            Collider::Bowl { center, radius, .. } => {
+            Collider::Bowl {
+                center,
+                radius,
+                rim_height,
+            } => {
                 let inner = (radius - epsilon).max(0.0);
                 Broad::Bowl {
                     center,
                     d2_min: inner * inner * (1.0 - MARGIN),
+                    rim: crate::physics::bowl::Rim::of(center, radius, rim_height).height,
                 }
             }
             Collider::HolePlane {
@@ -383,9 +395,13 @@ impl Broad {
                 phi_max,
             } => Self::plane_may_touch(x, point, normal, phi_max),
             Broad::Sphere { center, d2_max } => Self::sphere_may_touch(x, center, d2_max),
-            Broad::Bowl { center, d2_min } => {
+            Broad::Bowl {
+                center,
+                d2_min,
+                rim,
+            } => {
                 let d2 = (x - center).length_squared();
-                d2 >= d2_min || d2.is_nan()
+                (d2 >= d2_min || d2.is_nan()) && (x.y <= rim || x.y.is_nan())
             }
             Broad::HolePlane {
                 point,
@@ -436,10 +452,15 @@ impl Broad {
                     bits |= u64::from(Self::sphere_may_touch(*p, center, d2_max)) << k;
                 }
             }
-            Broad::Bowl { center, d2_min } => {
+            Broad::Bowl {
+                center,
+                d2_min,
+                rim,
+            } => {
                 for (k, p) in xs.iter().enumerate() {
                     let d2 = (*p - center).length_squared();
-                    bits |= u64::from((d2 >= d2_min) | d2.is_nan()) << k;
+                    let below = (p.y <= rim) | p.y.is_nan();
+                    bits |= u64::from(((d2 >= d2_min) | d2.is_nan()) & below) << k;
                 }
             }
             Broad::HolePlane {
