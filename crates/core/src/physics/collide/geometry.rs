@@ -427,6 +427,81 @@ impl Broad {
 }
 
 impl Broad {
+    /// False when the bounds rule out every point of the box `[lo, hi]` (m): no point of it is
+    /// one [`Broad::may_touch`] (or [`Broad::marks`]) lets through, so a whole box of particles
+    /// is left out at once. Each test takes the box's corner where the quantity the bounds
+    /// compare is most favourable (the smallest height, the largest or smallest distance) and
+    /// computes it with the same operations as the point test: a rounded subtraction,
+    /// product and sum never decrease when an operand grows (and a square when its operand
+    /// grows in size), so that corner's value bounds every point's, rounding included, and
+    /// the answer never differs from the points' own. A box with an infinite side (a NaN or
+    /// infinite coordinate, `fast::bounds`) is never ruled out.
+    ///
+    /// ```text
+    /// plane:        min_box φ ≥ φ_max                   φ = (x - p)·n, per axis the end
+    ///                                                   n_c points away from
+    /// sphere:       min_box |x - c|² ≥ d2_max            per axis the end nearest c (c inside: c)
+    /// bowl:         lo_y > rim   or   max_box |x - c|² < d2_min      per axis the farther end
+    /// floor, hole:  min_box h ≥ h_max   or   (max_box h < h_floor  and  max_box ρ² < ρ²_min)
+    /// ```
+    /// where `ρ² = |q - (q·n) n|²`, `q = x - hole_center`, is bounded this way only for a
+    /// normal along an axis (`±e_k`: then `ρ² = |q|²` without axis `k`, exactly); a tilted
+    /// floor's box is ruled out by its height alone.
+    #[must_use]
+    pub(crate) fn box_may_touch(&self, lo: DVec3, hi: DVec3) -> bool {
+        if !(lo.is_finite() && hi.is_finite()) {
+            return true;
+        }
+        // The box's corner where `(x - point)·normal` is smallest, and where it is largest.
+        let low_corner = |normal: DVec3| DVec3::select(normal.cmpge(DVec3::ZERO), lo, hi);
+        let high_corner = |normal: DVec3| DVec3::select(normal.cmpge(DVec3::ZERO), hi, lo);
+        // Per axis the largest |x_c - c_c| over the box.
+        let farthest = |center: DVec3| (lo - center).abs().max((hi - center).abs());
+        match *self {
+            Broad::Plane {
+                point,
+                normal,
+                phi_max,
+            } => {
+                let phi = (low_corner(normal) - point).dot(normal);
+                phi < phi_max || phi.is_nan()
+            }
+            Broad::Sphere { center, d2_max } => {
+                let nearest = hi.min(lo.max(center));
+                let d2 = (nearest - center).length_squared();
+                d2 < d2_max || d2.is_nan()
+            }
+            Broad::Bowl {
+                center,
+                d2_min,
+                rim,
+            } => {
+                let inside = farthest(center).length_squared() < d2_min;
+                !(lo.y > rim || inside)
+            }
+            Broad::HolePlane {
+                point,
+                normal,
+                hole_center,
+                h_max,
+                h_floor,
+                rho2_min,
+            } => {
+                if (low_corner(normal) - point).dot(normal) >= h_max {
+                    return false;
+                }
+                let Some(axis) = axis_of(normal) else {
+                    return true;
+                };
+                let mut radial = farthest(hole_center);
+                radial[axis] = 0.0;
+                let in_shaft = (high_corner(normal) - point).dot(normal) < h_floor
+                    && radial.length_squared() < rho2_min;
+                !in_shaft
+            }
+        }
+    }
+
     /// The points `xs` (at most 64) that the bounds do not rule out, as bits (bit `k` for
     /// `xs[k]`): [`Broad::may_touch`] of each, with the same arithmetic, but one loop per kind
     /// of collider and every test of a kind computed without a branch (`|` and `&` instead of
@@ -484,6 +559,13 @@ impl Broad {
         }
         bits
     }
+}
+
+/// `k` when `normal` is `±e_k` (one component ±1, the others zero), else `None`.
+fn axis_of(normal: DVec3) -> Option<usize> {
+    let a = normal.to_array();
+    let k = (0..3).find(|&k| a[k].abs() == 1.0)?;
+    (0..3).all(|j| j == k || a[j] == 0.0).then_some(k)
 }
 
 /// `(|d|, d/|d|)`, with the direction `+y` when `d = 0`.
