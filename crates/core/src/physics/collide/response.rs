@@ -148,7 +148,10 @@ pub(super) fn near_any(broads: &[Broad], x: &[DVec3]) -> Vec<u64> {
 /// [`near_any`] into `near` (its allocation reused). The points go in tiles of [`TILE`]: a
 /// tile whose box a collider's bounds rule out as a whole ([`Broad::box_may_touch`]) is not
 /// looked at point by point for that collider (a body's inside, far from every collider, or a
-/// body falling towards a bowl: most tiles), with the same marks.
+/// body falling towards a bowl: most tiles), with the same marks. A collider that ruled out
+/// no tile in a call is tested point by point, without boxes, for the next [`PAUSE`] calls
+/// on the same thread (a body resting across a floor's level, in every tile): whether a
+/// tile's box is looked at never changes a mark, only the time.
 pub(super) fn near_any_into(broads: &[Broad], x: &[DVec3], near: &mut Vec<u64>) {
     near.clear();
     near.resize(x.len().div_ceil(64), 0);
@@ -156,14 +159,35 @@ pub(super) fn near_any_into(broads: &[Broad], x: &[DVec3], near: &mut Vec<u64>) 
         return;
     }
     TILES.with(|tiles| {
-        let tiles = &mut *tiles.borrow_mut();
-        boxes(x, TILE, tiles, |lo, hi| (lo, hi));
-        for broad in broads {
+        let Tiles {
+            boxes: tiles,
+            pause,
+        } = &mut *tiles.borrow_mut();
+        if pause.len() < broads.len() {
+            pause.resize(broads.len(), 0);
+        }
+        if pause[..broads.len()].contains(&0) {
+            boxes(x, TILE, tiles, |lo, hi| (lo, hi));
+        }
+        for (broad, pause) in broads.iter().zip(pause.iter_mut()) {
+            if *pause > 0 {
+                *pause -= 1;
+                for (word, xs) in near.iter_mut().zip(x.chunks(64)) {
+                    *word |= broad.marks(xs);
+                }
+                continue;
+            }
+            let mut ruled_out = false;
             for (t, (&(lo, hi), xs)) in tiles.iter().zip(x.chunks(TILE)).enumerate() {
                 if broad.box_may_touch(lo, hi) {
                     let first = t * TILE;
                     near[first / 64] |= broad.marks(xs) << (first % 64);
+                } else {
+                    ruled_out = true;
                 }
+            }
+            if !ruled_out {
+                *pause = PAUSE;
             }
         }
     });
@@ -172,9 +196,20 @@ pub(super) fn near_any_into(broads: &[Broad], x: &[DVec3], near: &mut Vec<u64>) 
 /// Points per tile of [`near_any_into`] (a divisor of 64 and a multiple of 8).
 const TILE: usize = 64;
 
+/// Calls of [`near_any_into`] without boxes for a collider after one in which they ruled out
+/// nothing.
+const PAUSE: u8 = 15;
+
+/// A thread's scratch of [`near_any_into`]: the tiles' boxes, and per collider (by its index)
+/// the calls left without them.
+#[derive(Default)]
+struct Tiles {
+    boxes: Vec<(DVec3, DVec3)>,
+    pause: Vec<u8>,
+}
+
 thread_local! {
-    /// The tiles' boxes of [`near_any_into`] (reused).
-    static TILES: std::cell::RefCell<Vec<(DVec3, DVec3)>> = const { std::cell::RefCell::new(Vec::new()) };
+    static TILES: std::cell::RefCell<Tiles> = std::cell::RefCell::new(Tiles::default());
 }
 
 /// The body pays `amount` J from its kinetic energy ([`take_kinetic_with_spheres`]); every
