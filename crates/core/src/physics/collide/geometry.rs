@@ -577,3 +577,41 @@ pub(super) fn distance_and_direction(d: DVec3) -> (f64, DVec3) {
         (0.0, DVec3::Y)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::response::near_any;
+    use super::*;
+
+    /// A body above a bowl's rim is outside the bowl's sphere, yet no candidate: the exact test
+    /// gives no contact there (the bowl is not there), and the bounds leave it out; below the
+    /// rim, the same distance from the centre is a candidate. The 2023 bowl (rim at y = 0,
+    /// radius 9 about (2, 9/√2, 1)).
+    #[test]
+    fn a_body_above_the_bowl_s_rim_is_no_candidate() {
+        let bowl = Collider::course_2023_terrain()[1];
+        let Collider::Bowl { center, radius, .. } = bowl else {
+            unreachable!("the terrain's second collider is its bowl")
+        };
+        let broads = [bowl.broad(0.01)];
+        // A 4 m cube 11 m up, over the rim's edge (the jelly's start), and a point on the rim.
+        let mut above: Vec<DVec3> = (0..1000)
+            .map(|i| {
+                let (a, b, c) = (i % 10, (i / 10) % 10, i / 100);
+                DVec3::new(-4.8, 11.0, 0.0) + 4.0 / 9.0 * DVec3::new(a as f64, b as f64, c as f64)
+            })
+            .collect();
+        above.push(DVec3::new(center.x, 1e-300, center.z + 20.0));
+        let outside = above.iter().filter(|p| p.distance(center) > radius).count();
+        assert!(outside > 100, "{outside} points outside the sphere");
+        assert!(above.iter().all(|p| bowl.contact(*p).is_none()));
+        assert!(near_any(&broads, &above).iter().all(|&w| w == 0));
+        // On the sphere or beyond it, at the rim's height (either zero) and below: candidates.
+        let below: Vec<DVec3> = [0.0, -0.0, -1e-300, -0.5]
+            .iter()
+            .map(|&y| center + (DVec3::new(-4.8, y, 0.0) - center).normalize() * radius)
+            .map(|p| DVec3::new(p.x, p.y.min(0.0), p.z))
+            .collect();
+        assert_eq!(near_any(&broads, &below), vec![0b1111]);
+    }
+}
