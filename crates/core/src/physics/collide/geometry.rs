@@ -277,9 +277,16 @@ pub(crate) enum Broad {
     },
     /// `|x - c| - r < ε  ⇔  |x - c|² < (r + ε)²`: may touch when `|x - center|² < d2_max` (m²).
     Sphere { center: DVec3, d2_max: f64 },
-    /// `r - |x - c| < ε  ⇔  |x - c|² > (r - ε)²` (the rim is left to the exact test): may touch
-    /// when `|x - center|² ≥ d2_min` (m²).
-    Bowl { center: DVec3, d2_min: f64 },
+    /// `r - |x - c| < ε  ⇔  |x - c|² > (r - ε)²`, and not above the rim (the exact test's first
+    /// question, asked with the same comparison; the rim circle is left to it): may touch when
+    /// `|x - center|² ≥ d2_min` (m²) and not `y > rim` (m). A body falling towards the bowl from
+    /// above its rim is outside the sphere, but no particle of it is a candidate until it is
+    /// down in the bowl.
+    Bowl {
+        center: DVec3,
+        d2_min: f64,
+        rim: f64,
+    },
     /// Every contact has the height `h = (x - point)·normal < h_max`; below the floor
     /// (`h < h_floor`) only the shaft's wall band `ρ > R - ε` and the solid touch: `ρ² ≥
     /// rho2_min` (m²), `ρ` the distance from the hole's axis through `hole_center`.
@@ -314,11 +321,16 @@ impl Collider {
                     d2_max: reach * reach * (1.0 + MARGIN) + MARGIN,
                 }
             }
-            Collider::Bowl { center, radius, .. } => {
+            Collider::Bowl {
+                center,
+                radius,
+                rim_height,
+            } => {
                 let inner = (radius - epsilon).max(0.0);
                 Broad::Bowl {
                     center,
                     d2_min: inner * inner * (1.0 - MARGIN),
+                    rim: crate::physics::bowl::Rim::of(center, radius, rim_height).height,
                 }
             }
             Collider::HolePlane {
@@ -383,9 +395,13 @@ impl Broad {
                 phi_max,
             } => Self::plane_may_touch(x, point, normal, phi_max),
             Broad::Sphere { center, d2_max } => Self::sphere_may_touch(x, center, d2_max),
-            Broad::Bowl { center, d2_min } => {
+            Broad::Bowl {
+                center,
+                d2_min,
+                rim,
+            } => {
                 let d2 = (x - center).length_squared();
-                d2 >= d2_min || d2.is_nan()
+                (d2 >= d2_min || d2.is_nan()) && (x.y <= rim || x.y.is_nan())
             }
             Broad::HolePlane {
                 point,
@@ -411,6 +427,81 @@ impl Broad {
 }
 
 impl Broad {
+    /// False when the bounds rule out every point of the box `[lo, hi]` (m): no point of it is
+    /// one [`Broad::may_touch`] (or [`Broad::marks`]) lets through, so a whole box of particles
+    /// is left out at once. Each test takes the box's corner where the quantity the bounds
+    /// compare is most favourable (the smallest height, the largest or smallest distance) and
+    /// computes it with the same operations as the point test: a rounded subtraction,
+    /// product and sum never decrease when an operand grows (and a square when its operand
+    /// grows in size), so that corner's value bounds every point's, rounding included, and
+    /// the answer never differs from the points' own. A box with an infinite side (a NaN or
+    /// infinite coordinate, `fast::bounds`) is never ruled out.
+    ///
+    /// ```text
+    /// plane:        min_box φ ≥ φ_max                   φ = (x - p)·n, per axis the end
+    ///                                                   n_c points away from
+    /// sphere:       min_box |x - c|² ≥ d2_max            per axis the end nearest c (c inside: c)
+    /// bowl:         lo_y > rim   or   max_box |x - c|² < d2_min      per axis the farther end
+    /// floor, hole:  min_box h ≥ h_max   or   (max_box h < h_floor  and  max_box ρ² < ρ²_min)
+    /// ```
+    /// where `ρ² = |q - (q·n) n|²`, `q = x - hole_center`, is bounded this way only for a
+    /// normal along an axis (`±e_k`: then `ρ² = |q|²` without axis `k`, exactly); a tilted
+    /// floor's box is ruled out by its height alone.
+    #[must_use]
+    pub(crate) fn box_may_touch(&self, lo: DVec3, hi: DVec3) -> bool {
+        if !(lo.is_finite() && hi.is_finite()) {
+            return true;
+        }
+        // The box's corner where `(x - point)·normal` is smallest, and where it is largest.
+        let low_corner = |normal: DVec3| DVec3::select(normal.cmpge(DVec3::ZERO), lo, hi);
+        let high_corner = |normal: DVec3| DVec3::select(normal.cmpge(DVec3::ZERO), hi, lo);
+        // Per axis the largest |x_c - c_c| over the box.
+        let farthest = |center: DVec3| (lo - center).abs().max((hi - center).abs());
+        match *self {
+            Broad::Plane {
+                point,
+                normal,
+                phi_max,
+            } => {
+                let phi = (low_corner(normal) - point).dot(normal);
+                phi < phi_max || phi.is_nan()
+            }
+            Broad::Sphere { center, d2_max } => {
+                let nearest = hi.min(lo.max(center));
+                let d2 = (nearest - center).length_squared();
+                d2 < d2_max || d2.is_nan()
+            }
+            Broad::Bowl {
+                center,
+                d2_min,
+                rim,
+            } => {
+                let inside = farthest(center).length_squared() < d2_min;
+                !(lo.y > rim || inside)
+            }
+            Broad::HolePlane {
+                point,
+                normal,
+                hole_center,
+                h_max,
+                h_floor,
+                rho2_min,
+            } => {
+                if (low_corner(normal) - point).dot(normal) >= h_max {
+                    return false;
+                }
+                let Some(axis) = axis_of(normal) else {
+                    return true;
+                };
+                let mut radial = farthest(hole_center);
+                radial[axis] = 0.0;
+                let in_shaft = (high_corner(normal) - point).dot(normal) < h_floor
+                    && radial.length_squared() < rho2_min;
+                !in_shaft
+            }
+        }
+    }
+
     /// The points `xs` (at most 64) that the bounds do not rule out, as bits (bit `k` for
     /// `xs[k]`): [`Broad::may_touch`] of each, with the same arithmetic, but one loop per kind
     /// of collider and every test of a kind computed without a branch (`|` and `&` instead of
@@ -436,10 +527,15 @@ impl Broad {
                     bits |= u64::from(Self::sphere_may_touch(*p, center, d2_max)) << k;
                 }
             }
-            Broad::Bowl { center, d2_min } => {
+            Broad::Bowl {
+                center,
+                d2_min,
+                rim,
+            } => {
                 for (k, p) in xs.iter().enumerate() {
                     let d2 = (*p - center).length_squared();
-                    bits |= u64::from((d2 >= d2_min) | d2.is_nan()) << k;
+                    let below = (p.y <= rim) | p.y.is_nan();
+                    bits |= u64::from(((d2 >= d2_min) | d2.is_nan()) & below) << k;
                 }
             }
             Broad::HolePlane {
@@ -465,6 +561,13 @@ impl Broad {
     }
 }
 
+/// `k` when `normal` is `±e_k` (one component ±1, the others zero), else `None`.
+fn axis_of(normal: DVec3) -> Option<usize> {
+    let a = normal.to_array();
+    let k = (0..3).find(|&k| a[k].abs() == 1.0)?;
+    (0..3).all(|j| j == k || a[j] == 0.0).then_some(k)
+}
+
 /// `(|d|, d/|d|)`, with the direction `+y` when `d = 0`.
 pub(super) fn distance_and_direction(d: DVec3) -> (f64, DVec3) {
     let length = d.length();
@@ -472,5 +575,43 @@ pub(super) fn distance_and_direction(d: DVec3) -> (f64, DVec3) {
         (length, d / length)
     } else {
         (0.0, DVec3::Y)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::response::near_any;
+    use super::*;
+
+    /// A body above a bowl's rim is outside the bowl's sphere, yet no candidate: the exact test
+    /// gives no contact there (the bowl is not there), and the bounds leave it out; below the
+    /// rim, the same distance from the centre is a candidate. The 2023 bowl (rim at y = 0,
+    /// radius 9 about (2, 9/√2, 1)).
+    #[test]
+    fn a_body_above_the_bowl_s_rim_is_no_candidate() {
+        let bowl = Collider::course_2023_terrain()[1];
+        let Collider::Bowl { center, radius, .. } = bowl else {
+            unreachable!("the terrain's second collider is its bowl")
+        };
+        let broads = [bowl.broad(0.01)];
+        // A 4 m cube 11 m up, over the rim's edge (the jelly's start), and a point on the rim.
+        let mut above: Vec<DVec3> = (0..1000)
+            .map(|i| {
+                let (a, b, c) = (i % 10, (i / 10) % 10, i / 100);
+                DVec3::new(-4.8, 11.0, 0.0) + 4.0 / 9.0 * DVec3::new(a as f64, b as f64, c as f64)
+            })
+            .collect();
+        above.push(DVec3::new(center.x, 1e-300, center.z + 20.0));
+        let outside = above.iter().filter(|p| p.distance(center) > radius).count();
+        assert!(outside > 100, "{outside} points outside the sphere");
+        assert!(above.iter().all(|p| bowl.contact(*p).is_none()));
+        assert!(near_any(&broads, &above).iter().all(|&w| w == 0));
+        // On the sphere or beyond it, at the rim's height (either zero) and below: candidates.
+        let below: Vec<DVec3> = [0.0, -0.0, -1e-300, -0.5]
+            .iter()
+            .map(|&y| center + (DVec3::new(-4.8, y, 0.0) - center).normalize() * radius)
+            .map(|p| DVec3::new(p.x, p.y.min(0.0), p.z))
+            .collect();
+        assert_eq!(near_any(&broads, &below), vec![0b1111]);
     }
 }

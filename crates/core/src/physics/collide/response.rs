@@ -7,6 +7,7 @@ use super::budget::take_kinetic_with_spheres;
 use super::{
     Bodies, Broad, Collider, Contact, ContactParams, DynamicSphere, PartBounds, World, step_spheres,
 };
+use crate::physics::fast::bounds::boxes;
 
 /// Velocity response and positional projection of every free particle against the model's
 /// colliders, after a step of `dt` seconds (module docs). Keeps position Verlet's history
@@ -144,15 +145,71 @@ pub(super) fn near_any(broads: &[Broad], x: &[DVec3]) -> Vec<u64> {
     near
 }
 
-/// [`near_any`] into `near` (its allocation reused).
+/// [`near_any`] into `near` (its allocation reused). The points go in tiles of [`TILE`]: a
+/// tile whose box a collider's bounds rule out as a whole ([`Broad::box_may_touch`]) is not
+/// looked at point by point for that collider (a body's inside, far from every collider, or a
+/// body falling towards a bowl: most tiles), with the same marks. A collider that ruled out
+/// no tile in a call is tested point by point, without boxes, for the next [`PAUSE`] calls
+/// on the same thread (a body resting across a floor's level, in every tile): whether a
+/// tile's box is looked at never changes a mark, only the time.
 pub(super) fn near_any_into(broads: &[Broad], x: &[DVec3], near: &mut Vec<u64>) {
     near.clear();
     near.resize(x.len().div_ceil(64), 0);
-    for broad in broads {
-        for (word, xs) in near.iter_mut().zip(x.chunks(64)) {
-            *word |= broad.marks(xs);
-        }
+    if broads.is_empty() {
+        return;
     }
+    TILES.with(|tiles| {
+        let Tiles {
+            boxes: tiles,
+            pause,
+        } = &mut *tiles.borrow_mut();
+        if pause.len() < broads.len() {
+            pause.resize(broads.len(), 0);
+        }
+        if pause[..broads.len()].contains(&0) {
+            boxes(x, TILE, tiles, |lo, hi| (lo, hi));
+        }
+        for (broad, pause) in broads.iter().zip(pause.iter_mut()) {
+            if *pause > 0 {
+                *pause -= 1;
+                for (word, xs) in near.iter_mut().zip(x.chunks(64)) {
+                    *word |= broad.marks(xs);
+                }
+                continue;
+            }
+            let mut ruled_out = false;
+            for (t, (&(lo, hi), xs)) in tiles.iter().zip(x.chunks(TILE)).enumerate() {
+                if broad.box_may_touch(lo, hi) {
+                    let first = t * TILE;
+                    near[first / 64] |= broad.marks(xs) << (first % 64);
+                } else {
+                    ruled_out = true;
+                }
+            }
+            if !ruled_out {
+                *pause = PAUSE;
+            }
+        }
+    });
+}
+
+/// Points per tile of [`near_any_into`] (a divisor of 64 and a multiple of 8).
+const TILE: usize = 64;
+
+/// Calls of [`near_any_into`] without boxes for a collider after one in which they ruled out
+/// nothing.
+const PAUSE: u8 = 15;
+
+/// A thread's scratch of [`near_any_into`]: the tiles' boxes, and per collider (by its index)
+/// the calls left without them.
+#[derive(Default)]
+struct Tiles {
+    boxes: Vec<(DVec3, DVec3)>,
+    pause: Vec<u8>,
+}
+
+thread_local! {
+    static TILES: std::cell::RefCell<Tiles> = std::cell::RefCell::new(Tiles::default());
 }
 
 /// The body pays `amount` J from its kinetic energy ([`take_kinetic_with_spheres`]); every
@@ -653,5 +710,82 @@ mod tests {
             // Neither none nor all: the grid reaches both sides of every bound.
             assert!(touching > 1 && touching < x.len(), "{list:?}: {touching}");
         }
+    }
+
+    /// Tiles ruled out as a whole (`Broad::box_may_touch`) hold no point the point test lets
+    /// through, so `near_any` marks exactly the points `Broad::may_touch` does: clusters of 64
+    /// points, small and large, jittered around every collider's bounds (a hair inside and
+    /// outside each, above and below a floor, at a bowl's rim), with floors along +y, -x and
+    /// tilted, and clusters holding a NaN or an infinite coordinate. Many tiles are ruled out
+    /// (else the tiles would save nothing) and many are not.
+    #[test]
+    fn tiles_ruled_out_as_a_whole_hold_no_point_that_may_touch() {
+        let epsilon = 0.01;
+        let colliders = [
+            Collider::plane(DVec3::new(0.0, -1.0, 0.5), DVec3::new(0.3, 1.0, -0.2)),
+            Collider::sphere(DVec3::new(0.5, 0.2, -0.3), 1.5),
+            Collider::course_2023_terrain()[1],
+            Collider::course_2023_terrain()[0],
+            Collider::hole_plane(
+                DVec3::new(1.0, 0.0, 0.0),
+                -DVec3::X,
+                DVec3::new(1.0, 2.0, 1.0),
+                3.0,
+            ),
+            Collider::hole_plane(
+                DVec3::ZERO,
+                DVec3::new(0.1, 1.0, 0.0),
+                DVec3::new(2.0, 0.0, 1.0),
+                6.0,
+            ),
+        ];
+        // Centres of clusters: a walk through and around every collider.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut random = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let (mut ruled_out, mut kept) = (0, 0);
+        for collider in colliders {
+            let broads = [collider.broad(epsilon)];
+            for c in 0..400 {
+                let mut centre = DVec3::new(
+                    2.0 + 24.0 * random(),
+                    12.0 * random(),
+                    1.0 + 24.0 * random(),
+                );
+                let size = [1e-9, 1e-3, 0.05, 0.5, 3.0][c % 5];
+                // Every other cluster on the surface (give or take its size and the band).
+                if c % 2 == 1
+                    && let Some(contact) = collider.contact(centre)
+                {
+                    centre -= (contact.phi + epsilon * 2.0 * random()) * contact.normal;
+                }
+                let mut x: Vec<DVec3> = (0..64)
+                    .map(|_| centre + size * DVec3::new(random(), random(), random()))
+                    .collect();
+                if c % 37 == 0 {
+                    x[17].z = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY][c % 3];
+                }
+                // The box `near_any` takes (a NaN coordinate: that axis infinite).
+                let super::super::prepared::Aabb { lo, hi } = super::super::prepared::Aabb::of(&x);
+                let whole = broads[0].box_may_touch(lo, hi);
+                let each: u64 = (x.iter().enumerate())
+                    .map(|(i, p)| u64::from(broads[0].may_touch(*p)) << i)
+                    .sum();
+                if !whole {
+                    assert_eq!(each, 0, "{collider:?}: {lo} {hi}");
+                }
+                assert_eq!(near_any(&broads, &x), vec![each], "{collider:?}: {lo} {hi}");
+                ruled_out += usize::from(!whole);
+                kept += usize::from(whole);
+            }
+        }
+        assert!(
+            ruled_out > 400 && kept > 400,
+            "{ruled_out} ruled out, {kept} kept"
+        );
     }
 }

@@ -30,9 +30,14 @@ pub(super) fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3
                 let d2 = squared(minus(x, center));
                 d2.less_than(V::splat(d2_max)) | d2.nan_lanes()
             }
-            Broad::Bowl { center, d2_min } => {
+            Broad::Bowl {
+                center,
+                d2_min,
+                rim,
+            } => {
+                // Outside the inner sphere (or NaN) and not above the rim (NaN: not above).
                 let d2 = squared(minus(x, center));
-                !d2.less_than(V::splat(d2_min))
+                !d2.less_than(V::splat(d2_min)) & !V::splat(rim).less_than(x[1])
             }
             Broad::HolePlane {
                 point,
