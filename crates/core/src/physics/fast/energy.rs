@@ -17,7 +17,7 @@
 //! Verlet's accounting takes `E` before and after its projection (`x` moved, `x_prev` not):
 //! [`kinetic_gravity_terms`] keeps the terms before it, and [`kinetic_gravity_pair`] adds them
 //! up beside the terms after it, two independent sums in one loop (each in particle order, so
-//! the same bits), where two calls of [`kinetic_gravity`] wait twice for one chain of `n`
+//! the same bits), where two sums one after the other would wait twice for one chain of `n`
 //! dependent additions.
 
 use glam::DVec3;
@@ -27,63 +27,8 @@ use super::stencil::Kernel;
 /// Particles per block of terms.
 const BLOCK: usize = 64;
 
-/// `E` of the module docs: the kinetic energy with the velocities `(x - x_prev) / dt` plus
-/// the gravitational energy `-m g·x` (J), summed in particle order.
-///
-/// # Panics
-/// If `mass` or `x_prev` is shorter than `x`.
-// The one-sum form (the tests' reference for the pair; Verlet sums two at once).
-#[cfg_attr(not(test), allow(dead_code))]
-#[must_use]
-pub(crate) fn kinetic_gravity(
-    mass: &[f64],
-    gravity: DVec3,
-    x: &[DVec3],
-    x_prev: &[DVec3],
-    dt: f64,
-) -> f64 {
-    let (mass, x_prev) = (&mass[..x.len()], &x_prev[..x.len()]);
-    match Kernel::best() {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: `Kernel::best` chooses `Avx512` only on a CPU with AVX-512F.
-        Kernel::Avx512 => unsafe { kinetic_gravity_avx512(mass, gravity, x, x_prev, dt) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as above, AVX2.
-        Kernel::Avx2 => unsafe { kinetic_gravity_avx2(mass, gravity, x, x_prev, dt) },
-        _ => blocks(mass, gravity, x, x_prev, dt),
-    }
-}
-
-// The one-sum form (the tests' reference for the pair; Verlet sums two at once).
-#[cfg_attr(not(test), allow(dead_code))]
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn kinetic_gravity_avx512(
-    mass: &[f64],
-    gravity: DVec3,
-    x: &[DVec3],
-    x_prev: &[DVec3],
-    dt: f64,
-) -> f64 {
-    blocks(mass, gravity, x, x_prev, dt)
-}
-
-// The one-sum form (the tests' reference for the pair; Verlet sums two at once).
-#[cfg_attr(not(test), allow(dead_code))]
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn kinetic_gravity_avx2(
-    mass: &[f64],
-    gravity: DVec3,
-    x: &[DVec3],
-    x_prev: &[DVec3],
-    dt: f64,
-) -> f64 {
-    blocks(mass, gravity, x, x_prev, dt)
-}
-
 /// The terms `t_i` of the module docs into `terms` (resized to `x.len()`), as
-/// [`kinetic_gravity`] computes them.
+/// the textbook loop computes them (module docs).
 ///
 /// # Panics
 /// If `mass` or `x_prev` is shorter than `x`.
@@ -110,7 +55,7 @@ pub(crate) fn kinetic_gravity_terms(
 
 /// `(E_before, E)`: the sum of `before` (terms of [`kinetic_gravity_terms`]) and `E` of the
 /// module docs at `x`, each in particle order, in one loop (module docs): bit for bit the sum
-/// of `before` and [`kinetic_gravity`].
+/// of `before` and of the terms at `x`, each added in particle order from `+0`.
 ///
 /// # Panics
 /// If `mass`, `x_prev` or `before` is shorter than `x`.
@@ -208,25 +153,17 @@ fn pair(
     (e_before, e)
 }
 
-/// The terms of a block, then their sum (module docs).
-// The one-sum form (the tests' reference for the pair; Verlet sums two at once).
-#[cfg_attr(not(test), allow(dead_code))]
-#[inline(always)]
-fn blocks(mass: &[f64], gravity: DVec3, x: &[DVec3], x_prev: &[DVec3], dt: f64) -> f64 {
-    let mut e = 0.0;
-    let mut terms = [0.0; BLOCK];
-    for ((m, x), x_prev) in mass
-        .chunks(BLOCK)
-        .zip(x.chunks(BLOCK))
-        .zip(x_prev.chunks(BLOCK))
-    {
-        let terms = &mut terms[..x.len()];
-        all_terms(m, gravity, x, x_prev, dt, terms);
-        for t in terms.iter() {
-            e += t;
-        }
-    }
-    e
+/// `E` of the module docs alone: the second sum of [`kinetic_gravity_pair`] (the tests'
+/// one-sum form).
+#[cfg(test)]
+pub(crate) fn kinetic_gravity(
+    mass: &[f64],
+    gravity: DVec3,
+    x: &[DVec3],
+    x_prev: &[DVec3],
+    dt: f64,
+) -> f64 {
+    kinetic_gravity_pair(mass, gravity, x, x_prev, dt, &vec![0.0; x.len()]).1
 }
 
 #[cfg(test)]
@@ -244,7 +181,7 @@ mod tests {
     }
 
     #[test]
-    fn blocks_sum_the_textbook_loop_bit_for_bit() {
+    fn the_terms_and_the_pair_sum_the_textbook_loop_bit_for_bit() {
         let mut rng = crate::random::XorShift64Star::new(7);
         let mut next = || rng.unit() - 0.5;
         let gravity = DVec3::new(0.1, -9.81, 0.3);
@@ -258,10 +195,6 @@ mod tests {
             for dt in [1e-3, 1.0 / 60.0, 0.7] {
                 let want = textbook(&mass, gravity, &x, &x_prev, dt);
                 assert_eq!(
-                    blocks(&mass, gravity, &x, &x_prev, dt).to_bits(),
-                    want.to_bits()
-                );
-                assert_eq!(
                     kinetic_gravity(&mass, gravity, &x, &x_prev, dt).to_bits(),
                     want.to_bits(),
                     "n = {n}, dt = {dt}"
@@ -274,17 +207,24 @@ mod tests {
                 let want_moved = textbook(&mass, gravity, &moved, &x_prev, dt);
                 assert_eq!(e_moved.to_bits(), want_moved.to_bits(), "pair, n = {n}");
                 assert_eq!(e.to_bits(), want.to_bits(), "pair, n = {n}");
+                // Every kernel's instance, not only the CPU's best.
                 #[cfg(target_arch = "x86_64")]
-                for (kernel, f) in [
-                    (
-                        Kernel::Avx2,
-                        kinetic_gravity_avx2 as unsafe fn(_, _, _, _, _) -> f64,
-                    ),
-                    (Kernel::Avx512, kinetic_gravity_avx512),
+                type Terms = unsafe fn(&[f64], DVec3, &[DVec3], &[DVec3], f64, &mut [f64]);
+                #[cfg(target_arch = "x86_64")]
+                type Pair = unsafe fn(&[f64], DVec3, &[DVec3], &[DVec3], f64, &[f64]) -> (f64, f64);
+                #[cfg(target_arch = "x86_64")]
+                for (kernel, terms, pair) in [
+                    (Kernel::Avx2, terms_avx2 as Terms, pair_avx2 as Pair),
+                    (Kernel::Avx512, terms_avx512, pair_avx512),
                 ] {
                     if kernel.is_available() {
+                        let mut before = vec![0.0; n];
                         // SAFETY: the CPU has the kernel's instructions (checked).
-                        let got = unsafe { f(&mass, gravity, &x, &x_prev, dt) };
+                        let (got_moved, got) = unsafe {
+                            terms(&mass, gravity, &moved, &x_prev, dt, &mut before);
+                            pair(&mass, gravity, &x, &x_prev, dt, &before)
+                        };
+                        assert_eq!(got_moved.to_bits(), want_moved.to_bits(), "{kernel:?}");
                         assert_eq!(got.to_bits(), want.to_bits(), "{kernel:?}, n = {n}");
                     }
                 }
