@@ -33,6 +33,7 @@ pub(crate) mod energy;
 pub(crate) mod implicit_constraint;
 pub(crate) mod implicit_lattice;
 pub(crate) mod lanes;
+pub(crate) mod marks;
 pub mod pool;
 pub mod quadratic;
 pub mod stencil;

@@ -503,61 +503,24 @@ impl Broad {
     }
 
     /// The points `xs` (at most 64) that the bounds do not rule out, as bits (bit `k` for
-    /// `xs[k]`): [`Broad::may_touch`] of each, with the same arithmetic, but one loop per kind
-    /// of collider and every test of a kind computed without a branch (`|` and `&` instead of
-    /// `||`, `&&` and early returns), so that the compiler keeps the loop straight: a body far
-    /// from a collider costs a few operations per particle.
+    /// `xs[k]`): [`Broad::may_touch`] of each, with the same arithmetic, eight points at a time
+    /// (`fast::bounds::plane_bits` for a plane, `fast::marks` for the others), so that a body
+    /// near a collider costs a few vector operations per eight particles.
     #[must_use]
     pub(crate) fn marks(&self, xs: &[DVec3]) -> u64 {
         debug_assert!(xs.len() <= 64);
-        let mut bits = 0u64;
         match *self {
             Broad::Plane {
                 point,
                 normal,
                 phi_max,
             } => {
-                // Eight points at a time, the same operations (`fast::bounds`).
                 let mut word = [0];
                 plane_bits(xs, point, normal, phi_max, &mut word);
-                bits = word[0];
+                word[0]
             }
-            Broad::Sphere { center, d2_max } => {
-                for (k, p) in xs.iter().enumerate() {
-                    bits |= u64::from(Self::sphere_may_touch(*p, center, d2_max)) << k;
-                }
-            }
-            Broad::Bowl {
-                center,
-                d2_min,
-                rim,
-            } => {
-                for (k, p) in xs.iter().enumerate() {
-                    let d2 = (*p - center).length_squared();
-                    let below = (p.y <= rim) | p.y.is_nan();
-                    bits |= u64::from(((d2 >= d2_min) | d2.is_nan()) & below) << k;
-                }
-            }
-            Broad::HolePlane {
-                point,
-                normal,
-                hole_center,
-                h_max,
-                h_floor,
-                rho2_min,
-            } => {
-                for (k, p) in xs.iter().enumerate() {
-                    let h = (*p - point).dot(normal);
-                    let q = *p - hole_center;
-                    let rho2 = (q - q.dot(normal) * normal).length_squared();
-                    // Below h_max, and above the floor or at the shaft's wall band (or NaN).
-                    let low = (h < h_max) | h.is_nan();
-                    let may = low & ((h >= h_floor) | (rho2 >= rho2_min) | rho2.is_nan());
-                    bits |= u64::from(may) << k;
-                }
-            }
+            _ => crate::physics::fast::marks::marks(self, xs),
         }
-        bits
     }
 }
 

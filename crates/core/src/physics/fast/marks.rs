@@ -1,0 +1,253 @@
+//! The collision response's broad phase point by point (`collide/response.rs`, `near_any`):
+//! which of up to 64 points a collider's bounds ([`Broad`], `collide/geometry.rs`) do not rule
+//! out, eight points at a time with the CPU's widest vectors. The tests are
+//! [`Broad::may_touch`]'s, with the same operations in the same order (no fused multiply-add),
+//! so the same answers, NaN included (tested):
+//!
+//! ```text
+//! sphere      |x - c|² < d2_max                      or NaN
+//! bowl        (|x - c|² ≥ d2_min or NaN)  and  (y ≤ rim or y NaN)
+//! hole plane  (h < h_max or NaN)  and  (h ≥ h_floor  or  ρ² ≥ rho2_min  or  ρ² NaN)
+//!             h = (x - p)·n,  q = x - c_hole,  ρ² = |q - (q·n) n|²
+//! ```
+//! where `x` (m) is the point, `c` (m) the sphere's or bowl's centre, `d2_max`, `d2_min` (m²)
+//! the squared bounds, `rim` (m) the bowl's rim height, `p` and `n` a point of the floor and its
+//! unit normal, `c_hole` (m) the hole's centre and `ρ` (m) the distance from the hole's axis.
+//! A plane's test is `bounds::plane_bits`.
+//!
+//! Why: a body resting in the 2023 bowl (`jelly-bowl`) has every tile near both colliders, so
+//! the response tests all its particles against both after every step; one point at a time
+//! that was about a tenth of such a run (measured, one thread).
+
+use glam::DVec3;
+
+#[cfg(target_arch = "x86_64")]
+use super::lanes::{Avx2, Avx512};
+use super::lanes::{LANES, Lanes, Plain, first_lanes, load_chunk};
+use crate::physics::collide::Broad;
+
+/// Bit `k` set for `xs[k]` (at most 64 points) when `broad` does not rule it out:
+/// [`Broad::may_touch`] of each point, eight at a time.
+///
+/// # Panics
+/// If `xs` holds more than 64 points.
+#[must_use]
+pub(crate) fn marks(broad: &Broad, xs: &[DVec3]) -> u64 {
+    assert!(xs.len() <= 64, "at most 64 points");
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F (checked above).
+            return unsafe { marks_avx512(broad, xs) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked above).
+            return unsafe { marks_avx2(broad, xs) };
+        }
+    }
+    marks_lanes::<Plain>(broad, xs)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn marks_avx512(broad: &Broad, xs: &[DVec3]) -> u64 {
+    marks_lanes::<Avx512>(broad, xs)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn marks_avx2(broad: &Broad, xs: &[DVec3]) -> u64 {
+    marks_lanes::<Avx2>(broad, xs)
+}
+
+/// [`marks`] with lanes `V`: one loop per kind of collider, its constants splat once. (The
+/// loops are written out by a macro, not given a closure: a closure does not take its caller's
+/// target features, and its vector operations would be calls.)
+#[inline(always)]
+fn marks_lanes<V: Lanes>(broad: &Broad, xs: &[DVec3]) -> u64 {
+    let mut bits = 0u64;
+    macro_rules! each {
+        (|$x:ident| $test:expr) => {
+            for (k, chunk) in xs.chunks(LANES).enumerate() {
+                let count = chunk.len();
+                let $x = load_chunk::<V>(chunk, count);
+                let mask: u8 = $test;
+                bits |= u64::from(mask & first_lanes(count)) << (LANES * k);
+            }
+        };
+    }
+    match *broad {
+        Broad::Plane {
+            point,
+            normal,
+            phi_max,
+        } => {
+            let bound = V::splat(phi_max);
+            each!(|x| {
+                let phi = dot(minus(x, point), normal);
+                phi.less_than(bound) | phi.nan_lanes()
+            });
+        }
+        Broad::Sphere { center, d2_max } => {
+            let bound = V::splat(d2_max);
+            each!(|x| {
+                let d2 = squared(minus(x, center));
+                d2.less_than(bound) | d2.nan_lanes()
+            });
+        }
+        Broad::Bowl {
+            center,
+            d2_min,
+            rim,
+        } => {
+            let (bound, top) = (V::splat(d2_min), V::splat(rim));
+            each!(|x| {
+                let d2 = squared(minus(x, center));
+                let y = x[1];
+                (greater_equal(d2, bound) | d2.nan_lanes())
+                    & (greater_equal(top, y) | y.nan_lanes())
+            });
+        }
+        Broad::HolePlane {
+            point,
+            normal,
+            hole_center,
+            h_max,
+            h_floor,
+            rho2_min,
+        } => {
+            let (high, floor, wall) = (V::splat(h_max), V::splat(h_floor), V::splat(rho2_min));
+            each!(|x| {
+                let h = dot(minus(x, point), normal);
+                let q = minus(x, hole_center);
+                let along = dot(q, normal);
+                // q - (q·n) n, as glam computes `q - q.dot(n) * n`.
+                let radial = [
+                    q[0].sub(along.mul(V::splat(normal.x))),
+                    q[1].sub(along.mul(V::splat(normal.y))),
+                    q[2].sub(along.mul(V::splat(normal.z))),
+                ];
+                let rho2 = squared(radial);
+                let low = h.less_than(high) | h.nan_lanes();
+                low & (greater_equal(h, floor) | greater_equal(rho2, wall) | rho2.nan_lanes())
+            });
+        }
+    }
+    bits
+}
+
+/// Bit `l` set where lane `l` of `a` ≥ that of `b` (false when either is NaN, as `>=`).
+#[inline(always)]
+fn greater_equal<V: Lanes>(a: V, b: V) -> u8 {
+    !a.less_than(b) & !a.nan_lanes() & !b.nan_lanes()
+}
+
+/// `p · n` lane by lane, as `DVec3::dot` adds it: `(x n_x + y n_y) + z n_z`.
+#[inline(always)]
+fn dot<V: Lanes>(p: [V; 3], n: DVec3) -> V {
+    p[0].mul(V::splat(n.x))
+        .add(p[1].mul(V::splat(n.y)))
+        .add(p[2].mul(V::splat(n.z)))
+}
+
+/// `x - p` lane by lane.
+#[inline(always)]
+fn minus<V: Lanes>(x: [V; 3], p: DVec3) -> [V; 3] {
+    [
+        x[0].sub(V::splat(p.x)),
+        x[1].sub(V::splat(p.y)),
+        x[2].sub(V::splat(p.z)),
+    ]
+}
+
+/// `|d|²` lane by lane, as `DVec3::length_squared` adds it.
+#[inline(always)]
+fn squared<V: Lanes>(d: [V; 3]) -> V {
+    d[0].mul(d[0]).add(d[1].mul(d[1])).add(d[2].mul(d[2]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::collide::Collider;
+
+    /// Every kind of collider, its bounds at two contact bands, on points around and on its
+    /// surfaces (a grid with points a hair from each bound), NaN and infinite coordinates, and
+    /// every count from 1 to 64: the marks are `Broad::may_touch` of each point, bit for bit,
+    /// on every instruction set this CPU has.
+    #[test]
+    fn the_marks_are_the_point_tests() {
+        let colliders = [
+            Collider::Plane {
+                point: DVec3::new(0.1, -0.5, 0.2),
+                normal: DVec3::new(0.3, 1.0, -0.2).normalize(),
+            },
+            Collider::Sphere {
+                center: DVec3::new(0.5, 0.0, -0.25),
+                radius: 1.5,
+            },
+            Collider::Bowl {
+                center: DVec3::new(0.0, 2.0, 0.5),
+                radius: 2.0,
+                rim_height: 1.5,
+            },
+            Collider::HolePlane {
+                point: DVec3::new(0.0, 0.0, 0.0),
+                normal: DVec3::Y,
+                hole_center: DVec3::new(1.0, 0.0, 1.0),
+                hole_radius: 1.5,
+            },
+            Collider::HolePlane {
+                point: DVec3::new(0.0, 0.25, 0.0),
+                normal: DVec3::new(0.0, 1.0, 1.0).normalize(),
+                hole_center: DVec3::new(0.5, 0.25, -0.25),
+                hole_radius: 1.0,
+            },
+        ];
+        let mut points = Vec::new();
+        for i in -12..=12 {
+            for j in -12..=12 {
+                for k in [-1, 0, 1] {
+                    let s = 0.25 * (1.0 + 1e-9 * f64::from(k));
+                    points.push(DVec3::new(
+                        f64::from(i) * s,
+                        f64::from(j) * s,
+                        f64::from(i - j) * 0.5 * s,
+                    ));
+                }
+            }
+        }
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            points.push(DVec3::new(bad, 0.0, 0.0));
+            points.push(DVec3::new(0.0, bad, 0.0));
+            points.push(DVec3::new(0.5, 0.5, bad));
+        }
+        let mut checked = 0;
+        let (mut marked, mut left) = (0, 0);
+        for collider in colliders {
+            for epsilon in [0.0, 0.01] {
+                let broad = collider.broad(epsilon);
+                for count in 1..=64 {
+                    for xs in points.chunks(count) {
+                        let expected = (xs.iter().enumerate())
+                            .fold(0u64, |b, (k, p)| b | (u64::from(broad.may_touch(*p)) << k));
+                        assert_eq!(marks(&broad, xs), expected, "{broad:?}, {count} points");
+                        assert_eq!(
+                            marks_lanes::<Plain>(&broad, xs),
+                            expected,
+                            "{broad:?}, {count} points, plain lanes"
+                        );
+                        marked += expected.count_ones();
+                        left += xs.len() as u32 - expected.count_ones();
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        // Both answers occur (the test can fail either way).
+        assert!(
+            checked > 10_000 && marked > 1_000 && left > 1_000,
+            "{marked} {left}"
+        );
+    }
+}
