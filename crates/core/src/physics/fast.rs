@@ -15,6 +15,8 @@
 //! - `implicit_constraint`: a contact constraint of implicit Euler's solve (both paths read it).
 //! - `chain`: Verlet's red-black projection of a chain, eight rods at a time.
 //! - `bounds`: the boxes of the collision response's broad phase, eight points at a time.
+//! - `marks`: the response's broad phase point by point (sphere, bowl, floor with a hole),
+//!   eight points at a time.
 //! - `energy`: the kinetic and gravitational terms of Verlet's energy accounting, a block of
 //!   particles at a time with the widest vectors.
 //! - `elastic`: the elastic energy `Σ ½ k (L - L0)²` of `physics/energy.rs`, a block of springs
