@@ -15,6 +15,7 @@
 //! - `implicit_constraint`: a contact constraint of implicit Euler's solve (both paths read it).
 //! - `chain`: Verlet's red-black projection of a chain, eight rods at a time.
 //! - `bounds`: the boxes of the collision response's broad phase, eight points at a time.
+//! - `healthy`: the divergence check's quick pass, eight particles at a time.
 //! - `marks`: the response's broad phase point by point (sphere, bowl, floor with a hole),
 //!   eight points at a time.
 //! - `energy`: the kinetic and gravitational terms of Verlet's energy accounting, a block of
@@ -32,6 +33,7 @@ pub(crate) mod bounds;
 pub(crate) mod chain;
 pub(crate) mod elastic;
 pub(crate) mod energy;
+pub(crate) mod healthy;
 pub(crate) mod implicit_constraint;
 pub(crate) mod implicit_lattice;
 pub(crate) mod lanes;
