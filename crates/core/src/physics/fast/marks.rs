@@ -60,9 +60,9 @@ fn marks_avx2(broad: &Broad, xs: &[DVec3]) -> u64 {
     marks_lanes::<Avx2>(broad, xs)
 }
 
-/// [`marks`] with lanes `V`: one loop per kind of collider, its constants splat once. (The
-/// loops are written out by a macro, not given a closure: a closure does not take its caller's
-/// target features, and its vector operations would be calls.)
+/// [`marks`] with lanes `V`: one loop per kind of collider. (The loops are written out by a
+/// macro, not given a closure: a closure does not take its caller's target features, and its
+/// vector operations would be calls.)
 #[inline(always)]
 fn marks_lanes<V: Lanes>(broad: &Broad, xs: &[DVec3]) -> u64 {
     let mut bits = 0u64;
@@ -100,12 +100,9 @@ fn marks_lanes<V: Lanes>(broad: &Broad, xs: &[DVec3]) -> u64 {
             d2_min,
             rim,
         } => {
-            let (bound, top) = (V::splat(d2_min), V::splat(rim));
             each!(|x| {
                 let d2 = squared(minus(x, center));
-                let y = x[1];
-                (greater_equal(d2, bound) | d2.nan_lanes())
-                    & (greater_equal(top, y) | y.nan_lanes())
+                at_least_or_nan(d2, d2_min) & at_most_or_nan(x[1], rim)
             });
         }
         Broad::HolePlane {
@@ -116,7 +113,6 @@ fn marks_lanes<V: Lanes>(broad: &Broad, xs: &[DVec3]) -> u64 {
             h_floor,
             rho2_min,
         } => {
-            let (high, floor, wall) = (V::splat(h_max), V::splat(h_floor), V::splat(rho2_min));
             each!(|x| {
                 let h = dot(minus(x, point), normal);
                 let q = minus(x, hole_center);
@@ -128,23 +124,59 @@ fn marks_lanes<V: Lanes>(broad: &Broad, xs: &[DVec3]) -> u64 {
                     q[2].sub(along.mul(V::splat(normal.z))),
                 ];
                 let rho2 = squared(radial);
-                let low = h.less_than(high) | h.nan_lanes();
-                low & (greater_equal(h, floor) | greater_equal(rho2, wall) | rho2.nan_lanes())
+                below_or_nan(h, h_max) & (at_least(h, h_floor) | at_least_or_nan(rho2, rho2_min))
             });
         }
     }
     bits
 }
 
-/// Bit `l` set where lane `l` of `a` ≥ that of `b` (false when either is NaN, as `>=`).
+// The comparisons with a bound `b` (a number of the bounds, never a lane): one compare each
+// when `b` is a number, as `>=`, `<=` and `is_nan` answer with NaN on either side.
+
+/// `not a ≥ b` lane by lane: `a < b`, or either is NaN.
 #[inline(always)]
-fn greater_equal<V: Lanes>(a: V, b: V) -> u8 {
-    !a.less_than(b) & !a.nan_lanes() & !b.nan_lanes()
+fn below_or_nan<V: Lanes>(a: V, b: f64) -> u8 {
+    if b.is_nan() {
+        !0
+    } else {
+        a.less_than(V::splat(b)) | a.nan_lanes()
+    }
+}
+
+/// `a ≥ b` lane by lane (false for a NaN lane).
+#[inline(always)]
+fn at_least<V: Lanes>(a: V, b: f64) -> u8 {
+    if b.is_nan() {
+        0
+    } else {
+        !a.less_than(V::splat(b)) & !a.nan_lanes()
+    }
+}
+
+/// `a ≥ b or a is NaN` lane by lane.
+#[inline(always)]
+fn at_least_or_nan<V: Lanes>(a: V, b: f64) -> u8 {
+    if b.is_nan() {
+        a.nan_lanes()
+    } else {
+        !a.less_than(V::splat(b))
+    }
+}
+
+/// `a ≤ b or a is NaN` lane by lane.
+#[inline(always)]
+fn at_most_or_nan<V: Lanes>(a: V, b: f64) -> u8 {
+    if b.is_nan() {
+        a.nan_lanes()
+    } else {
+        !V::splat(b).less_than(a)
+    }
 }
 
 /// `p · n` lane by lane, as `DVec3::dot` adds it: `(x n_x + y n_y) + z n_z`.
 #[inline(always)]
-fn dot<V: Lanes>(p: [V; 3], n: DVec3) -> V {
+pub(crate) fn dot<V: Lanes>(p: [V; 3], n: DVec3) -> V {
     p[0].mul(V::splat(n.x))
         .add(p[1].mul(V::splat(n.y)))
         .add(p[2].mul(V::splat(n.z)))
@@ -152,7 +184,7 @@ fn dot<V: Lanes>(p: [V; 3], n: DVec3) -> V {
 
 /// `x - p` lane by lane.
 #[inline(always)]
-fn minus<V: Lanes>(x: [V; 3], p: DVec3) -> [V; 3] {
+pub(crate) fn minus<V: Lanes>(x: [V; 3], p: DVec3) -> [V; 3] {
     [
         x[0].sub(V::splat(p.x)),
         x[1].sub(V::splat(p.y)),
@@ -162,7 +194,7 @@ fn minus<V: Lanes>(x: [V; 3], p: DVec3) -> [V; 3] {
 
 /// `|d|²` lane by lane, as `DVec3::length_squared` adds it.
 #[inline(always)]
-fn squared<V: Lanes>(d: [V; 3]) -> V {
+pub(crate) fn squared<V: Lanes>(d: [V; 3]) -> V {
     d[0].mul(d[0]).add(d[1].mul(d[1])).add(d[2].mul(d[2]))
 }
 
@@ -222,11 +254,33 @@ mod tests {
             points.push(DVec3::new(0.0, bad, 0.0));
             points.push(DVec3::new(0.5, 0.5, bad));
         }
+        let mut broads: Vec<Broad> = (colliders.iter())
+            .flat_map(|c| [c.broad(0.0), c.broad(0.01)])
+            .collect();
+        // Bounds that are NaN (which `Collider::broad` never makes: it clamps): the
+        // comparisons' own answers all the same.
+        let nan = f64::NAN;
+        for (d2, rim) in [(nan, 1.0), (2.0, nan)] {
+            broads.push(Broad::Bowl {
+                center: DVec3::ZERO,
+                d2_min: d2,
+                rim,
+            });
+        }
+        for (h_max, h_floor, rho2_min) in [(nan, 0.0, 1.0), (0.5, nan, 1.0), (0.5, -0.5, nan)] {
+            broads.push(Broad::HolePlane {
+                point: DVec3::ZERO,
+                normal: DVec3::Y,
+                hole_center: DVec3::ZERO,
+                h_max,
+                h_floor,
+                rho2_min,
+            });
+        }
         let mut checked = 0;
         let (mut marked, mut left) = (0, 0);
-        for collider in colliders {
-            for epsilon in [0.0, 0.01] {
-                let broad = collider.broad(epsilon);
+        for broad in broads {
+            {
                 for count in 1..=64 {
                     for xs in points.chunks(count) {
                         let expected = (xs.iter().enumerate())

@@ -8,6 +8,7 @@
 #[allow(clippy::wildcard_imports)]
 use super::*;
 use crate::physics::collide::{Broad, ROUNDING_SPEED};
+use crate::physics::fast::marks::{dot, minus, squared};
 
 /// The chunk's particles (bit `l` for lane `l`) that may touch one of `colliders` (closer than
 /// `epsilon`, m, or inside): the bounds of [`Collider::broad`], eight particles at a time, so
@@ -63,34 +64,6 @@ pub(super) fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3
         };
     }
     mask
-}
-
-// Functions, not closures: a closure does not take its caller's target features, so LLVM kept
-// these out of line and called each AVX operation inside them as a function; `inline(always)`
-// functions are inlined into the AVX2 kernel, and their operations with them.
-
-/// `p · n` lane by lane.
-#[inline(always)]
-fn dot<V: Lanes>(p: [V; 3], n: DVec3) -> V {
-    p[0].mul(V::splat(n.x))
-        .add(p[1].mul(V::splat(n.y)))
-        .add(p[2].mul(V::splat(n.z)))
-}
-
-/// `x - p` lane by lane.
-#[inline(always)]
-fn minus<V: Lanes>(x: [V; 3], p: DVec3) -> [V; 3] {
-    [
-        x[0].sub(V::splat(p.x)),
-        x[1].sub(V::splat(p.y)),
-        x[2].sub(V::splat(p.z)),
-    ]
-}
-
-/// `|d|²` lane by lane.
-#[inline(always)]
-fn squared<V: Lanes>(d: [V; 3]) -> V {
-    d[0].mul(d[0]).add(d[1].mul(d[1])).add(d[2].mul(d[2]))
 }
 
 /// The contact force of `d`'s colliders on the `candidates` lanes of a chunk (positions `x`,
