@@ -15,7 +15,7 @@
 //!          (an axis with a NaN coordinate: (-∞, ∞))
 //! calm   = every x_i calm (|coordinate| < 1e50 m)  ⟺  every box_j inside (-1e50, 1e50)³
 //! near   = { i : some collider's bounds may hold x_i            (Broad::may_touch)
-//!                and some collider answers (x_i, v_i) }         (response::responds_within)
+//!                and some collider answers (x_i, v_i) }         (response::responds)
 //!          in index order
 //! ```
 //! where `B` is [`BOX`] particles (`fast::bounds`, eight points at a time), and a collider
@@ -39,7 +39,7 @@ use glam::DVec3;
 
 #[cfg(test)]
 use super::response::near_any;
-use super::response::{near_any_into, responds_within};
+use super::response::{near_any_into, responds};
 use super::{Broad, World, calm};
 use crate::physics::fast::bounds::{boxes, plane_bits};
 
@@ -153,7 +153,7 @@ impl PartBounds {
     /// Sums up particles `start..start + x.len()` at positions `x` (m) for the colliders of
     /// `world`, with the boxes of the spheres' broad phase when `with_boxes`. With their
     /// velocities `v` (m/s), `near` keeps only the particles some collider would answer
-    /// ([`responds_within`]: the response's own first tests, on the same numbers), most often none
+    /// ([`responds`]: the response's own first tests, on the same numbers), most often none
     /// of a body resting on a collider, so that the response on one thread visits only those.
     pub fn sum_up<'a>(
         &mut self,
@@ -172,8 +172,7 @@ impl PartBounds {
             let params = &world.contact;
             self.near.retain(|&i| {
                 let k = i as usize - start;
-                (world.colliders.iter().zip(&broads))
-                    .any(|(c, b)| responds_within(b, c, params, x[k], v[k]))
+                (world.colliders.iter()).any(|c| responds(c, params, x[k], v[k]))
             });
         }
     }
