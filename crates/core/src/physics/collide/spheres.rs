@@ -209,16 +209,16 @@ pub fn collide_spheres_prepared<'a, 'b>(
                         // The separation's potential energy (J): gravity on both, and the
                         // springs at i (neighbours where they were) where they gain.
                         let rise = |dx_s: DVec3, dx: DVec3| {
+                            if ws == 0.0 {
+                                // A kinematic sphere is driven: its pushes are not paid.
+                                return 0.0;
+                            }
                             let elastic = if w == 0.0 {
                                 0.0
                             } else {
                                 model.elastic_at_with(before, i, x_old + dx)
                                     - model.elastic_at_with(before, i, x_old)
                             };
-                            if ws == 0.0 {
-                                // A kinematic sphere is driven: its pushes are not paid.
-                                return 0.0;
-                            }
                             lift(dx_s, ws) + lift(dx, w) + elastic.max(0.0)
                         };
                         let touched = impulse_pair(
@@ -253,8 +253,11 @@ pub fn collide_spheres_prepared<'a, 'b>(
         // exactly; the system pays it from its kinetic energy (`budget`). Not with a kinematic
         // sphere: driven from outside, it may do work on the cloth.
         own.finish(n);
+        if spheres.iter().any(|s| s.kinematic) {
+            return;
+        }
         let (rise, size) = energy_rise(&model, x, v, Some(spheres), own);
-        if above_rounding(rise, size) && spheres.iter().all(|s| !s.kinematic) {
+        if above_rounding(rise, size) {
             let mut bodies = Bodies {
                 x,
                 v,
