@@ -40,7 +40,8 @@ use glam::DVec3;
 #[cfg(test)]
 use super::response::near_any;
 use super::response::{near_any_into, responds};
-use super::{Broad, World, calm};
+use super::spheres::push_part;
+use super::{Broad, DynamicSphere, World, calm};
 use crate::physics::fast::bounds::{boxes, plane_bits};
 
 /// Particles per box of the sphere–particle broad phase.
@@ -104,6 +105,12 @@ pub struct PartBounds {
     bits: Vec<u64>,
     /// Made after the last [`Prepared::take`].
     fresh: bool,
+    /// The kinematic spheres pushed the part's particles (`spheres::push_part`) since it was
+    /// summed up: `pushed` holds each pushed particle's first `(particle, x, v)`, in the order
+    /// of the pushes, and `spheres` the spheres as the part moved them.
+    pub(super) pushed_here: bool,
+    pub(super) pushed: Vec<(u32, DVec3, DVec3)>,
+    pub(super) spheres: Vec<DynamicSphere>,
 }
 
 impl PartBounds {
@@ -114,6 +121,7 @@ impl PartBounds {
     pub(super) fn fill(&mut self, broads: &[Broad], start: usize, x: &[DVec3], with_boxes: bool) {
         self.start = start;
         self.end = start + x.len();
+        self.pushed_here = false;
         self.boxes.clear();
         self.near.clear();
         let mut calm_known = None;
@@ -207,20 +215,30 @@ pub struct Prepared {
 
 impl Prepared {
     /// Sums up part `k`, particles `start..start + x.len()` at positions `x` (m) and
-    /// velocities `v` (m/s, if given) after a step, for the colliders of `world`, with boxes
-    /// when `with_boxes` ([`PartBounds::sum_up`]).
+    /// velocities `v` (m/s) after a step, for the colliders of `world`, with boxes when
+    /// `with_boxes` ([`PartBounds::sum_up`]); then, given `spheres` and the step `dt` (s),
+    /// pushes the part's particles out of those spheres, as this step's response would push
+    /// them, when they are all kinematic (`spheres::push_part`; the response records the
+    /// pushes instead of making them, or undoes them).
     pub fn prepare<'a>(
         &self,
         world: impl Into<World<'a>>,
         k: usize,
         start: usize,
-        x: &[DVec3],
-        v: Option<&[DVec3]>,
+        x: &mut [DVec3],
+        v: &mut [DVec3],
         with_boxes: bool,
+        spheres: Option<(&[DynamicSphere], f64)>,
     ) {
+        let world = world.into();
         MAKING.with(|making| {
             let making = &mut *making.borrow_mut();
-            making.sum_up(world, start, x, v, with_boxes);
+            making.sum_up(world, start, x, Some(v), with_boxes);
+            if let Some((spheres, dt)) = spheres
+                && with_boxes
+            {
+                push_part(&world, spheres, dt, making, x, v);
+            }
             making.fresh = true;
             let mut parts = self.parts.lock().unwrap_or_else(PoisonError::into_inner);
             if parts.len() <= k {
@@ -247,6 +265,19 @@ impl Prepared {
             p.fresh = false;
         }
         (end == n && count > 0).then_some(Taken { parts, count })
+    }
+
+    /// Undoes the pushes the parts made and no response took (`spheres::push_part`): the
+    /// positions (m) and velocities (m/s) of the body as they were before them. For a
+    /// response that found the summaries incomplete ([`Prepared::take`]).
+    pub fn undo_pushes(&self, x: &mut [DVec3], v: &mut [DVec3]) {
+        let mut parts = self.parts.lock().unwrap_or_else(PoisonError::into_inner);
+        for p in parts.iter_mut().filter(|p| p.pushed_here) {
+            p.pushed_here = false;
+            for &(i, x_old, v_old) in &p.pushed {
+                (x[i as usize], v[i as usize]) = (x_old, v_old);
+            }
+        }
     }
 }
 
