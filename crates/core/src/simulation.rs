@@ -544,7 +544,7 @@ fn response(dt: f64, account: bool, log: Arc<Mutex<ResponseLog>>) -> Response {
                 copy.extend_from_slice(&log.spheres);
             }
             let spheres = with_boxes.then_some((&copy[..], dt));
-            parts.prepare(model, k, q0, x, v, with_boxes, spheres);
+            parts.prepare(model, k, q0, x, v, spheres);
         });
     };
     let respond = move |model: &Model, x: &mut [DVec3], v: &mut [DVec3]| {

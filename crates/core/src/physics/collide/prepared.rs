@@ -215,11 +215,12 @@ pub struct Prepared {
 
 impl Prepared {
     /// Sums up part `k`, particles `start..start + x.len()` at positions `x` (m) and
-    /// velocities `v` (m/s) after a step, for the colliders of `world`, with boxes when
-    /// `with_boxes` ([`PartBounds::sum_up`]); then, given `spheres` and the step `dt` (s),
-    /// pushes the part's particles out of those spheres, as this step's response would push
-    /// them, when they are all kinematic (`spheres::push_part`; the response records the
-    /// pushes instead of making them, or undoes them).
+    /// velocities `v` (m/s) after a step, for the colliders of `world`
+    /// ([`PartBounds::sum_up`]); given the body's `spheres` (as the last response left them)
+    /// and the step `dt` (s), with the boxes of the spheres' broad phase, and then the part's
+    /// particles pushed out of those spheres as this step's response would push them, when
+    /// they are all kinematic (`spheres::push_part`; the response records the pushes instead
+    /// of making them, or undoes them).
     pub fn prepare<'a>(
         &self,
         world: impl Into<World<'a>>,
@@ -227,16 +228,13 @@ impl Prepared {
         start: usize,
         x: &mut [DVec3],
         v: &mut [DVec3],
-        with_boxes: bool,
         spheres: Option<(&[DynamicSphere], f64)>,
     ) {
         let world = world.into();
         MAKING.with(|making| {
             let making = &mut *making.borrow_mut();
-            making.sum_up(world, start, x, Some(v), with_boxes);
-            if let Some((spheres, dt)) = spheres
-                && with_boxes
-            {
+            making.sum_up(world, start, x, Some(v), spheres.is_some());
+            if let Some((spheres, dt)) = spheres {
                 push_part(&world, spheres, dt, making, x, v);
             }
             making.fresh = true;
