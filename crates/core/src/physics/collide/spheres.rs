@@ -146,6 +146,7 @@ pub(super) fn push_part(
     let e = world.contact.sphere_particle_restitution;
     let mut spheres = std::mem::take(&mut part.spheres);
     let mut pushed = std::mem::take(&mut part.pushed);
+    let mut highest = 0;
     for s in &mut spheres {
         let ws = s.inv_mass();
         let reach2 = s.radius * s.radius * (1.0 + 1e-9);
@@ -180,11 +181,12 @@ pub(super) fn push_part(
                 if touched.is_some() {
                     (x[k], v[k]) = (x_new, v_new);
                     bounds.include(x[k]);
+                    // Its first push only (a later sphere may push it again); the records
+                    // rise while one sphere pushes, so only a lower particle can be in them.
                     let i = i as u32;
-                    let seen = (pushed.last()).is_some_and(|p| p.0 >= i)
-                        && pushed.iter().any(|p| p.0 == i);
-                    if !seen {
+                    if i > highest || !pushed.iter().any(|p| p.0 == i) {
                         pushed.push((i, x_old, v_old));
+                        highest = highest.max(i);
                     }
                 }
             }
@@ -261,7 +263,7 @@ pub fn collide_spheres_prepared<'a, 'b>(
                     }
                 }
             } else {
-                for &(i, x_old, v_old) in &p.pushed {
+                for &(i, x_old, v_old) in p.pushed.iter().rev() {
                     (x[i as usize], v[i as usize]) = (x_old, v_old);
                 }
             }
