@@ -533,8 +533,19 @@ fn response(dt: f64, account: bool, log: Arc<Mutex<ResponseLog>>) -> Response {
         .unwrap_or_else(PoisonError::into_inner)
         .spheres
         .is_empty();
-    let prepare = move |model: &Model, k: usize, q0: usize, x: &[DVec3], v: &[DVec3]| {
-        parts.prepare(model, k, q0, x, Some(v), with_boxes);
+    // The spheres as the last response left them, for the parts' pushes (kinematic spheres).
+    let spheres_now = Arc::clone(&log);
+    let prepare = move |model: &Model, k: usize, q0: usize, x: &mut [DVec3], v: &mut [DVec3]| {
+        SPHERES.with(|copy| {
+            let copy = &mut *copy.borrow_mut();
+            copy.clear();
+            if with_boxes {
+                let log = spheres_now.lock().unwrap_or_else(PoisonError::into_inner);
+                copy.extend_from_slice(&log.spheres);
+            }
+            let spheres = with_boxes.then_some((&copy[..], dt));
+            parts.prepare(model, k, q0, x, v, spheres);
+        });
     };
     let respond = move |model: &Model, x: &mut [DVec3], v: &mut [DVec3]| {
         let mut log = log.lock().unwrap_or_else(PoisonError::into_inner);
@@ -555,6 +566,7 @@ fn response(dt: f64, account: bool, log: Arc<Mutex<ResponseLog>>) -> Response {
                 (taken.parts(), calm)
             }
             None => {
+                prepared.undo_pushes(x, v);
                 whole.sum_up(model, 0, &x[..n], Some(&v[..n]), with_boxes);
                 let calm = whole.calm();
                 (std::slice::from_mut(whole), calm)
@@ -600,6 +612,13 @@ fn response(dt: f64, account: bool, log: Arc<Mutex<ResponseLog>>) -> Response {
         contacts.push(energy_change_calm(model, x, v, spheres, changes, calm));
     };
     Response(Arc::new(respond), Some(Arc::new(prepare)))
+}
+
+thread_local! {
+    /// A thread's copy of a body's spheres for its parts' pushes (reused).
+    static SPHERES: std::cell::RefCell<Vec<DynamicSphere>> = const {
+        std::cell::RefCell::new(Vec::new())
+    };
 }
 
 /// The log of a finished chunk, taken out of its lock.

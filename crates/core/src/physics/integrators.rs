@@ -366,7 +366,7 @@ pub type ResponseFn = dyn Fn(&Model, &mut [DVec3], &mut [DVec3]) + Send + Sync;
 
 /// The preparing function of a [`Response`]: model, part, its first particle, its new positions
 /// (m) and velocities (m/s).
-pub type PrepareFn = dyn Fn(&Model, usize, usize, &[DVec3], &[DVec3]) + Send + Sync;
+pub type PrepareFn = dyn Fn(&Model, usize, usize, &mut [DVec3], &mut [DVec3]) + Send + Sync;
 
 impl Response {
     /// The preparing function bound to `model`, as a team's threads call it on each part they
@@ -377,9 +377,13 @@ impl Response {
     pub(crate) fn part_summary<'a>(
         &'a self,
         model: &'a Model,
-    ) -> Option<impl Fn(usize, usize, &[DVec3], &[DVec3]) + Sync + 'a> {
+    ) -> Option<impl Fn(usize, usize, &mut [DVec3], &mut [DVec3]) + Sync + 'a> {
         let prepare = self.1.as_deref()?;
-        Some(move |k: usize, q0: usize, x: &[DVec3], v: &[DVec3]| prepare(model, k, q0, x, v))
+        Some(
+            move |k: usize, q0: usize, x: &mut [DVec3], v: &mut [DVec3]| {
+                prepare(model, k, q0, x, v);
+            },
+        )
     }
 }
 

@@ -31,6 +31,23 @@
 //! boxes are one part's or the whole body's (any split). The response uses a summary only when
 //! every part of the body has one from the step just taken ([`Prepared::take`]); otherwise it
 //! scans the particles itself, as without a team.
+//!
+//! **Kinematic spheres push in the parts.** When every sphere is kinematic (driven, infinitely
+//! heavy: `spheres::kinematic_only`), a particle's push depends only on that particle and the
+//! spheres, and no push changes a sphere. The thread that summed up a part then also pushes its
+//! particles ([`Prepared::prepare`], `spheres::push_part`), with the spheres moved as the
+//! response moves them first:
+//!
+//! ```text
+//! c'  = c + dt u                                  (each kinematic sphere, velocity u)
+//! for each sphere, each box of the part within reach, each particle i of the box in order:
+//!     |x_i - c'|² < r² (1 + 1e-9)  ⟹  impulse and separation, as the response makes them
+//! ```
+//! where `dt` is the step (s), `c`, `c'` the centre before and after (m) and `r` the radius
+//! (m). The response then records each part's pushes (the first state of each particle it
+//! changed) instead of making them: the same particles, records and spheres, bit for bit
+//! (tested), on both threads instead of one. When the spheres it moved are not those the parts
+//! were given, bit for bit, it puts the parts' particles back and pushes them itself.
 
 use std::cell::RefCell;
 use std::sync::{Mutex, MutexGuard, PoisonError};
@@ -40,7 +57,8 @@ use glam::DVec3;
 #[cfg(test)]
 use super::response::near_any;
 use super::response::{near_any_into, responds};
-use super::{Broad, World, calm};
+use super::spheres::push_part;
+use super::{Broad, DynamicSphere, World, calm};
 use crate::physics::fast::bounds::{boxes, plane_bits};
 
 /// Particles per box of the sphere–particle broad phase.
@@ -104,6 +122,12 @@ pub struct PartBounds {
     bits: Vec<u64>,
     /// Made after the last [`Prepared::take`].
     fresh: bool,
+    /// The kinematic spheres pushed the part's particles (`spheres::push_part`) since it was
+    /// summed up: `pushed` holds each pushed particle's first `(particle, x, v)`, in the order
+    /// of the pushes, and `spheres` the spheres as the part moved them.
+    pub(super) pushed_here: bool,
+    pub(super) pushed: Vec<(u32, DVec3, DVec3)>,
+    pub(super) spheres: Vec<DynamicSphere>,
 }
 
 impl PartBounds {
@@ -114,6 +138,7 @@ impl PartBounds {
     pub(super) fn fill(&mut self, broads: &[Broad], start: usize, x: &[DVec3], with_boxes: bool) {
         self.start = start;
         self.end = start + x.len();
+        self.pushed_here = false;
         self.boxes.clear();
         self.near.clear();
         let mut calm_known = None;
@@ -207,20 +232,28 @@ pub struct Prepared {
 
 impl Prepared {
     /// Sums up part `k`, particles `start..start + x.len()` at positions `x` (m) and
-    /// velocities `v` (m/s, if given) after a step, for the colliders of `world`, with boxes
-    /// when `with_boxes` ([`PartBounds::sum_up`]).
+    /// velocities `v` (m/s) after a step, for the colliders of `world`
+    /// ([`PartBounds::sum_up`]); given the body's `spheres` (as the last response left them)
+    /// and the step `dt` (s), with the boxes of the spheres' broad phase, and then the part's
+    /// particles pushed out of those spheres as this step's response would push them, when
+    /// they are all kinematic (`spheres::push_part`; the response records the pushes instead
+    /// of making them, or undoes them).
     pub fn prepare<'a>(
         &self,
         world: impl Into<World<'a>>,
         k: usize,
         start: usize,
-        x: &[DVec3],
-        v: Option<&[DVec3]>,
-        with_boxes: bool,
+        x: &mut [DVec3],
+        v: &mut [DVec3],
+        spheres: Option<(&[DynamicSphere], f64)>,
     ) {
+        let world = world.into();
         MAKING.with(|making| {
             let making = &mut *making.borrow_mut();
-            making.sum_up(world, start, x, v, with_boxes);
+            making.sum_up(world, start, x, Some(v), spheres.is_some());
+            if let Some((spheres, dt)) = spheres {
+                push_part(&world, spheres, dt, making, x, v);
+            }
             making.fresh = true;
             let mut parts = self.parts.lock().unwrap_or_else(PoisonError::into_inner);
             if parts.len() <= k {
@@ -247,6 +280,19 @@ impl Prepared {
             p.fresh = false;
         }
         (end == n && count > 0).then_some(Taken { parts, count })
+    }
+
+    /// Undoes the pushes the parts made and no response took (`spheres::push_part`): the
+    /// positions (m) and velocities (m/s) of the body as they were before them. For a
+    /// response that found the summaries incomplete ([`Prepared::take`]).
+    pub fn undo_pushes(&self, x: &mut [DVec3], v: &mut [DVec3]) {
+        let mut parts = self.parts.lock().unwrap_or_else(PoisonError::into_inner);
+        for p in parts.iter_mut().filter(|p| p.pushed_here) {
+            p.pushed_here = false;
+            for &(i, x_old, v_old) in p.pushed.iter().rev() {
+                (x[i as usize], v[i as usize]) = (x_old, v_old);
+            }
+        }
     }
 }
 
@@ -454,6 +500,146 @@ mod tests {
         assert_eq!(part.near, expected);
         assert!(!expected.is_empty() && expected.len() < bounds.near.len());
         assert!(expected.iter().all(|i| bounds.near.contains(i)));
+    }
+
+    /// Kinematic spheres' pushes made part by part (`spheres::push_part`, then the response
+    /// records them) leave the particles, the spheres and the records bit for bit as the
+    /// response's own pushes over the whole body: two moving spheres over 300 particles (some
+    /// inside both, some pinned, NaN), split into one, two and three parts at any particle.
+    /// Where the parts must not push (a sphere that is not kinematic, a velocity of -0), or
+    /// pushed with spheres other than the step's (the response then undoes their pushes), the
+    /// same too.
+    #[test]
+    fn pushes_made_part_by_part_are_the_responses_pushes() {
+        use crate::physics::collide::{Bodies, Changes, ContactParams, advance_spheres};
+        use crate::physics::collide::{DynamicSphere, collide_spheres_prepared};
+        let bits = |v: &[DVec3]| -> Vec<u64> {
+            v.iter()
+                .flat_map(|p| p.to_array().map(f64::to_bits))
+                .collect()
+        };
+        let sphere_bits = |s: &[DynamicSphere]| -> Vec<u64> {
+            s.iter()
+                .flat_map(|s| [s.center.to_array(), s.velocity.to_array()])
+                .flatten()
+                .map(f64::to_bits)
+                .collect()
+        };
+        let params = ContactParams::course_2021();
+        let n = 300;
+        let inv_mass: Vec<f64> = (0..n)
+            .map(|i| if i % 37 == 5 { 0.0 } else { 40.0 })
+            .collect();
+        let world = World {
+            colliders: &[],
+            contact: &params,
+            gravity: DVec3::new(0.0, -9.81, 0.0),
+            inv_mass: &inv_mass,
+            springs: &[],
+            incident: &[],
+            incident_start: &[],
+        };
+        let x0: Vec<DVec3> = (0..n)
+            .map(|i| {
+                let f = i as f64;
+                DVec3::new(
+                    0.9 * (0.37 * f).sin(),
+                    0.5 * (0.11 * f).cos(),
+                    0.01 * f - 1.5,
+                )
+            })
+            .collect();
+        // A NaN particle makes a sphere NaN (its push is 0 · NaN): the parts' spheres then
+        // differ from the step's, and the response pushes itself.
+        let mut poisoned = x0.clone();
+        poisoned[77] = DVec3::new(f64::NAN, 0.0, 0.0);
+        let v0: Vec<DVec3> = (0..n)
+            .map(|i| DVec3::new(0.1, -0.3 * (0.7 * i as f64).cos(), 0.0))
+            .collect();
+        let kinematic = vec![
+            DynamicSphere::kinematic(DVec3::new(0.0, 0.0, -0.5), 0.6, DVec3::new(0.2, 0.1, 0.0)),
+            DynamicSphere::kinematic(DVec3::new(0.3, 0.1, 0.2), 0.5, DVec3::new(0.0, 0.0, 0.3)),
+        ];
+        let mut falling = kinematic.clone();
+        falling[1] = DynamicSphere::new(DVec3::new(0.3, 0.1, 0.2), 0.5);
+        let mut signed = kinematic.clone();
+        signed[0].velocity.z = -0.0;
+        let dt = 1e-3;
+        // (positions, spheres of the step, spheres the parts are given)
+        let cases = [
+            (&x0, kinematic.clone(), kinematic.clone()),
+            (&x0, falling.clone(), falling),
+            (&x0, signed.clone(), signed),
+            (&x0, kinematic.clone(), vec![kinematic[1], kinematic[0]]),
+            (&poisoned, kinematic.clone(), kinematic.clone()),
+        ];
+        for (case, (x0, spheres, given)) in cases.iter().enumerate() {
+            // The response over the whole body.
+            let (mut x, mut v, mut s) = ((*x0).clone(), v0.clone(), spheres.clone());
+            let mut x_prev = vec![DVec3::ZERO; n];
+            let mut expected = Changes::default();
+            let mut bodies = Bodies {
+                x: &mut x,
+                v: &mut v,
+                x_prev: &mut x_prev,
+                history_valid: false,
+                spheres: &mut s,
+            };
+            advance_spheres(world, bodies.reborrow(), dt);
+            collide_spheres_prepared(world, bodies, dt, Some(&mut expected), None);
+            expected.finish(n);
+            let pushed_some = expected.particles.len();
+            assert!(
+                pushed_some > 10 && pushed_some < n / 2,
+                "{case}: {pushed_some}"
+            );
+            for cuts in [vec![0, n], vec![0, 150, n], vec![0, 41, 200, n]] {
+                let (mut xp, mut vp, mut sp) = ((*x0).clone(), v0.clone(), spheres.clone());
+                let mut parts: Vec<PartBounds> = Vec::new();
+                for w in cuts.windows(2) {
+                    let (a, b) = (w[0], w[1]);
+                    let mut part = PartBounds::default();
+                    part.sum_up(world, a, &xp[a..b], Some(&vp[a..b]), true);
+                    push_part(&world, given, dt, &mut part, &mut xp[a..b], &mut vp[a..b]);
+                    if case == 0 {
+                        // The parts' pushes are taken as they are (their spheres the step's).
+                        assert!(part.pushed_here, "{cuts:?}");
+                        assert_eq!(sphere_bits(&part.spheres), sphere_bits(&s), "{cuts:?}");
+                    }
+                    parts.push(part);
+                }
+                let mut changes = Changes::default();
+                let mut bodies = Bodies {
+                    x: &mut xp,
+                    v: &mut vp,
+                    x_prev: &mut x_prev,
+                    history_valid: false,
+                    spheres: &mut sp,
+                };
+                advance_spheres(world, bodies.reborrow(), dt);
+                collide_spheres_prepared(world, bodies, dt, Some(&mut changes), Some(&mut parts));
+                changes.finish(n);
+                assert_eq!(bits(&xp), bits(&x), "{case} {cuts:?}");
+                assert_eq!(bits(&vp), bits(&v), "{case} {cuts:?}");
+                assert_eq!(sphere_bits(&sp), sphere_bits(&s), "{case} {cuts:?}");
+                let records = |c: &Changes| -> Vec<(u32, Vec<u64>)> {
+                    (c.particles.iter())
+                        .map(|&(i, x, v)| (i, bits(&[x, v])))
+                        .collect()
+                };
+                assert_eq!(records(&changes), records(&expected), "{case} {cuts:?}");
+            }
+        }
+        // Not kinematic or -0: no push.
+        let mut part = PartBounds::default();
+        let (mut x, mut v) = (x0.clone(), v0.clone());
+        part.sum_up(world, 0, &x, Some(&v), true);
+        push_part(&world, &cases[2].2, dt, &mut part, &mut x, &mut v);
+        assert!(!part.pushed_here && bits(&x) == bits(&x0));
+        push_part(&world, &cases[1].2, dt, &mut part, &mut x, &mut v);
+        assert!(!part.pushed_here && bits(&x) == bits(&x0));
+        push_part(&world, &cases[0].2, dt, &mut part, &mut x, &mut v);
+        assert!(part.pushed_here && !part.pushed.is_empty() && bits(&x) != bits(&x0));
     }
 
     /// Points with NaN or infinite coordinates anywhere (first, middle, last, several axes),

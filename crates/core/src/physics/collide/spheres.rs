@@ -75,12 +75,126 @@ pub fn step_spheres<'a, 'b>(model: impl Into<World<'a>>, state: impl Into<Bodies
 pub fn advance_spheres<'a, 'b>(model: impl Into<World<'a>>, state: impl Into<Bodies<'b>>, dt: f64) {
     let (model, state) = (model.into(), state.into());
     for s in state.spheres.iter_mut() {
-        if !s.kinematic {
-            // Semi-implicit Euler: velocity first, then position with the new velocity.
-            s.velocity += dt * model.gravity;
-        }
-        s.center += dt * s.velocity;
+        advance_sphere(s, model.gravity, dt);
     }
+}
+
+/// Moves one sphere by `dt` seconds under `gravity` (m/s²), as [`advance_spheres`] does.
+fn advance_sphere(s: &mut DynamicSphere, gravity: DVec3, dt: f64) {
+    if !s.kinematic {
+        // Semi-implicit Euler: velocity first, then position with the new velocity.
+        s.velocity += dt * gravity;
+    }
+    s.center += dt * s.velocity;
+}
+
+/// True when every sphere is kinematic with a finite centre and velocity: then each particle's
+/// push depends only on that particle and the spheres, and no push changes a sphere (its
+/// centre and velocity change by `0 · …`, exactly nothing while they are finite and the push
+/// is; a zero's sign or a NaN would stay), so the parts of a body may be pushed on their own
+/// ([`push_part`]).
+pub(super) fn kinematic_only(spheres: &[DynamicSphere]) -> bool {
+    spheres.iter().all(|s| {
+        s.kinematic
+            && s.center.is_finite()
+            && s.velocity.is_finite()
+            && !(s.center.to_array().iter())
+                .chain(&s.velocity.to_array())
+                .any(|c| *c == 0.0 && c.is_sign_negative())
+    })
+}
+
+/// The same bits of two lists of spheres (centres and velocities).
+fn same_spheres(a: &[DynamicSphere], b: &[DynamicSphere]) -> bool {
+    let bits = |s: &DynamicSphere| {
+        (s.center.to_array().into_iter())
+            .chain(s.velocity.to_array())
+            .map(f64::to_bits)
+            .collect::<Vec<u64>>()
+    };
+    a.len() == b.len() && a.iter().zip(b).all(|(a, b)| bits(a) == bits(b))
+}
+
+/// The pushes of the kinematic spheres `spheres` (as they are before this step's
+/// [`advance_spheres`], which this moves a copy of) on one part of a body, particles
+/// `part.start..part.end` at positions `x` and velocities `v` (that part only), by the
+/// thread that stepped the part: the same operations on each particle as
+/// [`collide_spheres_prepared`]'s, which then only records them (the parts together are
+/// that function's pushes, sphere by sphere over every particle, because no particle's push
+/// depends on another's and no push changes a sphere, [`kinematic_only`]). Each pushed
+/// particle's first state goes into `part.pushed`, the moved copies of the spheres into
+/// `part.spheres`; nothing is pushed unless [`kinematic_only`].
+pub(super) fn push_part(
+    world: &World,
+    spheres: &[DynamicSphere],
+    dt: f64,
+    part: &mut PartBounds,
+    x: &mut [DVec3],
+    v: &mut [DVec3],
+) {
+    part.pushed.clear();
+    part.spheres.clear();
+    part.spheres.extend_from_slice(spheres);
+    for s in &mut part.spheres {
+        advance_sphere(s, world.gravity, dt);
+    }
+    if !kinematic_only(&part.spheres) {
+        part.spheres.clear();
+        return;
+    }
+    let start = part.start;
+    let e = world.contact.sphere_particle_restitution;
+    let mut spheres = std::mem::take(&mut part.spheres);
+    let mut pushed = std::mem::take(&mut part.pushed);
+    let mut highest = 0;
+    for s in &mut spheres {
+        let ws = s.inv_mass();
+        let reach2 = s.radius * s.radius * (1.0 + 1e-9);
+        for (range, bounds) in part.boxes_mut() {
+            if bounds.distance_squared(s.center) >= reach2 {
+                continue;
+            }
+            for i in range {
+                let k = i - start;
+                if (x[k] - s.center).length_squared() >= reach2 {
+                    continue;
+                }
+                let (x_old, v_old) = (x[k], v[k]);
+                let (mut x_new, mut v_new) = (x_old, v_old);
+                // A kinematic sphere's push is not paid: `collide_spheres_prepared`'s climb
+                // is 0 J.
+                let touched = impulse_pair(
+                    Side {
+                        x: &mut s.center,
+                        v: &mut s.velocity,
+                        w: ws,
+                    },
+                    Side {
+                        x: &mut x_new,
+                        v: &mut v_new,
+                        w: world.inv_mass[i],
+                    },
+                    s.radius,
+                    e,
+                    &|_, _| 0.0,
+                );
+                if touched.is_some() {
+                    (x[k], v[k]) = (x_new, v_new);
+                    bounds.include(x[k]);
+                    // Its first push only (a later sphere may push it again); the records
+                    // rise while one sphere pushes, so only a lower particle can be in them.
+                    let i = i as u32;
+                    if i > highest || !pushed.iter().any(|p| p.0 == i) {
+                        pushed.push((i, x_old, v_old));
+                        highest = highest.max(i);
+                    }
+                }
+            }
+        }
+    }
+    part.spheres = spheres;
+    part.pushed = pushed;
+    part.pushed_here = true;
 }
 
 /// Steps 2–4 of [`step_spheres`]: the impulses and separations between spheres, colliders and
@@ -130,6 +244,34 @@ pub fn collide_spheres_prepared<'a, 'b>(
         history_valid,
         spheres,
     } = state;
+    let mut parts = parts;
+    if let Some(parts) = parts.as_deref_mut()
+        && parts.iter().any(|p| p.pushed_here)
+    {
+        // The parts pushed their particles ([`push_part`]): the same as the loops below when
+        // every part did, with this step's spheres (then they are kinematic and nothing below
+        // changes them); else their pushes are undone and the loops below make them.
+        let agree = !history_valid
+            && kinematic_only(spheres)
+            && (parts.iter()).all(|p| p.pushed_here && same_spheres(&p.spheres, spheres));
+        for p in parts.iter_mut() {
+            p.pushed_here = false;
+            if agree {
+                if let Some(log) = log.as_deref_mut() {
+                    for &(i, x_old, v_old) in &p.pushed {
+                        log.record(i as usize, x_old, v_old);
+                    }
+                }
+            } else {
+                for &(i, x_old, v_old) in p.pushed.iter().rev() {
+                    (x[i as usize], v[i as usize]) = (x_old, v_old);
+                }
+            }
+        }
+        if agree {
+            return;
+        }
+    }
     for b in 1..spheres.len() {
         let (before, rest) = spheres.split_at_mut(b);
         let sb = &mut rest[0];
@@ -209,16 +351,16 @@ pub fn collide_spheres_prepared<'a, 'b>(
                         // The separation's potential energy (J): gravity on both, and the
                         // springs at i (neighbours where they were) where they gain.
                         let rise = |dx_s: DVec3, dx: DVec3| {
+                            if ws == 0.0 {
+                                // A kinematic sphere is driven: its pushes are not paid.
+                                return 0.0;
+                            }
                             let elastic = if w == 0.0 {
                                 0.0
                             } else {
                                 model.elastic_at_with(before, i, x_old + dx)
                                     - model.elastic_at_with(before, i, x_old)
                             };
-                            if ws == 0.0 {
-                                // A kinematic sphere is driven: its pushes are not paid.
-                                return 0.0;
-                            }
                             lift(dx_s, ws) + lift(dx, w) + elastic.max(0.0)
                         };
                         let touched = impulse_pair(
@@ -253,8 +395,11 @@ pub fn collide_spheres_prepared<'a, 'b>(
         // exactly; the system pays it from its kinetic energy (`budget`). Not with a kinematic
         // sphere: driven from outside, it may do work on the cloth.
         own.finish(n);
+        if spheres.iter().any(|s| s.kinematic) {
+            return;
+        }
         let (rise, size) = energy_rise(&model, x, v, Some(spheres), own);
-        if above_rounding(rise, size) && spheres.iter().all(|s| !s.kinematic) {
+        if above_rounding(rise, size) {
             let mut bodies = Bodies {
                 x,
                 v,

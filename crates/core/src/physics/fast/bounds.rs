@@ -9,8 +9,11 @@
 //! Eight points `x0 y0 z0 x1 … z7` are three registers of eight values, and value `j` of them
 //! is axis `j mod 3`: three running minima and maxima (`vminpd`, `vmaxpd`, which pass over a
 //! NaN) and three NaN masks, one per register, see one axis per lane; at the end of a box the
-//! 24 lanes are folded into the three axes (the zero's sign may differ from the point-by-point
-//! box, which no distance sees). Longer boxes spread that fold over more points.
+//! 24 lanes are folded into the three axes in registers, lane `j` with lane `j + 12`, then
+//! `j + 6`, then `j + 3` (the zero's sign may differ from the point-by-point box, which no
+//! distance sees). Longer boxes spread that fold over more points. (The fold went through
+//! memory and a scalar chain per axis before: 15 µs for the boxes of 16 384 points, now 4.5–6.5
+//! µs, measured on the Zen 5 machine of `fast/stencil/team.rs`.)
 
 use glam::DVec3;
 
@@ -67,7 +70,7 @@ fn boxes_avx512<T>(
 ) {
     use std::arch::x86_64::{
         _CMP_UNORD_Q, _mm512_cmp_pd_mask, _mm512_loadu_pd, _mm512_max_pd, _mm512_min_pd,
-        _mm512_set1_pd, _mm512_storeu_pd,
+        _mm512_set1_pd,
     };
     // Bits of the lanes of register r that hold axis c: AXIS[r][c].
     const fn axis_bits(r: usize, c: usize) -> u8 {
@@ -110,28 +113,13 @@ fn boxes_avx512<T>(
                 nan[r] |= _mm512_cmp_pd_mask::<_CMP_UNORD_Q>(v, v);
             }
         }
-        let mut l = [0.0; 24];
-        let mut h = [0.0; 24];
-        for r in 0..3 {
-            // SAFETY: eight f64 into eight of an array of 24.
-            unsafe {
-                _mm512_storeu_pd(l.as_mut_ptr().add(8 * r), lo[r]);
-                _mm512_storeu_pd(h.as_mut_ptr().add(8 * r), hi[r]);
-            }
-        }
         // Axis c is lanes c, c + 3, … c + 21 (never NaN: the minima and maxima passed over
         // every NaN), folded in registers.
-        let mut box_lo = [0.0; 3];
-        let mut box_hi = [0.0; 3];
-        for c in 0..3 {
-            let (mut a, mut b) = (l[c], h[c]);
-            for k in 1..8 {
-                let (x, y) = (l[c + 3 * k], h[c + 3 * k]);
-                a = if x < a { x } else { a };
-                b = if y > b { y } else { b };
-            }
-            (box_lo[c], box_hi[c]) = (a, b);
-        }
+        let (l, h) = (
+            fold::<true>(lo[0], lo[1], lo[2]),
+            fold::<false>(hi[0], hi[1], hi[2]),
+        );
+        let (box_lo, box_hi) = ([l[0], l[1], l[2]], [h[0], h[1], h[2]]);
         let mut nan_axis = glam::BVec3::FALSE;
         for c in 0..3 {
             nan_axis.set(
@@ -146,6 +134,49 @@ fn boxes_avx512<T>(
             DVec3::select(nan_axis, DVec3::INFINITY, hi),
         ));
     }
+}
+
+/// The 24 lanes `a ++ b ++ c` (lane `j` holds axis `j mod 3`, as [`boxes_avx512`] keeps
+/// them) folded into the three axes, by minima (`MIN`) or maxima: lane `j` with lane `j + 12`,
+/// then `j + 6`, then `j + 3` (lanes of one axis each time), the axes in lanes 0, 1, 2 of the
+/// result. No lane is NaN, so the order of the fold changes no value (a zero's sign aside).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx512f")]
+fn fold<const MIN: bool>(
+    a: std::arch::x86_64::__m512d,
+    b: std::arch::x86_64::__m512d,
+    c: std::arch::x86_64::__m512d,
+) -> [f64; 4] {
+    use std::arch::x86_64::{
+        __m512d, _mm256_storeu_pd, _mm512_castpd512_pd256, _mm512_max_pd, _mm512_min_pd,
+        _mm512_permutex2var_pd, _mm512_permutexvar_pd, _mm512_set_epi64, _mm512_shuffle_f64x2,
+    };
+    let op = |x: __m512d, y: __m512d| {
+        if MIN {
+            _mm512_min_pd(x, y)
+        } else {
+            _mm512_max_pd(x, y)
+        }
+    };
+    // Lanes j 0..8 with j 12..20 (b's upper half, c's lower half); j 8..12 (b's lower half)
+    // with j 20..24 (c's upper half).
+    let low = op(a, _mm512_shuffle_f64x2::<0b01_00_11_10>(b, c));
+    let high = op(b, _mm512_shuffle_f64x2::<0b11_10_11_10>(c, c));
+    // j 0..6 with j 6..12: `low`'s lanes 6, 7 and `high`'s 0..4.
+    let six = op(
+        low,
+        _mm512_permutex2var_pd(low, _mm512_set_epi64(0, 0, 11, 10, 9, 8, 7, 6), high),
+    );
+    // j 0..3 with j 3..6.
+    let three = op(
+        six,
+        _mm512_permutexvar_pd(_mm512_set_epi64(0, 0, 0, 0, 0, 5, 4, 3), six),
+    );
+    let mut out = [0.0; 4];
+    // SAFETY: four f64 into an array of four.
+    unsafe { _mm256_storeu_pd(out.as_mut_ptr(), _mm512_castpd512_pd256(three)) };
+    out
 }
 
 /// Sets bit `i mod 64` of `bits[i / 64]` for every point `i` of `x` whose height over a plane

@@ -48,7 +48,8 @@
 //! team goes on with the next pass without handing the work back to the pool. What that
 //! function would ask of every particle, each thread can answer for its own part right after a
 //! pass ([`Crew::pass_then`]: the thread that wrote the part, while it is in its cache), so that
-//! the serial stage reads one summary per part instead.
+//! the serial stage reads one summary per part instead; and what it would do to each particle
+//! on its own, each thread can do to its part (the serial stage then records it).
 //!
 //! **Stealing.** Every thread of the team has a home part, which it claims first in every pass
 //! (so a part's particles stay in one core's cache from pass to pass). A thread that has
@@ -152,8 +153,8 @@ pub struct Pass<'a> {
 }
 
 /// What [`Crew::pass_then`] calls after each part: part `k`, its first particle `q0`, its new
-/// positions (m) and velocities (m/s).
-pub type PartFn<'a> = &'a (dyn Fn(usize, usize, &[DVec3], &[DVec3]) + Sync);
+/// positions (m) and velocities (m/s), which it may change (the part's own).
+pub type PartFn<'a> = &'a (dyn Fn(usize, usize, &mut [DVec3], &mut [DVec3]) + Sync);
 
 /// [`Update`] with buffers named by index (see [`Pass`]).
 #[derive(Clone, Copy, Debug)]
@@ -355,7 +356,7 @@ impl Common<'_> {
                 .range(scratch, x, v, q0, q1, &mut part, &output);
         });
         if let Some(then) = then {
-            let [xs, vs, _] = &part.outs;
+            let [xs, vs, _] = &mut part.outs;
             then(k, q0, xs, vs);
         }
         if let Some(slot) = sum {
@@ -448,7 +449,10 @@ impl Crew<'_> {
     /// the part, with `x` and `v` the part's new positions and velocities (`outs[0]`,
     /// `outs[1]`, particles `q0..`) while they are in its cache: a summary of each part that a
     /// following [`Crew::serial`] reads instead of scanning every particle itself (the
-    /// collision response's broad phase). `then` writes only what belongs to part `k`.
+    /// collision response's broad phase), or a change of each particle that depends on that
+    /// particle alone (a kinematic sphere's push). `then` writes only what belongs to part `k`:
+    /// no other thread reads the part's new values before the next pass (a pass never reads
+    /// its own outputs).
     ///
     /// # Panics
     /// As [`Crew::pass`].
