@@ -172,7 +172,8 @@ fn a_team_fails_loudly() {
 /// bit for bit `Stencil::sum_power` of the power buffer of the same pass run alone
 /// (`Stencil::write`), for 1, 2, 3 and 5 parts and more passes than the ring has slots,
 /// without colliders and with a plane the cube moves into (a contact column to sum); the
-/// states too.
+/// states too. So are the totals of `Stencil::write_with_power_in_parts` (one part sums them
+/// in registers as the pass goes and writes no buffer).
 fn a_teams_power_is_the_single_passes_power() {
     use glam::DVec3;
     use springlab::physics::collide::Collider;
@@ -207,6 +208,23 @@ fn a_teams_power_is_the_single_passes_power() {
             };
             stencil.write(&x, &v, [&mut x1, &mut v1, &mut []], &mut power, output);
             want.push(Stencil::sum_power(&power, contact));
+            // The totals summed as the pass goes (one part: in registers, no buffer
+            // written; more: the buffer summed), the same bits and states.
+            for parts in [1, 2, 3] {
+                let (mut x3, mut v3) = (x.clone(), v.clone());
+                let mut buffer = vec![f64::NAN; stencil.power_len()];
+                let outs = [&mut x3[..], &mut v3[..], &mut []];
+                let total =
+                    stencil.write_with_power_in_parts(&x, &v, outs, &mut buffer, output, parts);
+                let last = want.last().expect("a total");
+                assert_eq!(
+                    [total.0.to_bits(), total.1.to_bits()],
+                    [last.0.to_bits(), last.1.to_bits()],
+                    "{parts} parts, contact {contact}"
+                );
+                assert!(x3 == x1 && v3 == v1, "{parts} parts: states");
+                assert_eq!(buffer.iter().all(|p| p.is_nan()), parts == 1);
+            }
             (x, v) = (x1, v1);
         }
         assert_eq!(

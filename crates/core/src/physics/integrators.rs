@@ -543,9 +543,8 @@ fn fused_pass(
         stencil.write(x, v, outs, &mut [], output);
         return Power::default();
     }
-    stencil.write(x, v, outs, scratch.chunks(stencil), output);
-    let contact = output.dynamics().is_some_and(|d| !d.colliders.is_empty());
-    let (dampers_and_drag, contact) = Stencil::sum_power(&scratch.chunks, contact);
+    let (dampers_and_drag, contact) =
+        stencil.write_with_power(x, v, outs, scratch.chunks(stencil), output);
     Power {
         dampers_and_drag,
         contact,

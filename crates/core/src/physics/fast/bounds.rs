@@ -243,5 +243,101 @@ fn plane_bits_lanes<V: Lanes>(
     calm == u8::MAX
 }
 
+/// Sets bit `i mod 64` of `bits[i / 64]` for every point `i` at `x` moving at `v` that some
+/// plane `(point, normal)` of `planes` answers, the first tests of the collision response
+/// (`collide::response::responds`: the same operations, so the same answers, tested in
+/// `collide/prepared.rs`), eight points at a time:
+///
+/// ```text
+/// φ   = (x_i - point)·normal           (m)
+/// v_N = v_i·normal                     (m/s)
+/// answered  ⟺  not φ ≥ ε  and  not (φ ≥ 0 and v_N ≥ 0)
+/// ```
+/// where `ε` is the contact band (m) and a comparison with a NaN is false; and returns
+/// whether every position is calm (every coordinate inside (-1e50, 1e50) m, `collide::calm`).
+///
+/// # Panics
+/// If `bits` holds fewer than `x.len()` bits, or `v` is shorter than `x`.
+pub(crate) fn plane_answer_bits(
+    x: &[DVec3],
+    v: &[DVec3],
+    planes: &[(DVec3, DVec3)],
+    epsilon: f64,
+    bits: &mut [u64],
+) -> bool {
+    assert!(bits.len() * 64 >= x.len(), "a bit for every point");
+    let v = &v[..x.len()];
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        // SAFETY: the CPU supports AVX-512F (checked above).
+        return unsafe { plane_answer_bits_avx512(x, v, planes, epsilon, bits) };
+    }
+    plane_answer_bits_lanes::<Plain>(x, v, planes, epsilon, bits)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn plane_answer_bits_avx512(
+    x: &[DVec3],
+    v: &[DVec3],
+    planes: &[(DVec3, DVec3)],
+    epsilon: f64,
+    bits: &mut [u64],
+) -> bool {
+    plane_answer_bits_lanes::<Avx512>(x, v, planes, epsilon, bits)
+}
+
+/// [`plane_answer_bits`] with lanes `V`.
+#[inline(always)]
+fn plane_answer_bits_lanes<V: Lanes>(
+    x: &[DVec3],
+    v: &[DVec3],
+    planes: &[(DVec3, DVec3)],
+    epsilon: f64,
+    bits: &mut [u64],
+) -> bool {
+    let (low, high) = (V::splat(-CALM), V::splat(CALM));
+    let (band, zero) = (V::splat(epsilon), V::zero());
+    // `a ≥ b` as a mask: neither NaN and not `a < b`. A function, not a closure: a closure
+    // does not take the caller's target features, and its operations would become calls.
+    #[inline(always)]
+    fn at_least<V: Lanes>(a: V, b: V) -> u8 {
+        !a.less_than(b) & !a.nan_lanes() & !b.nan_lanes()
+    }
+    let mut calm = u8::MAX;
+    for (k, (xc, vc)) in x.chunks(LANES).zip(v.chunks(LANES)).enumerate() {
+        let count = xc.len();
+        let lanes = first_lanes(count);
+        let p = load_chunk::<V>(xc, count);
+        // The velocities only for a chunk with a point in some plane's band (most have none).
+        let mut u = [V::zero(); 3];
+        let mut loaded = false;
+        let mut answered = 0u8;
+        for &(point, normal) in planes {
+            // As `DVec3::dot` adds: (a_x n_x + a_y n_y) + a_z n_z.
+            let phi = (p[0].sub(V::splat(point.x)).mul(V::splat(normal.x)))
+                .add(p[1].sub(V::splat(point.y)).mul(V::splat(normal.y)))
+                .add(p[2].sub(V::splat(point.z)).mul(V::splat(normal.z)));
+            let within = !at_least(phi, band) & lanes;
+            if within == 0 {
+                continue;
+            }
+            if !loaded {
+                u = load_chunk::<V>(vc, count);
+                loaded = true;
+            }
+            let v_n = (u[0].mul(V::splat(normal.x)))
+                .add(u[1].mul(V::splat(normal.y)))
+                .add(u[2].mul(V::splat(normal.z)));
+            answered |= within & !(at_least(phi, zero) & at_least(v_n, zero));
+        }
+        bits[k / 8] |= u64::from(answered) << (8 * (k % 8));
+        for c in p {
+            calm &= (low.less_than(c) & c.less_than(high)) | !lanes;
+        }
+    }
+    calm == u8::MAX
+}
+
 /// The size of a calm coordinate (m): below it in magnitude (`collide::calm`).
 const CALM: f64 = 1e50;

@@ -68,7 +68,8 @@
 //! pass 1 also computes each damper's power `k_d ((v_b - v_a)·n)²` (two more multiplications
 //! per spring) and pass 2 adds the drag `c |v|²` and the contact power of each particle
 //! (see [`super::energy::dissipated_power`]); each chunk writes its eight partial sums, and the
-//! caller adds them in chunk order, so the total does not depend on the split between threads.
+//! caller adds them in chunk order, so the total does not depend on the split between threads
+//! (a pass on one part adds them itself as it goes, in that order: [`Stencil::write_with_power`]).
 //!
 //! **One reciprocal square root.** The length and the direction need `L = √(d·d)` and `1/L`.
 //! A 512-bit square root or division keeps the divider busy for about 13–16 cycles (measured on
@@ -721,7 +722,7 @@ impl Stencil {
         part: &mut Part,
         output: &Output,
     ) {
-        let power = !part.power.is_empty();
+        let power = !part.power.is_empty() || s.sum_power;
         match (self.kernel, power) {
             #[cfg(target_arch = "x86_64")]
             (Kernel::Avx512, false) => {

@@ -89,6 +89,12 @@ pub(super) struct Scratch {
     pub(super) xv: Aligned,
     /// Every group's force ring (N), see [`Group::ring_offset`].
     pub(super) ring: Aligned,
+    /// Sum the dissipated power of the next range's chunks here (`(dampers and drag,
+    /// contact)` lane by lane, chunk after chunk: what [`Stencil::sum_power`] adds from the
+    /// power buffer) instead of writing it to the part's buffer; cleared by that range.
+    pub(super) sum_power: bool,
+    /// Those sums (W).
+    pub(super) power_sums: [[f64; LANES]; 2],
 }
 
 /// A buffer of f64 whose used part starts at a 64-byte boundary, so that a chunk of `LANES`
@@ -176,7 +182,16 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
     // (from q0 - reach) up to the chunk that contains q1 - 1, and their second ends.
     let base = q0.saturating_sub(st.reach) / LANES * LANES;
     let len = q1.next_multiple_of(LANES) + st.reach - base;
-    let Scratch { xv, ring } = s;
+    let Scratch {
+        xv,
+        ring,
+        sum_power,
+        power_sums,
+    } = s;
+    // The power summed here, in registers, chunk after chunk (`Scratch::sum_power`, asked
+    // for this range only).
+    let mut sums =
+        std::mem::take(sum_power).then(|| (V::load(&power_sums[0]), V::load(&power_sums[1])));
     let stride = len.next_multiple_of(LANES);
     let (xs, vs) = xv.get_mut(6 * stride).split_at_mut(3 * stride);
     let (xs0, rest) = xs.split_at_mut(stride);
@@ -309,10 +324,11 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
                 x: components(w.x, i),
                 v: components(w.v, i),
             };
+            let sums = sums.as_mut();
             if chunk.count == LANES {
-                finish::<V, POWER, true>(output, &chunk, sum, spring_power[c], part);
+                finish::<V, POWER, true>(output, &chunk, sum, spring_power[c], part, sums);
             } else {
-                finish::<V, POWER, false>(output, &chunk, sum, spring_power[c], part);
+                finish::<V, POWER, false>(output, &chunk, sum, spring_power[c], part, sums);
             }
         }
         if let Output::Step {
@@ -323,6 +339,10 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
             let [xo, vo, _] = &mut part.outs;
             after(&mut xo[a..b], &mut vo[a..b]);
         }
+    }
+    if let Some((dampers, contact)) = sums {
+        dampers.store(&mut power_sums[0]);
+        contact.store(&mut power_sums[1]);
     }
 }
 
@@ -438,7 +458,8 @@ pub(super) struct Chunk<V> {
 
 /// Pass 2's end for one chunk: from the spring forces `sum` (N) to what `output` asks for,
 /// and the chunk's dissipated power when `POWER`. `WHOLE`: the chunk has `LANES` particles
-/// (`chunk.count` is then not read).
+/// (`chunk.count` is then not read). `sums`: the power is added to these running sums
+/// `(dampers and drag, contact)` instead of written to the part's buffer.
 #[inline(always)]
 pub(super) fn finish<V: Lanes, const POWER: bool, const WHOLE: bool>(
     output: &Output,
@@ -446,6 +467,7 @@ pub(super) fn finish<V: Lanes, const POWER: bool, const WHOLE: bool>(
     sum: [V; 3],
     spring_power: V,
     part: &mut Part,
+    sums: Option<&mut (V, V)>,
 ) {
     let Chunk { q, at, count, x, v } = *chunk;
     // A whole chunk (every one but a range's last): its loads and stores without the test for
@@ -483,14 +505,22 @@ pub(super) fn finish<V: Lanes, const POWER: bool, const WHOLE: bool>(
             let v2 = v[0].mul(v[0]).add(v[1].mul(v[1])).add(v[2].mul(v[2]));
             V::splat(d.drag).mul(v2).select(free)
         };
-        let power = &mut part.power[2 * at..2 * at + 2 * LANES];
-        let (dampers, contact) = power.split_at_mut(LANES);
-        spring_power
-            .add(drag)
-            .store(dampers.try_into().expect("a chunk"));
-        // Without colliders no contact values (`Stencil::sum_power` reads none then).
-        if !d.colliders.is_empty() {
-            contact_power.store(contact.try_into().expect("a chunk"));
+        if let Some((dampers, contact)) = sums {
+            // As `Stencil::sum_power` adds the chunks written below, in the same order.
+            *dampers = dampers.add(spring_power.add(drag));
+            if !d.colliders.is_empty() {
+                *contact = contact.add(contact_power);
+            }
+        } else {
+            let power = &mut part.power[2 * at..2 * at + 2 * LANES];
+            let (dampers, contact) = power.split_at_mut(LANES);
+            spring_power
+                .add(drag)
+                .store(dampers.try_into().expect("a chunk"));
+            // Without colliders no contact values (`Stencil::sum_power` reads none then).
+            if !d.colliders.is_empty() {
+                contact_power.store(contact.try_into().expect("a chunk"));
+            }
         }
     }
     let a = [f[0].mul(w), f[1].mul(w), f[2].mul(w)];
@@ -658,6 +688,70 @@ pub(super) unsafe fn ring_load<V: Lanes>(ring: &[f64], g: &Group, p: usize) -> F
         V::load(&*ring.as_ptr().add(g.ring_offset + c * stride + slot).cast())
     };
     [load(0), load(1), load(2)]
+}
+
+impl Stencil {
+    /// [`Stencil::write`] with the dissipated power (only with [`Dynamics`]), and its total
+    /// `(dampers and drag, contact)` (W) as [`Stencil::sum_power`] adds it from `power` (at
+    /// least [`Stencil::power_len`] long). On one part the chunks' power is added in registers
+    /// as the pass goes, in the same order, and `power` is not written.
+    ///
+    /// # Panics
+    /// As [`Stencil::write`].
+    pub fn write_with_power(
+        &self,
+        x: &[DVec3],
+        v: &[DVec3],
+        outs: [&mut [DVec3]; 3],
+        power: &mut [f64],
+        output: Output,
+    ) -> (f64, f64) {
+        let parts = self.parallel_parts(Pool::global().threads());
+        self.write_with_power_in_parts(x, v, outs, power, output, parts)
+    }
+
+    /// [`Stencil::write_with_power`] with the particles split into `parts` ranges (at most
+    /// [`MAX_PARTS`]); the same results bit for bit for every `parts`.
+    ///
+    /// # Panics
+    /// As [`Stencil::write`].
+    pub fn write_with_power_in_parts(
+        &self,
+        x: &[DVec3],
+        v: &[DVec3],
+        outs: [&mut [DVec3]; 3],
+        power: &mut [f64],
+        output: Output,
+        parts: usize,
+    ) -> (f64, f64) {
+        let contact = output.dynamics().is_some_and(|d| !d.colliders.is_empty());
+        if parts > 1 || matches!(output, Output::Add) {
+            self.write_in_parts(x, v, outs, power, output, parts);
+            return Self::sum_power(&power[..self.power_len()], contact);
+        }
+        let n = self.particles;
+        let (x, v) = (&x[..n], &v[..n]);
+        let [o0, o1, o2] = outs;
+        let (count, optional) = output.outputs();
+        let outs = [
+            cut(o0, count > 0, n),
+            cut(o1, count > 1, n),
+            cut(o2, optional && !o2.is_empty(), n),
+        ];
+        output.check(n);
+        let mut part = Part {
+            outs,
+            power: &mut [],
+        };
+        let sums = SCRATCH.with(|s| {
+            let s = &mut *s.borrow_mut();
+            s.sum_power = true;
+            s.power_sums = [[0.0; LANES]; 2];
+            self.range(s, x, v, 0, n, &mut part, &output);
+            s.power_sums
+        });
+        Self::power_total(&sums, contact)
+    }
 }
 
 impl<'a> Output<'a> {
