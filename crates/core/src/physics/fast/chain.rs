@@ -116,6 +116,7 @@ pub fn project_chain(
 
 impl ChainScratch {
     /// The twelve arrays (see [`ChainScratch`]).
+    #[inline]
     fn arrays(&mut self) -> [&mut [f64]; ARRAYS] {
         let len = self.len;
         let mut arrays = self.values[self.start..self.start + ARRAYS * len].chunks_exact_mut(len);

@@ -67,7 +67,7 @@ use glam::DVec3;
 use crate::physics::constraints::{prepare_rods, project_distances, project_distances_fast};
 #[cfg(test)]
 use crate::physics::fast::energy::kinetic_gravity;
-use crate::physics::fast::energy::{kinetic_gravity_pair, kinetic_gravity_terms};
+use crate::physics::fast::energy::{all_below, kinetic_gravity_pair, kinetic_gravity_terms};
 use crate::physics::forces::{Model, accelerations};
 
 use crate::physics::integrators::declaration::{
@@ -141,9 +141,9 @@ fn step(
     }
     // The dampers and drag saw v_n = (x_n - x_{n-1})/dt: D += dt P(x_n, v_n), when accounting.
     // Without dampers, drag, colliders or a stencil's pass, `dissipated_power` adds nothing to
-    // its `+0` sums: `+0` (`Power::default`), found in the walk over the springs that tells
-    // rods (`spring_kinds`).
-    let kinds = account.then(|| spring_kinds(model));
+    // its `+0` sums: `+0` (`Power::default`). What kinds of springs there are the model keeps
+    // (`Model::spring_kinds`: rods only, some damper), found once, not walked every step.
+    let kinds = account.then(|| model.spring_kinds());
     let power = if kinds.is_some_and(|k| !k.dampers)
         && model.drag == 0.0
         && model.colliders.is_empty()
@@ -273,36 +273,13 @@ const BOUNDED: f64 = 1e150;
 /// rest length.
 #[cfg(test)]
 fn rods_only(model: &Model) -> bool {
-    spring_kinds(model).rods
+    model.spring_kinds().rods
 }
 
-/// What the accounting asks of the springs, in one walk over them.
-#[derive(Clone, Copy)]
-struct SpringKinds {
-    /// Every spring is a rod ([`rods_only`]).
-    rods: bool,
-    /// Some spring has a damper.
-    dampers: bool,
-}
-
-/// [`SpringKinds`] of `model`'s springs.
-fn spring_kinds(model: &Model) -> SpringKinds {
-    (model.springs.iter()).fold(
-        SpringKinds {
-            rods: true,
-            dampers: false,
-        },
-        |k, s| SpringKinds {
-            rods: k.rods & (s.stiffness == 0.0) & s.rest_length.is_finite(),
-            dampers: k.dampers | (s.damping != 0.0),
-        },
-    )
-}
-
-/// True when every coordinate of `x` is below [`BOUNDED`] in magnitude (false for NaN).
+/// True when every coordinate of `x` is below [`BOUNDED`] in magnitude (false for NaN), every
+/// coordinate tested eight at a time (`fast/energy.rs`).
 fn bounded(x: &[DVec3]) -> bool {
-    let inside = |c: f64| c.abs() < BOUNDED;
-    (x.iter()).fold(true, |all, p| all & inside(p.x) & inside(p.y) & inside(p.z))
+    all_below(x, BOUNDED)
 }
 
 #[cfg(test)]
@@ -334,7 +311,8 @@ mod tests {
 
     /// The step's shortcut: without dampers, drag or colliders the dissipated power is
     /// `Power::default()` bit for bit (positions and velocities with NaN, infinities and
-    /// signed zeros), and `spring_kinds` finds a damper wherever one is.
+    /// signed zeros), and the model's `spring_kinds` finds a damper wherever one is, also after
+    /// the springs change.
     #[test]
     fn without_dampers_the_power_is_zero_bit_for_bit() {
         use crate::physics::energy::dissipated_power;
@@ -353,14 +331,22 @@ mod tests {
             DVec3::new(0.0, -9.81, 0.0),
             0.0,
         );
-        assert!(!spring_kinds(&model).dampers && !spring_kinds(&model).rods);
+        assert!(!model.spring_kinds().dampers && !model.spring_kinds().rods);
         let mut scratch = Vec::new();
         let p = dissipated_power(&model, &x, &v, &mut scratch);
         let zero = Power::default();
         assert_eq!(p.dampers_and_drag.to_bits(), zero.dampers_and_drag.to_bits());
         assert_eq!(p.contact.to_bits(), zero.contact.to_bits());
-        model.springs[2].damping = 0.5;
-        assert!(spring_kinds(&model).dampers);
+        model.update_springs(|s| {
+            if s.a == 2 {
+                s.damping = 0.5;
+            }
+        });
+        assert!(model.spring_kinds().dampers);
+        model.set_spring_coefficients(0.0, 0.0);
+        assert!(!model.spring_kinds().dampers && model.spring_kinds().rods);
+        model.update_springs(|s| s.rest_length = f64::INFINITY);
+        assert!(!model.spring_kinds().rods);
     }
 
     #[test]
