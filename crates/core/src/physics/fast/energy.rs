@@ -18,7 +18,14 @@
 //! [`kinetic_gravity_terms`] keeps the terms before it, and [`kinetic_gravity_pair`] adds them
 //! up beside the terms after it, two independent sums in one loop (each in particle order, so
 //! the same bits), where two sums one after the other would wait twice for one chain of `n`
-//! dependent additions.
+//! dependent additions. Inside [`Method::steps`](crate::physics::Method::steps) a [`Batch`]
+//! keeps the terms of up to [`BATCH`] steps and adds them up together: the same chains, each
+//! in particle order, but those of eight steps advance side by side instead of one step's
+//! chains waiting on one addition after the other.
+//!
+//! Verlet's elastic term of rods is a sum of `+0` while every coordinate is bounded
+//! (`integrators/verlet.rs`): [`all_below`] tests `|c| < limit` for every coordinate as a
+//! count of those outside (no early exit), which the compiler does eight at a time.
 
 use glam::DVec3;
 
@@ -76,6 +83,120 @@ pub(crate) fn kinetic_gravity_pair(
         // SAFETY: as above, AVX2.
         Kernel::Avx2 => unsafe { pair_avx2(mass, gravity, x, x_prev, dt, before) },
         _ => pair(mass, gravity, x, x_prev, dt, before),
+    }
+}
+
+/// Steps whose sums [`Batch`] adds up together.
+pub(crate) const BATCH: usize = 8;
+
+/// Verlet's energies before and after the projection of up to [`BATCH`] steps of one
+/// [`Method::steps`](crate::physics::Method::steps) call, added up together: each step's two
+/// sums are the same chains in particle order (the same bits), but the chains of eight steps
+/// advance side by side, where one step's two chains alone wait on one addition after the
+/// other.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Batch {
+    /// Set by `Method::steps` around its steps: Verlet's steps leave their projection's share
+    /// of the dissipated energy to [`Batch::finish`].
+    pub(crate) on: bool,
+    /// Particles of a row.
+    n: usize,
+    /// Rows filled.
+    pending: usize,
+    /// Row `s` (`n` terms): step `s`'s terms `t_i` before the projection.
+    before: Vec<f64>,
+    /// Row `s`: step `s`'s terms after the projection.
+    after: Vec<f64>,
+    /// Per row: the elastic energy before and after the projection (J).
+    elastic: [(f64, f64); BATCH],
+}
+
+impl Batch {
+    /// True when [`BATCH`] steps wait for [`Batch::finish`].
+    pub(crate) fn full(&self) -> bool {
+        self.pending == BATCH
+    }
+
+    /// The terms of the next step before its projection (module docs).
+    pub(crate) fn before(
+        &mut self,
+        mass: &[f64],
+        gravity: DVec3,
+        x: &[DVec3],
+        x_prev: &[DVec3],
+        dt: f64,
+    ) {
+        if self.n != x.len() {
+            self.n = x.len();
+            self.before = vec![0.0; BATCH * self.n];
+            self.after = vec![0.0; BATCH * self.n];
+        }
+        let row = &mut self.before[self.pending * self.n..][..self.n];
+        terms_into(mass, gravity, x, x_prev, dt, row);
+    }
+
+    /// The terms of the step after its projection, and its elastic energies before and after
+    /// (J): the step waits for [`Batch::finish`].
+    pub(crate) fn after(
+        &mut self,
+        mass: &[f64],
+        gravity: DVec3,
+        x: &[DVec3],
+        x_prev: &[DVec3],
+        dt: f64,
+        elastic: (f64, f64),
+    ) {
+        let row = &mut self.after[self.pending * self.n..][..self.n];
+        terms_into(mass, gravity, x, x_prev, dt, row);
+        self.elastic[self.pending] = elastic;
+        self.pending += 1;
+    }
+
+    /// Adds each waiting step's projection share, `(E_before + U_before) - (E + U)`, to the
+    /// `method` part of its entry in `steps` (the last entries, one per waiting step, in step
+    /// order) and sums the entry again, as Verlet's step adds it itself outside a batch.
+    pub(crate) fn finish(&mut self, steps: &mut [crate::physics::energy::Dissipated]) {
+        let pending = std::mem::take(&mut self.pending);
+        if pending == 0 {
+            return;
+        }
+        let first = steps.len() - pending;
+        let (mut e_before, mut e) = ([0.0; BATCH], [0.0; BATCH]);
+        let n = self.n;
+        for i in 0..n {
+            for s in 0..BATCH {
+                e_before[s] += self.before[s * n + i];
+                e[s] += self.after[s * n + i];
+            }
+        }
+        for (s, d) in steps[first..].iter_mut().enumerate() {
+            let (elastic_before, elastic_after) = self.elastic[s];
+            let before = e_before[s] + elastic_before;
+            let after = e[s] + elastic_after;
+            d.method += before - after;
+            *d = d.summed();
+        }
+    }
+}
+
+/// [`kinetic_gravity_terms`] into a row of the right length.
+fn terms_into(
+    mass: &[f64],
+    gravity: DVec3,
+    x: &[DVec3],
+    x_prev: &[DVec3],
+    dt: f64,
+    row: &mut [f64],
+) {
+    let (mass, x_prev) = (&mass[..x.len()], &x_prev[..x.len()]);
+    match Kernel::best() {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as in `kinetic_gravity_terms`.
+        Kernel::Avx512 => unsafe { terms_avx512(mass, gravity, x, x_prev, dt, row) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as above, AVX2.
+        Kernel::Avx2 => unsafe { terms_avx2(mass, gravity, x, x_prev, dt, row) },
+        _ => all_terms(mass, gravity, x, x_prev, dt, row),
     }
 }
 
