@@ -233,7 +233,8 @@ fn below_avx2(flat: &[f64], limit: f64) -> bool {
 /// compiler tests many values per instruction).
 #[inline(always)]
 fn below(flat: &[f64], limit: f64) -> bool {
-    let outside = |c: &f64| usize::from(!(c.abs() < limit));
+    // Not below: at or above the limit, or NaN (which is below nothing).
+    let outside = |c: &f64| usize::from(c.abs() >= limit || c.is_nan());
     flat.iter().map(outside).sum::<usize>() == 0
 }
 
