@@ -170,6 +170,11 @@ impl Simulation {
             fused_misses: 0,
             fused_steps: 0,
         };
+        // The buffers of the first chunk, before its steps.
+        let chunk = sim.chunk_steps() as usize;
+        for (body, work) in sim.scene.bodies.iter().zip(&mut sim.work) {
+            work.prepare(&body.model, chunk);
+        }
         sim.rebase_energy();
         sim
     }
@@ -434,17 +439,27 @@ impl Simulation {
         self.fused_steps += chunk;
         if self.accounting {
             // Step by step, body by body: the order of the sums of `Simulation::step`, each
-            // step's share less what its response removed, as `plain_step` takes it.
-            for s in 0..chunk as usize {
-                for (work, log) in self.work.iter().zip(&logs) {
-                    let mut d = work.step_dissipated[s];
-                    if let Some(log) = log {
-                        d.contacts -= log.contacts[s];
-                        d = d.summed();
+            // step's share less what its response removed, as `plain_step` takes it; summed in
+            // a local (the field would be stored and read back at every step).
+            let mut total = self.dissipated;
+            if let ([work], [None]) = (&self.work[..], &logs[..]) {
+                // One body without responses: its steps' shares in step order.
+                for d in &work.step_dissipated[..chunk as usize] {
+                    total = total.plus(*d);
+                }
+            } else {
+                for s in 0..chunk as usize {
+                    for (work, log) in self.work.iter().zip(&logs) {
+                        let mut d = work.step_dissipated[s];
+                        if let Some(log) = log {
+                            d.contacts -= log.contacts[s];
+                            d = d.summed();
+                        }
+                        total = total.plus(d);
                     }
-                    self.dissipated = self.dissipated.plus(d);
                 }
             }
+            self.dissipated = total;
         }
         true
     }

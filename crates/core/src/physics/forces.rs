@@ -57,6 +57,8 @@ pub struct Model {
     /// False when every spring has zero stiffness and damping (pure distance constraints, as in
     /// a Verlet rope): the force loop then skips the springs.
     elastic: bool,
+    /// What kinds of springs there are ([`SpringKinds`]), found once per change of the springs.
+    kinds: SpringKinds,
     /// The springs at each particle: `incident[incident_start[i]..incident_start[i + 1]]` are
     /// the indices of the springs with an end at particle `i` (for energy changes of a few
     /// particles without a pass over all springs). Built by [`Model::new`].
@@ -98,6 +100,7 @@ impl Model {
             incident,
             incident_start,
             elastic: any_elastic(&springs),
+            kinds: spring_kinds(&springs),
             stencil,
             mass,
             inv_mass,
@@ -147,6 +150,7 @@ impl Model {
         self.colour_starts = starts;
         self.stencil = Stencil::detect(self.particle_count(), &self.springs);
         self.elastic = any_elastic(&self.springs);
+        self.kinds = spring_kinds(&self.springs);
         (self.incident, self.incident_start) = incidence(self.particle_count(), &self.springs);
     }
 
@@ -163,6 +167,7 @@ impl Model {
             s.stiffness = stiffness;
             s.damping = damping;
         }
+        self.kinds = spring_kinds(&self.springs);
         if any_elastic(&self.springs) != self.elastic {
             // Springs became forces or stopped being forces: the stencil may change too.
             self.rebuild();
@@ -232,12 +237,42 @@ impl Model {
         self.inv_mass[i] = 1.0 / self.mass[i];
     }
 
+    /// What kinds of springs the model has ([`SpringKinds`]).
+    #[must_use]
+    pub(crate) fn spring_kinds(&self) -> SpringKinds {
+        self.kinds
+    }
+
     /// The springs grouped by colour (see [`Model::new`]): an iterator of slices of spring indices.
     pub fn spring_colours(&self) -> impl Iterator<Item = &[u32]> {
         self.colour_starts
             .windows(2)
             .map(|w| &self.projection_order[w[0]..w[1]])
     }
+}
+
+/// What Verlet's energy accounting asks of the springs at every step (`integrators/verlet.rs`),
+/// kept by the model so that no step walks the springs for it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct SpringKinds {
+    /// Every spring is a rod: no stiffness, a finite rest length.
+    pub(crate) rods: bool,
+    /// Some spring has a damper.
+    pub(crate) dampers: bool,
+}
+
+/// [`SpringKinds`] of `springs`.
+pub(crate) fn spring_kinds(springs: &[Spring]) -> SpringKinds {
+    (springs.iter()).fold(
+        SpringKinds {
+            rods: true,
+            dampers: false,
+        },
+        |k, s| SpringKinds {
+            rods: k.rods & (s.stiffness == 0.0) & s.rest_length.is_finite(),
+            dampers: k.dampers | (s.damping != 0.0),
+        },
+    )
 }
 
 /// True when some spring has a stiffness or a damping (exerts a force).

@@ -40,16 +40,26 @@ use crate::physics::lanes::{Avx2, Avx512};
 use crate::physics::lanes::{LANES, Lanes, Plain, first_lanes, lanes};
 use crate::physics::stencil::Kernel;
 
-/// The chain in structure-of-arrays form (reused, so steps do not allocate).
+/// The chain in structure-of-arrays form (reused, so steps do not allocate): twelve arrays of
+/// one length, a multiple of [`LANES`], one after the other in one buffer whose first array
+/// starts a 64-byte cache line, so that every chunk of eight at an even index `k` (a multiple
+/// of eight) is one line, one aligned load or store (an unaligned one spans two lines).
+/// Alignment changes no value.
+///
+/// The arrays, in order: `x`, `y`, `z` of the even particles `2k` (m), of the odd particles
+/// `2k + 1` (m), then per colour the rest length `L0` (m), `s_a`, `s_b` of rod `k`.
 #[derive(Clone, Debug, Default)]
 pub struct ChainScratch {
-    /// `x`, `y`, `z` of the even particles `2k` (m), zero in the padding.
-    even: [Vec<f64>; 3],
-    /// `x`, `y`, `z` of the odd particles `2k + 1` (m), zero in the padding.
-    odd: [Vec<f64>; 3],
-    /// Per colour: rest length `L0` (m), `s_a`, `s_b` of rod `k`.
-    rods: [[Vec<f64>; 3]; 2],
+    values: Vec<f64>,
+    /// Where the first array starts in `values` (its first 64-byte boundary).
+    start: usize,
+    /// The length of each array.
+    len: usize,
 }
+
+/// Arrays of [`ChainScratch`]: `x`, `y`, `z` of the even and the odd particles, then
+/// `L0`, `s_a`, `s_b` of colour 0 and of colour 1.
+const ARRAYS: usize = 12;
 
 /// The number of rods of colour 0 and colour 1 when `rods` is a whole chain `0 - 1 - … - m` in
 /// red-black order (see the module docs), else `None`.
@@ -105,6 +115,14 @@ pub fn project_chain(
 }
 
 impl ChainScratch {
+    /// The twelve arrays (see [`ChainScratch`]).
+    #[inline]
+    fn arrays(&mut self) -> [&mut [f64]; ARRAYS] {
+        let len = self.len;
+        let mut arrays = self.values[self.start..self.start + ARRAYS * len].chunks_exact_mut(len);
+        std::array::from_fn(|_| arrays.next().expect("twelve arrays"))
+    }
+
     /// Copies the `n` particles of the chain and its rods' coefficients in.
     fn load(&mut self, x: &[DVec3], rods: &[Rod], c0: usize) {
         let n = x.len();
@@ -112,24 +130,28 @@ impl ChainScratch {
         let len = n.div_ceil(2).next_multiple_of(LANES) + LANES;
         // The padding is never stored into; what it holds only reaches lanes that are not
         // stored either.
-        for c in self.even.iter_mut().chain(&mut self.odd) {
-            c.resize(len, 0.0);
+        if len != self.len {
+            self.values = vec![0.0; ARRAYS * len + LANES];
+            self.start = self.values.as_ptr().align_offset(64).min(LANES);
+            self.len = len;
         }
+        let [ex, ey, ez, ox, oy, oz, arrays @ ..] = self.arrays();
+        let (mut even, mut odd) = ([ex, ey, ez], [ox, oy, oz]);
         for (i, p) in x.iter().enumerate() {
             let (side, k) = if i % 2 == 0 {
-                (&mut self.even, i / 2)
+                (&mut even, i / 2)
             } else {
-                (&mut self.odd, i / 2)
+                (&mut odd, i / 2)
             };
             side[0][k] = p.x;
             side[1][k] = p.y;
             side[2][k] = p.z;
         }
-        for (colour, list) in [&rods[..c0], &rods[c0..]].into_iter().enumerate() {
-            let [rest, share_a, share_b] = &mut self.rods[colour];
-            for c in [&mut *rest, &mut *share_a, &mut *share_b] {
-                c.resize(len, 0.0);
-            }
+        let [r0, a0, b0, r1, a1, b1] = arrays;
+        let coefficients = [[r0, a0, b0], [r1, a1, b1]];
+        for (list, [rest, share_a, share_b]) in
+            [&rods[..c0], &rods[c0..]].into_iter().zip(coefficients)
+        {
             for (k, r) in list.iter().enumerate() {
                 rest[k] = r.rest_length;
                 share_a[k] = r.share_a;
@@ -139,9 +161,11 @@ impl ChainScratch {
     }
 
     /// Copies the projected positions back.
-    fn store(&self, x: &mut [DVec3]) {
+    fn store(&mut self, x: &mut [DVec3]) {
+        let [ex, ey, ez, ox, oy, oz, ..] = self.arrays();
+        let (even, odd) = ([ex, ey, ez], [ox, oy, oz]);
         for (i, p) in x.iter_mut().enumerate() {
-            let side = if i % 2 == 0 { &self.even } else { &self.odd };
+            let side = if i % 2 == 0 { &even } else { &odd };
             let k = i / 2;
             *p = DVec3::new(side[0][k], side[1][k], side[2][k]);
         }
@@ -163,20 +187,22 @@ fn passes_avx2(s: &mut ChainScratch, c0: usize, c1: usize, iterations: u32) {
 /// `iterations` times colour 0 then colour 1 (`c0`, `c1` rods).
 #[inline(always)]
 fn passes<V: Lanes>(s: &mut ChainScratch, c0: usize, c1: usize, iterations: u32) {
-    let ChainScratch { even, odd, rods } = s;
+    let [ex, ey, ez, ox, oy, oz, r0, a0, b0, r1, a1, b1] = s.arrays();
+    let (mut even, mut odd) = ([ex, ey, ez], [ox, oy, oz]);
+    let rods = [[&*r0, &*a0, &*b0], [&*r1, &*a1, &*b1]];
     for _ in 0..iterations {
-        colour::<V>(even, 0, odd, &rods[0], c0);
-        colour::<V>(odd, 1, even, &rods[1], c1);
+        colour::<V>(&mut even, 0, &mut odd, &rods[0], c0);
+        colour::<V>(&mut odd, 1, &mut even, &rods[1], c1);
     }
 }
 
 /// The `count` rods `k` joining `a[k]` and `b[k + b_shift]`, eight at a time.
 #[inline(always)]
 fn colour<V: Lanes>(
-    a: &mut [Vec<f64>; 3],
+    a: &mut [&mut [f64]; 3],
     b_shift: usize,
-    b: &mut [Vec<f64>; 3],
-    coefficients: &[Vec<f64>; 3],
+    b: &mut [&mut [f64]; 3],
+    coefficients: &[&[f64]; 3],
     count: usize,
 ) {
     let [ax, ay, az] = a;

@@ -18,7 +18,14 @@
 //! [`kinetic_gravity_terms`] keeps the terms before it, and [`kinetic_gravity_pair`] adds them
 //! up beside the terms after it, two independent sums in one loop (each in particle order, so
 //! the same bits), where two sums one after the other would wait twice for one chain of `n`
-//! dependent additions.
+//! dependent additions. Inside [`Method::steps`](crate::physics::Method::steps) a [`Batch`]
+//! keeps the terms of up to [`BATCH`] steps and adds them up together: the same chains, each
+//! in particle order, but those of eight steps advance side by side instead of one step's
+//! chains waiting on one addition after the other.
+//!
+//! Verlet's elastic term of rods is a sum of `+0` while every coordinate is bounded
+//! (`integrators/verlet.rs`): [`all_below`] tests `|c| < limit` for every coordinate as a
+//! count of those outside (no early exit), which the compiler does eight at a time.
 
 use glam::DVec3;
 
@@ -77,6 +84,158 @@ pub(crate) fn kinetic_gravity_pair(
         Kernel::Avx2 => unsafe { pair_avx2(mass, gravity, x, x_prev, dt, before) },
         _ => pair(mass, gravity, x, x_prev, dt, before),
     }
+}
+
+/// Steps whose sums [`Batch`] adds up together.
+pub(crate) const BATCH: usize = 8;
+
+/// Verlet's energies before and after the projection of up to [`BATCH`] steps of one
+/// [`Method::steps`](crate::physics::Method::steps) call, added up together: each step's two
+/// sums are the same chains in particle order (the same bits), but the chains of eight steps
+/// advance side by side, where one step's two chains alone wait on one addition after the
+/// other.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Batch {
+    /// Set by `Method::steps` around its steps: Verlet's steps leave their projection's share
+    /// of the dissipated energy to [`Batch::finish`].
+    pub(crate) on: bool,
+    /// Particles of a row.
+    n: usize,
+    /// Rows filled.
+    pending: usize,
+    /// Row `s` (`n` terms): step `s`'s terms `t_i` before the projection.
+    before: Vec<f64>,
+    /// Row `s`: step `s`'s terms after the projection.
+    after: Vec<f64>,
+    /// Per row: the elastic energy before and after the projection (J).
+    elastic: [(f64, f64); BATCH],
+}
+
+impl Batch {
+    /// True when [`BATCH`] steps wait for [`Batch::finish`].
+    pub(crate) fn full(&self) -> bool {
+        self.pending == BATCH
+    }
+
+    /// The terms of the next step before its projection (module docs).
+    pub(crate) fn before(
+        &mut self,
+        mass: &[f64],
+        gravity: DVec3,
+        x: &[DVec3],
+        x_prev: &[DVec3],
+        dt: f64,
+    ) {
+        if self.n != x.len() {
+            self.n = x.len();
+            self.before = vec![0.0; BATCH * self.n];
+            self.after = vec![0.0; BATCH * self.n];
+        }
+        let row = &mut self.before[self.pending * self.n..][..self.n];
+        terms_into(mass, gravity, x, x_prev, dt, row);
+    }
+
+    /// The terms of the step after its projection, and its elastic energies before and after
+    /// (J): the step waits for [`Batch::finish`].
+    pub(crate) fn after(
+        &mut self,
+        mass: &[f64],
+        gravity: DVec3,
+        x: &[DVec3],
+        x_prev: &[DVec3],
+        dt: f64,
+        elastic: (f64, f64),
+    ) {
+        let row = &mut self.after[self.pending * self.n..][..self.n];
+        terms_into(mass, gravity, x, x_prev, dt, row);
+        self.elastic[self.pending] = elastic;
+        self.pending += 1;
+    }
+
+    /// Adds each waiting step's projection share, `(E_before + U_before) - (E + U)`, to the
+    /// `method` part of its entry in `steps` (the last entries, one per waiting step, in step
+    /// order) and sums the entry again, as Verlet's step adds it itself outside a batch.
+    pub(crate) fn finish(&mut self, steps: &mut [crate::physics::energy::Dissipated]) {
+        let pending = std::mem::take(&mut self.pending);
+        if pending == 0 {
+            return;
+        }
+        let first = steps.len() - pending;
+        let (mut e_before, mut e) = ([0.0; BATCH], [0.0; BATCH]);
+        let n = self.n;
+        for i in 0..n {
+            for s in 0..BATCH {
+                e_before[s] += self.before[s * n + i];
+                e[s] += self.after[s * n + i];
+            }
+        }
+        for (s, d) in steps[first..].iter_mut().enumerate() {
+            let (elastic_before, elastic_after) = self.elastic[s];
+            let before = e_before[s] + elastic_before;
+            let after = e[s] + elastic_after;
+            d.method += before - after;
+            *d = d.summed();
+        }
+    }
+}
+
+/// [`kinetic_gravity_terms`] into a row of the right length.
+fn terms_into(
+    mass: &[f64],
+    gravity: DVec3,
+    x: &[DVec3],
+    x_prev: &[DVec3],
+    dt: f64,
+    row: &mut [f64],
+) {
+    let (mass, x_prev) = (&mass[..x.len()], &x_prev[..x.len()]);
+    match Kernel::best() {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as in `kinetic_gravity_terms`.
+        Kernel::Avx512 => unsafe { terms_avx512(mass, gravity, x, x_prev, dt, row) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as above, AVX2.
+        Kernel::Avx2 => unsafe { terms_avx2(mass, gravity, x, x_prev, dt, row) },
+        _ => all_terms(mass, gravity, x, x_prev, dt, row),
+    }
+}
+
+/// True when every coordinate of `x` is below `limit` in magnitude (false where one is NaN):
+/// `|c| < limit` for each, the same answer as testing them one by one, here all of them (no early
+/// exit) eight at a time with the CPU's widest vectors.
+pub(crate) fn all_below(x: &[DVec3], limit: f64) -> bool {
+    // SAFETY: `DVec3` is three `f64` (`#[repr(C)]`, no padding), so `x` is `3 x.len()` of them.
+    let flat = unsafe { std::slice::from_raw_parts(x.as_ptr().cast::<f64>(), 3 * x.len()) };
+    match Kernel::best() {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as in `kinetic_gravity_terms`.
+        Kernel::Avx512 => unsafe { below_avx512(flat, limit) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as above, AVX2.
+        Kernel::Avx2 => unsafe { below_avx2(flat, limit) },
+        _ => below(flat, limit),
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn below_avx512(flat: &[f64], limit: f64) -> bool {
+    below(flat, limit)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn below_avx2(flat: &[f64], limit: f64) -> bool {
+    below(flat, limit)
+}
+
+/// The count of values not below `limit` in magnitude is zero (a count, not a search, so the
+/// compiler tests many values per instruction).
+#[inline(always)]
+fn below(flat: &[f64], limit: f64) -> bool {
+    // Not below: at or above the limit, or NaN (which is below nothing).
+    let outside = |c: &f64| usize::from(c.abs() >= limit || c.is_nan());
+    flat.iter().map(outside).sum::<usize>() == 0
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -178,6 +337,60 @@ mod tests {
             e += 0.5 * mass[i] * v.length_squared() - mass[i] * gravity.dot(x[i]);
         }
         e
+    }
+
+    /// `all_below` answers as the coordinates tested one by one: at, just below and above the
+    /// limit, NaN and infinities, in every position of every size up to three vectors.
+    #[test]
+    fn all_below_is_every_coordinate_tested_one_by_one() {
+        let limit = 1e150;
+        let one_by_one = |x: &[DVec3]| {
+            x.iter()
+                .all(|p| p.x.abs() < limit && p.y.abs() < limit && p.z.abs() < limit)
+        };
+        let odd = [
+            limit,
+            -limit,
+            f64::from_bits(limit.to_bits() - 1),
+            -f64::from_bits(limit.to_bits() - 1),
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            -0.0,
+        ];
+        #[cfg(target_arch = "x86_64")]
+        type Below = unsafe fn(&[f64], f64) -> bool;
+        for n in 0..25 {
+            let clean: Vec<DVec3> = (0..n)
+                .map(|i| DVec3::new(i as f64, -(i as f64) * 1e140, 0.5))
+                .collect();
+            let mut cases = vec![clean.clone()];
+            for i in 0..n {
+                for axis in 0..3 {
+                    for &c in &odd {
+                        let mut x = clean.clone();
+                        x[i][axis] = c;
+                        cases.push(x);
+                    }
+                }
+            }
+            for x in &cases {
+                let want = one_by_one(x);
+                assert_eq!(all_below(x, limit), want, "{x:?}");
+                let flat: Vec<f64> = x.iter().flat_map(|p| p.to_array()).collect();
+                assert_eq!(below(&flat, limit), want);
+                #[cfg(target_arch = "x86_64")]
+                for (kernel, f) in [
+                    (Kernel::Avx2, below_avx2 as Below),
+                    (Kernel::Avx512, below_avx512),
+                ] {
+                    if kernel.is_available() {
+                        // SAFETY: the CPU has the kernel's instructions (checked).
+                        assert_eq!(unsafe { f(&flat, limit) }, want, "{kernel:?}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]

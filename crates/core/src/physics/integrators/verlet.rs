@@ -55,7 +55,9 @@
 //!
 //! **Energy accounting**: the dampers' power at `(x_n, v_n)` times `dt` (what the force saw),
 //! `½ m (1 - (1 - γ)²) |x_n - x_{n-1}|²/dt²` for the factor, `dt r m |v_centred|²` for the rate,
-//! and the drop of the energy across the projection.
+//! and the drop of the energy across the projection. Inside
+//! [`Method::steps`](crate::physics::Method::steps) the drop's two
+//! energies are added up eight steps at a time (`fast/energy.rs`, `Batch`), the same bits.
 //!
 //! Reference: L. Verlet, "Computer 'Experiments' on Classical Fluids", Phys. Rev. 159 (1967);
 //! E. Hairer, C. Lubich, G. Wanner, "Geometric numerical integration illustrated by the
@@ -67,7 +69,7 @@ use glam::DVec3;
 use crate::physics::constraints::{prepare_rods, project_distances, project_distances_fast};
 #[cfg(test)]
 use crate::physics::fast::energy::kinetic_gravity;
-use crate::physics::fast::energy::{kinetic_gravity_pair, kinetic_gravity_terms};
+use crate::physics::fast::energy::{all_below, kinetic_gravity_pair, kinetic_gravity_terms};
 use crate::physics::forces::{Model, accelerations};
 
 use crate::physics::integrators::declaration::{
@@ -128,6 +130,8 @@ fn step(
         dissipated,
         power_f,
         energy_terms,
+        energy_batch,
+        step_dissipated,
         ..
     } = work;
     let (account, textbook) = (*account, *textbook);
@@ -141,9 +145,9 @@ fn step(
     }
     // The dampers and drag saw v_n = (x_n - x_{n-1})/dt: D += dt P(x_n, v_n), when accounting.
     // Without dampers, drag, colliders or a stencil's pass, `dissipated_power` adds nothing to
-    // its `+0` sums: `+0` (`Power::default`), found in the walk over the springs that tells
-    // rods (`spring_kinds`).
-    let kinds = account.then(|| spring_kinds(model));
+    // its `+0` sums: `+0` (`Power::default`). What kinds of springs there are the model keeps
+    // (`Model::spring_kinds`: rods only, some damper), found once, not walked every step.
+    let kinds = account.then(|| model.spring_kinds());
     let power = if kinds.is_some_and(|k| !k.dampers)
         && model.drag == 0.0
         && model.colliders.is_empty()
@@ -181,7 +185,25 @@ fn step(
         }
         state.x_prev[i] = x_n;
     }
-    if params.iterations > 0 {
+    if params.iterations > 0 && account && energy_batch.on {
+        // Inside `Method::steps`: the energies before and after the projection go to the
+        // batch, which adds their share to this step's entry with those of the next steps.
+        if energy_batch.full() {
+            energy_batch.finish(step_dissipated);
+        }
+        let only_rods = kinds.is_some_and(|k| k.rods);
+        let (mass, gravity) = (&model.mass, model.gravity);
+        energy_batch.before(mass, gravity, &state.x, &state.x_prev, dt);
+        let elastic_before = elastic_energy(model, &state.x, only_rods);
+        prepare_rods(model, rods);
+        if textbook {
+            project_distances(rods, &mut state.x, params.iterations);
+        } else {
+            project_distances_fast(rods, &mut state.x, params.iterations, chain);
+        }
+        let elastic_after = elastic_energy(model, &state.x, only_rods);
+        energy_batch.after(mass, gravity, &state.x, &state.x_prev, dt, (elastic_before, elastic_after));
+    } else if params.iterations > 0 {
         let only_rods = kinds.is_some_and(|k| k.rods);
         // The energy before the projection: its elastic term now, its kinetic and
         // gravitational terms kept and summed beside those after (`fast/energy.rs`), as
@@ -273,36 +295,13 @@ const BOUNDED: f64 = 1e150;
 /// rest length.
 #[cfg(test)]
 fn rods_only(model: &Model) -> bool {
-    spring_kinds(model).rods
+    model.spring_kinds().rods
 }
 
-/// What the accounting asks of the springs, in one walk over them.
-#[derive(Clone, Copy)]
-struct SpringKinds {
-    /// Every spring is a rod ([`rods_only`]).
-    rods: bool,
-    /// Some spring has a damper.
-    dampers: bool,
-}
-
-/// [`SpringKinds`] of `model`'s springs.
-fn spring_kinds(model: &Model) -> SpringKinds {
-    (model.springs.iter()).fold(
-        SpringKinds {
-            rods: true,
-            dampers: false,
-        },
-        |k, s| SpringKinds {
-            rods: k.rods & (s.stiffness == 0.0) & s.rest_length.is_finite(),
-            dampers: k.dampers | (s.damping != 0.0),
-        },
-    )
-}
-
-/// True when every coordinate of `x` is below [`BOUNDED`] in magnitude (false for NaN).
+/// True when every coordinate of `x` is below [`BOUNDED`] in magnitude (false for NaN), every
+/// coordinate tested eight at a time (`fast/energy.rs`).
 fn bounded(x: &[DVec3]) -> bool {
-    let inside = |c: f64| c.abs() < BOUNDED;
-    (x.iter()).fold(true, |all, p| all & inside(p.x) & inside(p.y) & inside(p.z))
+    all_below(x, BOUNDED)
 }
 
 #[cfg(test)]
@@ -334,7 +333,8 @@ mod tests {
 
     /// The step's shortcut: without dampers, drag or colliders the dissipated power is
     /// `Power::default()` bit for bit (positions and velocities with NaN, infinities and
-    /// signed zeros), and `spring_kinds` finds a damper wherever one is.
+    /// signed zeros), and the model's `spring_kinds` finds a damper wherever one is, also after
+    /// the springs change.
     #[test]
     fn without_dampers_the_power_is_zero_bit_for_bit() {
         use crate::physics::energy::dissipated_power;
@@ -353,14 +353,80 @@ mod tests {
             DVec3::new(0.0, -9.81, 0.0),
             0.0,
         );
-        assert!(!spring_kinds(&model).dampers && !spring_kinds(&model).rods);
+        assert!(!model.spring_kinds().dampers && !model.spring_kinds().rods);
         let mut scratch = Vec::new();
         let p = dissipated_power(&model, &x, &v, &mut scratch);
         let zero = Power::default();
         assert_eq!(p.dampers_and_drag.to_bits(), zero.dampers_and_drag.to_bits());
         assert_eq!(p.contact.to_bits(), zero.contact.to_bits());
-        model.springs[2].damping = 0.5;
-        assert!(spring_kinds(&model).dampers);
+        model.update_springs(|s| {
+            if s.a == 2 {
+                s.damping = 0.5;
+            }
+        });
+        assert!(model.spring_kinds().dampers);
+        model.set_spring_coefficients(0.0, 0.0);
+        assert!(!model.spring_kinds().dampers && model.spring_kinds().rods);
+        model.update_springs(|s| s.rest_length = f64::INFINITY);
+        assert!(!model.spring_kinds().rods);
+    }
+
+    /// `Method::steps` (its accounting batched, `fast::energy::Batch`) against as many single
+    /// steps: every step's dissipated energy, the last one and the states bit for bit, over
+    /// batch lengths around `BATCH`, two calls in a row, rods, springs and dampers.
+    #[test]
+    fn many_steps_account_as_single_steps_bit_for_bit() {
+        use crate::physics::Method;
+        use crate::physics::energy::Dissipated;
+        let bits = |d: &Dissipated| {
+            [d.dampers_and_drag, d.contact_forces, d.contacts, d.method, d.total].map(f64::to_bits)
+        };
+        let n = 37;
+        for (stiffness, damping) in [(0.0, 0.0), (300.0, 0.0), (0.0, 0.4)] {
+            let springs: Vec<Spring> = (0..n as u32 - 1)
+                .map(|i| Spring {
+                    damping,
+                    ..spring(i, i + 1, 0.05, stiffness)
+                })
+                .collect();
+            let x: Vec<DVec3> = (0..n)
+                .map(|i| {
+                    let f = i as f64;
+                    DVec3::new(0.05 * f, 1.0 + 0.01 * (0.7 * f).sin(), 0.002 * f)
+                })
+                .collect();
+            let mut pinned = vec![false; n];
+            pinned[0] = true;
+            let gravity = DVec3::new(0.0, -9.81, 0.0);
+            let model = Model::new(vec![0.02; n], &pinned, springs, gravity, 0.0);
+            let start = State::new(x, vec![DVec3::ZERO; n]);
+            for (iterations, verlet_damping) in [(20, 0.0), (5, 5e-5)] {
+                let params = MethodParams {
+                    iterations,
+                    verlet_damping,
+                    ..MethodParams::default()
+                };
+                for steps in [1, 2, 7, 8, 9, 16, 17, 30] {
+                    let (mut one, mut many) = (start.clone(), start.clone());
+                    let (mut w1, mut wn) = (Workspace::new(), Workspace::new());
+                    (w1.account, wn.account) = (true, true);
+                    for _ in 0..2 {
+                        let mut want = Vec::new();
+                        for _ in 0..steps {
+                            Method::Verlet.step(&model, &mut one, 1e-3, &params, &mut w1);
+                            want.push(bits(&w1.dissipated));
+                        }
+                        Method::Verlet.steps(&model, &mut many, 1e-3, &params, &mut wn, steps);
+                        let got: Vec<_> = wn.step_dissipated.iter().map(bits).collect();
+                        assert_eq!(got, want, "k {stiffness} steps {steps}");
+                        assert_eq!(bits(&wn.dissipated), bits(&w1.dissipated));
+                        for (a, b) in one.x.iter().zip(&many.x) {
+                            assert_eq!(a.to_array().map(f64::to_bits), b.to_array().map(f64::to_bits));
+                        }
+                    }
+                }
+            }
+        }
     }
 
     #[test]
