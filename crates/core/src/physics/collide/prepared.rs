@@ -15,7 +15,7 @@
 //!          (an axis with a NaN coordinate: (-∞, ∞))
 //! calm   = every x_i calm (|coordinate| < 1e50 m)  ⟺  every box_j inside (-1e50, 1e50)³
 //! near   = { i : some collider's bounds may hold x_i            (Broad::may_touch)
-//!                and some collider answers (x_i, v_i) }         (response::responds)
+//!                and some collider answers (x_i, v_i) }         (response::responds_within)
 //!          in index order
 //! ```
 //! where `B` is [`BOX`] particles (`fast::bounds`, eight points at a time), and a collider
@@ -58,7 +58,7 @@ use glam::DVec3;
 
 #[cfg(test)]
 use super::response::near_any;
-use super::response::{near_any_into, responds};
+use super::response::{near_any_into, responds_within};
 use super::spheres::push_part;
 use super::{Broad, Collider, DynamicSphere, World, calm};
 use crate::physics::fast::bounds::{boxes, plane_answer_bits, plane_bits};
@@ -202,7 +202,7 @@ impl PartBounds {
     /// Sums up particles `start..start + x.len()` at positions `x` (m) for the colliders of
     /// `world`, with the boxes of the spheres' broad phase when `with_boxes`. With their
     /// velocities `v` (m/s), `near` keeps only the particles some collider would answer
-    /// ([`responds`]: the response's own first tests, on the same numbers), most often none
+    /// ([`responds_within`]: the response's own first tests, on the same numbers), most often none
     /// of a body resting on a collider, so that the response on one thread visits only those.
     pub fn sum_up<'a>(
         &mut self,
@@ -226,7 +226,8 @@ impl PartBounds {
             let params = &world.contact;
             self.near.retain(|&i| {
                 let k = i as usize - start;
-                (world.colliders.iter()).any(|c| responds(c, params, x[k], v[k]))
+                (world.colliders.iter().zip(&broads))
+                    .any(|(c, b)| responds_within(b, c, params, x[k], v[k]))
             });
         }
     }
@@ -234,9 +235,9 @@ impl PartBounds {
     /// [`PartBounds::sum_up`] with velocities when every collider is a plane (at most
     /// [`PLANES`]) and the contact band is a number: the particles a plane answers marked in
     /// one pass over `x` and `v`, eight at a time (`fast::bounds::plane_answer_bits`, the
-    /// tests of [`responds`] on the same numbers). A plane answers only particles its bounds
+    /// tests of [`responds_within`] on the same numbers). A plane answers only particles its bounds
     /// hold (`φ < ε ≤ φ_max`, or NaN), so `near` is the same as the bounds' set filtered by
-    /// [`responds`]. False, with nothing done, for other colliders.
+    /// [`responds_within`]. False, with nothing done, for other colliders.
     fn planes_answered(
         &mut self,
         world: &World<'_>,
@@ -705,7 +706,7 @@ mod tests {
 
     /// Planes alone (`fast::bounds::plane_answer_bits`, eight at a time): a summary's `near`
     /// is exactly the particles for which the response itself (`respond`) changes something
-    /// for some plane, and the same as the bounds' set filtered one by one (`responds`);
+    /// for some plane, and the same as the bounds' set filtered one by one (`responds_within`);
     /// `calm` is every position's. One and two planes (one tilted), points on both sides and
     /// in the band (φ = 0 exactly), `v·N` of both signs and zero (and -0), NaN, infinite and
     /// huge coordinates and velocities, counts that are not whole chunks, with and without
@@ -782,9 +783,9 @@ mod tests {
                 let mut filtered = PartBounds::default();
                 filtered.fill(&broads, start, x, false);
                 (filtered.near).retain(|&i| {
-                    colliders
-                        .iter()
-                        .any(|c| responds(c, &params, x[i as usize - start], v[i as usize - start]))
+                    let k = i as usize - start;
+                    (colliders.iter().zip(&broads))
+                        .any(|(c, b)| responds_within(b, c, &params, x[k], v[k]))
                 });
                 for with_boxes in [false, true] {
                     let mut part = PartBounds::default();

@@ -502,6 +502,17 @@ fn touching(
     if !collider.may_touch(x, params.epsilon + offset) {
         return None;
     }
+    touching_past_bounds(collider, offset, params, x, v)
+}
+
+/// [`touching`] for a point its collider's bounds do not rule out (the bounds already asked).
+fn touching_past_bounds(
+    collider: &Collider,
+    offset: f64,
+    params: &ContactParams,
+    x: DVec3,
+    v: DVec3,
+) -> Option<(f64, DVec3, f64)> {
     let Contact { phi, normal } = collider.contact(x)?;
     // A sphere touches when its centre is within its radius of the surface.
     let phi = phi - offset;
@@ -514,9 +525,21 @@ fn touching(
 
 /// True when [`respond`] would answer a particle at `x` (m) moving at `v` (m/s) with a change
 /// (its tests before it reads the body's springs): a particle for which this is false for
-/// every collider is one [`resolve`] leaves as it is.
-pub(super) fn responds(collider: &Collider, params: &ContactParams, x: DVec3, v: DVec3) -> bool {
-    touching(collider, 0.0, params, x, v).is_some()
+/// every collider is one [`resolve`] leaves as it is. `broad` is the collider's bounds at
+/// `params.epsilon` (`collider.broad(params.epsilon)`), made once for many points.
+pub(super) fn responds_within(
+    broad: &Broad,
+    collider: &Collider,
+    params: &ContactParams,
+    x: DVec3,
+    v: DVec3,
+) -> bool {
+    let passes = match collider {
+        // `Collider::may_touch` asks no bounds of a plane.
+        Collider::Plane { .. } => true,
+        _ => broad.may_touch(x),
+    };
+    passes && touching_past_bounds(collider, 0.0, params, x, v).is_some()
 }
 
 /// After a particle's `x` or `v` changed outside the integrator: Verlet's implied velocity
