@@ -142,7 +142,7 @@ impl PartBounds {
     /// empty), `calm` always. Planes' bounds and the calm test go eight points at a time
     /// (`fast::bounds::plane_bits`, the same answers), other colliders' one by one.
     pub(super) fn fill(&mut self, broads: &[Broad], start: usize, x: &[DVec3], with_boxes: bool) {
-        self.fill_with(start, x, with_boxes, |x, bits| {
+        self.fill_with(start, x, with_boxes, |x, _, bits| {
             let mut calm_known = None;
             let planes = broads.iter().all(|b| matches!(b, Broad::Plane { .. }));
             if planes {
@@ -165,14 +165,15 @@ impl PartBounds {
     }
 
     /// The summary of particles `start..start + x.len()` at positions `x` (m) whose `near`
-    /// bits `mark(x, bits)` sets (returning, when it knows it, whether every position is
-    /// calm): the boxes when `with_boxes`, then `calm`, then `near` from the bits.
+    /// bits `mark(x, boxes, bits)` sets (given the boxes, empty without `with_boxes`; returning,
+    /// when it knows it, whether every position is calm): the boxes when `with_boxes`, then
+    /// `calm`, then `near` from the bits.
     fn fill_with(
         &mut self,
         start: usize,
         x: &[DVec3],
         with_boxes: bool,
-        mark: impl FnOnce(&[DVec3], &mut Vec<u64>) -> Option<bool>,
+        mark: impl FnOnce(&[DVec3], &[Aabb], &mut Vec<u64>) -> Option<bool>,
     ) {
         self.start = start;
         self.end = start + x.len();
@@ -186,7 +187,7 @@ impl PartBounds {
         }
         self.bits.clear();
         self.bits.resize(x.len().div_ceil(64), 0);
-        let marked = mark(x, &mut self.bits);
+        let marked = mark(x, &self.boxes, &mut self.bits);
         calm_known = calm_known.or(marked);
         self.calm = calm_known.unwrap_or_else(|| x.iter().all(|p| calm(*p)));
         for (k, &word) in self.bits.iter().enumerate() {
@@ -258,8 +259,24 @@ impl PartBounds {
             };
             *plane = (point, normal);
         }
-        self.fill_with(start, x, with_boxes, |x, bits| {
-            Some(plane_answer_bits(x, v, &planes[..count], epsilon, bits))
+        let broads = planes.map(|(point, normal)| Collider::Plane { point, normal }.broad(epsilon));
+        let planes = &planes[..count];
+        // With boxes (a body with spheres), only the boxes some plane's bounds may reach are
+        // looked at: a plane answers only particles its bounds hold (`φ < ε < φ_max`), and a
+        // box ruled out as a whole holds none (`Broad::box_may_touch`); the boxes tell `calm`.
+        self.fill_with(start, x, with_boxes, |x, boxes, bits| {
+            if boxes.is_empty() {
+                return Some(plane_answer_bits(x, v, planes, epsilon, bits));
+            }
+            for (j, b) in boxes.iter().enumerate() {
+                if broads[..count].iter().any(|p| p.box_may_touch(b.lo, b.hi)) {
+                    let (first, end) = (j * BOX, ((j + 1) * BOX).min(x.len()));
+                    let mut word = [0];
+                    plane_answer_bits(&x[first..end], &v[first..end], planes, epsilon, &mut word);
+                    bits[first / 64] |= word[0] << (first % 64);
+                }
+            }
+            None
         });
         true
     }
