@@ -129,7 +129,7 @@ use crate::physics::springs::Spring;
 use kernels::range_portable;
 #[cfg(target_arch = "x86_64")]
 use kernels::{range_avx2, range_avx512};
-use passes::{Part, SCRATCH, Scratch, cut, take};
+use passes::{Part, SCRATCH, Scratch, outputs_for, take};
 pub use team::{Crew, PartFn, Pass, TeamPower, TeamUpdate};
 
 /// At most this many offset groups: more would make the passes slower than the spring list.
@@ -632,15 +632,8 @@ impl Stencil {
     ) {
         let n = self.particles;
         let (x, v) = (&x[..n], &v[..n]);
-        let [o0, o1, o2] = outs;
         // The outputs this variant writes, cut to n particles; the others to nothing.
-        let (count, optional) = output.outputs();
-        let outs = [
-            cut(o0, count > 0, n),
-            cut(o1, count > 1, n),
-            cut(o2, optional && !o2.is_empty(), n),
-        ];
-        output.check(n);
+        let outs = outputs_for(&output, outs, n);
         let power = if power.is_empty() {
             power
         } else {

@@ -72,6 +72,24 @@ pub(super) fn cut(o: &mut [DVec3], keep: bool, n: usize) -> &mut [DVec3] {
     if keep { &mut o[..n] } else { &mut o[..0] }
 }
 
+/// The outputs `output` writes (`Output::outputs`), each cut to `n` particles, the others to
+/// nothing; checks that `output`'s own arrays hold `n` particles.
+pub(super) fn outputs_for<'o>(
+    output: &Output,
+    outs: [&'o mut [DVec3]; 3],
+    n: usize,
+) -> [&'o mut [DVec3]; 3] {
+    let [o0, o1, o2] = outs;
+    let (count, optional) = output.outputs();
+    let outs = [
+        cut(o0, count > 0, n),
+        cut(o1, count > 1, n),
+        cut(o2, optional && !o2.is_empty(), n),
+    ];
+    output.check(n);
+    outs
+}
+
 /// One part's pieces of the outputs: `outs[k][i]` and `power[2 i..]` belong to the part's
 /// particle `q0 + i`.
 pub(super) struct Part<'o> {
@@ -731,14 +749,7 @@ impl Stencil {
         }
         let n = self.particles;
         let (x, v) = (&x[..n], &v[..n]);
-        let [o0, o1, o2] = outs;
-        let (count, optional) = output.outputs();
-        let outs = [
-            cut(o0, count > 0, n),
-            cut(o1, count > 1, n),
-            cut(o2, optional && !o2.is_empty(), n),
-        ];
-        output.check(n);
+        let outs = outputs_for(&output, outs, n);
         let mut part = Part {
             outs,
             power: &mut [],
