@@ -185,41 +185,27 @@ fn step(
         }
         state.x_prev[i] = x_n;
     }
-    if params.iterations > 0 && account && energy_batch.on {
-        // Inside `Method::steps`: the energies before and after the projection go to the
-        // batch, which adds their share to this step's entry with those of the next steps.
-        if energy_batch.full() {
-            energy_batch.finish(step_dissipated);
-        }
+    if params.iterations > 0 {
         let only_rods = kinds.is_some_and(|k| k.rods);
         let (mass, gravity) = (&model.mass, model.gravity);
-        energy_batch.before(mass, gravity, &state.x, &state.x_prev, dt);
-        let elastic_before = elastic_energy(model, &state.x, only_rods);
-        prepare_rods(model, rods);
-        if textbook {
-            project_distances(rods, &mut state.x, params.iterations);
-        } else {
-            project_distances_fast(rods, &mut state.x, params.iterations, chain);
+        // Inside `Method::steps` the energies before and after the projection go to the
+        // batch, which adds their share to this step's entry with those of the next steps.
+        let batched = account && energy_batch.on;
+        if batched && energy_batch.full() {
+            energy_batch.finish(step_dissipated);
         }
-        let elastic_after = elastic_energy(model, &state.x, only_rods);
-        energy_batch.after(mass, gravity, &state.x, &state.x_prev, dt, (elastic_before, elastic_after));
-    } else if params.iterations > 0 {
-        let only_rods = kinds.is_some_and(|k| k.rods);
         // The energy before the projection: its elastic term now, its kinetic and
         // gravitational terms kept and summed beside those after (`fast/energy.rs`), as
         // `mechanical_energy` sums each.
-        let elastic_before = if account {
-            kinetic_gravity_terms(
-                &model.mass,
-                model.gravity,
-                &state.x,
-                &state.x_prev,
-                dt,
-                energy_terms,
-            );
-            elastic_energy(model, &state.x, only_rods)
-        } else {
+        let elastic_before = if !account {
             0.0
+        } else {
+            if batched {
+                energy_batch.before(mass, gravity, &state.x, &state.x_prev, dt);
+            } else {
+                kinetic_gravity_terms(mass, gravity, &state.x, &state.x_prev, dt, energy_terms);
+            }
+            elastic_energy(model, &state.x, only_rods)
         };
         prepare_rods(model, rods);
         if textbook {
@@ -229,18 +215,18 @@ fn step(
             project_distances_fast(rods, &mut state.x, params.iterations, chain);
         }
         if account {
-            let (e_before, e) = kinetic_gravity_pair(
-                &model.mass,
-                model.gravity,
-                &state.x,
-                &state.x_prev,
-                dt,
-                energy_terms,
-            );
-            let before = e_before + elastic_before;
-            let after = e + elastic_energy(model, &state.x, only_rods);
-            // Projection is inelastic: what it takes out (or, rarely, puts in).
-            dissipated.method += before - after;
+            let elastic_after = elastic_energy(model, &state.x, only_rods);
+            if batched {
+                let elastic = (elastic_before, elastic_after);
+                energy_batch.after(mass, gravity, &state.x, &state.x_prev, dt, elastic);
+            } else {
+                let (e_before, e) =
+                    kinetic_gravity_pair(mass, gravity, &state.x, &state.x_prev, dt, energy_terms);
+                let before = e_before + elastic_before;
+                let after = e + elastic_after;
+                // Projection is inelastic: what it takes out (or, rarely, puts in).
+                dissipated.method += before - after;
+            }
         }
     }
     let inv_dt = 1.0 / dt;
