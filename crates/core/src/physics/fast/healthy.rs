@@ -1,6 +1,6 @@
 //! The divergence check's quick pass (`physics/diverge.rs`, run after every single step):
-//! whether a state is certainly healthy, eight particles at a time with the CPU's widest
-//! vectors.
+//! whether a state is certainly healthy, with the CPU's widest vectors (the positions by
+//! `fast::energy::all_below`, the speeds by a count the compiler vectorises).
 //!
 //! ```text
 //! healthy  ⇔  for every particle i:  x_i finite  and  |v_i|² ≤ v2_max
@@ -11,9 +11,8 @@
 
 use glam::DVec3;
 
-#[cfg(target_arch = "x86_64")]
-use super::lanes::{Avx2, Avx512};
-use super::lanes::{LANES, Lanes, Plain, first_lanes, load_chunk};
+use super::energy::all_below;
+use super::stencil::Kernel;
 
 /// True when every position is finite and every `|v|²` at most `v2_max` (m²/s²).
 ///
@@ -22,51 +21,45 @@ use super::lanes::{LANES, Lanes, Plain, first_lanes, load_chunk};
 #[must_use]
 pub(crate) fn healthy(x: &[DVec3], v: &[DVec3], v2_max: f64) -> bool {
     assert_eq!(x.len(), v.len(), "a velocity per position");
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU supports AVX-512F (checked above).
-            return unsafe { healthy_avx512(x, v, v2_max) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU supports AVX2 (checked above).
-            return unsafe { healthy_avx2(x, v, v2_max) };
-        }
+    // Finite: below +∞ in magnitude (`fast::energy::all_below`, which NaN fails too).
+    all_below(x, f64::INFINITY) && speeds_within(v, v2_max)
+}
+
+/// Every `|v|² ≤ v2_max` (false where one is NaN), with the CPU's widest vectors.
+fn speeds_within(v: &[DVec3], v2_max: f64) -> bool {
+    match Kernel::best() {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `Kernel::best` chooses `Avx512` only on a CPU with AVX-512F.
+        Kernel::Avx512 => unsafe { within_avx512(v, v2_max) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as above, AVX2.
+        Kernel::Avx2 => unsafe { within_avx2(v, v2_max) },
+        _ => within(v, v2_max),
     }
-    healthy_lanes::<Plain>(x, v, v2_max)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn healthy_avx512(x: &[DVec3], v: &[DVec3], v2_max: f64) -> bool {
-    healthy_lanes::<Avx512>(x, v, v2_max)
+fn within_avx512(v: &[DVec3], v2_max: f64) -> bool {
+    within(v, v2_max)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn healthy_avx2(x: &[DVec3], v: &[DVec3], v2_max: f64) -> bool {
-    healthy_lanes::<Avx2>(x, v, v2_max)
+fn within_avx2(v: &[DVec3], v2_max: f64) -> bool {
+    within(v, v2_max)
 }
 
-/// [`healthy`] with lanes `V`: the lanes that fail are gathered over the whole state (no
-/// branch per chunk); a state is seldom unhealthy.
+/// The count of speeds not within the bound is zero (a count, not a search, so the compiler
+/// tests many particles per instruction).
 #[inline(always)]
-fn healthy_lanes<V: Lanes>(x: &[DVec3], v: &[DVec3], v2_max: f64) -> bool {
-    let bound = V::splat(v2_max);
-    let mut bad = 0u8;
-    for (xs, vs) in x.chunks(LANES).zip(v.chunks(LANES)) {
-        let count = xs.len();
-        let p = load_chunk::<V>(xs, count);
-        let w = load_chunk::<V>(vs, count);
-        // x - x is 0 for a finite x, NaN for an infinite or NaN one.
-        let not_finite =
-            p[0].sub(p[0]).nan_lanes() | p[1].sub(p[1]).nan_lanes() | p[2].sub(p[2]).nan_lanes();
-        let v2 = w[0].mul(w[0]).add(w[1].mul(w[1])).add(w[2].mul(w[2]));
-        // Not `v2 ≤ bound`: above it, or NaN.
-        let fast = bound.less_than(v2) | v2.nan_lanes();
-        bad |= (not_finite | fast) & first_lanes(count);
-    }
-    bad == 0
+fn within(v: &[DVec3], v2_max: f64) -> bool {
+    // Outside: above the bound, or NaN on either side (as `<=` answers).
+    let outside = |v: &DVec3| {
+        let s = v.length_squared();
+        usize::from(s > v2_max || s.is_nan() || v2_max.is_nan())
+    };
+    v.iter().map(outside).sum::<usize>() == 0
 }
 
 #[cfg(test)]
@@ -80,7 +73,7 @@ mod tests {
 
     /// Healthy states of every length from 0 to 40, then each particle in turn given an
     /// infinite or NaN coordinate, or a speed at, just above and just below the bound: the
-    /// same answer as the loop, with every instruction set this CPU has.
+    /// same answer as the loop, with the CPU's widest vectors and portably.
     #[test]
     fn healthy_is_the_loop() {
         let bound = 0.999e6;
@@ -95,7 +88,11 @@ mod tests {
             let check = |x: &[DVec3], v: &[DVec3]| {
                 let expected = textbook(x, v, bound);
                 assert_eq!(healthy(x, v, bound), expected, "{n} particles");
-                assert_eq!(healthy_lanes::<Plain>(x, v, bound), expected, "{n}, plain");
+                assert_eq!(
+                    all_below(x, f64::INFINITY) && within(v, bound),
+                    expected,
+                    "{n}, portable"
+                );
                 expected
             };
             assert!(check(&x, &v));
