@@ -3,8 +3,6 @@
 
 use glam::DVec3;
 
-use crate::physics::fast::bounds::plane_bits;
-
 /// Relative margin on a bowl's rim circle (`ρ² ≤ a² (1 + margin)`): points on the circle up to
 /// rounding still belong to the bowl (see [`Collider::contact`]).
 const RIM_MARGIN: f64 = 1e-9;
@@ -504,23 +502,11 @@ impl Broad {
 
     /// The points `xs` (at most 64) that the bounds do not rule out, as bits (bit `k` for
     /// `xs[k]`): [`Broad::may_touch`] of each, with the same arithmetic, eight points at a time
-    /// (`fast::bounds::plane_bits` for a plane, `fast::marks` for the others), so that a body
-    /// near a collider costs a few vector operations per eight particles.
+    /// (`fast::marks`), so that a body near a collider costs a few vector operations per eight
+    /// particles.
     #[must_use]
     pub(crate) fn marks(&self, xs: &[DVec3]) -> u64 {
-        debug_assert!(xs.len() <= 64);
-        match *self {
-            Broad::Plane {
-                point,
-                normal,
-                phi_max,
-            } => {
-                let mut word = [0];
-                plane_bits(xs, point, normal, phi_max, &mut word);
-                word[0]
-            }
-            _ => crate::physics::fast::marks::marks(self, xs),
-        }
+        crate::physics::fast::marks::marks(self, xs)
     }
 }
 

@@ -5,6 +5,7 @@
 //! so the same answers, NaN included (tested):
 //!
 //! ```text
+//! plane       φ = (x - p)·n < φ_max                  or NaN
 //! sphere      |x - c|² < d2_max                      or NaN
 //! bowl        (|x - c|² ≥ d2_min or NaN)  and  (y ≤ rim or y NaN)
 //! hole plane  (h < h_max or NaN)  and  (h ≥ h_floor  or  ρ² ≥ rho2_min  or  ρ² NaN)
@@ -12,8 +13,9 @@
 //! ```
 //! where `x` (m) is the point, `c` (m) the sphere's or bowl's centre, `d2_max`, `d2_min` (m²)
 //! the squared bounds, `rim` (m) the bowl's rim height, `p` and `n` a point of the floor and its
-//! unit normal, `c_hole` (m) the hole's centre and `ρ` (m) the distance from the hole's axis.
-//! A plane's test is `bounds::plane_bits`.
+//! unit normal (a plane's too, with `φ_max` (m) its height bound), `c_hole` (m) the hole's
+//! centre and `ρ` (m) the distance from the hole's axis. (`bounds::plane_bits` is the plane's
+//! test with the calm test, for the summaries of parts.)
 //!
 //! Why: a body resting in the 2023 bowl (`jelly-bowl`) has every tile near both colliders, so
 //! the response tests all its particles against both after every step; one point at a time
