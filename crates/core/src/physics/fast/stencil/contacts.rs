@@ -3,21 +3,25 @@
 //! particles that may touch (`contact_lanes`): against planes alone all eight lanes at once with
 //! the scalar code's operations (`plane_lanes`, the same bits: a plane's contact is a few dot
 //! products, and a body resting on its plane has a whole layer of particles in the band every
-//! step), against other colliders the scalar code lane by lane.
+//! step), against other colliders the scalar code lane by lane. Each collider's bounds
+//! ([`Collider::broad`]) are made once per range (`Scratch::broads`), not again for every chunk
+//! and every particle that may touch (a jelly resting in the 2023 bowl has a hundred of those a
+//! step; the scalar code is given the bounds, `contact_force_within`).
 
 #[allow(clippy::wildcard_imports)]
 use super::*;
 use crate::physics::collide::{Broad, ROUNDING_SPEED};
 use crate::physics::fast::marks::{dot, minus, squared};
 
-/// The chunk's particles (bit `l` for lane `l`) that may touch one of `colliders` (closer than
-/// `epsilon`, m, or inside): the bounds of [`Collider::broad`], eight particles at a time, so
-/// that it never leaves out a particle that [`Collider::contact`] would put within `epsilon`.
+/// The chunk's particles (bit `l` for lane `l`) that may touch one of the colliders whose
+/// bounds are `broads` ([`Collider::broad`] at the contact band `ε`: closer than `ε` or
+/// inside), eight particles at a time, so that it never leaves out a particle that
+/// [`Collider::contact`] would put within `ε`.
 #[inline(always)]
-pub(super) fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3]) -> u8 {
+pub(super) fn may_touch<V: Lanes>(broads: &[Broad], x: [V; 3]) -> u8 {
     let mut mask = 0u8;
-    for collider in colliders {
-        mask |= match collider.broad(epsilon) {
+    for &broad in broads {
+        mask |= match broad {
             Broad::Plane {
                 point,
                 normal,
@@ -66,13 +70,16 @@ pub(super) fn may_touch<V: Lanes>(colliders: &[Collider], epsilon: f64, x: [V; 3
     mask
 }
 
-/// The contact force of `d`'s colliders on the `candidates` lanes of a chunk (positions `x`,
-/// velocities `v`, forces before contact `f`), with [`contact_force`], the function of
-/// [`super::collide::contact_forces`]: the new forces, and the contact power
-/// `-(f_contact)·v` (W) per lane.
+/// The contact force of `d`'s colliders (bounds `broads`, [`Collider::broad`] of each at the
+/// contact band) on the `candidates` lanes of a chunk (positions `x`, velocities `v`, forces
+/// before contact `f`), with [`contact_force`], the function of
+/// [`super::collide::contact_forces`], given the bounds (`contact_force_within`, the same
+/// tests on the same numbers): the new forces, and the contact power `-(f_contact)·v` (W) per
+/// lane.
 #[inline(always)]
 pub(super) fn contact_lanes<V: Lanes>(
     d: &Dynamics,
+    broads: &[Broad],
     x: [V; 3],
     v: [V; 3],
     f: [V; 3],
@@ -96,7 +103,7 @@ pub(super) fn contact_lanes<V: Lanes>(
     for l in (0..LANES).filter(|l| candidates & (1 << l) != 0) {
         let at = |a: &[[f64; LANES]; 3]| DVec3::new(a[0][l], a[1][l], a[2][l]);
         let (xl, vl, fl) = (at(&xs), at(&vs), at(&fs));
-        if let Some(total) = contact_force(d.colliders, d.contact, xl, vl, fl) {
+        if let Some(total) = contact_force_within(d.colliders, broads, d.contact, xl, vl, fl) {
             // P = -f_contact · v (see `collide::contact_power`).
             power[l] = -(total - fl).dot(vl);
             fs[0][l] = total.x;
@@ -257,8 +264,7 @@ mod tests {
                 let mut lanes = [p; LANES];
                 lanes[1] = DVec3::splat(1e6);
                 let mask = may_touch(
-                    &colliders,
-                    epsilon,
+                    &[broad],
                     crate::physics::fast::lanes::load_chunk::<Plain>(&lanes, LANES),
                 );
                 assert_eq!(mask & 1 != 0, passes, "{collider:?}: {p} lanes vs scalar");
@@ -275,8 +281,9 @@ mod tests {
 }
 
 #[cfg(test)]
-mod plane_tests {
+mod lane_tests {
     use super::*;
+    use crate::physics::collide::contact_force;
     use crate::physics::fast::lanes::load_chunk;
 
     /// The planes' lanes give `contact_force`'s forces and power bit for bit, lane by lane:
@@ -339,8 +346,10 @@ mod plane_tests {
                     }
                     let candidates = (seed as u8) | 0b1010_1010;
                     let lanes = |a: &[DVec3; LANES]| load_chunk::<Plain>(a, LANES);
+                    let broads: Vec<Broad> =
+                        colliders.iter().map(|c| c.broad(params.epsilon)).collect();
                     let (total, power) =
-                        contact_lanes(&d, lanes(&x), lanes(&v), lanes(&f), candidates);
+                        contact_lanes(&d, &broads, lanes(&x), lanes(&v), lanes(&f), candidates);
                     let mut out = [[0.0; LANES]; 3];
                     for (c, lane) in total.into_iter().enumerate() {
                         lane.store(&mut out[c]);
@@ -368,5 +377,96 @@ mod plane_tests {
             }
         }
         assert!(checked > 1000, "{checked} lanes touched");
+    }
+
+    /// With colliders of every kind (the plane among them, so the lanes take the scalar path
+    /// with the bounds made once, `contact_force_within`), the lanes' forces and power are
+    /// `contact_force`'s lane by lane, bit for bit: points inside, on and around the bowl, the
+    /// sphere, the floor with a hole and the plane, moving in and out, and a NaN.
+    #[test]
+    fn the_lanes_with_bounds_are_the_scalar_contact_force() {
+        let colliders = [
+            Collider::Bowl {
+                center: DVec3::new(0.0, 2.0, 0.0),
+                radius: 2.0,
+                rim_height: 1.5,
+            },
+            Collider::HolePlane {
+                point: DVec3::ZERO,
+                normal: DVec3::Y,
+                hole_center: DVec3::new(0.0, 0.0, 0.0),
+                hole_radius: 1.2,
+            },
+            Collider::Sphere {
+                center: DVec3::new(0.8, 0.3, 0.0),
+                radius: 0.4,
+            },
+            Collider::Plane {
+                point: DVec3::new(0.0, 0.05, 0.0),
+                normal: DVec3::Y,
+            },
+        ];
+        let params = ContactParams::course_2023();
+        let broads: Vec<Broad> = colliders.iter().map(|c| c.broad(params.epsilon)).collect();
+        let (mass, inv_mass) = ([1.0; LANES], [1.0; LANES]);
+        let d = Dynamics {
+            mass: &mass,
+            inv_mass: &inv_mass,
+            gravity: DVec3::new(0.0, -9.8, 0.0),
+            drag: 0.0,
+            colliders: &colliders,
+            contact: &params,
+        };
+        let bits = |a: DVec3| a.to_array().map(f64::to_bits);
+        let lanes = |a: &[DVec3; LANES]| load_chunk::<Plain>(a, LANES);
+        let (mut touched, mut candidate_lanes) = (0, 0);
+        for seed in 0..400u32 {
+            let r = |k: u32| {
+                let t = f64::from(seed.wrapping_mul(2_654_435_761).wrapping_add(k * 97)) * 1e-4;
+                (t.sin() * 1e4).fract()
+            };
+            let (mut x, mut v, mut f) = (
+                [DVec3::ZERO; LANES],
+                [DVec3::ZERO; LANES],
+                [DVec3::ZERO; LANES],
+            );
+            for l in 0..LANES {
+                let k = 10 * l as u32;
+                x[l] = DVec3::new(1.6 * r(k), 0.3 * r(k + 1) + 0.05, 1.6 * r(k + 2));
+                v[l] = DVec3::new(r(k + 3), r(k + 4), r(k + 5));
+                f[l] = DVec3::new(r(k + 6), -1.0 + r(k + 7), r(k + 8));
+            }
+            if seed == 11 {
+                x[2] = DVec3::new(f64::NAN, 0.1, 0.0);
+            }
+            let candidates = (seed as u8) | 0b0101_0101;
+            candidate_lanes += candidates.count_ones();
+            let (total, power) =
+                contact_lanes(&d, &broads, lanes(&x), lanes(&v), lanes(&f), candidates);
+            let mut out = [[0.0; LANES]; 3];
+            for (c, lane) in total.into_iter().enumerate() {
+                lane.store(&mut out[c]);
+            }
+            let mut p = [0.0; LANES];
+            power.store(&mut p);
+            for l in 0..LANES {
+                let got = DVec3::new(out[0][l], out[1][l], out[2][l]);
+                let scalar = (candidates & (1 << l) != 0)
+                    .then(|| contact_force(&colliders, &params, x[l], v[l], f[l]))
+                    .flatten();
+                let (want, want_power) = match scalar {
+                    Some(t) => (t, -(t - f[l]).dot(v[l])),
+                    None => (f[l], 0.0),
+                };
+                touched += usize::from(scalar.is_some());
+                assert_eq!(bits(got), bits(want), "lane {l}: {got} {want}");
+                assert_eq!(p[l].to_bits(), want_power.to_bits(), "lane {l} power");
+            }
+        }
+        // Both answers occur (the test can fail either way).
+        assert!(
+            touched > 100 && touched + 100 < candidate_lanes as usize,
+            "{touched} of {candidate_lanes} lanes touched"
+        );
     }
 }

@@ -113,6 +113,9 @@ pub(super) struct Scratch {
     pub(super) sum_power: bool,
     /// Those sums (W).
     pub(super) power_sums: [[f64; LANES]; 2],
+    /// The bounds of the range's colliders ([`Collider::broad`] at the contact band), made
+    /// once per range instead of once per chunk and particle.
+    pub(super) broads: Vec<Broad>,
 }
 
 /// A buffer of f64 whose used part starts at a 64-byte boundary, so that a chunk of `LANES`
@@ -205,7 +208,17 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
         ring,
         sum_power,
         power_sums,
+        broads,
     } = s;
+    broads.clear();
+    if let Output::Forces(d)
+    | Output::Accelerations(d)
+    | Output::Power(d)
+    | Output::Step { dynamics: d, .. } = output
+    {
+        broads.extend(d.colliders.iter().map(|c| c.broad(d.contact.epsilon)));
+    }
+    let broads = &broads[..];
     // The power summed here, in registers, chunk after chunk (`Scratch::sum_power`, asked
     // for this range only).
     let mut sums =
@@ -344,9 +357,9 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
             };
             let sums = sums.as_mut();
             if chunk.count == LANES {
-                finish::<V, POWER, true>(output, &chunk, sum, spring_power[c], part, sums);
+                finish::<V, POWER, true>(output, broads, &chunk, sum, spring_power[c], part, sums);
             } else {
-                finish::<V, POWER, false>(output, &chunk, sum, spring_power[c], part, sums);
+                finish::<V, POWER, false>(output, broads, &chunk, sum, spring_power[c], part, sums);
             }
         }
         if let Output::Step {
@@ -477,10 +490,12 @@ pub(super) struct Chunk<V> {
 /// Pass 2's end for one chunk: from the spring forces `sum` (N) to what `output` asks for,
 /// and the chunk's dissipated power when `POWER`. `WHOLE`: the chunk has `LANES` particles
 /// (`chunk.count` is then not read). `sums`: the power is added to these running sums
-/// `(dampers and drag, contact)` instead of written to the part's buffer.
+/// `(dampers and drag, contact)` instead of written to the part's buffer. `broads`: the bounds
+/// of the output's colliders, in their order.
 #[inline(always)]
 pub(super) fn finish<V: Lanes, const POWER: bool, const WHOLE: bool>(
     output: &Output,
+    broads: &[Broad],
     chunk: &Chunk<V>,
     sum: [V; 3],
     spring_power: V,
@@ -509,9 +524,9 @@ pub(super) fn finish<V: Lanes, const POWER: bool, const WHOLE: bool>(
     let free = V::zero().less_than(w);
     let mut contact_power = V::zero();
     if !d.colliders.is_empty() {
-        let candidates = free & may_touch(d.colliders, d.contact.epsilon, x);
+        let candidates = free & may_touch(broads, x);
         if candidates != 0 {
-            (f, contact_power) = contact_lanes(&d, x, v, f, candidates);
+            (f, contact_power) = contact_lanes(&d, broads, x, v, f, candidates);
         }
     }
     if POWER {
