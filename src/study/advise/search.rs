@@ -189,13 +189,19 @@ fn search(
         let steps = plan.reference_steps << k;
         let dt = time / steps as f64;
         progress(&Stage::Reference(dt));
-        // Hints: this run and the next (at the start also the third, so that both cores have
-        // a chain run while the search computes the spectra the other hints need), then the
-        // search's first runs.
+        // Hints: this run, the chain's last, then the next (at the start also the third), then
+        // the search's first runs. The last run is as long as all the others together and, on a
+        // scene with impacts, the one the chain most often ends with (the changes between
+        // halvings do not shrink as the method's order would have them until the steps resolve
+        // the impacts): started at once, it runs beside the shorter ones instead of after them.
+        // Where the chain ends earlier it is stopped then, having taken a core from guesses only.
         let ahead = if k == 0 { 2 } else { 1 };
-        let mut hints: Vec<Job> = (0..=ahead.min(REFERENCE_HALVINGS - k))
-            .map(|i| chain_job(steps << i))
+        let last = chain_job(plan.reference_steps << REFERENCE_HALVINGS);
+        let mut hints: Vec<Job> = std::iter::once(chain_job(steps))
+            .chain((k < REFERENCE_HALVINGS).then(|| last.clone()))
+            .chain((1..=ahead.min(REFERENCE_HALVINGS - k)).map(|i| chain_job(steps << i)))
             .collect();
+        hints.dedup();
         if k == 0 {
             runs.hint(hints.clone());
         }
