@@ -284,6 +284,62 @@ mod tests {
 mod lane_tests {
     use super::*;
     use crate::physics::collide::contact_force;
+
+    /// Eight particles of 1 kg under gravity, without drag, against `colliders`.
+    fn unit_masses<'a>(colliders: &'a [Collider], params: &'a ContactParams) -> Dynamics<'a> {
+        Dynamics {
+            mass: &[1.0; LANES],
+            inv_mass: &[1.0; LANES],
+            gravity: DVec3::new(0.0, -9.8, 0.0),
+            drag: 0.0,
+            colliders,
+            contact: params,
+        }
+    }
+
+    /// Asserts that the `candidates` lanes of a chunk at `x`, `v` with forces `f` get
+    /// `contact_force`'s forces and power bit for bit (a NaN force: NaN) and the others keep
+    /// theirs, through `contact_lanes` with the bounds made once; returns how many lanes a
+    /// collider pushed.
+    fn same_as_scalar(
+        d: &Dynamics,
+        x: &[DVec3; LANES],
+        v: &[DVec3; LANES],
+        f: &[DVec3; LANES],
+        candidates: u8,
+    ) -> usize {
+        let bits = |a: DVec3| a.to_array().map(f64::to_bits);
+        let lanes = |a: &[DVec3; LANES]| load_chunk::<Plain>(a, LANES);
+        let broads: Vec<Broad> = (d.colliders.iter())
+            .map(|c| c.broad(d.contact.epsilon))
+            .collect();
+        let (total, power) = contact_lanes(d, &broads, lanes(x), lanes(v), lanes(f), candidates);
+        let mut out = [[0.0; LANES]; 3];
+        for (c, lane) in total.into_iter().enumerate() {
+            lane.store(&mut out[c]);
+        }
+        let mut p = [0.0; LANES];
+        power.store(&mut p);
+        let mut touched = 0;
+        for l in 0..LANES {
+            let got = DVec3::new(out[0][l], out[1][l], out[2][l]);
+            let scalar = (candidates & (1 << l) != 0)
+                .then(|| contact_force(d.colliders, d.contact, x[l], v[l], f[l]))
+                .flatten();
+            let (want, want_power) = match scalar {
+                Some(t) => (t, -(t - f[l]).dot(v[l])),
+                None => (f[l], 0.0),
+            };
+            touched += usize::from(scalar.is_some());
+            if want.is_nan() {
+                assert!(got.is_nan(), "lane {l}");
+                continue;
+            }
+            assert_eq!(bits(got), bits(want), "lane {l}: {got} {want}");
+            assert_eq!(p[l].to_bits(), want_power.to_bits(), "lane {l} power");
+        }
+        touched
+    }
     use crate::physics::fast::lanes::load_chunk;
 
     /// The planes' lanes give `contact_force`'s forces and power bit for bit, lane by lane:
@@ -302,7 +358,6 @@ mod lane_tests {
                 normal: DVec3::new(1.0, 0.4, -0.3).normalize(),
             },
         ];
-        let bits = |a: DVec3| a.to_array().map(f64::to_bits);
         let mut checked = 0;
         for count in [1, 2] {
             for (friction, rest_speed) in [(0.0, 0.0), (0.0, 0.05), (0.3, 0.0), (0.2, 0.01)] {
@@ -311,16 +366,7 @@ mod lane_tests {
                     rest_speed,
                     ..ContactParams::course_2021()
                 };
-                let colliders = &planes[..count];
-                let (mass, inv_mass) = ([1.0; LANES], [1.0; LANES]);
-                let d = Dynamics {
-                    mass: &mass,
-                    inv_mass: &inv_mass,
-                    gravity: DVec3::new(0.0, -9.8, 0.0),
-                    drag: 0.0,
-                    colliders,
-                    contact: &params,
-                };
+                let d = unit_masses(&planes[..count], &params);
                 for seed in 0..200u32 {
                     let r = |k: u32| {
                         let t =
@@ -345,34 +391,7 @@ mod lane_tests {
                         x[5] = DVec3::new(f64::NAN, 0.0, 0.0);
                     }
                     let candidates = (seed as u8) | 0b1010_1010;
-                    let lanes = |a: &[DVec3; LANES]| load_chunk::<Plain>(a, LANES);
-                    let broads: Vec<Broad> =
-                        colliders.iter().map(|c| c.broad(params.epsilon)).collect();
-                    let (total, power) =
-                        contact_lanes(&d, &broads, lanes(&x), lanes(&v), lanes(&f), candidates);
-                    let mut out = [[0.0; LANES]; 3];
-                    for (c, lane) in total.into_iter().enumerate() {
-                        lane.store(&mut out[c]);
-                    }
-                    let mut p = [0.0; LANES];
-                    power.store(&mut p);
-                    for l in 0..LANES {
-                        let got = DVec3::new(out[0][l], out[1][l], out[2][l]);
-                        let scalar = (candidates & (1 << l) != 0)
-                            .then(|| contact_force(colliders, &params, x[l], v[l], f[l]))
-                            .flatten();
-                        let (want, want_power) = match scalar {
-                            Some(t) => (t, -(t - f[l]).dot(v[l])),
-                            None => (f[l], 0.0),
-                        };
-                        checked += usize::from(scalar.is_some());
-                        if want.is_nan() {
-                            assert!(got.is_nan(), "lane {l}");
-                            continue;
-                        }
-                        assert_eq!(bits(got), bits(want), "lane {l}: {got} {want}");
-                        assert_eq!(p[l].to_bits(), want_power.to_bits(), "lane {l} power");
-                    }
+                    checked += same_as_scalar(&d, &x, &v, &f, candidates);
                 }
             }
         }
@@ -407,18 +426,7 @@ mod lane_tests {
             },
         ];
         let params = ContactParams::course_2023();
-        let broads: Vec<Broad> = colliders.iter().map(|c| c.broad(params.epsilon)).collect();
-        let (mass, inv_mass) = ([1.0; LANES], [1.0; LANES]);
-        let d = Dynamics {
-            mass: &mass,
-            inv_mass: &inv_mass,
-            gravity: DVec3::new(0.0, -9.8, 0.0),
-            drag: 0.0,
-            colliders: &colliders,
-            contact: &params,
-        };
-        let bits = |a: DVec3| a.to_array().map(f64::to_bits);
-        let lanes = |a: &[DVec3; LANES]| load_chunk::<Plain>(a, LANES);
+        let d = unit_masses(&colliders, &params);
         let (mut touched, mut candidate_lanes) = (0, 0);
         for seed in 0..400u32 {
             let r = |k: u32| {
@@ -441,27 +449,7 @@ mod lane_tests {
             }
             let candidates = (seed as u8) | 0b0101_0101;
             candidate_lanes += candidates.count_ones();
-            let (total, power) =
-                contact_lanes(&d, &broads, lanes(&x), lanes(&v), lanes(&f), candidates);
-            let mut out = [[0.0; LANES]; 3];
-            for (c, lane) in total.into_iter().enumerate() {
-                lane.store(&mut out[c]);
-            }
-            let mut p = [0.0; LANES];
-            power.store(&mut p);
-            for l in 0..LANES {
-                let got = DVec3::new(out[0][l], out[1][l], out[2][l]);
-                let scalar = (candidates & (1 << l) != 0)
-                    .then(|| contact_force(&colliders, &params, x[l], v[l], f[l]))
-                    .flatten();
-                let (want, want_power) = match scalar {
-                    Some(t) => (t, -(t - f[l]).dot(v[l])),
-                    None => (f[l], 0.0),
-                };
-                touched += usize::from(scalar.is_some());
-                assert_eq!(bits(got), bits(want), "lane {l}: {got} {want}");
-                assert_eq!(p[l].to_bits(), want_power.to_bits(), "lane {l} power");
-            }
+            touched += same_as_scalar(&d, &x, &v, &f, candidates);
         }
         // Both answers occur (the test can fail either way).
         assert!(
