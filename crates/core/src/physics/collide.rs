@@ -150,12 +150,12 @@ mod spheres;
 
 pub use budget::take_kinetic_with_spheres;
 use budget::{above_rounding, energy_rise};
+pub(crate) use force::ROUNDING_SPEED;
 #[cfg(test)]
 pub(crate) use force::contact_force;
 pub use force::{ContactParams, contact_forces, contact_power};
-pub(crate) use force::{ROUNDING_SPEED, contact_force_within};
-pub(crate) use geometry::Broad;
 use geometry::distance_and_direction;
+pub(crate) use geometry::{Broad, RIM_MARGIN};
 pub use geometry::{Collider, Contact};
 pub use prepared::{PartBounds, Prepared, Taken};
 pub(crate) use response::calm;

@@ -2,7 +2,7 @@
 
 use glam::DVec3;
 
-use super::{Broad, Collider, Contact, World};
+use super::{Collider, Contact, World};
 
 /// `v·N` (m/s) up to which a particle counts as not moving away, so that the contact force still
 /// holds it: the velocity response sets `v·N = 0`, which rounding may turn into `+1e-17`.
@@ -118,43 +118,10 @@ pub(crate) fn contact_force(
     v: DVec3,
     f: DVec3,
 ) -> Option<DVec3> {
-    contact_force_where(colliders, params, x, v, f, |_, c| {
-        c.may_touch(x, params.epsilon)
-    })
-}
-
-/// [`contact_force`] given each collider's bounds `broads` ([`Collider::broad`] at the contact
-/// band, in the colliders' order; made once by a caller that asks for many particles): the same
-/// tests on the same numbers, so the same force.
-pub(crate) fn contact_force_within(
-    colliders: &[Collider],
-    broads: &[Broad],
-    params: &ContactParams,
-    x: DVec3,
-    v: DVec3,
-    f: DVec3,
-) -> Option<DVec3> {
-    // As `Collider::may_touch`: a plane has no bounds to test.
-    contact_force_where(colliders, params, x, v, f, |j, c| {
-        matches!(c, Collider::Plane { .. }) || broads[j].may_touch(x)
-    })
-}
-
-/// [`contact_force`] with `may_touch(j, collider)` telling whether collider `j`'s bounds
-/// hold `x`.
-#[inline(always)]
-fn contact_force_where(
-    colliders: &[Collider],
-    params: &ContactParams,
-    x: DVec3,
-    v: DVec3,
-    f: DVec3,
-    may_touch: impl Fn(usize, &Collider) -> bool,
-) -> Option<DVec3> {
     let mut f = f;
     let mut touched = false;
-    for (j, collider) in colliders.iter().enumerate() {
-        if !may_touch(j, collider) {
+    for collider in colliders {
+        if !collider.may_touch(x, params.epsilon) {
             continue;
         }
         let Some(Contact { phi, normal }) = collider.contact(x) else {

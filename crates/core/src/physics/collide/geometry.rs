@@ -5,7 +5,7 @@ use glam::DVec3;
 
 /// Relative margin on a bowl's rim circle (`ρ² ≤ a² (1 + margin)`): points on the circle up to
 /// rounding still belong to the bowl (see [`Collider::contact`]).
-const RIM_MARGIN: f64 = 1e-9;
+pub(crate) const RIM_MARGIN: f64 = 1e-9;
 
 /// A static obstacle. Normals are unit vectors: build colliders with the constructors
 /// ([`Collider::plane`] etc.) or pass them through

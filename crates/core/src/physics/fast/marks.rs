@@ -62,50 +62,43 @@ fn marks_avx2(broad: &Broad, xs: &[DVec3]) -> u64 {
     marks_lanes::<Avx2>(broad, xs)
 }
 
-/// [`marks`] with lanes `V`: one loop per kind of collider. (The loops are written out by a
-/// macro, not given a closure: a closure does not take its caller's target features, and its
-/// vector operations would be calls.)
+/// [`marks`] with lanes `V`: [`broad_lanes`] chunk after chunk.
 #[inline(always)]
 fn marks_lanes<V: Lanes>(broad: &Broad, xs: &[DVec3]) -> u64 {
     let mut bits = 0u64;
-    macro_rules! each {
-        (|$x:ident| $test:expr) => {
-            for (k, chunk) in xs.chunks(LANES).enumerate() {
-                let count = chunk.len();
-                let $x = load_chunk::<V>(chunk, count);
-                let mask: u8 = $test;
-                bits |= u64::from(mask & first_lanes(count)) << (LANES * k);
-            }
-        };
+    for (k, chunk) in xs.chunks(LANES).enumerate() {
+        let count = chunk.len();
+        let mask = broad_lanes(broad, load_chunk::<V>(chunk, count));
+        bits |= u64::from(mask & first_lanes(count)) << (LANES * k);
     }
+    bits
+}
+
+/// Bit `l` set when `broad` does not rule out the point in lane `l` of `x` (m):
+/// [`Broad::may_touch`] of each lane, the same operations and answers (module docs).
+#[inline(always)]
+pub(crate) fn broad_lanes<V: Lanes>(broad: &Broad, x: [V; 3]) -> u8 {
     match *broad {
         Broad::Plane {
             point,
             normal,
             phi_max,
         } => {
-            let bound = V::splat(phi_max);
-            each!(|x| {
-                let phi = dot(minus(x, point), normal);
-                phi.less_than(bound) | phi.nan_lanes()
-            });
+            // `φ < φ_max or φ NaN`: with a NaN bound, the NaN lanes only (as the point test).
+            let phi = dot(minus(x, point), normal);
+            phi.less_than(V::splat(phi_max)) | phi.nan_lanes()
         }
         Broad::Sphere { center, d2_max } => {
-            let bound = V::splat(d2_max);
-            each!(|x| {
-                let d2 = squared(minus(x, center));
-                d2.less_than(bound) | d2.nan_lanes()
-            });
+            let d2 = squared(minus(x, center));
+            d2.less_than(V::splat(d2_max)) | d2.nan_lanes()
         }
         Broad::Bowl {
             center,
             d2_min,
             rim,
         } => {
-            each!(|x| {
-                let d2 = squared(minus(x, center));
-                at_least_or_nan(d2, d2_min) & at_most_or_nan(x[1], rim)
-            });
+            let d2 = squared(minus(x, center));
+            at_least_or_nan(d2, d2_min) & at_most_or_nan(x[1], rim)
         }
         Broad::HolePlane {
             point,
@@ -115,22 +108,11 @@ fn marks_lanes<V: Lanes>(broad: &Broad, xs: &[DVec3]) -> u64 {
             h_floor,
             rho2_min,
         } => {
-            each!(|x| {
-                let h = dot(minus(x, point), normal);
-                let q = minus(x, hole_center);
-                let along = dot(q, normal);
-                // q - (q·n) n, as glam computes `q - q.dot(n) * n`.
-                let radial = [
-                    q[0].sub(along.mul(V::splat(normal.x))),
-                    q[1].sub(along.mul(V::splat(normal.y))),
-                    q[2].sub(along.mul(V::splat(normal.z))),
-                ];
-                let rho2 = squared(radial);
-                below_or_nan(h, h_max) & (at_least(h, h_floor) | at_least_or_nan(rho2, rho2_min))
-            });
+            let h = dot(minus(x, point), normal);
+            let rho2 = squared(radial(x, hole_center, normal));
+            below_or_nan(h, h_max) & (at_least(h, h_floor) | at_least_or_nan(rho2, rho2_min))
         }
     }
-    bits
 }
 
 // The comparisons with a bound `b` (a number of the bounds, never a lane): one compare each
@@ -182,6 +164,19 @@ pub(crate) fn dot<V: Lanes>(p: [V; 3], n: DVec3) -> V {
     p[0].mul(V::splat(n.x))
         .add(p[1].mul(V::splat(n.y)))
         .add(p[2].mul(V::splat(n.z)))
+}
+
+/// The offset of `x` from the axis through `c` along the unit normal `n`, lane by lane:
+/// `q - (q·n) n` with `q = x - c`, as glam computes `q - q.dot(n) * n`.
+#[inline(always)]
+pub(crate) fn radial<V: Lanes>(x: [V; 3], c: DVec3, n: DVec3) -> [V; 3] {
+    let q = minus(x, c);
+    let along = dot(q, n);
+    [
+        q[0].sub(along.mul(V::splat(n.x))),
+        q[1].sub(along.mul(V::splat(n.y))),
+        q[2].sub(along.mul(V::splat(n.z))),
+    ]
 }
 
 /// `x - p` lane by lane.

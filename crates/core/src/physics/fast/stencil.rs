@@ -124,7 +124,7 @@ use glam::DVec3;
 use super::lanes::{Avx2, Avx512};
 use super::lanes::{LANES, Lanes, Plain, lanes};
 use super::pool::Pool;
-use crate::physics::collide::{Broad, Collider, ContactParams, contact_force_within};
+use crate::physics::collide::{Broad, Collider, ContactParams};
 use crate::physics::springs::Spring;
 use kernels::range_portable;
 #[cfg(target_arch = "x86_64")]
