@@ -239,10 +239,11 @@ impl Linearisation {
     /// `δ ← δ / root`, and the scale of the finite differences: the largest `|δx|` or `|δv|/ω`
     /// component of a free particle.
     fn normalise(&self, dx: &mut [DVec3], dv: &mut [DVec3], root: f64) -> f64 {
+        // The divisions several at a time (`quadratic::divide`), then the scale.
+        quadratic::divide(dx, root);
+        quadratic::divide(dv, root);
         let mut scale = 0.0;
         for i in 0..dx.len() {
-            dx[i] /= root;
-            dv[i] /= root;
             if self.free[i] {
                 scale = f64::max(
                     scale,

@@ -182,10 +182,9 @@ pub fn omega_max_from(model: &Model, state: &State, warm: &mut Vec<DVec3>) -> Om
             let change = (lambda_new - lambda).abs();
             lambda = lambda_new;
             residual = r / lambda;
-            // q_{k+1} = A q_k / |A q_k|
-            for (q, y) in q.iter_mut().zip(&y) {
-                *q = *y / y_norm;
-            }
+            // q_{k+1} = A q_k / |A q_k| (the divisions several at a time)
+            std::mem::swap(&mut q, &mut y);
+            quadratic::divide(&mut q, y_norm);
             if residual <= RESIDUAL_TOLERANCE || change <= STALL_TOLERANCE * lambda {
                 break;
             }

@@ -18,6 +18,9 @@
 //! time between them). The operations are the loop's, in glam's order (`DMat3 * DVec3` column by column,
 //! `dot` as `x + y + z`), without fused multiply-add (Rust does not contract): the same bits
 //! (tested).
+//!
+//! Beside it, the power iterations' normalisation `v ← v / s` of every vector ([`divide`]),
+//! several divisions at a time (the same bits: a division is correctly rounded in every lane).
 
 use glam::DVec3;
 
@@ -45,6 +48,42 @@ pub fn spring_energy(e: f64, ends: &[[u32; 2]], k: SymBlocks, u: &[DVec3]) -> f6
         // SAFETY: as above, AVX2.
         Kernel::Avx2 => unsafe { energy_avx2(e, ends, k, u) },
         _ => energy_blocks(e, ends, k, u),
+    }
+}
+
+/// `v ← v / by` for every vector of `values`, component by component (as glam's `DVec3 / f64`):
+/// the power iterations' normalisations (`springlab::study::linear`, `springlab::study::modes`).
+/// The divisions do not depend on each other, so the compiler does them eight or four at a time
+/// with AVX-512 or AVX2 (a division is correctly rounded in every lane: the same bits, tested);
+/// one at a time they were about a fifth of a linear probe's bookkeeping.
+pub fn divide(values: &mut [DVec3], by: f64) {
+    match Kernel::best() {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `Kernel::best` chooses `Avx512` only on a CPU with AVX-512F.
+        Kernel::Avx512 => unsafe { divide_avx512(values, by) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as above, AVX2.
+        Kernel::Avx2 => unsafe { divide_avx2(values, by) },
+        _ => divide_each(values, by),
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn divide_avx512(values: &mut [DVec3], by: f64) {
+    divide_each(values, by);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn divide_avx2(values: &mut [DVec3], by: f64) {
+    divide_each(values, by);
+}
+
+#[inline(always)]
+fn divide_each(values: &mut [DVec3], by: f64) {
+    for v in values {
+        *v /= by;
     }
 }
 
@@ -187,6 +226,43 @@ mod tests {
             }
         }
         k
+    }
+
+    #[test]
+    fn divide_gives_the_textbook_bits() {
+        for n in [0, 1, 7, 37, 200] {
+            let (_, _, u) = case(0, n.max(1), n as u64 + 3);
+            let u = &u[..n];
+            for by in [3.0, 0.7, 1e-300, -2.5e7] {
+                let want: Vec<[u64; 3]> = u
+                    .iter()
+                    .map(|v| (*v / by).to_array().map(f64::to_bits))
+                    .collect();
+                let mut got = u.to_vec();
+                divide(&mut got, by);
+                let got: Vec<[u64; 3]> =
+                    got.iter().map(|v| v.to_array().map(f64::to_bits)).collect();
+                assert_eq!(got, want, "{n} vectors / {by}");
+                #[cfg(target_arch = "x86_64")]
+                for kernel in [Kernel::Avx2, Kernel::Avx512] {
+                    if !kernel.is_available() {
+                        continue;
+                    }
+                    let mut got = u.to_vec();
+                    // SAFETY: the CPU has the kernel's instructions (checked).
+                    unsafe {
+                        if kernel == Kernel::Avx2 {
+                            divide_avx2(&mut got, by);
+                        } else {
+                            divide_avx512(&mut got, by);
+                        }
+                    }
+                    let got: Vec<[u64; 3]> =
+                        got.iter().map(|v| v.to_array().map(f64::to_bits)).collect();
+                    assert_eq!(got, want, "{kernel:?}: {n} vectors / {by}");
+                }
+            }
+        }
     }
 
     #[test]
