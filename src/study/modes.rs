@@ -300,12 +300,31 @@ fn apply(
         *u = *q * *s;
     }
     y.fill(DVec3::ZERO);
+    // Row `held` is summed in `sum` while consecutive springs start at the same particle (the
+    // lattices list a particle's springs one after another) instead of a store and a load per
+    // spring; every row still gets its terms in spring order.
+    let mut held = usize::MAX;
+    let mut sum = DVec3::ZERO;
     for (s, k_s) in model.springs().iter().zip(blocks) {
         let (a, b) = (s.a as usize, s.b as usize);
         // (K u)_a += K_s (u_a - u_b),  (K u)_b += K_s (u_b - u_a)
         let f = *k_s * (u[a] - u[b]);
-        y[a] += f;
-        y[b] -= f;
+        if a != held {
+            if let Some(row) = y.get_mut(held) {
+                *row = sum;
+            }
+            held = a;
+            sum = y[a];
+        }
+        sum += f;
+        if b == held {
+            sum -= f;
+        } else {
+            y[b] -= f;
+        }
+    }
+    if let Some(row) = y.get_mut(held) {
+        *row = sum;
     }
     for (y, s) in y.iter_mut().zip(scale) {
         *y *= *s;
