@@ -426,6 +426,40 @@ mod tests {
     use super::*;
     use crate::scene;
 
+    /// The product of the power iteration (a row held in registers while its springs come one
+    /// after another) gives the spring loop's bits on a jelly, a cloth and a rope.
+    #[test]
+    fn the_product_gives_the_spring_loops_bits() {
+        let mut random = XorShift64Star::new(5);
+        for name in ["jelly-bowl", "cloth-sphere", "rope"] {
+            let scene = scene::load(name, &[]).expect("a built-in scene");
+            let body = &scene.bodies[0];
+            let n = body.model.particle_count();
+            let blocks = stiffness_blocks(&body.model, &body.state.x);
+            let scale: Vec<f64> = (0..n).map(|i| body.model.inv_mass[i].sqrt()).collect();
+            let q: Vec<DVec3> = (0..n)
+                .map(|_| DVec3::new(random.symmetric(), random.symmetric(), random.symmetric()))
+                .collect();
+            let u: Vec<DVec3> = q.iter().zip(&scale).map(|(q, s)| *q * *s).collect();
+            let mut want = vec![DVec3::ZERO; n];
+            for (s, k_s) in body.model.springs().iter().zip(&blocks) {
+                let (a, b) = (s.a as usize, s.b as usize);
+                let f = *k_s * (u[a] - u[b]);
+                want[a] += f;
+                want[b] -= f;
+            }
+            for (y, s) in want.iter_mut().zip(&scale) {
+                *y *= *s;
+            }
+            let (mut scratch, mut y) = (vec![DVec3::ZERO; n], vec![DVec3::ONE; n]);
+            apply(&body.model, &blocks, &scale, &q, &mut scratch, &mut y);
+            let bits = |v: &[DVec3]| -> Vec<[u64; 3]> {
+                v.iter().map(|v| v.to_array().map(f64::to_bits)).collect()
+            };
+            assert_eq!(bits(&y), bits(&want), "{name}");
+        }
+    }
+
     /// The six numbers of every block of a stretched, sheared jelly and a cloth (compressed and
     /// stretched springs, every direction) give `K_s d` with the bits of glam's `DMat3 * d`, and
     /// the blocks are symmetric bit for bit.
