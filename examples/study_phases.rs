@@ -8,6 +8,8 @@
 //!   `R` (1 to 3) probes per method.
 //! - `stiffest [SCENE]`: the stiffest-state run (a run of the scene over 2 s with `ω_max` sampled
 //!   401 times by a warm-started power iteration, `study::modes::omega_max_from`).
+//! - `energy [SCENE]`: the scene's energy (kinetic, gravitational, elastic) 20 000 times: the
+//!   confirmation and usable-dt runs' energy looks.
 //! - `blocks [SCENE]`: how many of the springs' stiffness blocks `K_s` at the start are distinct
 //!   bit for bit (the lattices repeat a few directions).
 //!
@@ -60,6 +62,14 @@ fn main() {
                 s.omega_max.to_bits()
             );
         }
+        "energy" => {
+            // The energy looks of the confirmation and usable-dt runs.
+            let mut sum = 0.0;
+            for _ in 0..20_000 {
+                sum += springlab::physics::energy(&body.model, &body.state).total;
+            }
+            println!("energy sum bits {:016x}", sum.to_bits());
+        }
         "blocks" => {
             for body in &scene.bodies {
                 let x = &body.state.x;
@@ -85,7 +95,7 @@ fn main() {
             }
         }
         _ => {
-            eprintln!("usage: study_phases growth|stiffest|blocks [SCENE] [PROBES]");
+            eprintln!("usage: study_phases growth|stiffest|energy|blocks [SCENE] [PROBES]");
             std::process::exit(2);
         }
     }
