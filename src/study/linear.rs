@@ -146,15 +146,6 @@ impl Linearisation {
         }
     }
 
-    /// Adds `½ m_i |δv_i|²` to `e` when particle `i` is free (the perturbation's kinetic
-    /// energy, summed in index order).
-    #[inline(always)]
-    fn add_kinetic(&self, e: &mut f64, i: usize, dv: DVec3) {
-        if self.free[i] {
-            *e += self.half_mass[i] * dv.length_squared();
-        }
-    }
-
     /// `e + Σ_s ½ δx_sᵀ K_s δx_s` (`δx_s = δx_b - δx_a`), added in spring order
     /// ([`quadratic::spring_energy`]: the terms a block of springs at a time).
     fn elastic(&self, e: f64, dx: &[DVec3]) -> f64 {
@@ -179,70 +170,33 @@ impl Linearisation {
         }
     }
 
-    /// `fill(i, δx_i, δv_i)` sets the new perturbation, then its rigid components are removed
-    /// (M-orthogonal projection); returns its kinetic energy `Σ ½ m_i |δv_i|²` (J per s²).
+    /// Removes the rigid components of the perturbation `(δx, δv)` (M-orthogonal projection);
+    /// returns its kinetic energy `Σ ½ m_i |δv_i|²` over the free particles (J per s²):
     ///
-    /// The textbook order is one mode and one vector at a time (`c = Σ_i m_i u_i·e_k`, then
-    /// `u -= c e_k`), the kinetic energy after the last mode. Here pass `k` subtracts mode
-    /// `k - 1` and sums the components along mode `k` (after the last mode: the kinetic energy),
-    /// for `δx` and `δv` together: the same sums in the same order, so the same bits, in one
-    /// pass per mode.
-    fn project(
-        &self,
-        dx: &mut [DVec3],
-        dv: &mut [DVec3],
-        mut fill: impl FnMut(usize, &mut DVec3, &mut DVec3),
-    ) -> f64 {
+    /// ```text
+    /// for each rigid mode e_k:   c = Σ_i m_i u_i·e_k,i,   u ← u - c e_k     (u = δx, then δv)
+    /// ```
+    /// one mode and one vector at a time, the kinetic energy after the last mode. Each pass is
+    /// done for `δx` and `δv` together, the terms eight particles at a time and their sums in
+    /// particle order ([`quadratic::components`], [`quadratic::remove`],
+    /// [`quadratic::kinetic`]): the same sums in the same order, so the same bits.
+    fn project(&self, dx: &mut [DVec3], dv: &mut [DVec3]) -> f64 {
         let mass = &self.model.mass;
-        let mut kinetic = 0.0;
-        // The components along the first mode (none: the kinetic energy).
-        let (mut cx, mut cv) = (-0.0, -0.0);
-        match self.rigid.first() {
-            Some(first) => {
-                for i in 0..dx.len() {
-                    fill(i, &mut dx[i], &mut dv[i]);
-                    cx += mass[i] * dx[i].dot(first[i]);
-                    cv += mass[i] * dv[i].dot(first[i]);
-                }
-            }
-            None => {
-                for i in 0..dx.len() {
-                    fill(i, &mut dx[i], &mut dv[i]);
-                    self.add_kinetic(&mut kinetic, i, dv[i]);
-                }
-            }
+        for mode in &self.rigid {
+            let c = quadratic::components(mass, mode, dx, dv);
+            quadratic::remove(mode, c, dx, dv);
         }
-        for (k, mode) in self.rigid.iter().enumerate() {
-            match self.rigid.get(k + 1) {
-                Some(next) => {
-                    let (mut nx, mut nv) = (-0.0, -0.0);
-                    for i in 0..dx.len() {
-                        dx[i] -= cx * mode[i];
-                        dv[i] -= cv * mode[i];
-                        nx += mass[i] * dx[i].dot(next[i]);
-                        nv += mass[i] * dv[i].dot(next[i]);
-                    }
-                    (cx, cv) = (nx, nv);
-                }
-                None => {
-                    for i in 0..dx.len() {
-                        dx[i] -= cx * mode[i];
-                        dv[i] -= cv * mode[i];
-                        self.add_kinetic(&mut kinetic, i, dv[i]);
-                    }
-                }
-            }
-        }
-        kinetic
+        quadratic::kinetic(0.0, &self.half_mass, &self.free, dv)
     }
 
     /// `δ ← δ / root`, and the scale of the finite differences: the largest `|δx|` or `|δv|/ω`
     /// component of a free particle.
     fn normalise(&self, dx: &mut [DVec3], dv: &mut [DVec3], root: f64) -> f64 {
+        // The divisions several at a time (`quadratic::divide`), then the scale.
+        quadratic::divide(dx, root);
+        quadratic::divide(dv, root);
         let mut scale = 0.0;
         for i in 0..dx.len() {
-            dx[i] /= root;
-            dv[i] /= root;
             if self.free[i] {
                 scale = f64::max(
                     scale,
@@ -268,7 +222,7 @@ impl Linearisation {
         // linearly and drown the rest in rounding.
         self.stiffness_times(&mut dx);
         self.stiffness_times(&mut dv);
-        let kinetic = self.project(&mut dx, &mut dv, |_, _, _| {});
+        let kinetic = self.project(&mut dx, &mut dv);
         let e = self.elastic(kinetic, &dx);
         if e.is_nan() || e <= 0.0 {
             return Growth {
@@ -300,24 +254,20 @@ impl Linearisation {
                 return stop(k, log_e, false, "not finite");
             }
             let s = FD_SIZE * self.length / scale;
-            let (s_plus, s_minus) = (s, -s);
-            for i in 0..n {
-                for (state, s) in [(&mut plus, s_plus), (&mut minus, s_minus)] {
-                    state.x[i] = self.base.x[i] + s * dx[i];
-                    state.v[i] = self.base.v[i] + s * dv[i];
-                    // Verlet's history: the displacement that the velocity implies.
-                    state.x_prev[i] = state.x[i] - dt * state.v[i];
-                }
-            }
-            for state in [&mut plus, &mut minus] {
+            for (state, s) in [(&mut plus, s), (&mut minus, -s)] {
+                // y_0 ± s δ, with Verlet's history: the displacement that the velocity implies
+                // (x_prev = x - dt v).
+                let base = (&self.base.x[..], &self.base.v[..]);
+                let out = (&mut state.x[..], &mut state.v[..], &mut state.x_prev[..]);
+                quadratic::offset(base, s, (&dx, &dv), dt, out);
                 state.history_valid = true;
                 method.step(&self.model, state, dt, params, &mut work);
             }
+            // J δ = (Φ(y_0 + s δ) - Φ(y_0 - s δ)) / (2 s)
             let inv = 0.5 / s;
-            let kinetic = self.project(&mut dx, &mut dv, |i, dx, dv| {
-                *dx = (plus.x[i] - minus.x[i]) * inv;
-                *dv = (plus.v[i] - minus.v[i]) * inv;
-            });
+            quadratic::central_difference(&plus.x, &minus.x, inv, &mut dx);
+            quadratic::central_difference(&plus.v, &minus.v, inv, &mut dv);
+            let kinetic = self.project(&mut dx, &mut dv);
             let g = self.elastic(kinetic, &dx);
             if !(g.is_finite() && g > 0.0) {
                 if g == 0.0 {

@@ -64,7 +64,7 @@
 //!
 //! So the study also runs the scene once with its own methods and `dt` over the horizon,
 //! samples `ω_max` of every body every [`STIFFEST_SAMPLE_INTERVAL`] seconds (power iteration
-//! warm-started from the previous sample, [`super::modes::omega_max_from`]) and reports the
+//! warm-started from the previous sample, [`super::modes::omega_max_unbounded`]) and reports the
 //! **stiffest state** and each method's damped theory linearised there (`stiffest_theory`).
 //! The state is held only for an instant, so a run survives a little above that theory: on
 //! scenes with impacts the scene limit lies between the theory at the stiffest state and the

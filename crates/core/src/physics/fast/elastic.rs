@@ -13,7 +13,8 @@
 //! first, the terms computed for the whole block (the compiler does them, square roots
 //! included, four or eight at a time with AVX2 or AVX-512), then added in spring order as the
 //! textbook sum adds them, while the next block is gathered (the additions are one chain; the
-//! gathering fills the time between them). The operations are `Spring::energy`'s (glam's
+//! gathering fills the time between them; `x_a` is loaded once for the run of springs that
+//! start at `a`, as a lattice lists them). The operations are `Spring::energy`'s (glam's
 //! `length` as `√(x² + y² + z²)`, a correctly rounded square root in every lane, no fused
 //! multiply-add: Rust does not contract), so the sum is the same bits (tested).
 
@@ -107,9 +108,21 @@ fn blocks(springs: &[Spring], x: &[DVec3]) -> f64 {
     terms_of(&g, first.len(), &mut terms);
     // Every block but the last is full.
     let mut ready = first.len();
+    // x_a is kept while consecutive springs start at it (a lattice's springs of one particle
+    // come one after another).
+    let (mut held, mut x_a) = (u32::MAX, DVec3::ZERO);
     for chunk in chunks {
         for (j, s) in chunk.iter().enumerate() {
-            gather(&mut g, j, s, x);
+            if s.a != held {
+                held = s.a;
+                x_a = x[s.a as usize];
+            }
+            let d = x[s.b as usize] - x_a;
+            g.d[0][j] = d.x;
+            g.d[1][j] = d.y;
+            g.d[2][j] = d.z;
+            g.k[j] = s.stiffness;
+            g.rest[j] = s.rest_length;
             e += terms[j];
         }
         for t in &terms[chunk.len()..ready] {
@@ -137,10 +150,12 @@ mod tests {
         let x: Vec<DVec3> = (0..n).map(|_| DVec3::new(next(), next(), next())).collect();
         // Counts below, at and above a vector and a block, not multiples of either; a spring
         // of zero length (both ends one particle) and one of zero stiffness among them.
-        for count in [0, 1, 7, 64, 65, 129, 300] {
+        // Runs of springs from one particle (as a lattice lists them) and springs from scattered
+        // ones.
+        for (count, run) in [(0, 1), (1, 1), (7, 1), (64, 1), (65, 3), (129, 1), (300, 3)] {
             let springs: Vec<Spring> = (0..count)
                 .map(|s| Spring {
-                    a: ((s * 7 + 3) % n) as u32,
+                    a: ((s / run * 7 + 3) % n) as u32,
                     b: if s == 5 { 3 } else { ((s * 13 + 5) % n) as u32 },
                     rest_length: 0.3 + next(),
                     stiffness: if s == 2 { 0.0 } else { 1e3 * (1.0 + next()) },

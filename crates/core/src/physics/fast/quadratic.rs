@@ -15,12 +15,32 @@
 //! the whole block (the compiler does them four or eight at a time with AVX2 or AVX-512), then
 //! added in spring order as the textbook loop adds them, while the next block's differences
 //! are gathered (the additions are one chain, one after the other; the gathering fills the
-//! time between them). The operations are the loop's, in glam's order (`DMat3 * DVec3` column by column,
+//! time between them; `u_a` is loaded once for the run of springs that start at `a`, as a
+//! lattice lists them). The operations are the loop's, in glam's order (`DMat3 * DVec3` column by column,
 //! `dot` as `x + y + z`), without fused multiply-add (Rust does not contract): the same bits
 //! (tested).
+//!
+//! Beside it, the rest of a linear probe's power step, eight particles at a time on the CPU's
+//! widest [`Lanes`] (each lane's operations are the textbook loop's, in glam's order, so the
+//! same bits; tested), where `u` is `δx` or `δv` (per particle), `e` a rigid mode, `m` the
+//! masses (kg) and `s`, `dt` (s) scalars:
+//!
+//! ```text
+//! x = x_0 + s δx,  v = v_0 + s δv,  x_prev = x - dt v     (offset: the perturbed states)
+//! u = (u_+ - u_-) · (1 / 2s)                              (central_difference)
+//! c = ((-0 + m_0 u_0·e_0) + m_1 u_1·e_1) + …              (components: the terms eight at
+//! u ← u - c e                                               a time, the sum in order; remove)
+//! K = ((e + ½ m_0 |δv_0|²) + …)  over free particles       (kinetic, in order)
+//! v ← v / s                                               (divide: the normalisations)
+//! ```
+//! One particle at a time in the baseline build they were about half of a probe's bookkeeping
+//! beside [`spring_energy`] (`examples/study_phases.rs`).
 
 use glam::DVec3;
 
+#[cfg(target_arch = "x86_64")]
+use super::lanes::{Avx2, Avx512};
+use super::lanes::{LANES, Lanes, Plain, load_chunk, load_padded, store_chunk};
 use super::stencil::Kernel;
 
 /// Springs per block of terms.
@@ -45,6 +65,258 @@ pub fn spring_energy(e: f64, ends: &[[u32; 2]], k: SymBlocks, u: &[DVec3]) -> f6
         // SAFETY: as above, AVX2.
         Kernel::Avx2 => unsafe { energy_avx2(e, ends, k, u) },
         _ => energy_blocks(e, ends, k, u),
+    }
+}
+
+/// `v ← v / by` for every vector of `values`, component by component (as glam's `DVec3 / f64`):
+/// the power iterations' normalisations (`springlab::study::linear`, `springlab::study::modes`).
+/// The divisions do not depend on each other, so the compiler does them eight or four at a time
+/// with AVX-512 or AVX2 (a division is correctly rounded in every lane: the same bits, tested);
+/// one at a time they were about a fifth of a linear probe's bookkeeping.
+pub fn divide(values: &mut [DVec3], by: f64) {
+    match Kernel::best() {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `Kernel::best` chooses `Avx512` only on a CPU with AVX-512F.
+        Kernel::Avx512 => unsafe { divide_avx512(values, by) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as above, AVX2.
+        Kernel::Avx2 => unsafe { divide_avx2(values, by) },
+        _ => divide_each(values, by),
+    }
+}
+
+/// `$name(args…)`: `$body::<V>` on the CPU's widest [`Lanes`] ([`Kernel::best`]), through an
+/// AVX-512 and an AVX2 instance compiled with their target features.
+macro_rules! on_best {
+    ($vis:vis $name:ident, $body:ident, ($($arg:ident: $ty:ty),*) -> $ret:ty) => {
+        #[allow(clippy::too_many_arguments)]
+        $vis fn $name($($arg: $ty),*) -> $ret {
+            #[cfg(target_arch = "x86_64")]
+            #[target_feature(enable = "avx512f")]
+            #[allow(clippy::too_many_arguments)]
+            fn avx512($($arg: $ty),*) -> $ret {
+                $body::<Avx512>($($arg),*)
+            }
+
+            #[cfg(target_arch = "x86_64")]
+            #[target_feature(enable = "avx2")]
+            #[allow(clippy::too_many_arguments)]
+            fn avx2($($arg: $ty),*) -> $ret {
+                $body::<Avx2>($($arg),*)
+            }
+
+            match Kernel::best() {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: `Kernel::best` chooses `Avx512` only on a CPU with AVX-512F.
+                Kernel::Avx512 => unsafe { avx512($($arg),*) },
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: as above, AVX2.
+                Kernel::Avx2 => unsafe { avx2($($arg),*) },
+                _ => $body::<Plain>($($arg),*),
+            }
+        }
+    };
+}
+
+on_best!(
+    pub central_difference,
+    difference_body,
+    (plus: &[DVec3], minus: &[DVec3], inv: f64, out: &mut [DVec3]) -> ()
+);
+on_best!(
+    pub offset,
+    offset_body,
+    (
+        base: (&[DVec3], &[DVec3]),
+        s: f64,
+        delta: (&[DVec3], &[DVec3]),
+        dt: f64,
+        out: (&mut [DVec3], &mut [DVec3], &mut [DVec3])
+    ) -> ()
+);
+on_best!(
+    pub components,
+    components_body,
+    (mass: &[f64], along: &[DVec3], x: &[DVec3], v: &[DVec3]) -> (f64, f64)
+);
+on_best!(
+    pub remove,
+    remove_body,
+    (mode: &[DVec3], c: (f64, f64), x: &mut [DVec3], v: &mut [DVec3]) -> ()
+);
+on_best!(
+    pub kinetic,
+    kinetic_body,
+    (e: f64, half_mass: &[f64], free: &[bool], v: &[DVec3]) -> f64
+);
+
+/// `out_i = (plus_i - minus_i) · inv` (glam's order: the difference, then the product).
+#[inline(always)]
+fn difference_body<V: Lanes>(plus: &[DVec3], minus: &[DVec3], inv: f64, out: &mut [DVec3]) {
+    let n = out.len();
+    let (plus, minus) = (&plus[..n], &minus[..n]);
+    let inv = V::splat(inv);
+    for q in (0..n).step_by(LANES) {
+        let count = (n - q).min(LANES);
+        let (p, m) = (
+            load_chunk::<V>(&plus[q..], count),
+            load_chunk::<V>(&minus[q..], count),
+        );
+        let d = [
+            p[0].sub(m[0]).mul(inv),
+            p[1].sub(m[1]).mul(inv),
+            p[2].sub(m[2]).mul(inv),
+        ];
+        store_chunk(d, &mut out[q..], count);
+    }
+}
+
+/// A perturbed state: `x = x_0 + s δx`, `v = v_0 + s δv` and Verlet's history
+/// `x_prev = x - dt v`, into `out = (x, v, x_prev)` (glam's order).
+#[inline(always)]
+fn offset_body<V: Lanes>(
+    (base_x, base_v): (&[DVec3], &[DVec3]),
+    s: f64,
+    (dx, dv): (&[DVec3], &[DVec3]),
+    dt: f64,
+    (x, v, x_prev): (&mut [DVec3], &mut [DVec3], &mut [DVec3]),
+) {
+    let n = x.len();
+    let (base_x, base_v, dx, dv) = (&base_x[..n], &base_v[..n], &dx[..n], &dv[..n]);
+    let (v, x_prev) = (&mut v[..n], &mut x_prev[..n]);
+    let (s, dt) = (V::splat(s), V::splat(dt));
+    for q in (0..n).step_by(LANES) {
+        let count = (n - q).min(LANES);
+        let (bx, bv) = (
+            load_chunk::<V>(&base_x[q..], count),
+            load_chunk::<V>(&base_v[q..], count),
+        );
+        let (ex, ev) = (
+            load_chunk::<V>(&dx[q..], count),
+            load_chunk::<V>(&dv[q..], count),
+        );
+        let xq = [
+            bx[0].add(s.mul(ex[0])),
+            bx[1].add(s.mul(ex[1])),
+            bx[2].add(s.mul(ex[2])),
+        ];
+        let vq = [
+            bv[0].add(s.mul(ev[0])),
+            bv[1].add(s.mul(ev[1])),
+            bv[2].add(s.mul(ev[2])),
+        ];
+        let back = [
+            xq[0].sub(dt.mul(vq[0])),
+            xq[1].sub(dt.mul(vq[1])),
+            xq[2].sub(dt.mul(vq[2])),
+        ];
+        store_chunk(xq, &mut x[q..], count);
+        store_chunk(vq, &mut v[q..], count);
+        store_chunk(back, &mut x_prev[q..], count);
+    }
+}
+
+/// `(Σ_i m_i x_i·e_i, Σ_i m_i v_i·e_i)`, each added in particle order from `-0` (as
+/// `Iterator::sum`): the terms eight at a time, then the two chains of additions.
+#[inline(always)]
+fn components_body<V: Lanes>(
+    mass: &[f64],
+    along: &[DVec3],
+    x: &[DVec3],
+    v: &[DVec3],
+) -> (f64, f64) {
+    let n = x.len();
+    let (mass, along, v) = (&mass[..n], &along[..n], &v[..n]);
+    let (mut cx, mut cv) = (-0.0, -0.0);
+    let (mut tx, mut tv) = ([0.0; LANES], [0.0; LANES]);
+    for q in (0..n).step_by(LANES) {
+        let count = (n - q).min(LANES);
+        let e = load_chunk::<V>(&along[q..], count);
+        let (xq, vq) = (
+            load_chunk::<V>(&x[q..], count),
+            load_chunk::<V>(&v[q..], count),
+        );
+        let m = load_padded::<V>(mass, q, count);
+        // Written out, not with a closure: a closure does not take its caller's target
+        // features.
+        let x_e = xq[0].mul(e[0]).add(xq[1].mul(e[1])).add(xq[2].mul(e[2]));
+        let v_e = vq[0].mul(e[0]).add(vq[1].mul(e[1])).add(vq[2].mul(e[2]));
+        m.mul(x_e).store(&mut tx);
+        m.mul(v_e).store(&mut tv);
+        for (a, b) in tx[..count].iter().zip(&tv[..count]) {
+            cx += a;
+            cv += b;
+        }
+    }
+    (cx, cv)
+}
+
+/// `x_i ← x_i - c_x e_i`, `v_i ← v_i - c_v e_i` (glam's order).
+#[inline(always)]
+fn remove_body<V: Lanes>(mode: &[DVec3], (cx, cv): (f64, f64), x: &mut [DVec3], v: &mut [DVec3]) {
+    let n = x.len();
+    let (mode, v) = (&mode[..n], &mut v[..n]);
+    let (cx, cv) = (V::splat(cx), V::splat(cv));
+    for q in (0..n).step_by(LANES) {
+        let count = (n - q).min(LANES);
+        let e = load_chunk::<V>(&mode[q..], count);
+        let (xq, vq) = (
+            load_chunk::<V>(&x[q..], count),
+            load_chunk::<V>(&v[q..], count),
+        );
+        let xq = [
+            xq[0].sub(cx.mul(e[0])),
+            xq[1].sub(cx.mul(e[1])),
+            xq[2].sub(cx.mul(e[2])),
+        ];
+        let vq = [
+            vq[0].sub(cv.mul(e[0])),
+            vq[1].sub(cv.mul(e[1])),
+            vq[2].sub(cv.mul(e[2])),
+        ];
+        store_chunk(xq, &mut x[q..], count);
+        store_chunk(vq, &mut v[q..], count);
+    }
+}
+
+/// `e + Σ ½ m_i |v_i|²` over the particles with `free[i]`, added in particle order.
+#[inline(always)]
+fn kinetic_body<V: Lanes>(mut e: f64, half_mass: &[f64], free: &[bool], v: &[DVec3]) -> f64 {
+    let n = v.len();
+    let (half_mass, free) = (&half_mass[..n], &free[..n]);
+    let mut t = [0.0; LANES];
+    for q in (0..n).step_by(LANES) {
+        let count = (n - q).min(LANES);
+        let vq = load_chunk::<V>(&v[q..], count);
+        let squared = vq[0].mul(vq[0]).add(vq[1].mul(vq[1])).add(vq[2].mul(vq[2]));
+        load_padded::<V>(half_mass, q, count)
+            .mul(squared)
+            .store(&mut t);
+        for (t, free) in t[..count].iter().zip(&free[q..q + count]) {
+            if *free {
+                e += t;
+            }
+        }
+    }
+    e
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn divide_avx512(values: &mut [DVec3], by: f64) {
+    divide_each(values, by);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn divide_avx2(values: &mut [DVec3], by: f64) {
+    divide_each(values, by);
+}
+
+#[inline(always)]
+fn divide_each(values: &mut [DVec3], by: f64) {
+    for v in values {
+        *v /= by;
     }
 }
 
@@ -102,9 +374,16 @@ fn energy_blocks(mut e: f64, ends: &[[u32; 2]], k: SymBlocks, u: &[DVec3]) -> f6
     terms_of(k, 0, first.len(), &d, &mut f, &mut terms);
     // Every block but the last is full.
     let mut ready = first.len();
+    let (mut held, mut u_a) = (u32::MAX, DVec3::ZERO);
     for (start, ends) in blocks {
-        for (j, ends) in ends.iter().enumerate() {
-            let v = u[ends[1] as usize] - u[ends[0] as usize];
+        for (j, &[a, b]) in ends.iter().enumerate() {
+            // u_a is kept while consecutive springs start at it (a lattice's springs of one
+            // particle come one after another).
+            if a != held {
+                held = a;
+                u_a = u[a as usize];
+            }
+            let v = u[b as usize] - u_a;
             d[0][j] = v.x;
             d[1][j] = v.y;
             d[2][j] = v.z;
@@ -163,7 +442,13 @@ mod tests {
         let mut ends = Vec::new();
         let mut blocks = Vec::new();
         for s in 0..springs {
-            let a = (s * 7 + 3) % n;
+            // Runs of three springs from one particle (as a lattice lists them) where the count
+            // is odd.
+            let a = if springs % 2 == 1 {
+                (s / 3 * 7 + 3) % n
+            } else {
+                (s * 7 + 3) % n
+            };
             let b = (s * 13 + 5) % n;
             ends.push([a as u32, b as u32]);
             let (xx, xy, xz, yy, yz, zz) = (next(), next(), next(), next(), next(), next());
@@ -187,6 +472,150 @@ mod tests {
             }
         }
         k
+    }
+
+    fn bits(v: &[DVec3]) -> Vec<[u64; 3]> {
+        v.iter().map(|v| v.to_array().map(f64::to_bits)).collect()
+    }
+
+    /// The power step's passes on the best kernel and on plain arrays against the textbook
+    /// loops, bit for bit, for counts below, at and above a chunk of lanes.
+    #[test]
+    fn power_step_passes_give_the_textbook_bits() {
+        for n in [0, 1, 7, 8, 9, 37] {
+            let (_, _, a) = case(0, n + 1, 3 * n as u64 + 1);
+            let (_, _, b) = case(0, n + 1, 3 * n as u64 + 2);
+            let (_, _, e) = case(0, n + 1, 3 * n as u64 + 3);
+            let (a, b, e) = (&a[..n], &b[..n], &e[..n]);
+            let mass: Vec<f64> = (0..n).map(|i| 0.5 + i as f64).collect();
+            let free: Vec<bool> = (0..n).map(|i| i % 4 != 2).collect();
+            let (s, dt, c) = (1.5e-7, 2e-3, (0.3, -1.7));
+
+            // offset
+            let mut want = (a.to_vec(), b.to_vec(), a.to_vec());
+            for i in 0..n {
+                want.0[i] = a[i] + s * e[i];
+                want.1[i] = b[i] + s * a[i];
+                want.2[i] = want.0[i] - dt * want.1[i];
+            }
+            let mut got = (
+                vec![DVec3::ZERO; n],
+                vec![DVec3::ZERO; n],
+                vec![DVec3::ZERO; n],
+            );
+            offset((a, b), s, (e, a), dt, (&mut got.0, &mut got.1, &mut got.2));
+            assert_eq!(bits(&got.0), bits(&want.0), "offset x, {n}");
+            assert_eq!(bits(&got.1), bits(&want.1), "offset v, {n}");
+            assert_eq!(bits(&got.2), bits(&want.2), "offset x_prev, {n}");
+            let mut plain = (
+                vec![DVec3::ZERO; n],
+                vec![DVec3::ZERO; n],
+                vec![DVec3::ZERO; n],
+            );
+            offset_body::<Plain>(
+                (a, b),
+                s,
+                (e, a),
+                dt,
+                (&mut plain.0, &mut plain.1, &mut plain.2),
+            );
+            assert_eq!(bits(&plain.2), bits(&want.2), "plain offset, {n}");
+
+            // central_difference
+            let want: Vec<DVec3> = (0..n).map(|i| (a[i] - b[i]) * (0.5 / s)).collect();
+            let mut got = vec![DVec3::ZERO; n];
+            central_difference(a, b, 0.5 / s, &mut got);
+            assert_eq!(bits(&got), bits(&want), "difference, {n}");
+            difference_body::<Plain>(a, b, 0.5 / s, &mut got);
+            assert_eq!(bits(&got), bits(&want), "plain difference, {n}");
+
+            // components
+            let (mut cx, mut cv) = (-0.0, -0.0);
+            for i in 0..n {
+                cx += mass[i] * a[i].dot(e[i]);
+                cv += mass[i] * b[i].dot(e[i]);
+            }
+            for got in [
+                components(&mass, e, a, b),
+                components_body::<Plain>(&mass, e, a, b),
+            ] {
+                assert_eq!(got.0.to_bits(), cx.to_bits(), "components x, {n}");
+                assert_eq!(got.1.to_bits(), cv.to_bits(), "components v, {n}");
+            }
+
+            // remove
+            let (mut wx, mut wv) = (a.to_vec(), b.to_vec());
+            for i in 0..n {
+                wx[i] -= c.0 * e[i];
+                wv[i] -= c.1 * e[i];
+            }
+            let (mut gx, mut gv) = (a.to_vec(), b.to_vec());
+            remove(e, c, &mut gx, &mut gv);
+            assert_eq!(
+                (bits(&gx), bits(&gv)),
+                (bits(&wx), bits(&wv)),
+                "remove, {n}"
+            );
+            let (mut gx, mut gv) = (a.to_vec(), b.to_vec());
+            remove_body::<Plain>(e, c, &mut gx, &mut gv);
+            assert_eq!(
+                (bits(&gx), bits(&gv)),
+                (bits(&wx), bits(&wv)),
+                "plain remove, {n}"
+            );
+
+            // kinetic
+            let half: Vec<f64> = mass.iter().map(|m| 0.5 * m).collect();
+            let mut want = 0.0;
+            for i in 0..n {
+                if free[i] {
+                    want += half[i] * b[i].length_squared();
+                }
+            }
+            for got in [
+                kinetic(0.0, &half, &free, b),
+                kinetic_body::<Plain>(0.0, &half, &free, b),
+            ] {
+                assert_eq!(got.to_bits(), want.to_bits(), "kinetic, {n}");
+            }
+        }
+    }
+
+    #[test]
+    fn divide_gives_the_textbook_bits() {
+        for n in [0, 1, 7, 37, 200] {
+            let (_, _, u) = case(0, n.max(1), n as u64 + 3);
+            let u = &u[..n];
+            for by in [3.0, 0.7, 1e-300, -2.5e7] {
+                let want: Vec<[u64; 3]> = u
+                    .iter()
+                    .map(|v| (*v / by).to_array().map(f64::to_bits))
+                    .collect();
+                let mut got = u.to_vec();
+                divide(&mut got, by);
+                let got: Vec<[u64; 3]> =
+                    got.iter().map(|v| v.to_array().map(f64::to_bits)).collect();
+                assert_eq!(got, want, "{n} vectors / {by}");
+                #[cfg(target_arch = "x86_64")]
+                for kernel in [Kernel::Avx2, Kernel::Avx512] {
+                    if !kernel.is_available() {
+                        continue;
+                    }
+                    let mut got = u.to_vec();
+                    // SAFETY: the CPU has the kernel's instructions (checked).
+                    unsafe {
+                        if kernel == Kernel::Avx2 {
+                            divide_avx2(&mut got, by);
+                        } else {
+                            divide_avx512(&mut got, by);
+                        }
+                    }
+                    let got: Vec<[u64; 3]> =
+                        got.iter().map(|v| v.to_array().map(f64::to_bits)).collect();
+                    assert_eq!(got, want, "{kernel:?}: {n} vectors / {by}");
+                }
+            }
+        }
     }
 
     #[test]
