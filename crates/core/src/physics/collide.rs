@@ -156,7 +156,7 @@ pub(crate) use geometry::Broad;
 use geometry::distance_and_direction;
 pub use geometry::{Collider, Contact};
 pub use prepared::{PartBounds, Prepared, Taken};
-pub(crate) use response::calm;
+pub(crate) use response::{CALM, calm};
 pub use response::{
     Changes, after_step, resolve, resolve_logged, resolve_prepared, spheres_energy, take_kinetic,
 };

@@ -293,7 +293,7 @@ impl Changes {
     /// Records particle `i` at `x` (m), `v` (m/s) before a change; its first record is
     /// [`Changes::of`] it from now on.
     #[inline]
-    pub(super) fn record(&mut self, i: usize, x: DVec3, v: DVec3) {
+    pub(crate) fn record(&mut self, i: usize, x: DVec3, v: DVec3) {
         if self.slot.len() <= i {
             self.slot.resize(i + 1, u32::MAX);
         }
@@ -417,8 +417,11 @@ impl Changes {
 /// between two calm points has a finite elastic energy for any stiffness below 1e200 N/m.
 #[must_use]
 pub(crate) fn calm(p: DVec3) -> bool {
-    p.abs().cmplt(DVec3::splat(1e50)).all()
+    p.abs().cmplt(DVec3::splat(CALM)).all()
 }
+
+/// The bound of [`calm`] (m).
+pub(crate) const CALM: f64 = 1e50;
 
 /// Kinetic and gravitational energy of the non-kinematic dynamic `spheres` under `gravity`
 /// (m/s²), in J, as [`crate::physics::energy::energy`] counts them.
