@@ -228,6 +228,9 @@ pub(super) fn pay(
         log.record_free(world.inv_mass, &state.x[..n], &state.v[..n]);
     }
     take_kinetic_with_spheres(world.inv_mass, &mut state.v[..n], state.spheres, amount);
+    if !state.history_valid {
+        return;
+    }
     for i in free() {
         keep_verlet_history(
             state.history_valid,
