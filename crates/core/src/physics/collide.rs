@@ -156,11 +156,8 @@ pub(crate) use geometry::Broad;
 use geometry::distance_and_direction;
 pub use geometry::{Collider, Contact};
 pub use prepared::{PartBounds, Prepared, Taken};
-pub(crate) use response::{CALM, calm};
-pub use response::{
-    Changes, after_step, resolve, resolve_logged, resolve_prepared, spheres_energy, take_kinetic,
-};
-use response::{keep_verlet_history, pay, respond};
+pub use response::{Changes, after_step, resolve, resolve_logged, resolve_prepared, take_kinetic};
+use response::{pay, respond};
 pub use spheres::{
     DynamicSphere, advance_spheres, collide_spheres, collide_spheres_logged,
     collide_spheres_prepared, step_spheres,
@@ -282,6 +279,35 @@ impl Bodies<'_> {
             history_valid: self.history_valid,
             spheres: self.spheres,
         }
+    }
+}
+
+/// True when every coordinate of `p` is below 1e50 m in size (false for NaN and ±∞): a spring
+/// between two calm points has a finite elastic energy for any stiffness below 1e200 N/m.
+#[must_use]
+pub(crate) fn calm(p: DVec3) -> bool {
+    p.abs().cmplt(DVec3::splat(CALM)).all()
+}
+
+/// The bound of [`calm`] (m).
+pub(crate) const CALM: f64 = 1e50;
+
+/// Kinetic and gravitational energy of the non-kinematic dynamic `spheres` under `gravity`
+/// (m/s²), in J, as [`crate::physics::energy::energy`] counts them.
+#[must_use]
+pub fn spheres_energy(gravity: DVec3, spheres: &[DynamicSphere]) -> f64 {
+    spheres
+        .iter()
+        .filter(|s| !s.kinematic)
+        .map(|s| 0.5 * s.mass * s.velocity.length_squared() - s.mass * gravity.dot(s.center))
+        .sum()
+}
+
+/// After a particle's `x` or `v` changed outside the integrator: Verlet's implied velocity
+/// `(x - x_prev)/dt` becomes the new `v` again (`x_prev = x - dt v`), if Verlet has a history.
+fn keep_verlet_history(history_valid: bool, x_prev: &mut DVec3, x: DVec3, v: DVec3, dt: f64) {
+    if history_valid {
+        *x_prev = x - dt * v;
     }
 }
 
