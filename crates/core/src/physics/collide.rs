@@ -158,11 +158,8 @@ use geometry::distance_and_direction;
 pub(crate) use geometry::{Broad, RIM_MARGIN};
 pub use geometry::{Collider, Contact};
 pub use prepared::{PartBounds, Prepared, Taken};
-pub(crate) use response::calm;
-pub use response::{
-    Changes, after_step, resolve, resolve_logged, resolve_prepared, spheres_energy, take_kinetic,
-};
-use response::{keep_verlet_history, pay, respond};
+pub use response::{Changes, after_step, resolve, resolve_logged, resolve_prepared, take_kinetic};
+use response::{pay, respond};
 pub use spheres::{
     DynamicSphere, advance_spheres, collide_spheres, collide_spheres_logged,
     collide_spheres_prepared, step_spheres,
@@ -212,6 +209,33 @@ impl World<'_> {
         self.elastic_at_with(|j| x[j], i, at)
     }
 
+    /// [`World::elastic_at_with`] at `to` and at `from` (m), `(E_to, E_from)` (J), in one pass
+    /// over the springs at `i` (each other end looked up once): the same two sums, each in
+    /// the springs' order from `.sum()`'s start.
+    #[must_use]
+    pub fn elastic_at_both(
+        &self,
+        x: impl Fn(usize) -> DVec3,
+        i: usize,
+        to: DVec3,
+        from: DVec3,
+    ) -> (f64, f64) {
+        let (Some(&first), Some(&end)) =
+            (self.incident_start.get(i), self.incident_start.get(i + 1))
+        else {
+            return (0.0, 0.0);
+        };
+        let start: f64 = std::iter::empty::<f64>().sum();
+        let (mut e_to, mut e_from) = (start, start);
+        for &k in &self.incident[first as usize..end as usize] {
+            let s = &self.springs[k as usize];
+            let other = x(if s.a as usize == i { s.b } else { s.a } as usize);
+            e_to += s.energy_between(to, other);
+            e_from += s.energy_between(from, other);
+        }
+        (e_to, e_from)
+    }
+
     /// [`World::elastic_at`] with every other end `j` at `x(j)` (m).
     #[must_use]
     pub fn elastic_at_with(&self, x: impl Fn(usize) -> DVec3, i: usize, at: DVec3) -> f64 {
@@ -256,6 +280,122 @@ impl Bodies<'_> {
             x_prev: self.x_prev,
             history_valid: self.history_valid,
             spheres: self.spheres,
+        }
+    }
+}
+
+/// True when every coordinate of `p` is below 1e50 m in size (false for NaN and ±∞): a spring
+/// between two calm points has a finite elastic energy for any stiffness below 1e200 N/m.
+#[must_use]
+pub(crate) fn calm(p: DVec3) -> bool {
+    p.abs().cmplt(DVec3::splat(CALM)).all()
+}
+
+/// The bound of [`calm`] (m).
+pub(crate) const CALM: f64 = 1e50;
+
+/// Kinetic and gravitational energy of the non-kinematic dynamic `spheres` under `gravity`
+/// (m/s²), in J, as [`crate::physics::energy::energy`] counts them.
+#[must_use]
+pub fn spheres_energy(gravity: DVec3, spheres: &[DynamicSphere]) -> f64 {
+    spheres
+        .iter()
+        .filter(|s| !s.kinematic)
+        .map(|s| 0.5 * s.mass * s.velocity.length_squared() - s.mass * gravity.dot(s.center))
+        .sum()
+}
+
+/// After a particle's `x` or `v` changed outside the integrator: Verlet's implied velocity
+/// `(x - x_prev)/dt` becomes the new `v` again (`x_prev = x - dt v`), if Verlet has a history.
+fn keep_verlet_history(history_valid: bool, x_prev: &mut DVec3, x: DVec3, v: DVec3, dt: f64) {
+    if history_valid {
+        *x_prev = x - dt * v;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::springs::SpringKind;
+
+    /// Both sums of one pass are the two sums of [`World::elastic_at_with`], bit for bit: a
+    /// particle with springs (one to itself, one twice), one without, one out of range, other
+    /// ends moved, at ±0, infinite and NaN.
+    #[test]
+    fn elastic_at_both_is_two_sums() {
+        let spring = |a: u32, b: u32, rest_length: f64| Spring {
+            a,
+            b,
+            rest_length,
+            stiffness: 300.0 + 50.0 * f64::from(a + b),
+            damping: 0.0,
+            kind: SpringKind::Struct,
+        };
+        let springs = [
+            spring(0, 1, 0.1),
+            spring(1, 2, 0.2),
+            spring(2, 0, 0.15),
+            spring(2, 2, 0.0),
+            spring(1, 2, 0.3),
+            spring(3, 1, 0.05),
+        ];
+        // Incidence lists as `Model::new` makes them: each particle's springs in order.
+        let n = 5u32;
+        let mut incident_start = vec![0u32];
+        let mut incident = Vec::new();
+        for p in 0..n {
+            for (k, s) in springs.iter().enumerate() {
+                for end in [s.a, s.b] {
+                    if end == p {
+                        incident.push(k as u32);
+                    }
+                }
+            }
+            incident_start.push(incident.len() as u32);
+        }
+        let params = ContactParams::default();
+        let world = World {
+            colliders: &[],
+            contact: &params,
+            gravity: DVec3::new(0.0, -9.8, 0.0),
+            inv_mass: &[1.0; 5],
+            springs: &springs,
+            incident: &incident,
+            incident_start: &incident_start,
+        };
+        let x = [
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(0.1, -0.0, 0.02),
+            DVec3::new(0.05, 0.2, -0.1),
+            DVec3::new(-0.3, 0.1, 0.0),
+            DVec3::new(1.0, 1.0, 1.0),
+        ];
+        let points = [
+            DVec3::ZERO,
+            DVec3::new(-0.0, 0.0, -0.0),
+            DVec3::new(0.3, -0.1, 0.2),
+            DVec3::new(1e200, 0.0, 0.0),
+            DVec3::new(f64::INFINITY, 0.0, 0.0),
+            DVec3::new(0.0, f64::NAN, 0.0),
+        ];
+        let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+        for i in 0..=n as usize {
+            for shift in [DVec3::ZERO, DVec3::new(0.01, -0.02, 0.0)] {
+                let at = |j: usize| x[j] + shift * j as f64;
+                for to in points {
+                    for from in points {
+                        let (e_to, e_from) = world.elastic_at_both(at, i, to, from);
+                        let want = (
+                            world.elastic_at_with(at, i, to),
+                            world.elastic_at_with(at, i, from),
+                        );
+                        assert!(
+                            same(e_to, want.0) && same(e_from, want.1),
+                            "particle {i}, {to} {from}: {e_to} {e_from} vs {want:?}"
+                        );
+                    }
+                }
+            }
         }
     }
 }

@@ -18,7 +18,7 @@ use serde::Serialize;
 
 use glam::DVec3;
 
-use super::collide::{Changes, DynamicSphere, calm, contact_power, spheres_energy};
+use super::collide::{CALM, Changes, DynamicSphere, World, calm, contact_power, spheres_energy};
 use super::forces::{Model, applied_forces};
 use super::particles::State;
 
@@ -116,89 +116,167 @@ pub fn energy_change_calm(
     changes: &Changes,
     calm_elsewhere: bool,
 ) -> f64 {
-    // The position of particle j before the response.
-    let before = |j: usize| changes.of(j).map_or(x[j], |c| c.1);
-    let records = &changes.particles;
-    // A spring whose two ends are where they were adds `E_s - E_s`, exactly 0 J when its
-    // energy is finite (ends at calm, equal positions): most of the records are velocities the
-    // body's payment scaled, so most springs are left out without changing a bit of the sum
-    // (which never holds -0, so adding +0 does nothing). `moved` marks the recorded particles
-    // that moved or are not calm; only they and their neighbours have springs to visit (all
-    // particles when some position is not calm).
-    let mut moved = vec![0u64; x.len().div_ceil(64)];
-    let mut records_calm = true;
-    for &(i, x_old, _) in records {
-        let i = i as usize;
-        let here = calm(x[i]);
-        records_calm &= here;
-        if x[i] != x_old || !here {
-            moved[i / 64] |= 1 << (i % 64);
+    LEDGER.with(|ledger| {
+        let ledger = &mut *ledger.borrow_mut();
+        ledger.change(model, x, v, changes, calm_elsewhere)
+    }) + spheres_energy(model.gravity, spheres)
+        - changes.spheres_before
+}
+
+thread_local! {
+    /// A thread's scratch of [`energy_change_calm`] (reused, so a response does not allocate).
+    static LEDGER: std::cell::RefCell<Ledger> = std::cell::RefCell::new(Ledger::default());
+}
+
+/// The scratch of [`energy_change_calm`]: which particles moved, which entries of the
+/// springs-at-a-particle lists hold a spring to sum, each record's two terms.
+#[derive(Default)]
+struct Ledger {
+    /// Bit `i % 64` of word `i / 64`: recorded particle `i` moved or is not calm.
+    moved: Vec<u64>,
+    /// Bit `h % 64` of word `h / 64`: entry `h` of `World::incident` is a spring to sum there.
+    owned: Vec<u64>,
+    /// Each record's kinetic and gravitational terms (J).
+    terms: Vec<[f64; 2]>,
+}
+
+impl Ledger {
+    /// The particles' part of [`energy_change_calm`] (without the spheres): the records'
+    /// terms, and the springs at them that moved, in the textbook sum's order (record by
+    /// record, each record's springs in the order of its list after its terms).
+    fn change(
+        &mut self,
+        model: &Model,
+        x: &[DVec3],
+        v: &[DVec3],
+        changes: &Changes,
+        calm_elsewhere: bool,
+    ) -> f64 {
+        let records = &changes.particles;
+        let gravity = model.gravity;
+        // Each record's kinetic and gravitational terms, independent of each other; which
+        // recorded particles moved (or are not calm); whether the records are in particle
+        // order, each once (`Changes::finish` makes them so).
+        let Ledger {
+            moved,
+            owned,
+            terms,
+        } = self;
+        moved.clear();
+        moved.resize(x.len().div_ceil(64), 0);
+        terms.clear();
+        let (mut records_calm, mut in_order, mut last) = (true, true, None);
+        for &(i, x_old, v_old) in records {
+            in_order &= last.is_none_or(|last| last < i);
+            last = Some(i);
+            let i = i as usize;
+            let here = calm(x[i]);
+            records_calm &= here;
+            if x[i] != x_old || !here {
+                moved[i / 64] |= 1 << (i % 64);
+            }
+            let m = model.mass[i];
+            terms.push([
+                0.5 * m * (v[i].length_squared() - v_old.length_squared()),
+                m * gravity.dot(x[i] - x_old),
+            ]);
         }
-    }
-    let moved = |j: usize| moved.get(j / 64).is_none_or(|w| w >> (j % 64) & 1 == 1);
-    let mut visit = vec![0u64; x.len().div_ceil(64)];
-    let all_calm = if calm_elsewhere {
-        records_calm
-    } else {
-        x.iter().all(|p| calm(*p))
-    };
-    if all_calm {
+        let moved = |j: usize| moved.get(j / 64).is_none_or(|w| w >> (j % 64) & 1 == 1);
+        let before = |j: usize| changes.of(j).map_or(x[j], |c| c.1);
+        let all_calm = if calm_elsewhere {
+            records_calm
+        } else {
+            super::fast::energy::all_below(x, CALM)
+        };
+        let mut delta = 0.0;
+        if !(all_calm && in_order) {
+            // The textbook loop: every spring at every record, those whose two ends are where
+            // they were (and calm) left out, each spring once (at its first recorded end).
+            for (&(i, ..), &[kinetic, lift]) in records.iter().zip(terms.iter()) {
+                delta += kinetic;
+                delta -= lift;
+                let i = i as usize;
+                let i_still = !moved(i);
+                for &s in model.springs_at(i) {
+                    let s = &model.springs[s as usize];
+                    let (a, b) = (s.a as usize, s.b as usize);
+                    let other = if a == i { b } else { a };
+                    if i_still && !moved(other) && calm(x[other]) {
+                        // Both ends where they were: 0 J.
+                        continue;
+                    }
+                    if other < i && changes.of(other).is_some() {
+                        // Counted with the other end, which comes first.
+                        continue;
+                    }
+                    delta += s.energy(x) - s.energy_between(before(a), before(b));
+                }
+            }
+            return delta;
+        }
+        // Every position calm: a spring whose two ends are where they were adds `E_s - E_s`,
+        // exactly 0 J, and the sum never holds -0 (it starts at +0), so adding it does
+        // nothing: only the springs at a moved particle are summed. Most records are
+        // velocities the body's payment scaled. Each such spring is marked at the entry of
+        // the springs-at-a-particle lists where the loop above sums it (its first recorded
+        // end, `World::incident`, whose lists follow each other in particle order as the
+        // records do), so the sum walks the records and the marks together: the same terms
+        // in the same order. A zero gravitational term (a particle that did not move) is
+        // left out: `d - (+0) = d` for every `d`.
+        let world = World::from(model);
+        let (incident, start) = (world.incident, world.incident_start);
+        owned.clear();
+        owned.resize(incident.len().div_ceil(64), 0);
+        let mut mark = |h: usize| owned[h / 64] |= 1 << (h % 64);
         for &(j, ..) in records {
             let j = j as usize;
             if !moved(j) {
                 continue;
             }
-            visit[j / 64] |= 1 << (j % 64);
-            for &s in model.springs_at(j) {
-                let s = &model.springs[s as usize];
+            for h in start[j] as usize..start[j + 1] as usize {
+                let k = incident[h];
+                let s = &model.springs[k as usize];
                 let other = if s.a as usize == j { s.b } else { s.a } as usize;
-                visit[other / 64] |= 1 << (other % 64);
+                if other < j && changes.of(other).is_some() {
+                    if moved(other) {
+                        // Marked from the other end's own list.
+                        continue;
+                    }
+                    // Summed at the other end: its entry of this spring.
+                    let list = start[other] as usize..start[other + 1] as usize;
+                    if let Some(h) = list.into_iter().find(|&h| incident[h] == k) {
+                        mark(h);
+                    }
+                } else {
+                    mark(h);
+                }
             }
         }
-    } else {
-        visit.fill(u64::MAX);
+        let next = |from: usize| {
+            let mut w = from / 64;
+            let mut bits = owned.get(w).map_or(0, |&b| b & (u64::MAX << (from % 64)));
+            while bits == 0 {
+                w += 1;
+                bits = *owned.get(w)?;
+            }
+            Some(64 * w + bits.trailing_zeros() as usize)
+        };
+        let mut cursor = next(0).unwrap_or(usize::MAX);
+        for (&(i, ..), &[kinetic, lift]) in records.iter().zip(terms.iter()) {
+            delta += kinetic;
+            if lift.to_bits() != 0 {
+                delta -= lift;
+            }
+            let end = start[i as usize + 1] as usize;
+            while cursor < end {
+                let s = &model.springs[incident[cursor] as usize];
+                let (a, b) = (s.a as usize, s.b as usize);
+                delta += s.energy(x) - s.energy_between(before(a), before(b));
+                cursor = next(cursor + 1).unwrap_or(usize::MAX);
+            }
+        }
+        delta
     }
-    // Each record's kinetic and gravitational terms first, independent of each other; then
-    // the sum in record order, the springs of a visited record after its terms (the same
-    // operations in the same order as one loop, so the same bits; the sum alone keeps its
-    // register, where one loop spilled it for the springs' work).
-    let gravity = model.gravity;
-    let terms: Vec<[f64; 2]> = (records.iter())
-        .map(|&(i, x_old, v_old)| {
-            let i = i as usize;
-            let m = model.mass[i];
-            [
-                0.5 * m * (v[i].length_squared() - v_old.length_squared()),
-                m * gravity.dot(x[i] - x_old),
-            ]
-        })
-        .collect();
-    let mut delta = 0.0;
-    for (&(i, ..), &[kinetic, lift]) in records.iter().zip(&terms) {
-        delta += kinetic;
-        delta -= lift;
-        let i = i as usize;
-        if visit[i / 64] >> (i % 64) & 1 == 0 {
-            // Every spring at i has both ends where they were: 0 J.
-            continue;
-        }
-        let i_still = !moved(i);
-        for &s in model.springs_at(i) {
-            let s = &model.springs[s as usize];
-            let (a, b) = (s.a as usize, s.b as usize);
-            let other = if a == i { b } else { a };
-            if i_still && !moved(other) && calm(x[other]) {
-                // Both ends where they were: 0 J.
-                continue;
-            }
-            if other < i && changes.of(other).is_some() {
-                // Counted with the other end, which comes first.
-                continue;
-            }
-            delta += s.energy(x) - s.energy_between(before(a), before(b));
-        }
-    }
-    delta + spheres_energy(model.gravity, spheres) - changes.spheres_before
 }
 
 /// The power that the dissipative forces take out of the particles at positions `x` (m) and
@@ -312,5 +390,142 @@ impl Dissipated {
     pub fn add_power(&mut self, dt: f64, p: Power) {
         self.dampers_and_drag += dt * p.dampers_and_drag;
         self.contact_forces += dt * p.contact;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::springs::{Spring, SpringKind};
+
+    /// The change as its formula reads (the module docs of `collide/budget.rs`): every record's
+    /// kinetic and gravitational terms, then every spring at it once (at its first recorded
+    /// end), with both ends as they were, none left out.
+    fn in_full(model: &Model, x: &[DVec3], v: &[DVec3], changes: &Changes) -> f64 {
+        let before = |j: usize| changes.of(j).map_or(x[j], |c| c.1);
+        let mut delta = 0.0;
+        for &(i, x_old, v_old) in &changes.particles {
+            let i = i as usize;
+            let m = model.mass[i];
+            delta += 0.5 * m * (v[i].length_squared() - v_old.length_squared());
+            delta -= m * model.gravity.dot(x[i] - x_old);
+            for &k in model.springs_at(i) {
+                let s = &model.springs[k as usize];
+                let (a, b) = (s.a as usize, s.b as usize);
+                let other = if a == i { b } else { a };
+                if other < i && changes.of(other).is_some() {
+                    continue;
+                }
+                delta += s.energy(x) - s.energy_between(before(a), before(b));
+            }
+        }
+        delta
+    }
+
+    /// The sum over the moved springs only, walked with the records (`Ledger::change`), is the
+    /// formula's sum bit for bit: on a lattice of 9 × 9 particles (more than a word of bits)
+    /// with bend springs, a spring from a particle to itself and a spring twice, for records
+    /// of a few particles, of every particle (a payment), of particles that moved or only
+    /// slowed, at coordinates of ±0, and with a particle far away, infinite or NaN, recorded
+    /// or not (no shortcut then); with and without `calm_elsewhere` where it holds.
+    #[test]
+    fn the_moved_springs_sum_to_the_formulas_bits() {
+        let side = 9u32;
+        let n = (side * side) as usize;
+        let spring = |a: u32, b: u32, rest_length: f64| Spring {
+            a,
+            b,
+            rest_length,
+            stiffness: 500.0 + f64::from(a % 7) * 100.0,
+            damping: 0.0,
+            kind: SpringKind::Struct,
+        };
+        let mut springs = Vec::new();
+        for r in 0..side {
+            for c in 0..side {
+                let i = r * side + c;
+                for (dr, dc, rest) in [(0, 1, 0.1), (1, 0, 0.1), (1, 1, 0.14), (0, 2, 0.2)] {
+                    let (r2, c2) = (r + dr, c + dc);
+                    if r2 < side && c2 < side {
+                        springs.push(spring(i, r2 * side + c2, rest));
+                    }
+                }
+            }
+        }
+        springs.push(spring(40, 40, 0.0));
+        springs.push(spring(70, 71, 0.05));
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut random = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mass: Vec<f64> = (0..n).map(|_| 0.01 + random()).collect();
+        let model = Model::new(
+            mass,
+            &vec![false; n],
+            springs,
+            DVec3::new(0.0, -9.8, 0.0),
+            0.0,
+        );
+        let (mut shortcuts, mut paid) = (0, 0);
+        for round in 0..400 {
+            let mut x: Vec<DVec3> = (0..n)
+                .map(|i| {
+                    let (r, c) = ((i as u32 / side) as f64, (i as u32 % side) as f64);
+                    DVec3::new(0.1 * c, 0.01 * random(), 0.1 * r) + 0.01 * random()
+                })
+                .collect();
+            let mut v: Vec<DVec3> = (0..n)
+                .map(|_| DVec3::new(random(), random(), random()) - 0.5)
+                .collect();
+            if round % 5 == 0 {
+                // Coordinates of ±0.
+                x[3] = DVec3::new(0.0, -0.0, 0.0);
+                x[12] = DVec3::new(-0.0, 0.0, -0.0);
+            }
+            let every = round % 3 == 0;
+            let mut changes = Changes::default();
+            for i in 0..n {
+                if !(every || random() < 0.15) {
+                    continue;
+                }
+                let (mut x_old, v_old) = (x[i], v[i] * (1.0 + random()));
+                if random() < 0.2 {
+                    x_old += DVec3::new(random(), random(), random()) * 0.01;
+                }
+                if round % 5 == 0 && i == 3 {
+                    x_old = DVec3::new(-0.0, 0.0, -0.0);
+                }
+                changes.record(i, x_old, v_old);
+            }
+            changes.finish(n);
+            let far = [None, None, Some(1e60), Some(f64::INFINITY), Some(f64::NAN)][round % 5];
+            if let Some(far) = far {
+                // A recorded particle or not (the last one).
+                let i = if round % 2 == 0 { 80 } else { 17 };
+                x[i].y = far;
+                v[i].x = far;
+            }
+            let full = in_full(&model, &x, &v, &changes);
+            let all_calm = x.iter().all(|p| calm(*p));
+            let calm_elsewhere = (0..n)
+                .filter(|&i| changes.of(i).is_none())
+                .all(|i| calm(x[i]));
+            for told in [false, true] {
+                if told && !calm_elsewhere {
+                    continue;
+                }
+                let fast = energy_change_calm(&model, &x, &v, &[], &changes, told);
+                assert!(
+                    fast.to_bits() == full.to_bits() || (fast.is_nan() && full.is_nan()),
+                    "round {round}, told {told}: {fast} J vs {full} J"
+                );
+            }
+            shortcuts += usize::from(all_calm);
+            paid += usize::from(every && all_calm);
+        }
+        assert!(shortcuts > 120 && paid > 40, "{shortcuts} {paid}");
     }
 }

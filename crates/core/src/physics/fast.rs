@@ -20,6 +20,8 @@
 //!   eight points at a time.
 //! - `energy`: the kinetic and gravitational terms of Verlet's energy accounting, a block of
 //!   particles at a time with the widest vectors.
+//! - `ledger`: the kinetic energy the collision response's budget pays from, a block of
+//!   particles at a time with the widest vectors, added in particle order.
 //! - `elastic`: the elastic energy `Σ ½ k (L - L0)²` of `physics/energy.rs`, a block of springs
 //!   at a time with the widest vectors, added in spring order.
 //! - [`quadratic`]: the stability study's sum over springs (a perturbation's elastic energy), a
@@ -37,6 +39,7 @@ pub(crate) mod healthy;
 pub(crate) mod implicit_constraint;
 pub(crate) mod implicit_lattice;
 pub(crate) mod lanes;
+pub(crate) mod ledger;
 pub(crate) mod marks;
 pub mod pool;
 pub mod quadratic;

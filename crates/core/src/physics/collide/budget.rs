@@ -84,12 +84,10 @@ pub fn take_kinetic_with_spheres(
     spheres: &mut [DynamicSphere],
     amount: f64,
 ) -> f64 {
-    let particles: f64 = inv_mass
-        .iter()
-        .zip(v.iter())
-        .filter(|(w, _)| **w != 0.0)
-        .map(|(w, v)| 0.5 * v.length_squared() / w)
-        .sum();
+    // `inv_mass.iter().zip(v.iter()).filter(|(w, _)| **w != 0.0).map(|(w, v)| 0.5 *
+    // v.length_squared() / w).sum()`: the same sum in the same order, its terms a block at a
+    // time (`fast/ledger.rs`).
+    let particles = crate::physics::fast::ledger::kinetic_of_free(inv_mass, v);
     let moving = || spheres.iter().filter(|s| !s.kinematic);
     let own: f64 = moving()
         .map(|s| 0.5 * s.mass * s.velocity.length_squared())

@@ -5,7 +5,8 @@ use glam::DVec3;
 
 use super::budget::take_kinetic_with_spheres;
 use super::{
-    Bodies, Broad, Collider, Contact, ContactParams, DynamicSphere, PartBounds, World, step_spheres,
+    Bodies, Broad, Collider, Contact, ContactParams, PartBounds, World, keep_verlet_history,
+    step_spheres,
 };
 use crate::physics::fast::bounds::boxes;
 
@@ -228,6 +229,9 @@ pub(super) fn pay(
         log.record_free(world.inv_mass, &state.x[..n], &state.v[..n]);
     }
     take_kinetic_with_spheres(world.inv_mass, &mut state.v[..n], state.spheres, amount);
+    if !state.history_valid {
+        return;
+    }
     for i in free() {
         keep_verlet_history(
             state.history_valid,
@@ -293,7 +297,7 @@ impl Changes {
     /// Records particle `i` at `x` (m), `v` (m/s) before a change; its first record is
     /// [`Changes::of`] it from now on.
     #[inline]
-    pub(super) fn record(&mut self, i: usize, x: DVec3, v: DVec3) {
+    pub(crate) fn record(&mut self, i: usize, x: DVec3, v: DVec3) {
         if self.slot.len() <= i {
             self.slot.resize(i + 1, u32::MAX);
         }
@@ -413,24 +417,6 @@ impl Changes {
     }
 }
 
-/// True when every coordinate of `p` is below 1e50 m in size (false for NaN and ±∞): a spring
-/// between two calm points has a finite elastic energy for any stiffness below 1e200 N/m.
-#[must_use]
-pub(crate) fn calm(p: DVec3) -> bool {
-    p.abs().cmplt(DVec3::splat(1e50)).all()
-}
-
-/// Kinetic and gravitational energy of the non-kinematic dynamic `spheres` under `gravity`
-/// (m/s²), in J, as [`crate::physics::energy::energy`] counts them.
-#[must_use]
-pub fn spheres_energy(gravity: DVec3, spheres: &[DynamicSphere]) -> f64 {
-    spheres
-        .iter()
-        .filter(|s| !s.kinematic)
-        .map(|s| 0.5 * s.mass * s.velocity.length_squared() - s.mass * gravity.dot(s.center))
-        .sum()
-}
-
 /// The response of one point (a particle, or a sphere's centre with `offset` its radius, m) to
 /// one collider: projection, climb, bounce, impact friction (module docs). `rise(from, to)` is
 /// the potential energy per kg (J/kg) that moving the point from `from` to `to` adds. Returns
@@ -540,20 +526,6 @@ pub(super) fn responds_within(
         _ => broad.may_touch(x),
     };
     passes && touching_past_bounds(collider, 0.0, params, x, v).is_some()
-}
-
-/// After a particle's `x` or `v` changed outside the integrator: Verlet's implied velocity
-/// `(x - x_prev)/dt` becomes the new `v` again (`x_prev = x - dt v`), if Verlet has a history.
-pub(super) fn keep_verlet_history(
-    history_valid: bool,
-    x_prev: &mut DVec3,
-    x: DVec3,
-    v: DVec3,
-    dt: f64,
-) {
-    if history_valid {
-        *x_prev = x - dt * v;
-    }
 }
 
 /// Everything collisions do after an integrator step of `dt` seconds: [`step_spheres`], then

@@ -358,8 +358,9 @@ pub fn collide_spheres_prepared<'a, 'b>(
                             let elastic = if w == 0.0 {
                                 0.0
                             } else {
-                                model.elastic_at_with(before, i, x_old + dx)
-                                    - model.elastic_at_with(before, i, x_old)
+                                let (to, from) =
+                                    model.elastic_at_both(before, i, x_old + dx, x_old);
+                                to - from
                             };
                             lift(dx_s, ws) + lift(dx, w) + elastic.max(0.0)
                         };
