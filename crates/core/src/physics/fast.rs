@@ -31,6 +31,56 @@
 //! buffers); `Cargo.toml` denies it everywhere else.
 #![allow(unsafe_code)]
 
+/// Defines `$name(args…)`: `$body::<V>` on the widest [`lanes::Lanes`] of a kernel, through an
+/// AVX-512 and an AVX2 instance, each compiled with its target feature so that the inlined body
+/// runs on those registers. `on_lanes!(vis name, body, (args) -> ret)` takes the CPU's best
+/// ([`stencil::Kernel::best`]); `on_lanes!(vis name(kernel), body, (args) -> ret)` adds a first
+/// parameter `kernel: Kernel`, which must be one this CPU has (as a stencil's kernel and
+/// `Kernel::best` are).
+macro_rules! on_lanes {
+    ($vis:vis $name:ident(kernel), $body:ident, ($($arg:ident: $ty:ty),*) -> $ret:ty) => {
+        #[allow(clippy::too_many_arguments)]
+        $vis fn $name(kernel: $crate::physics::fast::stencil::Kernel, $($arg: $ty),*) -> $ret {
+            on_lanes!(@dispatch kernel, $body, ($($arg: $ty),*) -> $ret)
+        }
+    };
+    ($vis:vis $name:ident, $body:ident, ($($arg:ident: $ty:ty),*) -> $ret:ty) => {
+        #[allow(clippy::too_many_arguments)]
+        $vis fn $name($($arg: $ty),*) -> $ret {
+            on_lanes!(
+                @dispatch $crate::physics::fast::stencil::Kernel::best(),
+                $body,
+                ($($arg: $ty),*) -> $ret
+            )
+        }
+    };
+    (@dispatch $kernel:expr, $body:ident, ($($arg:ident: $ty:ty),*) -> $ret:ty) => {{
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f")]
+        #[allow(clippy::too_many_arguments)]
+        fn avx512($($arg: $ty),*) -> $ret {
+            $body::<$crate::physics::fast::lanes::Avx512>($($arg),*)
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        #[allow(clippy::too_many_arguments)]
+        fn avx2($($arg: $ty),*) -> $ret {
+            $body::<$crate::physics::fast::lanes::Avx2>($($arg),*)
+        }
+
+        match $kernel {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the kernel is one this CPU has (macro docs).
+            $crate::physics::fast::stencil::Kernel::Avx512 => unsafe { avx512($($arg),*) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as above.
+            $crate::physics::fast::stencil::Kernel::Avx2 => unsafe { avx2($($arg),*) },
+            _ => $body::<$crate::physics::fast::lanes::Plain>($($arg),*),
+        }
+    }};
+}
+
 pub(crate) mod bounds;
 pub(crate) mod chain;
 pub(crate) mod elastic;

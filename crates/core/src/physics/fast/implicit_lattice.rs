@@ -70,10 +70,10 @@
 use glam::DVec3;
 
 use super::implicit_constraint::{Constraint, Rows, SphereRows};
-#[cfg(target_arch = "x86_64")]
-use crate::physics::lanes::{Avx2, Avx512};
+#[cfg(test)]
+use crate::physics::lanes::Plain;
 use crate::physics::lanes::{
-    LANES, Lanes, Plain, first_lanes, lanes, load_chunk, load_padded, store_chunk,
+    LANES, Lanes, first_lanes, lanes, load_chunk, load_padded, store_chunk,
 };
 use crate::physics::stencil::{Kernel, Stencil};
 
@@ -712,41 +712,6 @@ fn advance_body<V: Lanes>(
     dampers + drag * sum_lanes(drag_sum)
 }
 
-/// `$name(kernel, args…)`: the body generic over [`Lanes`] on `kernel`'s registers, through an
-/// AVX-512 and an AVX2 instance, each compiled with its target feature so that the inlined
-/// body runs on those registers. `kernel` must be one this CPU has, as a stencil's kernel
-/// ([`Stencil::kernel`]) and [`Kernel::best`] are.
-macro_rules! on_kernel {
-    ($vis:vis $name:ident, $body:ident, ($($arg:ident: $ty:ty),*) -> $ret:ty) => {
-        #[allow(clippy::too_many_arguments)]
-        $vis fn $name(kernel: Kernel, $($arg: $ty),*) -> $ret {
-            #[cfg(target_arch = "x86_64")]
-            #[target_feature(enable = "avx512f")]
-            #[allow(clippy::too_many_arguments)]
-            fn avx512($($arg: $ty),*) -> $ret {
-                $body::<Avx512>($($arg),*)
-            }
-
-            #[cfg(target_arch = "x86_64")]
-            #[target_feature(enable = "avx2")]
-            #[allow(clippy::too_many_arguments)]
-            fn avx2($($arg: $ty),*) -> $ret {
-                $body::<Avx2>($($arg),*)
-            }
-
-            match kernel {
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: the caller passes a kernel this CPU has (macro docs).
-                Kernel::Avx512 => unsafe { avx512($($arg),*) },
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: as above.
-                Kernel::Avx2 => unsafe { avx2($($arg),*) },
-                _ => $body::<Plain>($($arg),*),
-            }
-        }
-    };
-}
-
 mod aligned;
 mod contacts;
 mod solve;
@@ -757,13 +722,13 @@ use aligned::Aligned;
 pub(crate) use contacts::inside_spheres;
 use solve::{raw, raw_block, raw_triple, soa_ptrs, solve_on, sum_lanes};
 
-on_kernel!(
-    assemble_on,
+on_lanes!(
+    assemble_on(kernel),
     assemble_body,
     (sys: &mut Lattice, stencil: &Stencil, dt: f64, particles: &Particles<'_>) -> ()
 );
-on_kernel!(
-    advance_on,
+on_lanes!(
+    advance_on(kernel),
     advance_body,
     (
         sys: &mut Lattice,
@@ -775,8 +740,8 @@ on_kernel!(
         v: &mut [DVec3]
     ) -> f64
 );
-on_kernel!(
-    elastic_on,
+on_lanes!(
+    elastic_on(kernel),
     elastic_body,
     (sys: &Lattice, stencil: &Stencil) -> f64
 );

@@ -38,9 +38,9 @@
 
 use glam::DVec3;
 
-#[cfg(target_arch = "x86_64")]
-use super::lanes::{Avx2, Avx512};
-use super::lanes::{LANES, Lanes, Plain, load_chunk, load_padded, store_chunk};
+#[cfg(test)]
+use super::lanes::Plain;
+use super::lanes::{LANES, Lanes, load_chunk, load_padded, store_chunk};
 use super::stencil::Kernel;
 
 /// Springs per block of terms.
@@ -85,45 +85,12 @@ pub fn divide(values: &mut [DVec3], by: f64) {
     }
 }
 
-/// `$name(args…)`: `$body::<V>` on the CPU's widest [`Lanes`] ([`Kernel::best`]), through an
-/// AVX-512 and an AVX2 instance compiled with their target features.
-macro_rules! on_best {
-    ($vis:vis $name:ident, $body:ident, ($($arg:ident: $ty:ty),*) -> $ret:ty) => {
-        #[allow(clippy::too_many_arguments)]
-        $vis fn $name($($arg: $ty),*) -> $ret {
-            #[cfg(target_arch = "x86_64")]
-            #[target_feature(enable = "avx512f")]
-            #[allow(clippy::too_many_arguments)]
-            fn avx512($($arg: $ty),*) -> $ret {
-                $body::<Avx512>($($arg),*)
-            }
-
-            #[cfg(target_arch = "x86_64")]
-            #[target_feature(enable = "avx2")]
-            #[allow(clippy::too_many_arguments)]
-            fn avx2($($arg: $ty),*) -> $ret {
-                $body::<Avx2>($($arg),*)
-            }
-
-            match Kernel::best() {
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: `Kernel::best` chooses `Avx512` only on a CPU with AVX-512F.
-                Kernel::Avx512 => unsafe { avx512($($arg),*) },
-                #[cfg(target_arch = "x86_64")]
-                // SAFETY: as above, AVX2.
-                Kernel::Avx2 => unsafe { avx2($($arg),*) },
-                _ => $body::<Plain>($($arg),*),
-            }
-        }
-    };
-}
-
-on_best!(
+on_lanes!(
     pub central_difference,
     difference_body,
     (plus: &[DVec3], minus: &[DVec3], inv: f64, out: &mut [DVec3]) -> ()
 );
-on_best!(
+on_lanes!(
     pub offset,
     offset_body,
     (
@@ -134,17 +101,17 @@ on_best!(
         out: (&mut [DVec3], &mut [DVec3], &mut [DVec3])
     ) -> ()
 );
-on_best!(
+on_lanes!(
     pub components,
     components_body,
     (mass: &[f64], along: &[DVec3], x: &[DVec3], v: &[DVec3]) -> (f64, f64)
 );
-on_best!(
+on_lanes!(
     pub remove,
     remove_body,
     (mode: &[DVec3], c: (f64, f64), x: &mut [DVec3], v: &mut [DVec3]) -> ()
 );
-on_best!(
+on_lanes!(
     pub kinetic,
     kinetic_body,
     (e: f64, half_mass: &[f64], free: &[bool], v: &[DVec3]) -> f64

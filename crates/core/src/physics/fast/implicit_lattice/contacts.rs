@@ -62,8 +62,8 @@ fn inside_body<V: Lanes>(
     }
 }
 
-on_kernel!(
-    inside_on,
+on_lanes!(
+    inside_on(kernel),
     inside_body,
     (
         x: &[DVec3],

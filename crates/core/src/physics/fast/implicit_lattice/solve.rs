@@ -408,8 +408,8 @@ fn solve_body<V: Lanes>(
     outcome
 }
 
-on_kernel!(
-    pub(super) solve_on,
+on_lanes!(
+    pub(super) solve_on(kernel),
     solve_body,
     (
         sys: &mut Lattice,
