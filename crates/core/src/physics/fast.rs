@@ -36,37 +36,65 @@
 /// runs on those registers. `on_lanes!(vis name, body, (args) -> ret)` takes the CPU's best
 /// ([`stencil::Kernel::best`]); `on_lanes!(vis name(kernel), body, (args) -> ret)` adds a first
 /// parameter `kernel: Kernel`, which must be one this CPU has (as a stencil's kernel and
-/// `Kernel::best` are).
+/// `Kernel::best` are). With `plain body` the body is not generic (scalar code the compiler
+/// vectorises): each instance compiles it with its target feature.
 macro_rules! on_lanes {
-    ($vis:vis $name:ident(kernel), $body:ident, ($($arg:ident: $ty:ty),*) -> $ret:ty) => {
+    ($vis:vis $name:ident(kernel), plain $body:ident, $sig:tt -> $ret:ty) => {
+        on_lanes!(@kernel $vis $name, [$body], [$body], [$body], $sig -> $ret);
+    };
+    ($vis:vis $name:ident, plain $body:ident, $sig:tt -> $ret:ty) => {
+        on_lanes!(@best $vis $name, [$body], [$body], [$body], $sig -> $ret);
+    };
+    ($vis:vis $name:ident(kernel), $body:ident, $sig:tt -> $ret:ty) => {
+        on_lanes!(
+            @kernel $vis $name,
+            [$body::<$crate::physics::fast::lanes::Avx512>],
+            [$body::<$crate::physics::fast::lanes::Avx2>],
+            [$body::<$crate::physics::fast::lanes::Plain>],
+            $sig -> $ret
+        );
+    };
+    ($vis:vis $name:ident, $body:ident, $sig:tt -> $ret:ty) => {
+        on_lanes!(
+            @best $vis $name,
+            [$body::<$crate::physics::fast::lanes::Avx512>],
+            [$body::<$crate::physics::fast::lanes::Avx2>],
+            [$body::<$crate::physics::fast::lanes::Plain>],
+            $sig -> $ret
+        );
+    };
+    (@kernel $vis:vis $name:ident, $wide:tt, $narrow:tt, $plain:tt,
+        ($($arg:ident: $ty:ty),*) -> $ret:ty) => {
         #[allow(clippy::too_many_arguments)]
         $vis fn $name(kernel: $crate::physics::fast::stencil::Kernel, $($arg: $ty),*) -> $ret {
-            on_lanes!(@dispatch kernel, $body, ($($arg: $ty),*) -> $ret)
+            on_lanes!(@dispatch kernel, $wide, $narrow, $plain, ($($arg: $ty),*) -> $ret)
         }
     };
-    ($vis:vis $name:ident, $body:ident, ($($arg:ident: $ty:ty),*) -> $ret:ty) => {
+    (@best $vis:vis $name:ident, $wide:tt, $narrow:tt, $plain:tt,
+        ($($arg:ident: $ty:ty),*) -> $ret:ty) => {
         #[allow(clippy::too_many_arguments)]
         $vis fn $name($($arg: $ty),*) -> $ret {
             on_lanes!(
                 @dispatch $crate::physics::fast::stencil::Kernel::best(),
-                $body,
+                $wide, $narrow, $plain,
                 ($($arg: $ty),*) -> $ret
             )
         }
     };
-    (@dispatch $kernel:expr, $body:ident, ($($arg:ident: $ty:ty),*) -> $ret:ty) => {{
+    (@dispatch $kernel:expr, [$($wide:tt)*], [$($narrow:tt)*], [$($plain:tt)*],
+        ($($arg:ident: $ty:ty),*) -> $ret:ty) => {{
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx512f")]
         #[allow(clippy::too_many_arguments)]
         fn avx512($($arg: $ty),*) -> $ret {
-            $body::<$crate::physics::fast::lanes::Avx512>($($arg),*)
+            $($wide)*($($arg),*)
         }
 
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx2")]
         #[allow(clippy::too_many_arguments)]
         fn avx2($($arg: $ty),*) -> $ret {
-            $body::<$crate::physics::fast::lanes::Avx2>($($arg),*)
+            $($narrow)*($($arg),*)
         }
 
         match $kernel {
@@ -76,7 +104,7 @@ macro_rules! on_lanes {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: as above.
             $crate::physics::fast::stencil::Kernel::Avx2 => unsafe { avx2($($arg),*) },
-            _ => $body::<$crate::physics::fast::lanes::Plain>($($arg),*),
+            _ => $($plain)*($($arg),*),
         }
     }};
 }

@@ -33,28 +33,10 @@ const BLOCK: usize = 64;
 /// If a spring's end is not an index of `x`.
 #[must_use]
 pub(crate) fn elastic(springs: &[Spring], x: &[DVec3]) -> f64 {
-    match Kernel::best() {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: `Kernel::best` chooses `Avx512` only on a CPU with AVX-512F.
-        Kernel::Avx512 => unsafe { elastic_avx512(springs, x) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as above, AVX2.
-        Kernel::Avx2 => unsafe { elastic_avx2(springs, x) },
-        _ => blocks(springs, x),
-    }
+    elastic_on(Kernel::best(), springs, x)
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn elastic_avx512(springs: &[Spring], x: &[DVec3]) -> f64 {
-    blocks(springs, x)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn elastic_avx2(springs: &[Spring], x: &[DVec3]) -> f64 {
-    blocks(springs, x)
-}
+on_lanes!(elastic_on(kernel), plain blocks, (springs: &[Spring], x: &[DVec3]) -> f64);
 
 /// A block's gathered numbers, one array each: the differences' components, the stiffnesses and
 /// the rest lengths.
@@ -167,13 +149,9 @@ mod tests {
             assert_eq!(blocks(&springs, &x).to_bits(), want.to_bits(), "{count}");
             assert_eq!(elastic(&springs, &x).to_bits(), want.to_bits(), "{count}");
             #[cfg(target_arch = "x86_64")]
-            for (kernel, f) in [
-                (Kernel::Avx2, elastic_avx2 as unsafe fn(_, _) -> f64),
-                (Kernel::Avx512, elastic_avx512),
-            ] {
+            for kernel in [Kernel::Avx2, Kernel::Avx512] {
                 if kernel.is_available() {
-                    // SAFETY: the CPU has the kernel's instructions (checked).
-                    let got = unsafe { f(&springs, &x) };
+                    let got = elastic_on(kernel, &springs, &x);
                     assert_eq!(got.to_bits(), want.to_bits(), "{kernel:?}, {count}");
                 }
             }

@@ -47,17 +47,8 @@ pub(crate) fn kinetic_gravity_terms(
     dt: f64,
     terms: &mut Vec<f64>,
 ) {
-    let (mass, x_prev) = (&mass[..x.len()], &x_prev[..x.len()]);
     terms.resize(x.len(), 0.0);
-    match Kernel::best() {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: `Kernel::best` chooses `Avx512` only on a CPU with AVX-512F.
-        Kernel::Avx512 => unsafe { terms_avx512(mass, gravity, x, x_prev, dt, terms) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as above, AVX2.
-        Kernel::Avx2 => unsafe { terms_avx2(mass, gravity, x, x_prev, dt, terms) },
-        _ => all_terms(mass, gravity, x, x_prev, dt, terms),
-    }
+    terms_into(mass, gravity, x, x_prev, dt, terms);
 }
 
 /// `(E_before, E)`: the sum of `before` (terms of [`kinetic_gravity_terms`]) and `E` of the
@@ -75,15 +66,7 @@ pub(crate) fn kinetic_gravity_pair(
     before: &[f64],
 ) -> (f64, f64) {
     let (mass, x_prev, before) = (&mass[..x.len()], &x_prev[..x.len()], &before[..x.len()]);
-    match Kernel::best() {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as in `kinetic_gravity_terms`.
-        Kernel::Avx512 => unsafe { pair_avx512(mass, gravity, x, x_prev, dt, before) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as above, AVX2.
-        Kernel::Avx2 => unsafe { pair_avx2(mass, gravity, x, x_prev, dt, before) },
-        _ => pair(mass, gravity, x, x_prev, dt, before),
-    }
+    pair_on(Kernel::best(), mass, gravity, x, x_prev, dt, before)
 }
 
 /// Steps whose sums [`Batch`] adds up together.
@@ -189,15 +172,7 @@ fn terms_into(
     row: &mut [f64],
 ) {
     let (mass, x_prev) = (&mass[..x.len()], &x_prev[..x.len()]);
-    match Kernel::best() {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as in `kinetic_gravity_terms`.
-        Kernel::Avx512 => unsafe { terms_avx512(mass, gravity, x, x_prev, dt, row) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as above, AVX2.
-        Kernel::Avx2 => unsafe { terms_avx2(mass, gravity, x, x_prev, dt, row) },
-        _ => all_terms(mass, gravity, x, x_prev, dt, row),
-    }
+    terms_on(Kernel::best(), mass, gravity, x, x_prev, dt, row);
 }
 
 /// True when every coordinate of `x` is below `limit` in magnitude (false where one is NaN):
@@ -206,28 +181,10 @@ fn terms_into(
 pub(crate) fn all_below(x: &[DVec3], limit: f64) -> bool {
     // SAFETY: `DVec3` is three `f64` (`#[repr(C)]`, no padding), so `x` is `3 x.len()` of them.
     let flat = unsafe { std::slice::from_raw_parts(x.as_ptr().cast::<f64>(), 3 * x.len()) };
-    match Kernel::best() {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as in `kinetic_gravity_terms`.
-        Kernel::Avx512 => unsafe { below_avx512(flat, limit) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as above, AVX2.
-        Kernel::Avx2 => unsafe { below_avx2(flat, limit) },
-        _ => below(flat, limit),
-    }
+    below_on(Kernel::best(), flat, limit)
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn below_avx512(flat: &[f64], limit: f64) -> bool {
-    below(flat, limit)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn below_avx2(flat: &[f64], limit: f64) -> bool {
-    below(flat, limit)
-}
+on_lanes!(below_on(kernel), plain below, (flat: &[f64], limit: f64) -> bool);
 
 /// The count of values not below `limit` in magnitude is zero (a count, not a search, so the
 /// compiler tests many values per instruction).
@@ -238,29 +195,17 @@ fn below(flat: &[f64], limit: f64) -> bool {
     flat.iter().map(outside).sum::<usize>() == 0
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn terms_avx512(m: &[f64], g: DVec3, x: &[DVec3], xp: &[DVec3], dt: f64, t: &mut [f64]) {
-    all_terms(m, g, x, xp, dt, t);
-}
+on_lanes!(
+    terms_on(kernel),
+    plain all_terms,
+    (m: &[f64], g: DVec3, x: &[DVec3], xp: &[DVec3], dt: f64, t: &mut [f64]) -> ()
+);
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn terms_avx2(m: &[f64], g: DVec3, x: &[DVec3], xp: &[DVec3], dt: f64, t: &mut [f64]) {
-    all_terms(m, g, x, xp, dt, t);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn pair_avx512(m: &[f64], g: DVec3, x: &[DVec3], xp: &[DVec3], dt: f64, b: &[f64]) -> (f64, f64) {
-    pair(m, g, x, xp, dt, b)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn pair_avx2(m: &[f64], g: DVec3, x: &[DVec3], xp: &[DVec3], dt: f64, b: &[f64]) -> (f64, f64) {
-    pair(m, g, x, xp, dt, b)
-}
+on_lanes!(
+    pair_on(kernel),
+    plain pair,
+    (m: &[f64], g: DVec3, x: &[DVec3], xp: &[DVec3], dt: f64, b: &[f64]) -> (f64, f64)
+);
 
 /// One particle's term `t_i` (module docs).
 #[inline(always)]
@@ -358,8 +303,6 @@ mod tests {
             f64::NEG_INFINITY,
             -0.0,
         ];
-        #[cfg(target_arch = "x86_64")]
-        type Below = unsafe fn(&[f64], f64) -> bool;
         for n in 0..25 {
             let clean: Vec<DVec3> = (0..n)
                 .map(|i| DVec3::new(i as f64, -(i as f64) * 1e140, 0.5))
@@ -380,13 +323,9 @@ mod tests {
                 let flat: Vec<f64> = x.iter().flat_map(|p| p.to_array()).collect();
                 assert_eq!(below(&flat, limit), want);
                 #[cfg(target_arch = "x86_64")]
-                for (kernel, f) in [
-                    (Kernel::Avx2, below_avx2 as Below),
-                    (Kernel::Avx512, below_avx512),
-                ] {
+                for kernel in [Kernel::Avx2, Kernel::Avx512] {
                     if kernel.is_available() {
-                        // SAFETY: the CPU has the kernel's instructions (checked).
-                        assert_eq!(unsafe { f(&flat, limit) }, want, "{kernel:?}");
+                        assert_eq!(below_on(kernel, &flat, limit), want, "{kernel:?}");
                     }
                 }
             }
@@ -422,21 +361,12 @@ mod tests {
                 assert_eq!(e.to_bits(), want.to_bits(), "pair, n = {n}");
                 // Every kernel's instance, not only the CPU's best.
                 #[cfg(target_arch = "x86_64")]
-                type Terms = unsafe fn(&[f64], DVec3, &[DVec3], &[DVec3], f64, &mut [f64]);
-                #[cfg(target_arch = "x86_64")]
-                type Pair = unsafe fn(&[f64], DVec3, &[DVec3], &[DVec3], f64, &[f64]) -> (f64, f64);
-                #[cfg(target_arch = "x86_64")]
-                for (kernel, terms, pair) in [
-                    (Kernel::Avx2, terms_avx2 as Terms, pair_avx2 as Pair),
-                    (Kernel::Avx512, terms_avx512, pair_avx512),
-                ] {
+                for kernel in [Kernel::Avx2, Kernel::Avx512] {
                     if kernel.is_available() {
                         let mut before = vec![0.0; n];
-                        // SAFETY: the CPU has the kernel's instructions (checked).
-                        let (got_moved, got) = unsafe {
-                            terms(&mass, gravity, &moved, &x_prev, dt, &mut before);
-                            pair(&mass, gravity, &x, &x_prev, dt, &before)
-                        };
+                        terms_on(kernel, &mass, gravity, &moved, &x_prev, dt, &mut before);
+                        let (got_moved, got) =
+                            pair_on(kernel, &mass, gravity, &x, &x_prev, dt, &before);
                         assert_eq!(got_moved.to_bits(), want_moved.to_bits(), "{kernel:?}");
                         assert_eq!(got.to_bits(), want.to_bits(), "{kernel:?}, n = {n}");
                     }

@@ -12,7 +12,6 @@
 use glam::DVec3;
 
 use super::energy::all_below;
-use super::stencil::Kernel;
 
 /// True when every position is finite and every `|v|²` at most `v2_max` (m²/s²).
 ///
@@ -25,30 +24,8 @@ pub(crate) fn healthy(x: &[DVec3], v: &[DVec3], v2_max: f64) -> bool {
     all_below(x, f64::INFINITY) && speeds_within(v, v2_max)
 }
 
-/// Every `|v|² ≤ v2_max` (false where one is NaN), with the CPU's widest vectors.
-fn speeds_within(v: &[DVec3], v2_max: f64) -> bool {
-    match Kernel::best() {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: `Kernel::best` chooses `Avx512` only on a CPU with AVX-512F.
-        Kernel::Avx512 => unsafe { within_avx512(v, v2_max) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as above, AVX2.
-        Kernel::Avx2 => unsafe { within_avx2(v, v2_max) },
-        _ => within(v, v2_max),
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn within_avx512(v: &[DVec3], v2_max: f64) -> bool {
-    within(v, v2_max)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn within_avx2(v: &[DVec3], v2_max: f64) -> bool {
-    within(v, v2_max)
-}
+// Every `|v|² ≤ v2_max` (false where one is NaN), with the CPU's widest vectors.
+on_lanes!(speeds_within, plain within, (v: &[DVec3], v2_max: f64) -> bool);
 
 /// The count of speeds not within the bound is zero (a count, not a search, so the compiler
 /// tests many particles per instruction).

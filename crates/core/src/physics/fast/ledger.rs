@@ -15,8 +15,6 @@
 
 use glam::DVec3;
 
-use super::stencil::Kernel;
-
 /// Particles per block of terms.
 const BLOCK: usize = 64;
 
@@ -25,29 +23,10 @@ const BLOCK: usize = 64;
 /// v.length_squared() / w).sum()`.
 pub(crate) fn kinetic_of_free(inv_mass: &[f64], v: &[DVec3]) -> f64 {
     let n = inv_mass.len().min(v.len());
-    let (inv_mass, v) = (&inv_mass[..n], &v[..n]);
-    match Kernel::best() {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: `Kernel::best` chooses `Avx512` only on a CPU with AVX-512F.
-        Kernel::Avx512 => unsafe { kinetic_avx512(inv_mass, v) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as above, AVX2.
-        Kernel::Avx2 => unsafe { kinetic_avx2(inv_mass, v) },
-        _ => kinetic(inv_mass, v),
-    }
+    kinetic_best(&inv_mass[..n], &v[..n])
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn kinetic_avx512(inv_mass: &[f64], v: &[DVec3]) -> f64 {
-    kinetic(inv_mass, v)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn kinetic_avx2(inv_mass: &[f64], v: &[DVec3]) -> f64 {
-    kinetic(inv_mass, v)
-}
+on_lanes!(kinetic_best, plain kinetic, (inv_mass: &[f64], v: &[DVec3]) -> f64);
 
 /// The terms a block at a time (every particle's, a pinned one's thrown away), then the free
 /// ones added in order to the start of `.sum()` (the sum of nothing): `.sum()`'s additions.

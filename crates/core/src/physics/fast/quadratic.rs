@@ -57,16 +57,14 @@ pub type SymBlocks<'a> = [&'a [f64]; 6];
 pub fn spring_energy(e: f64, ends: &[[u32; 2]], k: SymBlocks, u: &[DVec3]) -> f64 {
     let m = ends.len();
     let k = k.map(|a| &a[..m]);
-    match Kernel::best() {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: `Kernel::best` chooses `Avx512` only on a CPU with AVX-512F.
-        Kernel::Avx512 => unsafe { energy_avx512(e, ends, k, u) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as above, AVX2.
-        Kernel::Avx2 => unsafe { energy_avx2(e, ends, k, u) },
-        _ => energy_blocks(e, ends, k, u),
-    }
+    energy_on(Kernel::best(), e, ends, k, u)
 }
+
+on_lanes!(
+    energy_on(kernel),
+    plain energy_blocks,
+    (e: f64, ends: &[[u32; 2]], k: SymBlocks, u: &[DVec3]) -> f64
+);
 
 /// `v ← v / by` for every vector of `values`, component by component (as glam's `DVec3 / f64`):
 /// the power iterations' normalisations (`springlab::study::linear`, `springlab::study::modes`).
@@ -74,16 +72,10 @@ pub fn spring_energy(e: f64, ends: &[[u32; 2]], k: SymBlocks, u: &[DVec3]) -> f6
 /// with AVX-512 or AVX2 (a division is correctly rounded in every lane: the same bits, tested);
 /// one at a time they were about a fifth of a linear probe's bookkeeping.
 pub fn divide(values: &mut [DVec3], by: f64) {
-    match Kernel::best() {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: `Kernel::best` chooses `Avx512` only on a CPU with AVX-512F.
-        Kernel::Avx512 => unsafe { divide_avx512(values, by) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: as above, AVX2.
-        Kernel::Avx2 => unsafe { divide_avx2(values, by) },
-        _ => divide_each(values, by),
-    }
+    divide_on(Kernel::best(), values, by);
 }
+
+on_lanes!(divide_on(kernel), plain divide_each, (values: &mut [DVec3], by: f64) -> ());
 
 on_lanes!(
     pub central_difference,
@@ -268,35 +260,11 @@ fn kinetic_body<V: Lanes>(mut e: f64, half_mass: &[f64], free: &[bool], v: &[DVe
     e
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn divide_avx512(values: &mut [DVec3], by: f64) {
-    divide_each(values, by);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn divide_avx2(values: &mut [DVec3], by: f64) {
-    divide_each(values, by);
-}
-
 #[inline(always)]
 fn divide_each(values: &mut [DVec3], by: f64) {
     for v in values {
         *v /= by;
     }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn energy_avx512(e: f64, ends: &[[u32; 2]], k: SymBlocks, u: &[DVec3]) -> f64 {
-    energy_blocks(e, ends, k, u)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn energy_avx2(e: f64, ends: &[[u32; 2]], k: SymBlocks, u: &[DVec3]) -> f64 {
-    energy_blocks(e, ends, k, u)
 }
 
 /// A block's differences `u_to - u_from`, one array per component: `d_s = u_b - u_a` (`from`
@@ -569,14 +537,7 @@ mod tests {
                         continue;
                     }
                     let mut got = u.to_vec();
-                    // SAFETY: the CPU has the kernel's instructions (checked).
-                    unsafe {
-                        if kernel == Kernel::Avx2 {
-                            divide_avx2(&mut got, by);
-                        } else {
-                            divide_avx512(&mut got, by);
-                        }
-                    }
+                    divide_on(kernel, &mut got, by);
                     let got: Vec<[u64; 3]> =
                         got.iter().map(|v| v.to_array().map(f64::to_bits)).collect();
                     assert_eq!(got, want, "{kernel:?}: {n} vectors / {by}");
@@ -608,14 +569,7 @@ mod tests {
                 if !kernel.is_available() {
                     continue;
                 }
-                // SAFETY: the CPU has the kernel's instructions (checked).
-                let e = unsafe {
-                    if kernel == Kernel::Avx2 {
-                        energy_avx2(0.25, &ends, k, &u)
-                    } else {
-                        energy_avx512(0.25, &ends, k, &u)
-                    }
-                };
+                let e = energy_on(kernel, 0.25, &ends, k, &u);
                 assert_eq!(e.to_bits(), want_e.to_bits(), "{kernel:?}, {springs}");
             }
         }
