@@ -260,6 +260,13 @@ fn a_teams_power_is_the_single_passes_power() {
             );
             // An odd count of steps ends in the second pair of buffers.
             assert!(x2 == x && v2 == v, "{parts} parts: states");
+            // Part 0 (particle 0 on) sums its chunks in registers: its piece of every slot
+            // of the ring (here its first chunk, two columns of eight) is never written.
+            assert!(
+                (ring.chunks(stencil.power_len()))
+                    .all(|slot| slot[..16].iter().all(|p| p.is_nan())),
+                "{parts} parts: part 0's power written to the ring"
+            );
         }
     }
 }
