@@ -168,22 +168,54 @@ fn a_team_fails_loudly() {
     assert!(x == state.x && v == state.v);
 }
 
+/// The power of a pass from its buffer (two columns of eight values per chunk) as its formula
+/// reads (`Stencil::sum_power`): lane by lane, each group of 128 chunks summed in order from
+/// zero, the groups' sums in order from zero, then the lanes in order.
+fn grouped_power(power: &[f64], contact: bool) -> (f64, f64) {
+    let column = |c: usize| {
+        let mut total = [0.0; 8];
+        for group in power.chunks(16 * 128) {
+            let mut sums = [0.0; 8];
+            for chunk in group.chunks_exact(16) {
+                for (s, p) in sums.iter_mut().zip(&chunk[8 * c..8 * c + 8]) {
+                    *s += p;
+                }
+            }
+            for (t, s) in total.iter_mut().zip(sums) {
+                *t += s;
+            }
+        }
+        total.iter().sum::<f64>()
+    };
+    (column(0), if contact { column(1) } else { 0.0 })
+}
+
 /// A team's power totals (its ring of slots, each summed part by part in later passes) are
 /// bit for bit `Stencil::sum_power` of the power buffer of the same pass run alone
-/// (`Stencil::write`), for 1, 2, 3 and 5 parts and more passes than the ring has slots,
-/// without colliders and with a plane the cube moves into (a contact column to sum); the
-/// states too. So are the totals of `Stencil::write_with_power_in_parts` (one part sums them
-/// in registers as the pass goes and writes no buffer).
+/// (`Stencil::write`), which is its formula (`grouped_power`), for 1, 2, 3 and 5 parts and
+/// more passes than the ring has slots, without colliders and with a plane the body moves into
+/// (a contact column to sum); the states too. So are the totals of
+/// `Stencil::write_with_power_in_parts` (one part sums them in registers as the pass goes and
+/// writes no buffer). On the jelly cube (1 000 particles: one group, the plain sum chunk after
+/// chunk) and on the 128×128 cloth (16 groups, parts cut inside groups).
 fn a_teams_power_is_the_single_passes_power() {
+    for workload in [Workload::JellySe, Workload::Cloth128Se] {
+        a_teams_power_is_the_single_passes_power_on(workload);
+    }
+}
+
+fn a_teams_power_is_the_single_passes_power_on(workload: Workload) {
     use glam::DVec3;
     use springlab::physics::collide::Collider;
     use springlab::physics::stencil::{Output, Stencil, TeamPower, Update};
-    let mut r = Run::new(Workload::JellySe);
+    let mut r = Run::new(workload);
     let stencil = r.model.stencil().expect("a lattice").clone();
-    // The cube moving down through a plane a little above its lowest layer.
+    // The body moving down through a plane a little above its lowest layer, each particle a
+    // little differently (so that every damper takes power).
     let lowest = r.state.x.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
-    for v in &mut r.state.v {
-        *v = DVec3::new(0.1, -0.5, 0.05);
+    for (i, v) in r.state.v.iter_mut().enumerate() {
+        let wobble = 0.01 * (0.7 * i as f64).sin();
+        *v = DVec3::new(0.1 + wobble, -0.5 - wobble, 0.05);
     }
     for contact in [false, true] {
         if contact {
@@ -198,6 +230,7 @@ fn a_teams_power_is_the_single_passes_power() {
         // Step by step: each pass's power buffer summed.
         let (mut x, mut v) = (r.state.x.clone(), r.state.v.clone());
         let mut want = Vec::new();
+        let mut grouped_differs = false;
         let mut power = vec![0.0; stencil.power_len()];
         for _ in 0..steps {
             let (mut x1, mut v1) = (x.clone(), v.clone());
@@ -208,6 +241,26 @@ fn a_teams_power_is_the_single_passes_power() {
             };
             stencil.write(&x, &v, [&mut x1, &mut v1, &mut []], &mut power, output);
             want.push(Stencil::sum_power(&power, contact));
+            let formula = grouped_power(&power, contact);
+            let last = want.last().expect("a total");
+            assert_eq!(
+                [formula.0.to_bits(), formula.1.to_bits()],
+                [last.0.to_bits(), last.1.to_bits()],
+                "{workload}: the power's formula, contact {contact}"
+            );
+            // The plain sum, chunk after chunk: the same with one group (so the groups
+            // changed nothing up to 1 024 particles), not always with more.
+            let mut plain = [0.0; 8];
+            for chunk in power.chunks_exact(16) {
+                for (s, p) in plain.iter_mut().zip(&chunk[..8]) {
+                    *s += p;
+                }
+            }
+            let plain = plain.iter().sum::<f64>();
+            if stencil.particles() <= 1024 {
+                assert_eq!(plain.to_bits(), last.0.to_bits());
+            }
+            grouped_differs |= plain.to_bits() != last.0.to_bits();
             // The totals summed as the pass goes (one part: in registers, no buffer
             // written; more: the buffer summed), the same bits and states.
             for parts in [1, 2, 3] {
@@ -220,9 +273,9 @@ fn a_teams_power_is_the_single_passes_power() {
                 assert_eq!(
                     [total.0.to_bits(), total.1.to_bits()],
                     [last.0.to_bits(), last.1.to_bits()],
-                    "{parts} parts, contact {contact}"
+                    "{workload}, {parts} parts, contact {contact}"
                 );
-                assert!(x3 == x1 && v3 == v1, "{parts} parts: states");
+                assert!(x3 == x1 && v3 == v1, "{workload}, {parts} parts: states");
                 assert_eq!(buffer.iter().all(|p| p.is_nan()), parts == 1);
             }
             (x, v) = (x1, v1);
@@ -231,6 +284,15 @@ fn a_teams_power_is_the_single_passes_power() {
             want.iter().any(|p| p.1 != 0.0),
             contact,
             "the plane's contact power"
+        );
+        assert!(
+            want.iter().all(|p| p.0 > 0.0),
+            "{workload}: the dampers' power"
+        );
+        assert_eq!(
+            grouped_differs,
+            stencil.particles() > 1024,
+            "{workload}: the groups' sum against the plain one"
         );
         for parts in [1, 2, 3, 5] {
             let (mut x0, mut v0) = (r.state.x.clone(), r.state.v.clone());
@@ -256,16 +318,25 @@ fn a_teams_power_is_the_single_passes_power() {
             assert_eq!(
                 bits(&totals),
                 bits(&want),
-                "{parts} parts, contact {contact}"
+                "{workload}, {parts} parts, contact {contact}"
             );
             // An odd count of steps ends in the second pair of buffers.
-            assert!(x2 == x && v2 == v, "{parts} parts: states");
-            // Part 0 (particle 0 on) sums its chunks in registers: its piece of every slot
-            // of the ring (here its first chunk, two columns of eight) is never written.
+            assert!(x2 == x && v2 == v, "{workload}, {parts} parts: states");
+            // A part sums the groups that start in it in registers: no chunk's values from
+            // the first group's start on are written to the ring (part 0 starts there, and
+            // its chunk 0 is always one), only the groups' sums after the chunks' values.
+            let slots = ring.chunks(stencil.power_slot_len());
             assert!(
-                (ring.chunks(stencil.power_len()))
+                slots
+                    .clone()
                     .all(|slot| slot[..16].iter().all(|p| p.is_nan())),
-                "{parts} parts: part 0's power written to the ring"
+                "{workload}, {parts} parts: part 0's chunks written to the ring"
+            );
+            assert!(
+                slots
+                    .take(steps)
+                    .all(|slot| !slot[stencil.power_len()].is_nan()),
+                "{workload}, {parts} parts: no group's sums"
             );
         }
     }

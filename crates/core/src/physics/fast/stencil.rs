@@ -129,7 +129,7 @@ use crate::physics::springs::Spring;
 use kernels::range_portable;
 #[cfg(target_arch = "x86_64")]
 use kernels::{range_avx2, range_avx512};
-use passes::{Part, SCRATCH, Scratch, outputs_for, take};
+use passes::{Part, PowerMode, SCRATCH, Scratch, outputs_for, take};
 pub use team::{Crew, PartFn, Pass, TeamPower, TeamUpdate};
 
 /// At most this many offset groups: more would make the passes slower than the spring list.
@@ -147,6 +147,14 @@ const MIN_SPRINGS: usize = 32;
 /// faster than 64 and the jelly as fast (16 no better, 128 clearly slower); every ring
 /// (`δ + TILE + LANES` forces, rounded up to a power of two) is smaller too.
 const TILE: usize = 32;
+
+/// The dissipated power of a pass is summed in groups of this many chunks (1 024 particles),
+/// lane by lane: each group's chunks in order from zero, then the groups' sums in order from
+/// zero ([`Stencil::sum_power`]). A part of a team sums every group that starts inside it in
+/// registers and stores that one sum; only its chunks before its first group (the end of a
+/// group the previous part began) wait in the ring for the previous part's sum. One group
+/// (up to 1 024 particles) is the plain sum chunk after chunk.
+pub(super) const POWER_GROUP: usize = 128;
 
 /// At most this many parts (threads) per pass.
 pub const MAX_PARTS: usize = 16;
@@ -565,11 +573,37 @@ impl Stencil {
     /// `contact`: the pass had colliders ([`Dynamics::colliders`]). Without, the pass writes
     /// no contact values (they would all be `+0`, whose sum is `+0`): the contact power is
     /// `+0` and only the dampers' half of the buffer is read.
+    ///
+    /// ```text
+    /// G_g = ((0 + c_{g,0}) + c_{g,1}) + …      the chunks of group g, in order
+    /// P   = ((0 + G_0) + G_1) + …              the groups, in order
+    /// total = P_0 + P_1 + … + P_7              P's lanes, in order
+    /// ```
+    /// where `c_{g,i}` is the `i`-th chunk of group `g` (eight lanes, W; [`POWER_GROUP`]
+    /// chunks a group), each sum lane by lane, the dampers' and the contact column apart.
     #[must_use]
     pub fn sum_power(power: &[f64], contact: bool) -> (f64, f64) {
-        let mut sums = [[0.0; LANES]; 2];
-        Self::add_power(&mut sums, power, contact);
-        Self::power_total(&sums, contact)
+        let mut total = [[0.0; LANES]; 2];
+        for group in power.chunks(2 * LANES * POWER_GROUP) {
+            let mut sums = [[0.0; LANES]; 2];
+            Self::add_power(&mut sums, group, contact);
+            Self::close_group(&mut total, &sums);
+        }
+        Self::power_total(&total, contact)
+    }
+
+    /// `total += group`, lane by lane (both columns): a group's sums added to the groups'.
+    pub(super) fn close_group(total: &mut [[f64; LANES]; 2], group: &[[f64; LANES]; 2]) {
+        for (t, g) in total.iter_mut().zip(group) {
+            for (t, g) in t.iter_mut().zip(g) {
+                *t += g;
+            }
+        }
+    }
+
+    /// The values after the chunks' in a slot of a team's ring: each group's sums.
+    pub(super) fn groups_len(&self) -> usize {
+        2 * LANES * self.particles.div_ceil(LANES).div_ceil(POWER_GROUP)
     }
 
     /// The last sum of [`Stencil::sum_power`]: its lane sums added in lane order.
@@ -645,7 +679,11 @@ impl Stencil {
         };
         let parts = parts.clamp(1, MAX_PARTS);
         if parts == 1 {
-            let mut part = Part { outs, power };
+            let mut part = Part {
+                outs,
+                power,
+                groups: &mut [],
+            };
             SCRATCH.with(|s| self.range(&mut s.borrow_mut(), x, v, 0, n, &mut part, &output));
             return;
         }
@@ -670,7 +708,11 @@ impl Stencil {
             debug_assert!(power_len <= rest_power.len());
             let (power, others) = std::mem::take(&mut rest_power).split_at_mut(power_len);
             rest_power = others;
-            Mutex::new(Part { outs, power })
+            Mutex::new(Part {
+                outs,
+                power,
+                groups: &mut [],
+            })
         });
         Pool::global().run(parts, &|k| {
             let mut part = pieces[k]
@@ -715,7 +757,7 @@ impl Stencil {
         part: &mut Part,
         output: &Output,
     ) {
-        let power = !part.power.is_empty() || s.sum_power;
+        let power = !part.power.is_empty() || s.power_mode != PowerMode::Buffer;
         match (self.kernel, power) {
             #[cfg(target_arch = "x86_64")]
             (Kernel::Avx512, false) => {

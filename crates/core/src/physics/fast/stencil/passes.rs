@@ -91,10 +91,28 @@ pub(super) fn outputs_for<'o>(
 }
 
 /// One part's pieces of the outputs: `outs[k][i]` and `power[2 i..]` belong to the part's
-/// particle `q0 + i`.
+/// particle `q0 + i`; `groups[2 LANES j..]` to the `j`-th power group that starts in the part
+/// ([`PowerMode::Groups`]).
 pub(super) struct Part<'o> {
     pub(super) outs: [&'o mut [DVec3]; 3],
     pub(super) power: &'o mut [f64],
+    pub(super) groups: &'o mut [f64],
+}
+
+/// Where a range puts its chunks' dissipated power (`(dampers and drag, contact)`, W, lane by
+/// lane): see [`Stencil::sum_power`] for the sum it is part of.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) enum PowerMode {
+    /// Every chunk's into the part's buffer (`Part::power`).
+    #[default]
+    Buffer,
+    /// The range is a whole pass: its groups summed in registers, and the groups' sums into
+    /// `Scratch::power_sums` (`P` of [`Stencil::sum_power`]).
+    Total,
+    /// The range is a part of a team's pass: the chunks before the first group that starts in
+    /// it into the buffer (they continue the previous part's group), each group that starts in
+    /// it summed in registers (to its end or the part's) into `Part::groups`.
+    Groups,
 }
 
 /// Scratch buffers of one thread (reused, so steps do not allocate).
@@ -107,11 +125,9 @@ pub(super) struct Scratch {
     pub(super) xv: Aligned,
     /// Every group's force ring (N), see [`Group::ring_offset`].
     pub(super) ring: Aligned,
-    /// Sum the dissipated power of the next range's chunks here (`(dampers and drag,
-    /// contact)` lane by lane, chunk after chunk: what [`Stencil::sum_power`] adds from the
-    /// power buffer) instead of writing it to the part's buffer; cleared by that range.
-    pub(super) sum_power: bool,
-    /// Those sums (W).
+    /// Where the next range puts its dissipated power; set back to the buffer by that range.
+    pub(super) power_mode: PowerMode,
+    /// The pass's sums of [`PowerMode::Total`] (W).
     pub(super) power_sums: [[f64; LANES]; 2],
     /// The bounds of the range's colliders ([`Collider::broad`] at the contact band), made
     /// once per range instead of once per chunk and particle.
@@ -206,10 +222,11 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
     let Scratch {
         xv,
         ring,
-        sum_power,
+        power_mode,
         power_sums,
         broads,
     } = s;
+    let mode = std::mem::take(power_mode);
     broads.clear();
     if let Output::Forces(d)
     | Output::Accelerations(d)
@@ -219,10 +236,38 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
         broads.extend(d.colliders.iter().map(|c| c.broad(d.contact.epsilon)));
     }
     let broads = &broads[..];
-    // The power summed here, in registers, chunk after chunk (`Scratch::sum_power`, asked
-    // for this range only).
-    let mut sums =
-        std::mem::take(sum_power).then(|| (V::load(&power_sums[0]), V::load(&power_sums[1])));
+    // The power summed here, in registers (`Scratch::power_mode`): the chunks from
+    // `chained_from` on, group by group (`open`: the group being summed; `closed`: the sum of
+    // the groups before it, for a whole pass). The chunks before go to the buffer.
+    let group_len = POWER_GROUP * LANES;
+    let chained_from = match mode {
+        PowerMode::Buffer => usize::MAX,
+        PowerMode::Total => q0,
+        PowerMode::Groups => q0.next_multiple_of(group_len),
+    };
+    let mut open = (V::zero(), V::zero());
+    let mut closed = (V::zero(), V::zero());
+    let mut groups_done = 0;
+    // The open group ends: into the closed groups' sums, or stored as the part's next group.
+    #[inline(always)]
+    fn close<V: Lanes>(
+        mode: PowerMode,
+        open: &mut (V, V),
+        closed: &mut (V, V),
+        groups: &mut [f64],
+        done: &mut usize,
+    ) {
+        if mode == PowerMode::Groups {
+            let group = &mut groups[2 * LANES * *done..2 * LANES * (*done + 1)];
+            let (dampers, contact) = group.split_at_mut(LANES);
+            open.0.store(dampers.try_into().expect("a chunk"));
+            open.1.store(contact.try_into().expect("a chunk"));
+            *done += 1;
+        } else {
+            *closed = (closed.0.add(open.0), closed.1.add(open.1));
+        }
+        *open = (V::zero(), V::zero());
+    }
     let stride = len.next_multiple_of(LANES);
     let (xs, vs) = xv.get_mut(6 * stride).split_at_mut(3 * stride);
     let (xs0, rest) = xs.split_at_mut(stride);
@@ -355,7 +400,11 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
                 x: components(w.x, i),
                 v: components(w.v, i),
             };
-            let sums = sums.as_mut();
+            let chained = POWER && q >= chained_from;
+            if chained && q > chained_from && q.is_multiple_of(group_len) {
+                close(mode, &mut open, &mut closed, part.groups, &mut groups_done);
+            }
+            let sums = chained.then_some(&mut open);
             if chunk.count == LANES {
                 finish::<V, POWER, true>(output, broads, &chunk, sum, spring_power[c], part, sums);
             } else {
@@ -371,9 +420,12 @@ pub(super) fn range_body<V: Lanes, const POWER: bool>(
             after(&mut xo[a..b], &mut vo[a..b]);
         }
     }
-    if let Some((dampers, contact)) = sums {
-        dampers.store(&mut power_sums[0]);
-        contact.store(&mut power_sums[1]);
+    if POWER && chained_from < q1 {
+        close(mode, &mut open, &mut closed, part.groups, &mut groups_done);
+    }
+    if mode == PowerMode::Total {
+        closed.0.store(&mut power_sums[0]);
+        closed.1.store(&mut power_sums[1]);
     }
 }
 
@@ -768,12 +820,14 @@ impl Stencil {
         let mut part = Part {
             outs,
             power: &mut [],
+            groups: &mut [],
         };
         let sums = SCRATCH.with(|s| {
             let s = &mut *s.borrow_mut();
-            s.sum_power = true;
+            s.power_mode = PowerMode::Total;
             s.power_sums = [[0.0; LANES]; 2];
             self.range(s, x, v, 0, n, &mut part, &output);
+            s.power_mode = PowerMode::Buffer;
             s.power_sums
         });
         Self::power_total(&sums, contact)

@@ -23,27 +23,31 @@
 //! a team are bit for bit `n` single steps, for any number of parts and threads (tested).
 //!
 //! **Dissipated power.** A pass may name a slot for its dissipated power
-//! ([`Stencil::team_with_power`], [`Pass::power`]): each part writes its piece of the pass's
-//! power values as [`Stencil::write_in_parts`] cuts its power buffer, into a ring of `R` slots
-//! (slot `p` at `p mod R`), and the team sums them as [`Stencil::sum_power`] does, chunk after
-//! chunk into one running sum per lane, so that slot `p`'s total is the pass's power bit for
-//! bit (energy accounting in many steps at once, `Simulation::advance`):
+//! ([`Stencil::team_with_power`], [`Pass::power`]), in a ring of `R` slots (slot `p` at
+//! `p mod R`), and the team sums it as [`Stencil::sum_power`] does, so that slot `p`'s total is
+//! the pass's power bit for bit (energy accounting in many steps at once,
+//! `Simulation::advance`). That sum goes group by group (1 024 particles, `POWER_GROUP`
+//! chunks): each group's chunks in order from zero, then the groups' sums in order. A part
+//! sums every group that starts in it in registers as it computes the chunks and stores each
+//! group's lane sums in the slot (`PowerMode::Groups`); its chunks before its first group end
+//! a group the previous part began, so their values go to the slot's chunks, as
+//! [`Stencil::write_in_parts`] cuts its power buffer. Then:
 //!
 //! ```text
-//! pass s:  run part k; then add to the running sums of the slot written k passes ago
-//!          (pass s - k) its chunks of part k                 (part 0: this pass's slot, from 0)
+//! pass s:  run part k; then, to the running sums of the slot written k passes ago (pass s - k),
+//!          add its chunks of part k to the open group, and for each group that starts in
+//!          part k close the open one and open it with the part's sums of it
+//!                                                            (part 0: this pass's slot, from 0)
 //! ```
-//! The chunks of part `k` of a slot are added after those of part `k - 1` (one pass earlier,
-//! behind a barrier) and before those of part `k + 1`: the order of one sum over the whole
-//! slot, whichever thread adds them. Part 0's are the first, from zero, so it adds them in
-//! registers as it computes them (as one range does, `Scratch::sum_power`) and writes none to
-//! the ring: on a 128×128 cloth at two threads that thread's pass was 3 µs shorter (of 65–70;
-//! the stores of a pass's power went to lines outside the caches) and its 0.6 µs of sums gone. A slot is read until `parts - 1` passes after it was
-//! written, so a ring of `parts` slots is never overwritten before it is summed; the sums of
-//! the team's last passes are finished after it. So the power of many steps needs no more
-//! memory than a few passes' (a 128×128 cloth: 0.5 MB instead of 16 MB for 64 steps, which
-//! went out of the caches), and each part's values are added by the thread that has just
-//! written them or, a pass later, by a thread that still has them in its cache.
+//! Part `k`'s share of a slot is added after part `k - 1`'s (one pass earlier, behind a
+//! barrier) and before part `k + 1`'s: the order of one sum over the whole slot, whichever
+//! thread adds it. A slot is read until `parts - 1` passes after it was written, so a ring of
+//! `parts` slots is never overwritten before it is summed; the sums of the team's last passes
+//! are finished after it. Before the groups every part but the first wrote all its chunks'
+//! values to the ring and added them a pass later: on a 128×128 cloth at two threads, 2.5 µs
+//! of stores to lines outside the caches and 0.6 µs of additions per pass on that thread (of
+//! 65–70 µs). Now a part writes at most a group's chunks there, and the ring's slots stay the
+//! chunks' size (0.5 MB for two slots of the 128×128 cloth).
 //!
 //! **A serial stage.** Between two passes the body may call [`Crew::serial`]: the first thread
 //! to come runs a function on whole buffers (the collision response after a step, which reads
@@ -126,7 +130,10 @@ fn waited(start: &mut Option<Instant>, spins: u32) -> Duration {
 /// the contacts' values of the chunks added so far, the logical slot, and the next part.
 #[derive(Clone, Copy, Default)]
 struct Running {
-    sums: [[f64; LANES]; 2],
+    /// The sums of the slot's closed groups (`P` of `Stencil::sum_power`).
+    closed: [[f64; LANES]; 2],
+    /// The sums of its open group (`G`).
+    open: [[f64; LANES]; 2],
     slot: usize,
     next: usize,
 }
@@ -242,7 +249,7 @@ struct Common<'b> {
     homes: usize,
     buffers: [Shared; MAX_BUFFERS],
     count: usize,
-    /// The ring of power slots (each [`Stencil::power_len`] values), `ring` of them.
+    /// The ring of power slots (each [`Stencil::power_slot_len`] values), `ring` of them.
     power: SharedPower,
     ring: usize,
     /// Each slot's `(dampers and drag, contact)` power (W) once summed.
@@ -332,96 +339,88 @@ impl Common<'_> {
         output.check(n);
         // The part's piece of the pass's power slot, as `Stencil::write_in_parts` cuts it:
         // two values per particle from 2 q0, the last part to the end of the slot (padding).
-        // Part 0 adds its own chunks to its slot's running sums first, from zero, right as
-        // it writes them: summed in registers inside the kernel (`Scratch::sum_power`, the same
-        // additions in the same order as `add_power` on the written chunks), not written to the
-        // ring and read back.
-        let in_registers = k == 0 && sum.is_some() && sum == pass.power;
-        let power: &mut [f64] = match pass.power {
-            Some(_) if in_registers => &mut [],
+        // The part's pieces of the pass's power slot: of its chunks' values, as
+        // `Stencil::write_in_parts` cuts them (two values per particle from 2 q0, the last part
+        // to the end, padding), and of the groups' sums, those of the groups that start in it.
+        let (power, groups): (&mut [f64], &mut [f64]) = match pass.power {
             Some(slot) => {
                 let len = self.stencil.power_len();
                 let end = if k + 1 == self.parts { len } else { 2 * q1 };
+                let group = 2 * LANES * POWER_GROUP;
+                let (g0, g1) = ((2 * q0).div_ceil(group), end.div_ceil(group));
+                let at = slot % self.ring * self.stencil.power_slot_len();
                 // SAFETY: as above; the ring holds `ring` slots (checked by
-                // `Stencil::team_with_power`), the parts' pieces of a slot are disjoint, and
-                // no slot being summed is written (`Crew::pass_then` checked).
+                // `Stencil::team_with_power`), the parts' pieces of a slot are disjoint (a group
+                // starts in one part), and no slot being summed is written (`Crew::pass_then`
+                // checked).
                 unsafe {
-                    std::slice::from_raw_parts_mut(
-                        self.power.ptr.add(slot % self.ring * len + 2 * q0),
-                        end - 2 * q0,
+                    (
+                        std::slice::from_raw_parts_mut(
+                            self.power.ptr.add(at + 2 * q0),
+                            end - 2 * q0,
+                        ),
+                        std::slice::from_raw_parts_mut(
+                            self.power.ptr.add(at + len + 2 * LANES * g0),
+                            2 * LANES * (g1 - g0),
+                        ),
                     )
                 }
             }
-            None => &mut [],
+            None => (&mut [], &mut []),
         };
         let mut part = Part {
             outs: pass.outs.map(piece),
             power,
+            groups,
         };
         let (x, v) = (&read(pass.x)[..n], &read(pass.v)[..n]);
-        let sums = SCRATCH.with(|scratch| {
+        SCRATCH.with(|scratch| {
             let scratch = &mut scratch.borrow_mut();
-            scratch.sum_power = in_registers;
-            scratch.power_sums = [[0.0; LANES]; 2];
+            if pass.power.is_some() {
+                scratch.power_mode = PowerMode::Groups;
+            }
             self.stencil
                 .range(scratch, x, v, q0, q1, &mut part, &output);
-            // (An empty range returns before it takes the flag.)
-            scratch.sum_power = false;
-            scratch.power_sums
+            // (An empty range returns before it takes the mode.)
+            scratch.power_mode = PowerMode::Buffer;
         });
         if let Some(then) = then {
             let [xs, vs, _] = &mut part.outs;
             then(k, q0, xs, vs);
         }
         if let Some(slot) = sum {
-            if in_registers {
-                self.start_power(slot, sums);
-            } else {
-                self.add_power(k, slot);
-            }
+            self.add_power(k, slot);
         }
         self.done[k].0.store(s + 1, Ordering::Release);
     }
 
-    /// Adds part `k`'s chunks of power slot `slot` to the slot's running sums (module docs),
-    /// as [`Stencil::sum_power`] adds them; after the last part, the slot's total. The chunks
-    /// of part `k` are those from the first whole chunk at or after `2 bounds[k]` (the
-    /// parts' pieces of the ring, `run_part`) to the next part's first.
-    /// Part 0's running sums `sums` of slot `slot`, added in the kernel ([`Common::run_part`]):
-    /// what [`Common::add_power`] of part 0 leaves (after the last part, the slot's total).
-    fn start_power(&self, slot: usize, sums: [[f64; LANES]; 2]) {
-        let at = slot % self.ring;
-        // SAFETY: as in `add_power`: part 0 of a slot's pass is the first to touch its sums.
-        let running = unsafe { &mut *self.running[at].get() };
-        *running = Running {
-            sums,
-            slot,
-            next: 1,
-        };
-        if self.parts == 1 {
-            self.finish_power(slot, running);
-        }
-    }
-
+    /// Adds part `k`'s share of power slot `slot` to the slot's running sums (module docs),
+    /// as [`Stencil::sum_power`] adds them; after the last part, the slot's total. Part `k`'s
+    /// chunks are those from the first whole chunk at or after `bounds[k]` to the next part's
+    /// first: those before the first group that starts in it continue the open group, chunk
+    /// by chunk (from the ring); each group that starts in it closes the open one and opens
+    /// with the sums the part made of it (`PowerMode::Groups`).
     fn add_power(&self, k: usize, slot: usize) {
         let len = self.stencil.power_len();
-        let from = |k: usize| match k {
+        // The part's first chunk (the parts' pieces of the ring, `run_part`).
+        let first = |k: usize| match k {
             0 => 0,
-            k if k == self.parts => len,
-            k => (2 * self.bounds[k]).next_multiple_of(2 * LANES).min(len),
+            k if k == self.parts => len / (2 * LANES),
+            k => self.bounds[k].div_ceil(LANES).min(len / (2 * LANES)),
         };
-        let at = slot % self.ring;
-        // SAFETY: slot `at` of the ring was written by a pass every part of which is done (a
-        // barrier ago), and no pass writes it until its last part is added (`Crew::pass_then`
-        // checked); its running sums are touched by one part at a time, the parts in
-        // successive passes, each behind a barrier.
-        let (values, running) = unsafe {
+        let (c0, c1) = (first(k), first(k + 1));
+        let lead = c0.next_multiple_of(POWER_GROUP).min(c1);
+        let at = slot % self.ring * self.stencil.power_slot_len();
+        // SAFETY: slot `slot % ring` of the ring was written by a pass every part of which is
+        // done (a barrier ago), and no pass writes it until its last part is added
+        // (`Crew::pass_then` checked); its running sums are touched by one part at a time, the
+        // parts in successive passes, each behind a barrier.
+        let (values, groups, running) = unsafe {
+            let ring = self.power.ptr.add(at);
             (
-                std::slice::from_raw_parts(
-                    self.power.ptr.add(at * len + from(k)),
-                    from(k + 1) - from(k),
-                ),
-                &mut *self.running[at].get(),
+                std::slice::from_raw_parts(ring.add(2 * LANES * c0), 2 * LANES * (lead - c0)),
+                std::slice::from_raw_parts(ring.add(len), self.stencil.groups_len()),
+                &mut *self.running[slot % self.ring].get(),
             )
         };
         if k == 0 {
@@ -434,9 +433,21 @@ impl Common<'_> {
             running.slot == slot && running.next == k,
             "power summed out of order"
         );
-        Stencil::add_power(&mut running.sums, values, self.contact);
+        Stencil::add_power(&mut running.open, values, self.contact);
+        for g in c0.div_ceil(POWER_GROUP)..c1.div_ceil(POWER_GROUP) {
+            if g > 0 {
+                Stencil::close_group(&mut running.closed, &running.open);
+            }
+            let sums = &groups[2 * LANES * g..2 * LANES * (g + 1)];
+            for (open, column) in running.open.iter_mut().zip(sums.chunks_exact(LANES)) {
+                open.copy_from_slice(column);
+            }
+        }
         running.next = k + 1;
         if k + 1 == self.parts {
+            if c1 > 0 {
+                Stencil::close_group(&mut running.closed, &running.open);
+            }
             self.finish_power(slot, running);
         }
     }
@@ -445,7 +456,7 @@ impl Common<'_> {
     fn finish_power(&self, slot: usize, running: &Running) {
         assert!(slot < self.totals.len, "no power total {slot}");
         // SAFETY: inside the totals (checked); each slot's total is written once.
-        unsafe { *self.totals.ptr.add(slot) = Stencil::power_total(&running.sums, self.contact) };
+        unsafe { *self.totals.ptr.add(slot) = Stencil::power_total(&running.closed, self.contact) };
     }
 }
 
@@ -656,7 +667,7 @@ impl Stencil {
         body: &(dyn Fn(&Crew) + Sync),
     ) {
         let parts = parts.clamp(1, MAX_PARTS);
-        let ring = (power.ring.len() / self.power_len().max(1)).min(MAX_PARTS);
+        let ring = (power.ring.len() / self.power_slot_len().max(1)).min(MAX_PARTS);
         assert!(
             power.totals.is_empty() || ring >= parts,
             "a power ring of {ring} slots for {parts} parts"
@@ -754,14 +765,21 @@ impl Stencil {
     /// The values of a team's power ring ([`TeamPower::ring`]) for `parts` parts.
     #[must_use]
     pub fn power_ring_len(&self, parts: usize) -> usize {
-        parts.clamp(1, MAX_PARTS) * self.power_len()
+        parts.clamp(1, MAX_PARTS) * self.power_slot_len()
+    }
+
+    /// The values of one slot of a team's power ring: its chunks' values
+    /// ([`Stencil::power_len`]), then each group's sums.
+    #[must_use]
+    pub fn power_slot_len(&self) -> usize {
+        self.power_len() + self.groups_len()
     }
 }
 
 /// The dissipated power of a team's passes ([`Stencil::team_with_power`]).
 #[derive(Default)]
 pub struct TeamPower<'a> {
-    /// The ring of slots the passes write (scratch): whole slots of [`Stencil::power_len`]
+    /// The ring of slots the passes write (scratch): whole slots of [`Stencil::power_slot_len`]
     /// values, at least [`Stencil::power_ring_len`] values.
     pub ring: &'a mut [f64],
     /// Total `k`: `(dampers and drag, contact)` (W) of the pass with [`Pass::power`] `Some(k)`.
