@@ -569,7 +569,7 @@ impl Stencil {
     }
 
     /// The dissipated power in a buffer written by [`Stencil::write`]: `(dampers and drag,
-    /// contact)` (W), added chunk by chunk in a fixed order (so the same for any split).
+    /// contact)` (W), added in a fixed order, group by group (so the same for any split).
     /// `contact`: the pass had colliders ([`Dynamics::colliders`]). Without, the pass writes
     /// no contact values (they would all be `+0`, whose sum is `+0`): the contact power is
     /// `+0` and only the dampers' half of the buffer is read.
