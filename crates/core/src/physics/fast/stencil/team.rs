@@ -46,8 +46,8 @@
 //! are finished after it. Before the groups every part but the first wrote all its chunks'
 //! values to the ring and added them a pass later: on a 128×128 cloth at two threads, 2.5 µs
 //! of stores to lines outside the caches and 0.6 µs of additions per pass on that thread (of
-//! 65–70 µs). Now a part writes at most a group's chunks there, and the ring's slots stay the
-//! chunks' size (0.5 MB for two slots of the 128×128 cloth).
+//! 65–70 µs). Now a part writes at most a group's chunks there (a slot still has room for every
+//! chunk, and one sum per group: 0.5 MB for two slots of the 128×128 cloth).
 //!
 //! **A serial stage.** Between two passes the body may call [`Crew::serial`]: the first thread
 //! to come runs a function on whole buffers (the collision response after a step, which reads
@@ -127,7 +127,8 @@ fn waited(start: &mut Option<Instant>, spins: u32) -> Duration {
 }
 
 /// The running sums of one slot of the power ring (module docs): per lane, the dampers' and
-/// the contacts' values of the chunks added so far, the logical slot, and the next part.
+/// the contacts' values added so far (of the closed groups, and of the open one), the logical
+/// slot, and the next part.
 #[derive(Clone, Copy, Default)]
 struct Running {
     /// The sums of the slot's closed groups (`P` of `Stencil::sum_power`).
@@ -337,8 +338,6 @@ impl Common<'_> {
             after: pass.after,
         };
         output.check(n);
-        // The part's piece of the pass's power slot, as `Stencil::write_in_parts` cuts it:
-        // two values per particle from 2 q0, the last part to the end of the slot (padding).
         // The part's pieces of the pass's power slot: of its chunks' values, as
         // `Stencil::write_in_parts` cuts them (two values per particle from 2 q0, the last part
         // to the end, padding), and of the groups' sums, those of the groups that start in it.
