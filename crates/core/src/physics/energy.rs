@@ -490,13 +490,8 @@ mod tests {
         }
         springs.push(spring(40, 40, 0.0));
         springs.push(spring(70, 71, 0.05));
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut random = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut generator = crate::random::XorShift64Star::new(2);
+        let mut random = move || generator.unit();
         let mass: Vec<f64> = (0..n).map(|_| 0.01 + random()).collect();
         let model = Model::new(
             mass,

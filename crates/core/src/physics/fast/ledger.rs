@@ -56,13 +56,8 @@ mod tests {
     /// the block, pinned particles anywhere, velocities of ±0, huge, infinite and NaN.
     #[test]
     fn the_kinetic_energy_of_the_free_particles_is_the_iterators_sum() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut random = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut generator = crate::random::XorShift64Star::new(0x2545_f491_4f6c_dd1du64);
+        let mut random = move || generator.unit();
         for n in [0, 1, 2, 7, 63, 64, 65, 130, 625] {
             for round in 0..6 {
                 let inv_mass: Vec<f64> = (0..n)
