@@ -35,7 +35,7 @@ use glam::{DMat3, DVec3};
 use serde::{Serialize, Serializer};
 
 use super::energy::{Dissipated, Power, dissipated_power};
-use super::forces::Model;
+use super::forces::{Model, accelerations};
 use super::particles::State;
 use super::stencil::{After, Base, Output, Stencil, Update};
 
@@ -569,6 +569,41 @@ fn fused_pass(
     Power {
         dampers_and_drag,
         contact,
+    }
+}
+
+/// `a = a(x, v)` ([`accelerations`]) and, when `account`, the dissipated power at `(x, v)`
+/// ([`power_if`], zero otherwise), for a method whose update is its own loop (position and
+/// velocity Verlet): on a lattice with the fused passes wanted (`textbook` not set) both come
+/// from one stencil pass ([`fused_pass`]) instead of two, the same numbers bit for bit (the
+/// accelerations are that pass's output, and its power sums do not depend on what it writes or
+/// on the split); else the two calls.
+fn accelerations_and_power(
+    model: &Model,
+    x: &[DVec3],
+    v: &[DVec3],
+    a: &mut [DVec3],
+    account: bool,
+    textbook: bool,
+    scratch: &mut PowerScratch,
+) -> Power {
+    match model.stencil().filter(|_| !textbook) {
+        Some(stencil) => {
+            let output = Output::Accelerations(model.dynamics(true));
+            fused_pass(
+                stencil,
+                x,
+                v,
+                [a, &mut [], &mut []],
+                output,
+                account,
+                scratch,
+            )
+        }
+        None => {
+            accelerations(model, x, v, a);
+            power_if(account, model, x, v, scratch)
+        }
     }
 }
 

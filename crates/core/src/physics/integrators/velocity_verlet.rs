@@ -22,7 +22,9 @@
 //! `v*` differs from it by O(dt²), which costs O(dt³) per step in `v_{n+1}`, so the method stays
 //! second order (position Verlet, whose dampers see a velocity half a step late, becomes first
 //! order). Two force evaluations per step (the second could serve the next step when nothing
-//! changes the state in between; this file keeps the textbook form).
+//! changes the state in between; this file keeps the textbook form). On a lattice each
+//! evaluation and the dissipated power at the same state come from one stencil pass
+//! (`integrators::accelerations_and_power`, the same bits as the two calls).
 //!
 //! **Stability on the harmonic oscillator** `x'' = -ω² x`: the step matrix has trace
 //! `2 - dt²ω²` and determinant 1, the same recurrence as position Verlet and semi-implicit
@@ -37,11 +39,11 @@
 //! E. Hairer, C. Lubich, G. Wanner, "Geometric numerical integration illustrated by the
 //! Störmer–Verlet method", Acta Numerica 12 (2003), §1.3.
 
-use crate::physics::forces::{Model, accelerations};
+use crate::physics::forces::Model;
 use crate::physics::integrators::declaration::{
     Declaration, OscillatorLimit, Scratch, StabilityFunction, two_evaluations,
 };
-use crate::physics::integrators::{MethodParams, Workspace, power_if};
+use crate::physics::integrators::{MethodParams, Workspace, accelerations_and_power};
 use crate::physics::particles::State;
 
 /// The method's row of the registry (`integrators.rs`).
@@ -70,24 +72,26 @@ fn step(model: &Model, state: &mut State, dt: f64, _: &MethodParams, work: &mut 
         k,
         v_stage,
         account,
+        textbook,
         dissipated,
         power_f,
         ..
     } = work;
-    // D += dt/2 P(x_n, v_n), when accounting.
-    dissipated.add_power(half, power_if(*account, model, &state.x, &state.v, power_f));
-    // a_n = a(x_n, v_n).
-    accelerations(model, &state.x, &state.v, a);
+    let (account, textbook) = (*account, *textbook);
+    // a_n = a(x_n, v_n); D += dt/2 P(x_n, v_n), when accounting (on a lattice from one pass,
+    // `accelerations_and_power`).
+    let (x, v) = (&state.x, &state.v);
+    let p = accelerations_and_power(model, x, v, a, account, textbook, power_f);
+    dissipated.add_power(half, p);
     for i in 0..state.x.len() {
         // x_{n+1} = x_n + dt v_n + ½ dt² a_n; v* = v_n + dt a_n.
         state.x[i] += dt * state.v[i] + half * dt * a[i];
         v_stage[i] = state.v[i] + dt * a[i];
     }
-    // D += dt/2 P(x_{n+1}, v*), when accounting.
-    dissipated.add_power(half, power_if(*account, model, &state.x, v_stage, power_f));
-    // a_{n+1} = a(x_{n+1}, v*).
+    // a_{n+1} = a(x_{n+1}, v*); D += dt/2 P(x_{n+1}, v*), when accounting.
     let a_new = &mut k[0];
-    accelerations(model, &state.x, v_stage, a_new);
+    let p = accelerations_and_power(model, &state.x, v_stage, a_new, account, textbook, power_f);
+    dissipated.add_power(half, p);
     for i in 0..state.v.len() {
         // v_{n+1} = v_n + ½ dt (a_n + a_{n+1}).
         state.v[i] += half * (a[i] + a_new[i]);

@@ -51,7 +51,9 @@
 //! **Fast path.** On a chain (a rope) the projection computes eight rods of a colour at a time
 //! with the textbook's operations, so the same bits
 //! ([`project_distances_fast`](crate::physics::constraints::project_distances_fast); the
-//! workspace's `textbook` flag keeps the loop, and the tests compare the two).
+//! workspace's `textbook` flag keeps the loop, and the tests compare the two). On a lattice the
+//! accelerations and the dissipated power at `(x_n, v_n)` come from one stencil pass instead of
+//! two (`integrators::accelerations_and_power`, the same bits).
 //!
 //! **Energy accounting**: the dampers' power at `(x_n, v_n)` times `dt` (what the force saw),
 //! `½ m (1 - (1 - γ)²) |x_n - x_{n-1}|²/dt²` for the factor, `dt r m |v_centred|²` for the rate,
@@ -70,13 +72,12 @@ use crate::physics::constraints::{prepare_rods, project_distances, project_dista
 #[cfg(test)]
 use crate::physics::fast::energy::kinetic_gravity;
 use crate::physics::fast::energy::{all_below, kinetic_gravity_pair, kinetic_gravity_terms};
-use crate::physics::forces::{Model, accelerations};
+use crate::physics::forces::Model;
 
 use crate::physics::integrators::declaration::{
     Declaration, OscillatorLimit, Scratch, StabilityFunction,
 };
-use crate::physics::energy::Power;
-use crate::physics::integrators::{MethodParams, Workspace, power_if};
+use crate::physics::integrators::{MethodParams, Workspace, accelerations_and_power};
 use crate::physics::particles::State;
 
 /// The method's row of the registry (`integrators.rs`).
@@ -135,7 +136,26 @@ fn step(
         ..
     } = work;
     let (account, textbook) = (*account, *textbook);
-    accelerations(model, &state.x, &state.v, a);
+    // a_n = a(x_n, v_n), and the power of the dampers and drag, which saw
+    // v_n = (x_n - x_{n-1})/dt: D += dt P(x_n, v_n), when accounting. Without dampers, drag,
+    // colliders or a stencil's pass, `dissipated_power` adds nothing to its `+0` sums: `+0`
+    // (`Power::default`), not computed. What kinds of springs there are the model keeps
+    // (`Model::spring_kinds`: rods only, some damper), found once, not walked every step. On a
+    // lattice the accelerations and the power come from one pass (`accelerations_and_power`).
+    let kinds = account.then(|| model.spring_kinds());
+    let no_power = kinds.is_some_and(|k| !k.dampers)
+        && model.drag == 0.0
+        && model.colliders.is_empty()
+        && model.stencil().is_none();
+    let power = accelerations_and_power(
+        model,
+        &state.x,
+        &state.v,
+        a,
+        account && !no_power,
+        textbook,
+        power_f,
+    );
     let dt2 = dt * dt;
     if !state.history_valid {
         // x_{-1} = x_0 - dt v_0 + ½ dt² a_0 (backward Taylor step, error O(dt³)).
@@ -143,20 +163,6 @@ fn step(
             state.x_prev[i] = state.x[i] - dt * state.v[i] + 0.5 * dt2 * a[i];
         }
     }
-    // The dampers and drag saw v_n = (x_n - x_{n-1})/dt: D += dt P(x_n, v_n), when accounting.
-    // Without dampers, drag, colliders or a stencil's pass, `dissipated_power` adds nothing to
-    // its `+0` sums: `+0` (`Power::default`). What kinds of springs there are the model keeps
-    // (`Model::spring_kinds`: rods only, some damper), found once, not walked every step.
-    let kinds = account.then(|| model.spring_kinds());
-    let power = if kinds.is_some_and(|k| !k.dampers)
-        && model.drag == 0.0
-        && model.colliders.is_empty()
-        && model.stencil().is_none()
-    {
-        Power::default()
-    } else {
-        power_if(account, model, &state.x, &state.v, power_f)
-    };
     dissipated.add_power(dt, power);
     let keep = 1.0 - params.verlet_damping;
     let rate = params.verlet_damping_rate;
