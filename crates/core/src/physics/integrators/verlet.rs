@@ -299,6 +299,7 @@ fn bounded(x: &[DVec3]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::physics::energy::Power;
     use crate::physics::springs::{Spring, SpringKind};
 
     /// [`mechanical_energy`] as the textbook writes it: every spring's `½ k (L - L0)²`.
