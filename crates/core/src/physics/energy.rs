@@ -225,6 +225,7 @@ impl Ledger {
         // left out: `d - (+0) = d` for every `d`.
         let world = World::from(model);
         let (incident, start) = (world.incident, world.incident_start);
+        let twins = model.incident_twins();
         // Every mark lies in a record's list, and only those lists are read: a few records (a
         // large cloth's pushes) clear their lists' words only, not the whole bitmap of two bits
         // per spring; many (a payment) clear it all at once.
@@ -256,11 +257,9 @@ impl Ledger {
                         // Marked from the other end's own list.
                         continue;
                     }
-                    // Summed at the other end: its entry of this spring.
-                    let list = start[other] as usize..start[other + 1] as usize;
-                    if let Some(h) = list.into_iter().find(|&h| incident[h] == k) {
-                        mark(h);
-                    }
+                    // Summed at the other end: its entry of this spring (the spring's one
+                    // entry in that list, `other != j`).
+                    mark(twins[h] as usize);
                 } else {
                     mark(h);
                 }

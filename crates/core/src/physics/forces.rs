@@ -65,6 +65,10 @@ pub struct Model {
     incident: Vec<u32>,
     /// See `incident`; `particles + 1` entries.
     incident_start: Vec<u32>,
+    /// For each entry `h` of `incident` (a spring at one of its ends), the entry of the same
+    /// spring in the list of its other end (for a spring from a particle to itself, its other
+    /// entry in the same list).
+    incident_twin: Vec<u32>,
 }
 
 impl Model {
@@ -95,10 +99,11 @@ impl Model {
             .collect();
         let (projection_order, colour_starts) = colour_springs(n, &springs);
         let stencil = Stencil::detect(n, &springs);
-        let (incident, incident_start) = incidence(n, &springs);
+        let (incident, incident_start, incident_twin) = incidence(n, &springs);
         Model {
             incident,
             incident_start,
+            incident_twin,
             elastic: any_elastic(&springs),
             kinds: spring_kinds(&springs),
             stencil,
@@ -151,7 +156,8 @@ impl Model {
         self.stencil = Stencil::detect(self.particle_count(), &self.springs);
         self.elastic = any_elastic(&self.springs);
         self.kinds = spring_kinds(&self.springs);
-        (self.incident, self.incident_start) = incidence(self.particle_count(), &self.springs);
+        (self.incident, self.incident_start, self.incident_twin) =
+            incidence(self.particle_count(), &self.springs);
     }
 
     /// The indices of the springs with an end at particle `i`, in spring order.
@@ -159,6 +165,12 @@ impl Model {
     pub fn springs_at(&self, i: usize) -> &[u32] {
         let (start, end) = (self.incident_start[i], self.incident_start[i + 1]);
         &self.incident[start as usize..end as usize]
+    }
+
+    /// For each entry of the springs-at-a-particle lists (`World::incident`), the entry of the
+    /// same spring in its other end's list.
+    pub(crate) fn incident_twins(&self) -> &[u32] {
+        &self.incident_twin
     }
 
     /// Sets the stiffness (N/m) and damping (N·s/m) of every spring.
@@ -284,7 +296,7 @@ fn any_elastic(springs: &[Spring]) -> bool {
 
 /// For every particle, the indices of its springs (counting sort by end, in spring order):
 /// `(indices, starts)` with `starts[i]..starts[i + 1]` the range of particle `i`.
-fn incidence(particles: usize, springs: &[Spring]) -> (Vec<u32>, Vec<u32>) {
+fn incidence(particles: usize, springs: &[Spring]) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
     let mut starts = vec![0u32; particles + 1];
     for s in springs {
         starts[s.a as usize + 1] += 1;
@@ -295,13 +307,18 @@ fn incidence(particles: usize, springs: &[Spring]) -> (Vec<u32>, Vec<u32>) {
     }
     let mut fill = starts.clone();
     let mut indices = vec![0u32; 2 * springs.len()];
+    let mut twins = vec![0u32; 2 * springs.len()];
     for (k, s) in springs.iter().enumerate() {
-        for end in [s.a as usize, s.b as usize] {
+        let mut entries = [0u32; 2];
+        for (entry, end) in entries.iter_mut().zip([s.a as usize, s.b as usize]) {
+            *entry = fill[end];
             indices[fill[end] as usize] = k as u32;
             fill[end] += 1;
         }
+        twins[entries[0] as usize] = entries[1];
+        twins[entries[1] as usize] = entries[0];
     }
-    (indices, starts)
+    (indices, starts, twins)
 }
 
 /// Greedy edge colouring in spring order: each spring takes the smallest colour not yet used at
@@ -448,6 +465,64 @@ impl<'a> From<&'a Model> for World<'a> {
             springs: &model.springs,
             incident: &model.incident,
             incident_start: &model.incident_start,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::springs::SpringKind;
+
+    /// Every entry's twin holds the same spring, in the list of the spring's other end (the
+    /// other entry of the same list for a spring from a particle to itself), and twins pair up:
+    /// on random springs with repeated pairs and springs from a particle to itself.
+    #[test]
+    fn each_entry_of_the_incidence_lists_knows_its_twin() {
+        let mut generator = crate::random::XorShift64Star::new(0x7715_0000_0000_0047);
+        for particles in [1, 2, 5, 40] {
+            let springs: Vec<Spring> = (0..3 * particles)
+                .map(|_| {
+                    let end = |g: &mut crate::random::XorShift64Star| {
+                        (g.unit() * particles as f64) as u32 % particles as u32
+                    };
+                    let (a, b) = (end(&mut generator), end(&mut generator));
+                    Spring {
+                        a,
+                        b,
+                        rest_length: 1.0,
+                        stiffness: 1.0,
+                        damping: 0.0,
+                        kind: SpringKind::Struct,
+                    }
+                })
+                .collect();
+            let (incident, start, twins) = incidence(particles, &springs);
+            let list = |p: u32| start[p as usize] as usize..start[p as usize + 1] as usize;
+            let mut self_springs = 0;
+            for (h, &twin) in twins.iter().enumerate() {
+                let (k, twin) = (incident[h], twin as usize);
+                let s = &springs[k as usize];
+                assert_eq!(
+                    incident[twin], k,
+                    "entry {h}: its twin holds another spring"
+                );
+                assert_eq!(twins[twin] as usize, h, "entry {h}: twins do not pair up");
+                assert_ne!(twin, h, "entry {h} is its own twin");
+                // The list that holds h is one end's; the twin lies in the other end's.
+                let here = if list(s.a).contains(&h) { s.a } else { s.b };
+                assert!(list(here).contains(&h), "entry {h} in neither end's list");
+                let there = if here == s.a { s.b } else { s.a };
+                assert!(
+                    list(there).contains(&twin),
+                    "entry {h}: twin not at the other end"
+                );
+                self_springs += usize::from(s.a == s.b);
+            }
+            assert!(
+                particles > 5 || self_springs > 0,
+                "{particles}: no spring to itself"
+            );
         }
     }
 }
