@@ -528,23 +528,23 @@ fn explicit_step(
     textbook: TextbookStep,
     fast: FusedStep,
 ) -> u64 {
-    match fused(model, work) {
+    match fused(model, work.textbook) {
         Some(stencil) => fast(stencil, model, state, dt, work),
         None => textbook(model, state, dt, work),
     }
 }
 
 /// The stencil, when the method should fuse its stages into the stencil's passes: a lattice,
-/// and `work.textbook` not set.
-fn fused<'m>(model: &'m Model, work: &Workspace) -> Option<&'m Stencil> {
-    if work.textbook { None } else { model.stencil() }
+/// and `textbook` (the workspace's flag) not set.
+fn fused(model: &Model, textbook: bool) -> Option<&Stencil> {
+    if textbook { None } else { model.stencil() }
 }
 
 /// The stencil and its number of parts when a method's many steps can run as one team of
 /// threads ([`Stencil::team`]): a lattice with the fused passes wanted ([`fused`]) and work for
 /// at least two threads.
 fn team<'m>(model: &'m Model, work: &Workspace) -> Option<(&'m Stencil, usize)> {
-    let stencil = fused(model, work)?;
+    let stencil = fused(model, work.textbook)?;
     let parts = stencil.parallel_parts(crate::physics::pool::Pool::global().threads());
     (parts >= 2).then_some((stencil, parts))
 }
@@ -587,7 +587,7 @@ fn accelerations_and_power(
     textbook: bool,
     scratch: &mut PowerScratch,
 ) -> Power {
-    match model.stencil().filter(|_| !textbook) {
+    match fused(model, textbook) {
         Some(stencil) => {
             let output = Output::Accelerations(model.dynamics(true));
             fused_pass(

@@ -119,7 +119,7 @@ pub(super) fn step(
     params: &MethodParams,
     work: &mut Workspace,
 ) -> u64 {
-    match fused(model, work).filter(|s| lattice::usable(s)) {
+    match fused(model, work.textbook).filter(|s| lattice::usable(s)) {
         Some(stencil) => lattice::step(stencil, model, state, dt, params, work),
         None => newton_step(model, state, dt, params, work),
     }

@@ -90,7 +90,7 @@ pub(super) fn steps(
     work: &mut Workspace,
     n: u64,
 ) -> Option<u64> {
-    let stencil = fused(model, work)?;
+    let stencil = fused(model, work.textbook)?;
     let dynamics = model.dynamics(true);
     let account = work.account;
     let per_step = |p: Power| {

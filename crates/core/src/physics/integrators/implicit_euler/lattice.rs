@@ -25,7 +25,7 @@ pub(super) use crate::physics::fast::implicit_lattice::usable;
 /// term summed on the lattice where there is one (eight springs at a time; equal to rounding).
 /// `Simulation`'s energy guard compares two of these around every step.
 pub fn guard_energy(model: &Model, state: &State, work: &mut Workspace) -> Energy {
-    match fused(model, work) {
+    match fused(model, work.textbook) {
         Some(stencil) => {
             let elastic = work.lattice.elastic_energy(stencil, &state.x);
             energy_with_elastic(model, state, elastic)
