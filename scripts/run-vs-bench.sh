@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # `springlab run` against `springlab bench`: each peer workload (docs/workloads.md) beside the
 # course scene that does the same work, timed in one interleaved run, on one thread
-# (SPRINGLAB_THREADS=1) and on all threads; prints steps/s of both and run/bench.
+# (SPRINGLAB_THREADS=1) and on all threads; prints steps/s of both and run/bench, for `run`
+# as it is by default (with its energy accounting, which the bench does not do) and with
+# `--no-accounting` (the bench's work, and the scene's collision response).
 #
 # Usage: scripts/run-vs-bench.sh [-n ROUNDS] [WORKLOAD...]
 #   ROUNDS     rounds (default 3); each round times the bench and the run of every workload at
@@ -18,6 +20,7 @@
 #   rope-se              rope, 64 nodes over 1 m, k = 50 000 N/m, k_d = 1 N·s/m, 10 000 steps
 #   rope-verlet          rope, 64 nodes, k = 0, Verlet with 20 projections, 10 000 steps
 # run's steps/s is its steps over its `wall_seconds` (the stepping, as bench times it).
+# The accounting's share of a step is the difference of the two run columns.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
@@ -62,9 +65,9 @@ bench_rate() { # WORKLOAD -> steps/s
     "$springlab" bench "$1" --json --repeats 3 --budget 0 --force |
         grep -o '"steps_per_second":[^,}]*' | head -1 | cut -d: -f2
 }
-run_rate() { # WORKLOAD -> steps/s
+run_rate() { # WORKLOAD [FLAG] -> steps/s
     # shellcheck disable=SC2046
-    "$springlab" run $(scene_of "$1") --json --force |
+    "$springlab" run $(scene_of "$1") --json --force ${2:+"$2"} |
         awk '{ match($0, /"steps":[^,]*/); s = substr($0, RSTART + 8, RLENGTH - 8)
                match($0, /"wall_seconds":[^,]*/); w = substr($0, RSTART + 15, RLENGTH - 15)
                printf "%.1f\n", s / w }'
@@ -78,18 +81,22 @@ for ((round = 1; round <= rounds; round++)); do
         for t in 1 "$all"; do
             b=$(SPRINGLAB_THREADS=$t bench_rate "$w")
             r=$(SPRINGLAB_THREADS=$t run_rate "$w")
+            q=$(SPRINGLAB_THREADS=$t run_rate "$w" --no-accounting)
             rate[$w,$t,b]=$(best "$b" "${rate[$w,$t,b]:-}")
             rate[$w,$t,r]=$(best "$r" "${rate[$w,$t,r]:-}")
+            rate[$w,$t,q]=$(best "$q" "${rate[$w,$t,q]:-}")
         done
     done
 done
 
 echo "load $(cut -d' ' -f1-3 /proc/loadavg), $rounds rounds, best of each"
-printf '%-12s %7s %12s %12s %7s\n' workload threads bench run run/bench
+printf '%-12s %7s %12s %12s %7s %14s %7s\n' workload threads bench run run/bench \
+    "no accounting" "/bench"
+percent() { awk -v b="$1" -v r="$2" 'BEGIN { print 100 * r / b }'; }
 for w in "${workloads[@]}"; do
     for t in 1 "$all"; do
-        b=${rate[$w,$t,b]} r=${rate[$w,$t,r]}
-        printf '%-12s %7s %12.0f %12.0f %6.1f%%\n' "$w" "$t" "$b" "$r" \
-            "$(awk -v b="$b" -v r="$r" 'BEGIN { print 100 * r / b }')"
+        b=${rate[$w,$t,b]} r=${rate[$w,$t,r]} q=${rate[$w,$t,q]}
+        printf '%-12s %7s %12.0f %12.0f %6.1f%% %14.0f %6.1f%%\n' "$w" "$t" "$b" "$r" \
+            "$(percent "$b" "$r")" "$q" "$(percent "$b" "$q")"
     done
 done

@@ -319,3 +319,79 @@ fn springlab_kernel_chooses_the_spring_kernel_or_says_what_it_accepts() {
         );
     }
 }
+
+/// `--no-accounting` takes nothing from the motion: the accounting only watches it, so every
+/// position, velocity and energy is the same bits with and without it (scenes on each of the
+/// simulator's paths: the lattice's fused chunks with a plane's response, spheres that push a
+/// cloth, Verlet's projections on the rope, implicit Euler's energy guard), and only the
+/// accounting's own numbers are left out.
+#[test]
+fn no_accounting_leaves_the_motion_as_it_is() {
+    let runs: [&[&str]; 4] = [
+        &[
+            "cube-plane",
+            "--set",
+            "n=6",
+            "--set",
+            "offset=[0,-0.9,0]",
+            "--time",
+            "0.6",
+        ],
+        &["cloth-spheres", "--time", "0.3"],
+        &["rope", "--method", "verlet", "--time", "2"],
+        &["jelly-bowl", "--method", "implicit-euler", "--time", "0.2"],
+    ];
+    for run in runs {
+        let mut args = vec!["run"];
+        args.extend_from_slice(run);
+        args.push("--json");
+        let mut with = json(&args);
+        args.push("--no-accounting");
+        let mut without = json(&args);
+        assert!(with["residual"].is_f64(), "{run:?}: {}", with["residual"]);
+        assert!(with["dissipated"]["total"].is_f64(), "{run:?}");
+        for key in ["residual", "dissipated", "not_accurate"] {
+            assert!(without[key].is_null(), "{run:?}: {key} = {}", without[key]);
+            with[key] = serde_json::Value::Null;
+        }
+        with["wall_seconds"] = 0.into();
+        without["wall_seconds"] = 0.into();
+        assert!(with["steps"].as_u64().is_some_and(|n| n > 0), "{run:?}");
+        assert_eq!(with, without, "{run:?}");
+    }
+}
+
+#[test]
+fn without_accounting_the_csv_leaves_its_columns_empty_and_the_summary_says_so() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("osc.csv");
+    let out = springlab(&[
+        "run",
+        "oscillator",
+        "--steps",
+        "10",
+        "--csv",
+        path.to_str().unwrap(),
+        "--no-accounting",
+    ]);
+    assert!(out.status.success());
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        summary.contains("energy accounting: off (--no-accounting)"),
+        "{summary}"
+    );
+    assert!(!summary.contains("residual"), "{summary}");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 1 + 11, "header and steps 0 to 10");
+    for line in &lines[1..] {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells.len(), 14, "{line}");
+        assert_eq!((cells[6], cells[7]), ("", ""), "{line}");
+        let numbers: Vec<f64> = (cells[..6].iter().chain(&cells[8..]))
+            .map(|c| c.parse().expect("a number"))
+            .collect();
+        // total = kinetic + gravity + elastic
+        assert!((numbers[2] + numbers[3] + numbers[4] - numbers[5]).abs() < 1e-12);
+    }
+}
