@@ -237,7 +237,8 @@ fn the_rope_converges_at_second_order_to_the_continuum_and_the_study_says_where(
     assert_eq!(time, 1.0);
     let planned =
         resolution::runs(&refinement, &levels, &options, time, &Limits::DEFAULT).expect("runs");
-    let report = resolution::resolution(&refinement, &options, time, &planned, &mut |_, _, _| {});
+    let report =
+        resolution::resolution(&refinement, &options, time, &planned, &mut |_, _, _, _| {});
     let exact: Vec<f64> = (1..=observe::SAMPLES)
         .map(|k| continuum_end(k as f64 * time / observe::SAMPLES as f64))
         .collect();

@@ -18,6 +18,7 @@ mod common;
 mod advise;
 mod bench_workloads;
 mod budget;
+mod cli_progress;
 mod cli_run;
 mod cli_scene_files;
 mod collide;

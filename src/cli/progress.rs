@@ -2,18 +2,25 @@
 
 use std::fmt;
 use std::io::IsTerminal;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::{HumanDuration, ProgressBar, ProgressDrawTarget, ProgressState, ProgressStyle};
 
 /// A progress bar on standard error that appears only on a terminal and only once the work has
 /// taken a second; piped or redirected output stays free of it. Off a terminal there is no bar
 /// at all (`bar` is `None`), so a short run's timing holds no bar's set-up (indicatif parses its
 /// templates when a bar is made).
+///
+/// The bar is one line, its label cut to the terminal's width (a line that wrapped would be
+/// redrawn on the line below at every tick). It is shown once, by whichever comes first after a
+/// second: a timer thread, or an update (a second `set_draw_target` would start a new bar below
+/// the first and leave the first on the screen). Its time left says `…` until a unit is done.
 pub struct Progress {
     bar: Option<ProgressBar>,
     start: Instant,
-    shown: bool,
+    shown: Arc<AtomicBool>,
 }
 
 impl Progress {
@@ -22,21 +29,22 @@ impl Progress {
     /// a second.
     #[must_use]
     pub fn new(len: u64, label: &str) -> Progress {
+        let shown = Arc::new(AtomicBool::new(false));
         let bar = std::io::stderr().is_terminal().then(|| {
             let bar = ProgressBar::hidden();
             bar.set_length(len);
             if let Ok(style) = ProgressStyle::with_template(
-                "{msg} {bar:30} {pos}/{len} elapsed {elapsed} eta {eta}",
+                "{wide_msg} {bar:20} {pos}/{len} {elapsed} · {left} left",
             ) {
-                bar.set_style(style);
+                bar.set_style(style.with_key("left", time_left));
             }
             bar.set_message(label.to_string());
             let later = bar.clone();
+            let once = Arc::clone(&shown);
             std::thread::spawn(move || {
                 std::thread::sleep(Duration::from_secs(1));
                 if !later.is_finished() {
-                    later.set_draw_target(ProgressDrawTarget::stderr());
-                    later.enable_steady_tick(Duration::from_millis(500));
+                    show(&later, &once);
                 }
             });
             bar
@@ -44,17 +52,15 @@ impl Progress {
         Progress {
             bar,
             start: Instant::now(),
-            shown: false,
+            shown,
         }
     }
 
     fn reveal(&mut self) {
         if let Some(bar) = &self.bar
-            && !self.shown
             && self.start.elapsed() >= Duration::from_secs(1)
         {
-            bar.set_draw_target(ProgressDrawTarget::stderr());
-            self.shown = true;
+            show(bar, &self.shown);
         }
     }
 
@@ -88,6 +94,23 @@ impl Progress {
             bar.finish_and_clear();
         }
     }
+}
+
+/// Shows `bar` on standard error unless `shown` says it already is.
+fn show(bar: &ProgressBar, shown: &AtomicBool) {
+    if !shown.swap(true, Ordering::SeqCst) {
+        bar.set_draw_target(ProgressDrawTarget::stderr());
+        bar.enable_steady_tick(Duration::from_millis(500));
+    }
+}
+
+/// The time left at the rate so far (`…` before the first unit is done, when there is no rate).
+fn time_left(state: &ProgressState, w: &mut dyn fmt::Write) {
+    let _ = if state.pos() == 0 {
+        write!(w, "…")
+    } else {
+        write!(w, "{:#}", HumanDuration(state.eta()))
+    };
 }
 
 impl Drop for Progress {

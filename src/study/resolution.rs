@@ -63,6 +63,7 @@ use super::StudyError;
 use super::modes::omega_max;
 use super::observe::{self, Difference, Measurement, Observable, Observation, Unit};
 use crate::physics::Method;
+use crate::physics::pool::JobEvent;
 use crate::scene::{self, Scene};
 
 pub mod limit;
@@ -370,15 +371,16 @@ fn weight_of(p: &PlannedRun) -> f64 {
     p.scene.spring_count() as f64 * p.steps as f64
 }
 
-/// Runs the study on the planned `runs` (see [`runs`]) over the cores; calls `progress(i)` as
-/// run `i` starts (`i = planned.len()`: the time-step check).
+/// Runs the study on the planned `runs` (see [`runs`]) over the cores; calls
+/// `progress(i, n, kinds, …)` as run `i` starts and as it ends (`i = planned.len()`: the
+/// time-step check).
 #[must_use]
 pub fn resolution(
     refinement: &Refinement,
     options: &ResolutionOptions,
     time: f64,
     planned: &[PlannedRun],
-    progress: &mut dyn FnMut(usize, i64, Kinds),
+    progress: &mut dyn FnMut(usize, i64, Kinds, JobEvent),
 ) -> ResolutionReport {
     // The runs are independent, and so is the time-step check (the base level at dt / 2, the
     // last job): all of them spread over the cores, the costliest first; each result is the
@@ -402,11 +404,12 @@ pub fn resolution(
     };
     let jobs = planned.len() + usize::from(base.is_some());
     let threads = crate::physics::pool::Pool::global().threads();
-    let mut measured =
-        crate::physics::pool::independent(jobs, threads, weight, job, |i| match planned.get(i) {
-            Some(p) => progress(i, p.n, p.kinds),
-            None => progress(planned.len(), refinement.base, Kinds::All),
-        });
+    let mut measured = crate::physics::pool::independent(jobs, threads, weight, job, |i, e| {
+        match planned.get(i) {
+            Some(p) => progress(i, p.n, p.kinds, e),
+            None => progress(planned.len(), refinement.base, Kinds::All, e),
+        }
+    });
     let half = base.and_then(|_| measured.pop());
     let mut runs: Vec<LevelRun> = Vec::with_capacity(planned.len());
     for (p, run) in planned.iter().zip(measured) {

@@ -108,6 +108,7 @@ use super::linear::{self, Linearisation};
 use super::modes::omega_max;
 use super::theory::equilibrium::spectrum_at_equilibrium;
 use super::theory::{self, TheoryLimit};
+use crate::physics::pool::JobEvent;
 use crate::physics::{Method, OscillatorLimit, energy};
 use crate::scene::{self, Scene};
 
@@ -332,7 +333,7 @@ pub fn stability(
     options: &StabilityOptions,
     progress: &mut dyn FnMut(Method, &Probe),
 ) -> Result<StabilityReport, StudyError> {
-    stability_with(scene, options, progress, &mut |_| {})
+    stability_with(scene, options, progress, &mut |_, _| {})
 }
 
 /// Counts a job out of [`Context::busy`] when it ends.
@@ -350,8 +351,8 @@ enum Job {
     Stiffest((StiffestState, usize, theory::Spectrum)),
 }
 
-/// [`stability`], also calling `started` as each method's search starts (on the calling
-/// thread, while the others run: a terminal's progress).
+/// [`stability`], also calling `event(method, …)` as each method's search starts and as it
+/// ends (on the calling thread, while the others run: a terminal's progress).
 ///
 /// # Errors
 /// As [`stability`].
@@ -359,7 +360,7 @@ pub fn stability_with(
     scene: &Scene,
     options: &StabilityOptions,
     progress: &mut dyn FnMut(Method, &Probe),
-    started: &mut dyn FnMut(Method),
+    event: &mut dyn FnMut(Method, JobEvent),
 ) -> Result<StabilityReport, StudyError> {
     let horizon = options.horizon;
     if !(horizon > 0.0 && horizon.is_finite()) {
@@ -454,9 +455,9 @@ pub fn stability_with(
         }
         None => f64::INFINITY,
     };
-    let mut jobs = crate::physics::pool::independent(count + 1, threads, weight, job, |i| {
+    let mut jobs = crate::physics::pool::independent(count + 1, threads, weight, job, |i, e| {
         if let Some(&m) = options.methods.get(i) {
-            started(m);
+            event(m, e);
         }
     });
     let Some(Job::Stiffest((stiffest_state, stiffest_body, stiffest_spectrum))) = jobs.pop() else {

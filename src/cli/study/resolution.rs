@@ -8,6 +8,7 @@ use super::super::progress::Progress;
 use crate::budget::{self, Limits};
 use crate::output;
 use crate::physics::Method;
+use crate::physics::pool::JobEvent;
 use crate::scene;
 use crate::study::observe::{Difference, Unit};
 use crate::study::resolution::{self, Kinds, LevelRun, ResolutionOptions, ResolutionReport};
@@ -64,15 +65,27 @@ pub(super) fn run_resolution(args: &ResolutionArgs) -> anyhow::Result<()> {
     let total = planned.len() as u64 + 1;
     let mut progress = Progress::new(total, &format!("study resolution {}", args.scene));
     let key = refinement.dimension.key();
-    let report = resolution::resolution(&refinement, &options, time, &planned, &mut |i, n, k| {
-        progress.set(i as u64);
+    // The runs go over the cores, the costliest first: the bar counts those ended and names
+    // those running.
+    let mut running: Vec<String> = Vec::new();
+    let mut ended = 0;
+    let mut on_run = |i: usize, n: i64, k: Kinds, e: JobEvent| {
         let what = if i == planned.len() {
-            "time-step check".to_string()
+            format!("{key} = {n} at dt/2")
         } else {
-            k.name().to_string()
+            format!("{key} = {n} {}", k.name())
         };
-        progress.label(format!("study resolution: {key} = {n}, {what}"));
-    });
+        match e {
+            JobEvent::Started => running.push(what),
+            JobEvent::Finished => {
+                running.retain(|r| *r != what);
+                ended += 1;
+            }
+        }
+        progress.label(format!("{}: {}", args.scene, running.join(", ")));
+        progress.set(ended);
+    };
+    let report = resolution::resolution(&refinement, &options, time, &planned, &mut on_run);
     progress.finish();
     if let Some(path) = &args.png {
         crate::cli::study_chart::save_resolution(&report, path)?;

@@ -250,8 +250,18 @@ pub fn alone<R>(f: impl FnOnce() -> R) -> R {
     f()
 }
 
+/// What became of a job of [`independent`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JobEvent {
+    /// The job started.
+    Started,
+    /// The job ended (its result is kept).
+    Finished,
+}
+
 /// Runs `job(0)`, …, `job(count - 1)` on up to `threads` scoped threads and returns their
-/// results in index order; `started(i)` is called on the calling thread as job `i` starts.
+/// results in index order; `event(i, …)` is called on the calling thread as job `i` starts and
+/// as it ends (a terminal's progress).
 ///
 /// For independent runs (the levels of a study, a verification beside its confirmation):
 /// heaviest first by `weight` (largest-processing-time first, so that the longest job does not
@@ -272,14 +282,16 @@ pub fn independent<R: Send>(
     threads: usize,
     weight: impl Fn(usize) -> f64,
     job: impl Fn(usize) -> R + Sync,
-    mut started: impl FnMut(usize),
+    mut event: impl FnMut(usize, JobEvent),
 ) -> Vec<R> {
     let threads = threads.clamp(1, count.max(1));
     if threads == 1 {
         return (0..count)
             .map(|i| {
-                started(i);
-                job(i)
+                event(i, JobEvent::Started);
+                let r = job(i);
+                event(i, JobEvent::Finished);
+                r
             })
             .collect();
     }
@@ -307,8 +319,11 @@ pub fn independent<R: Send>(
         // Ends when every thread has finished (or one panicked: the scope then panics too).
         for (i, result) in rx {
             match result {
-                None => started(i),
-                Some(r) => results[i] = Some(r),
+                None => event(i, JobEvent::Started),
+                Some(r) => {
+                    results[i] = Some(r);
+                    event(i, JobEvent::Finished);
+                }
             }
         }
     });
@@ -466,11 +481,25 @@ mod tests {
         let job = |i: usize| (1..=i as u64).sum::<u64>();
         for threads in 1..=4 {
             let mut seen = Vec::new();
-            let out = super::independent(9, threads, |i| (i % 4) as f64, job, |i| seen.push(i));
+            let out = super::independent(
+                9,
+                threads,
+                |i| (i % 4) as f64,
+                job,
+                |i, e| {
+                    seen.push((i, e));
+                },
+            );
             let want: Vec<u64> = (0..9u64).map(|i| i * (i + 1) / 2).collect();
             assert_eq!(out, want, "{threads} threads");
-            seen.sort_unstable();
-            assert_eq!(seen, (0..9).collect::<Vec<_>>(), "each job started once");
+            // Each job starts once and then ends once.
+            for i in 0..9 {
+                let events: Vec<JobEvent> = (seen.iter())
+                    .filter(|(j, _)| *j == i)
+                    .map(|&(_, e)| e)
+                    .collect();
+                assert_eq!(events, [JobEvent::Started, JobEvent::Finished], "job {i}");
+            }
         }
     }
 
