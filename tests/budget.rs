@@ -216,9 +216,11 @@ fn progress_shows_on_a_terminal_and_not_in_a_pipe() {
         .output()
         .expect("run script (util-linux) for a pseudo-terminal");
     let screen = String::from_utf8_lossy(&out.stdout);
-    // The bar: label, position/length (1 method × 4 levels), elapsed time, estimate.
+    // The bar: label, position/length (1 method × 4 levels), elapsed time, time left.
     assert!(
-        screen.contains("study convergence rope") && screen.contains("/4 elapsed"),
+        screen.contains("study convergence rope")
+            && screen.contains(" 0/4 ")
+            && screen.contains(" left"),
         "no progress bar on the terminal: {screen}"
     );
     // Piped: no progress, only the result.
