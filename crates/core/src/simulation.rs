@@ -190,8 +190,9 @@ impl Simulation {
     }
 
     /// Turns implicit Euler's energy guard (module docs) on or off (on by default). Off, a
-    /// step is one solve however the energy moves: cheaper, for runs that judge boundedness
-    /// rather than every step (the stability study's confirmation runs).
+    /// step is one solve however the energy moves: cheaper, for a caller that judges
+    /// boundedness rather than every step (tests and `examples/implicit_guard.rs` compare the
+    /// two; the stability study's confirmation runs keep it on, as a user's run has it).
     pub fn set_energy_guard(&mut self, on: bool) {
         self.guard = on;
     }
