@@ -122,3 +122,4 @@ pub(crate) mod marks;
 pub mod pool;
 pub mod quadratic;
 pub mod stencil;
+pub(crate) mod xpbd;

@@ -63,6 +63,9 @@ pub struct Model {
     /// the indices of the springs with an end at particle `i` (for energy changes of a few
     /// particles without a pass over all springs). Built by [`Model::new`].
     incident: Vec<u32>,
+    /// A new value whenever the springs change (and for every model built), the same in a
+    /// clone: the key of caches kept outside the model (XPBD's rows, `fast/xpbd.rs`).
+    revision: SpringsRevision,
     /// See `incident`; `particles + 1` entries.
     incident_start: Vec<u32>,
     /// For each entry `h` of `incident` (a spring at one of its ends), the entry of the same
@@ -101,6 +104,7 @@ impl Model {
         let stencil = Stencil::detect(n, &springs);
         let (incident, incident_start, incident_twin) = incidence(n, &springs);
         Model {
+            revision: SpringsRevision::next(),
             incident,
             incident_start,
             incident_twin,
@@ -150,6 +154,7 @@ impl Model {
     /// Recomputes what is derived from the springs (the colouring, the stencil form, the
     /// incidence lists). Every method that changes the springs calls it.
     fn rebuild(&mut self) {
+        self.revision = SpringsRevision::next();
         let (order, starts) = colour_springs(self.particle_count(), &self.springs);
         self.projection_order = order;
         self.colour_starts = starts;
@@ -167,6 +172,12 @@ impl Model {
         &self.incident[start as usize..end as usize]
     }
 
+    /// The springs' revision: equal in two models (or one model at two times) only when their
+    /// springs are the same, one a clone of the other's.
+    pub(crate) fn springs_revision(&self) -> SpringsRevision {
+        self.revision
+    }
+
     /// For each entry of the springs-at-a-particle lists (`World::incident`), the entry of the
     /// same spring in its other end's list.
     pub(crate) fn incident_twins(&self) -> &[u32] {
@@ -179,6 +190,7 @@ impl Model {
             s.stiffness = stiffness;
             s.damping = damping;
         }
+        self.revision = SpringsRevision::next();
         self.kinds = spring_kinds(&self.springs);
         if any_elastic(&self.springs) != self.elastic {
             // Springs became forces or stopped being forces: the stencil may change too.
@@ -271,6 +283,31 @@ pub(crate) struct SpringKinds {
     pub(crate) rods: bool,
     /// Some spring has a damper.
     pub(crate) dampers: bool,
+}
+
+/// An identity of a model's springs ([`Model::springs_revision`]), drawn from a counter of the
+/// process. Not part of the model's value: two revisions always compare equal as fields (so
+/// two models built alike are equal); compare them with [`SpringsRevision::same`].
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SpringsRevision(u64);
+
+impl SpringsRevision {
+    /// A revision no model had before.
+    fn next() -> SpringsRevision {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+        SpringsRevision(NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed))
+    }
+
+    /// True when both are the same revision (0, [`Default`], is none).
+    pub(crate) fn same(self, other: SpringsRevision) -> bool {
+        self.0 != 0 && self.0 == other.0
+    }
+}
+
+impl PartialEq for SpringsRevision {
+    fn eq(&self, _: &SpringsRevision) -> bool {
+        true
+    }
 }
 
 /// [`SpringKinds`] of `springs`.

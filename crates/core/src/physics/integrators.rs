@@ -277,6 +277,8 @@ pub struct Workspace {
     pub(crate) diag_inv: Vec<DMat3>,
     pub(crate) cg: [Vec<DVec3>; 4],
     pub(crate) lambda: Vec<f64>,
+    /// XPBD: the springs of a step's passes with their constants ([`crate::physics::fast::xpbd`]).
+    pub(crate) xpbd: crate::physics::fast::xpbd::XpbdRows,
     /// Verlet: the springs as rods, in projection order.
     pub(crate) rods: Vec<crate::physics::constraints::Rod>,
     /// Verlet: a chain's rods and particles laid out for the fast projection.

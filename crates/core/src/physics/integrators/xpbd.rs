@@ -80,7 +80,11 @@ pub(super) const DECLARATION: Declaration = Declaration {
         )
     },
     params: &["iterations", "substeps"],
-    scratch: Scratch::NONE,
+    // The pass's rows (`fast/xpbd.rs`): two ends and six numbers per spring.
+    scratch: Scratch {
+        particle: 0.0,
+        spring: crate::physics::fast::xpbd::ROW_BYTES as f64,
+    },
     fused: false,
     energy_guard: false,
     step,
@@ -100,11 +104,18 @@ fn step(
     let Workspace {
         x_stage: x_start,
         lambda,
+        xpbd: rows,
+        textbook,
         account,
         dissipated,
         power_f,
         ..
     } = work;
+    // The seam: the textbook pass below, or the same pass laid out once with each spring's
+    // constants, eight springs at a time (`fast/xpbd.rs`, the same numbers bit for bit).
+    if !*textbook {
+        rows.prepare(model, h);
+    }
     for _ in 0..substeps {
         // Remember where the substep started: x_prev = x.
         x_start.copy_from_slice(&state.x);
@@ -115,9 +126,16 @@ fn step(
             state.v[i] += h * a_ext;
             state.x[i] += h * state.v[i];
         }
-        lambda.fill(0.0);
-        for _ in 0..params.iterations.max(1) {
-            xpbd_solve(model, &mut state.x, x_start, lambda, h);
+        if *textbook {
+            lambda.fill(0.0);
+            for _ in 0..params.iterations.max(1) {
+                xpbd_solve(model, &mut state.x, x_start, lambda, h);
+            }
+        } else {
+            rows.start_substep();
+            for _ in 0..params.iterations.max(1) {
+                rows.solve(&model.inv_mass, &mut state.x, x_start);
+            }
         }
         let work = contacts(model, &mut state.x, x_start, h);
         if *account {
