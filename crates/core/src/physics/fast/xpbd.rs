@@ -16,15 +16,17 @@
 //! springs of a colour at once, each end's `x, y, z` read whole and turned into lanes, and
 //! computes each lane with the textbook's operations in its order (no fused multiply-add).
 //!
-//! Either way the positions and multipliers are the textbook's bit for bit (`tests/physics.rs`
-//! compares the two on the lattices; the test below on a model that is not one, with pinned
-//! ends, dampers, zero stiffness and a spring of zero length). On the jelly cube (1 000
+//! Elsewhere (no AVX-512) the textbook pass runs. The positions and multipliers are the
+//! textbook's bit for bit (`tests/physics.rs` compares the two on the lattices; the test below
+//! on a model that is not one, with pinned ends, dampers, zero stiffness and a spring of zero
+//! length). On the jelly cube (1 000
 //! particles, 12 876 springs, 10 substeps) the pass takes about half the textbook's time
 //! (docs/performance.md).
 
 use glam::DVec3;
 
 use crate::physics::forces::{Model, SpringsRevision};
+#[cfg(target_arch = "x86_64")]
 use crate::physics::stencil::Kernel;
 
 /// Bytes per spring of [`XpbdRows`]: two ends (`i64`) and six numbers (`f64`: rest length,
@@ -47,9 +49,6 @@ pub(crate) struct XpbdRows {
     damping: Vec<f64>,
     lambda: Vec<f64>,
     colours: Vec<usize>,
-    /// No two rows of a colour share a particle (the colouring had a colour for every spring),
-    /// so the rows of a colour may be solved eight at a time.
-    disjoint: bool,
     /// One more than the largest end of a row: the particles a pass needs.
     needs: usize,
     /// What the rows were laid out for: the model's springs and `h` (its bits).
@@ -58,11 +57,17 @@ pub(crate) struct XpbdRows {
 
 impl XpbdRows {
     /// Lays out the springs of `model` for substeps of `h` seconds (module docs), unless they
-    /// are laid out for the same springs and `h` already.
-    pub(crate) fn prepare(&mut self, model: &Model, h: f64) {
+    /// are laid out for the same springs and `h` already. False, with nothing done, where the
+    /// pass cannot take eight springs at a time (no AVX-512, or that kernel turned off with
+    /// `SPRINGLAB_KERNEL`, or a colouring whose last colour holds springs that share
+    /// particles): the caller takes the textbook pass.
+    pub(crate) fn prepare(&mut self, model: &Model, h: f64) -> bool {
+        if !wide() || model.spring_colours().count() > MAX_DISJOINT_COLOURS {
+            return false;
+        }
         let revision = model.springs_revision();
         if revision.same(self.key.0) && h.to_bits() == self.key.1 {
-            return;
+            return true;
         }
         self.key = (revision, h.to_bits());
         self.a.clear();
@@ -93,23 +98,17 @@ impl XpbdRows {
         let (k, k_d) = (&self.stiffness[..], &self.damping[..]);
         let (alpha_tilde, gamma) = (&mut self.alpha_tilde[..], &mut self.gamma[..]);
         #[cfg(target_arch = "x86_64")]
-        if Kernel::best() == Kernel::Avx512 {
-            // SAFETY: AVX-512F is there (`Kernel::best` chose it only then).
-            unsafe { constants_avx512(k, k_d, h, alpha_tilde, gamma) };
-        } else {
-            constants(k, k_d, h, alpha_tilde, gamma);
+        // SAFETY: AVX-512F is there (`wide`).
+        unsafe {
+            constants_avx512(k, k_d, h, alpha_tilde, gamma);
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        constants(k, k_d, h, alpha_tilde, gamma);
         self.lambda.clear();
         self.lambda.resize(self.a.len(), 0.0);
         self.needs = (self.a.iter().chain(&self.b))
             .map(|&i| i as usize + 1)
             .max()
             .unwrap_or(0);
-        // The greedy colouring gives its last colour (the 64th) to every spring that finds
-        // the others taken at its ends; below that a colour's springs share no particle.
-        self.disjoint = self.colours.len() <= MAX_DISJOINT_COLOURS + 1;
+        true
     }
 
     /// `λ = 0`: the start of a substep.
@@ -117,54 +116,25 @@ impl XpbdRows {
         self.lambda.fill(0.0);
     }
 
-    /// One pass over the springs as compliant constraints, as the textbook pass: positions `x`
-    /// (m) moved, `x_prev` (m) those at the start of the substep, `inv_mass` (1/kg) the model's.
-    /// On a CPU with AVX-512 (and that kernel not turned off, [`Kernel::best`]), eight springs
-    /// of a colour at a time, with the same operations in each lane.
+    /// One pass over the springs as compliant constraints, as the textbook pass, eight springs
+    /// of a colour at a time: positions `x` (m) moved, `x_prev` (m) those at the start of the
+    /// substep, `inv_mass` (1/kg) the model's.
     ///
     /// # Panics
-    /// If a spring's end is out of range of `x`, `x_prev` or `inv_mass`.
+    /// If the rows are not laid out ([`XpbdRows::prepare`] returned false) or a spring's end is
+    /// out of range of `x`, `x_prev` or `inv_mass`.
     pub(crate) fn solve(&mut self, inv_mass: &[f64], x: &mut [DVec3], x_prev: &[DVec3]) {
-        self.solve_with(Kernel::best(), inv_mass, x, x_prev);
-    }
-
-    /// [`XpbdRows::solve`] with eight springs at a time only when `kernel` is AVX-512 (and the
-    /// CPU has it).
-    fn solve_with(&mut self, kernel: Kernel, inv_mass: &[f64], x: &mut [DVec3], x_prev: &[DVec3]) {
         let n = x.len().min(x_prev.len()).min(inv_mass.len());
         assert!(self.needs <= n, "a spring's end out of range");
+        assert!(
+            wide() && !self.colours.is_empty(),
+            "laid out for eight at a time"
+        );
         #[cfg(target_arch = "x86_64")]
-        if self.disjoint
-            && kernel == Kernel::Avx512
-            && std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("avx512vl")
-        {
-            // SAFETY: AVX-512F and VL are there (detected), every end is in range (asserted
-            // above), and the rows of a colour share no particle (`disjoint`).
-            unsafe { self.solve_avx512(inv_mass, x, x_prev) };
-            return;
-        }
-        for r in 0..self.a.len() {
-            let (a, b) = (self.a[r] as usize, self.b[r] as usize);
-            let (w_a, w_b) = (inv_mass[a], inv_mass[b]);
-            if w_a + w_b == 0.0 {
-                continue;
-            }
-            let d = x[b] - x[a];
-            let length = d.length();
-            if length == 0.0 {
-                continue;
-            }
-            let n = d / length;
-            let c = length - self.rest[r];
-            let c_dot = n.dot((x[b] - x_prev[b]) - (x[a] - x_prev[a]));
-            let (alpha_tilde, gamma) = (self.alpha_tilde[r], self.gamma[r]);
-            let lambda = &mut self.lambda[r];
-            let delta_lambda = (-c - alpha_tilde * *lambda - gamma * c_dot)
-                / ((1.0 + gamma) * (w_a + w_b) + alpha_tilde);
-            *lambda += delta_lambda;
-            x[a] -= w_a * delta_lambda * n;
-            x[b] += w_b * delta_lambda * n;
+        // SAFETY: AVX-512F and VL are there (`wide`), every end is in range (asserted above),
+        // and the rows of a colour share no particle (`prepare` laid them out only then).
+        unsafe {
+            self.solve_avx512(inv_mass, x, x_prev);
         }
     }
 
@@ -330,8 +300,22 @@ impl XpbdRows {
     }
 }
 
+/// True where the pass can take eight springs at a time: AVX-512F and VL, and that kernel not
+/// turned off ([`Kernel::best`]).
+fn wide() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        Kernel::best() == Kernel::Avx512
+            && std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    false
+}
+
 /// `α̃ = 1/(k h²)` and `γ = k_d/(k h)` of every row, with the textbook pass's operations (the
 /// same numbers however many at a time).
+#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn constants(k: &[f64], k_d: &[f64], h: f64, alpha_tilde: &mut [f64], gamma: &mut [f64]) {
     for (((k, k_d), alpha_tilde), gamma) in k.iter().zip(k_d).zip(alpha_tilde).zip(gamma) {
@@ -357,7 +341,7 @@ unsafe fn constants_avx512(
 }
 
 /// Colours up to which the greedy colouring keeps a colour's springs apart (`forces.rs`:
-/// 64 colours in a bit set, the last taking whatever is left).
+/// 64 colours in a bit set, the 64th taking every spring that finds the others taken).
 const MAX_DISJOINT_COLOURS: usize = 63;
 
 #[cfg(test)]
@@ -421,32 +405,31 @@ mod tests {
             .collect();
         for (substeps, passes) in [(1, 1), (3, 2), (2, 5)] {
             let h = 1e-3 / f64::from(substeps);
-            // Eight at a time where the CPU has AVX-512, one at a time in any case.
-            for kernel in [Kernel::Avx512, Kernel::Portable] {
-                let (mut textbook, mut fast) = (x.clone(), x.clone());
-                let mut lambda = vec![0.0; model.springs().len()];
-                let mut rows = XpbdRows::default();
-                rows.prepare(&model, h);
-                assert!(rows.disjoint);
-                for _ in 0..substeps {
-                    lambda.fill(0.0);
-                    rows.start_substep();
-                    for _ in 0..passes {
-                        xpbd_solve(&model, &mut textbook, &x_prev, &mut lambda, h);
-                        rows.solve_with(kernel, &model.inv_mass, &mut fast, &x_prev);
-                    }
-                }
-                let bits = |x: &[DVec3]| -> Vec<[u64; 3]> {
-                    x.iter().map(|p| p.to_array().map(f64::to_bits)).collect()
-                };
-                let label = format!("{kernel:?}: {substeps} substeps, {passes} passes");
-                assert_eq!(bits(&fast), bits(&textbook), "{label}");
-                assert_ne!(
-                    bits(&fast),
-                    bits(&x),
-                    "{label}: the pass moved the particles"
-                );
+            let (mut textbook, mut fast) = (x.clone(), x.clone());
+            let mut lambda = vec![0.0; model.springs().len()];
+            let mut rows = XpbdRows::default();
+            if !rows.prepare(&model, h) {
+                eprintln!("no AVX-512 here: the textbook pass runs instead, nothing to compare");
+                return;
             }
+            for _ in 0..substeps {
+                lambda.fill(0.0);
+                rows.start_substep();
+                for _ in 0..passes {
+                    xpbd_solve(&model, &mut textbook, &x_prev, &mut lambda, h);
+                    rows.solve(&model.inv_mass, &mut fast, &x_prev);
+                }
+            }
+            let bits = |x: &[DVec3]| -> Vec<[u64; 3]> {
+                x.iter().map(|p| p.to_array().map(f64::to_bits)).collect()
+            };
+            let label = format!("{substeps} substeps, {passes} passes");
+            assert_eq!(bits(&fast), bits(&textbook), "{label}");
+            assert_ne!(
+                bits(&fast),
+                bits(&x),
+                "{label}: the pass moved the particles"
+            );
         }
     }
 
@@ -484,7 +467,9 @@ mod tests {
             let (mut textbook, mut fast) = (x.clone(), x.clone());
             let mut lambda = vec![0.0; 5];
             xpbd_solve(&model, &mut textbook, &x, &mut lambda, h);
-            rows.prepare(&model, h);
+            if !rows.prepare(&model, h) {
+                return;
+            }
             rows.start_substep();
             rows.solve(&model.inv_mass, &mut fast, &x);
             assert_eq!(fast, textbook, "after {change:?}");

@@ -113,9 +113,7 @@ fn step(
     } = work;
     // The seam: the textbook pass below, or the same pass laid out once with each spring's
     // constants, eight springs at a time (`fast/xpbd.rs`, the same numbers bit for bit).
-    if !*textbook {
-        rows.prepare(model, h);
-    }
+    let wide = !*textbook && rows.prepare(model, h);
     for _ in 0..substeps {
         // Remember where the substep started: x_prev = x.
         x_start.copy_from_slice(&state.x);
@@ -126,15 +124,15 @@ fn step(
             state.v[i] += h * a_ext;
             state.x[i] += h * state.v[i];
         }
-        if *textbook {
-            lambda.fill(0.0);
-            for _ in 0..params.iterations.max(1) {
-                xpbd_solve(model, &mut state.x, x_start, lambda, h);
-            }
-        } else {
+        if wide {
             rows.start_substep();
             for _ in 0..params.iterations.max(1) {
                 rows.solve(&model.inv_mass, &mut state.x, x_start);
+            }
+        } else {
+            lambda.fill(0.0);
+            for _ in 0..params.iterations.max(1) {
+                xpbd_solve(model, &mut state.x, x_start, lambda, h);
             }
         }
         let work = contacts(model, &mut state.x, x_start, h);
