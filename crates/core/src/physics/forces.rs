@@ -286,10 +286,17 @@ pub(crate) struct SpringKinds {
 }
 
 /// An identity of a model's springs ([`Model::springs_revision`]), drawn from a counter of the
-/// process. Not part of the model's value: two revisions always compare equal as fields (so
-/// two models built alike are equal); compare them with [`SpringsRevision::same`].
-#[derive(Clone, Copy, Debug, Default)]
+/// process. Not part of the model's value: two revisions always compare equal as fields and
+/// print alike (so two models built alike are equal, and their `Debug` text, which the lesson
+/// app's memo hashes, is the same); compare them with [`SpringsRevision::same`].
+#[derive(Clone, Copy, Default)]
 pub(crate) struct SpringsRevision(u64);
+
+impl std::fmt::Debug for SpringsRevision {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("SpringsRevision")
+    }
+}
 
 impl SpringsRevision {
     /// A revision no model had before.
@@ -510,6 +517,35 @@ impl<'a> From<&'a Model> for World<'a> {
 mod tests {
     use super::*;
     use crate::physics::springs::SpringKind;
+
+    /// Two models built alike are equal and print alike (the lesson app keeps spectra under a
+    /// hash of the `Debug` text), though their springs' revisions differ; a change of the
+    /// springs gives a new revision, a clone keeps it.
+    #[test]
+    fn the_springs_revision_is_an_identity_not_a_value() {
+        let build = || {
+            let spring = Spring {
+                a: 0,
+                b: 1,
+                rest_length: 1.0,
+                stiffness: 10.0,
+                damping: 0.0,
+                kind: SpringKind::Struct,
+            };
+            Model::new(vec![1.0; 2], &[true, false], vec![spring], DVec3::ZERO, 0.0)
+        };
+        let (first, second) = (build(), build());
+        assert_eq!(first, second);
+        assert_eq!(format!("{first:?}"), format!("{second:?}"));
+        assert!(!first.springs_revision().same(second.springs_revision()));
+        let mut clone = first.clone();
+        assert!(clone.springs_revision().same(first.springs_revision()));
+        clone.scale_stiffness(2.0);
+        assert!(!clone.springs_revision().same(first.springs_revision()));
+        let before = clone.springs_revision();
+        clone.set_spring_coefficients(5.0, 0.1);
+        assert!(!clone.springs_revision().same(before));
+    }
 
     /// Every entry's twin holds the same spring, in the list of the spring's other end (the
     /// other entry of the same list for a spring from a particle to itself), and twins pair up:
