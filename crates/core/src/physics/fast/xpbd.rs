@@ -19,9 +19,8 @@
 //! Elsewhere (no AVX-512) the textbook pass runs. The positions and multipliers are the
 //! textbook's bit for bit (`tests/physics.rs` compares the two on the lattices; the test below
 //! on a model that is not one, with pinned ends, dampers, zero stiffness and a spring of zero
-//! length). On the jelly cube (1 000
-//! particles, 12 876 springs, 10 substeps) the pass takes about half the textbook's time
-//! (docs/performance.md).
+//! length). On the jelly cube (1 000 particles, 12 876 springs, 10 substeps) the pass takes
+//! about half the textbook's time (docs/performance.md).
 
 use glam::DVec3;
 
@@ -29,9 +28,9 @@ use crate::physics::forces::{Model, SpringsRevision};
 #[cfg(target_arch = "x86_64")]
 use crate::physics::stencil::Kernel;
 
-/// Bytes per spring of [`XpbdRows`]: two ends (`i64`) and six numbers (`f64`: rest length,
-/// `k`, `k_d`, `α̃`, `γ`, `λ`).
-pub(crate) const ROW_BYTES: usize = 2 * size_of::<i64>() + 6 * size_of::<f64>();
+/// Bytes per spring of [`XpbdRows`]: two ends (`i64`) and four numbers (`f64`: rest length,
+/// `α̃`, `γ`, `λ`).
+pub(crate) const ROW_BYTES: usize = 2 * size_of::<i64>() + 4 * size_of::<f64>();
 
 /// The springs of one step's passes, in the textbook pass's order, as arrays (one entry per
 /// row): their ends, rest lengths (m), `α̃ = 1/(k h²)` (1/kg), `γ = k_d/(k h)`
@@ -44,9 +43,6 @@ pub(crate) struct XpbdRows {
     rest: Vec<f64>,
     alpha_tilde: Vec<f64>,
     gamma: Vec<f64>,
-    /// Each row's stiffness `k` (N/m) and damping `k_d` (N·s/m), for `α̃` and `γ`.
-    stiffness: Vec<f64>,
-    damping: Vec<f64>,
     lambda: Vec<f64>,
     colours: Vec<usize>,
     /// One more than the largest end of a row: the particles a pass needs.
@@ -73,8 +69,8 @@ impl XpbdRows {
         self.a.clear();
         self.b.clear();
         self.rest.clear();
-        self.stiffness.clear();
-        self.damping.clear();
+        self.alpha_tilde.clear();
+        self.gamma.clear();
         self.colours.clear();
         self.colours.push(0);
         for colour in model.spring_colours() {
@@ -87,20 +83,11 @@ impl XpbdRows {
                 self.a.push(i64::from(s.a));
                 self.b.push(i64::from(s.b));
                 self.rest.push(s.rest_length);
-                self.stiffness.push(s.stiffness);
-                self.damping.push(s.damping);
+                // α̃ = 1/(k h²), γ = k_d/(k h): the textbook pass's operations.
+                self.alpha_tilde.push(1.0 / (s.stiffness * h * h));
+                self.gamma.push(s.damping / (s.stiffness * h));
             }
             self.colours.push(self.a.len());
-        }
-        let rows = self.a.len();
-        self.alpha_tilde.resize(rows, 0.0);
-        self.gamma.resize(rows, 0.0);
-        let (k, k_d) = (&self.stiffness[..], &self.damping[..]);
-        let (alpha_tilde, gamma) = (&mut self.alpha_tilde[..], &mut self.gamma[..]);
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: AVX-512F is there (`wide`).
-        unsafe {
-            constants_avx512(k, k_d, h, alpha_tilde, gamma);
         }
         self.lambda.clear();
         self.lambda.resize(self.a.len(), 0.0);
@@ -311,33 +298,6 @@ fn wide() -> bool {
     }
     #[cfg(not(target_arch = "x86_64"))]
     false
-}
-
-/// `α̃ = 1/(k h²)` and `γ = k_d/(k h)` of every row, with the textbook pass's operations (the
-/// same numbers however many at a time).
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn constants(k: &[f64], k_d: &[f64], h: f64, alpha_tilde: &mut [f64], gamma: &mut [f64]) {
-    for (((k, k_d), alpha_tilde), gamma) in k.iter().zip(k_d).zip(alpha_tilde).zip(gamma) {
-        *alpha_tilde = 1.0 / (k * h * h);
-        *gamma = k_d / (k * h);
-    }
-}
-
-/// [`constants`] compiled for AVX-512F: eight divisions at a time.
-///
-/// # Safety
-/// The CPU must support AVX-512F.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-unsafe fn constants_avx512(
-    k: &[f64],
-    k_d: &[f64],
-    h: f64,
-    alpha_tilde: &mut [f64],
-    gamma: &mut [f64],
-) {
-    constants(k, k_d, h, alpha_tilde, gamma);
 }
 
 /// Colours up to which the greedy colouring keeps a colour's springs apart (`forces.rs`:
