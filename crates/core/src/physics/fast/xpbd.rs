@@ -435,4 +435,24 @@ mod tests {
             assert_eq!(fast, textbook, "after {change:?}");
         }
     }
+
+    /// A particle with more springs than the colouring has colours (a star of 70): its last
+    /// colour holds springs that share the centre, so the rows are not laid out and the step
+    /// takes the textbook pass.
+    #[test]
+    fn a_colouring_that_runs_out_of_colours_is_left_to_the_textbook() {
+        let springs: Vec<Spring> = (1..=70u32)
+            .map(|b| Spring {
+                a: 0,
+                b,
+                rest_length: 1.0,
+                stiffness: 10.0,
+                damping: 0.0,
+                kind: SpringKind::Struct,
+            })
+            .collect();
+        let model = Model::new(vec![1.0; 71], &[false; 71], springs, DVec3::ZERO, 0.0);
+        assert!(model.spring_colours().count() > MAX_DISJOINT_COLOURS);
+        assert!(!XpbdRows::default().prepare(&model, 1e-3));
+    }
 }
