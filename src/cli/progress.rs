@@ -8,6 +8,8 @@ use std::time::{Duration, Instant};
 
 use indicatif::{HumanDuration, ProgressBar, ProgressDrawTarget, ProgressState, ProgressStyle};
 
+use crate::physics::pool::JobEvent;
+
 /// A progress bar on standard error that appears only on a terminal and only once the work has
 /// taken a second; piped or redirected output stays free of it. Off a terminal there is no bar
 /// at all (`bar` is `None`), so a short run's timing holds no bar's set-up (indicatif parses its
@@ -21,6 +23,9 @@ pub struct Progress {
     bar: Option<ProgressBar>,
     start: Instant,
     shown: Arc<AtomicBool>,
+    /// [`Progress::job`]: the names of the jobs running, and how many have ended.
+    running: Vec<String>,
+    ended: u64,
 }
 
 impl Progress {
@@ -53,6 +58,8 @@ impl Progress {
             bar,
             start: Instant::now(),
             shown,
+            running: Vec::new(),
+            ended: 0,
         }
     }
 
@@ -86,6 +93,26 @@ impl Progress {
             bar.set_message(label);
         }
         self.reveal();
+    }
+
+    /// Job `name`, one of several running side by side (a study's runs over the cores),
+    /// started or ended (`event`): the bar counts the jobs ended, and its label is `scene`
+    /// followed by the names of those running (or "finishing" once none is).
+    pub fn job(&mut self, scene: &str, name: String, event: JobEvent) {
+        match event {
+            JobEvent::Started => self.running.push(name),
+            JobEvent::Finished => {
+                self.running.retain(|r| *r != name);
+                self.ended += 1;
+            }
+        }
+        let label = if self.running.is_empty() {
+            format!("{scene}: finishing")
+        } else {
+            format!("{scene}: {}", self.running.join(", "))
+        };
+        self.label(label);
+        self.set(self.ended);
     }
 
     /// Removes the bar.

@@ -67,23 +67,13 @@ pub(super) fn run_resolution(args: &ResolutionArgs) -> anyhow::Result<()> {
     let key = refinement.dimension.key();
     // The runs go over the cores, the costliest first: the bar counts those ended and names
     // those running.
-    let mut running: Vec<String> = Vec::new();
-    let mut ended = 0;
     let mut on_run = |i: usize, n: i64, k: Kinds, e: JobEvent| {
         let what = if i == planned.len() {
             format!("{key} = {n} at dt/2")
         } else {
             format!("{key} = {n} {}", k.name())
         };
-        match e {
-            JobEvent::Started => running.push(what),
-            JobEvent::Finished => {
-                running.retain(|r| *r != what);
-                ended += 1;
-            }
-        }
-        progress.label(format!("{}: {}", args.scene, running.join(", ")));
-        progress.set(ended);
+        progress.job(&args.scene, what, e);
     };
     let report = resolution::resolution(&refinement, &options, time, &planned, &mut on_run);
     progress.finish();

@@ -11,7 +11,6 @@ use super::super::progress::Progress;
 use crate::budget::{self, Limits};
 use crate::format::short;
 use crate::physics::Method;
-use crate::physics::pool::JobEvent;
 use crate::scene;
 use crate::study::Stability;
 use crate::study::stability::usable::Usable;
@@ -86,23 +85,8 @@ pub(super) fn run_stability(args: &StabilityArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     // Each method's search runs on a core of its own; the bar counts the searches ended and
     // names those running (the probes are reported only when all have ended).
-    let mut running: Vec<Method> = Vec::new();
-    let mut ended = 0;
     let result = stability::stability_with(&scene, &options, &mut |_, _| {}, &mut |m, e| {
-        match e {
-            JobEvent::Started => running.push(m),
-            JobEvent::Finished => {
-                running.retain(|&r| r != m);
-                ended += 1;
-            }
-        }
-        let names: Vec<&str> = running.iter().map(|m| m.name()).collect();
-        progress.label(if names.is_empty() {
-            format!("{}: finishing", args.scene)
-        } else {
-            format!("{}: {}", args.scene, names.join(", "))
-        });
-        progress.set(ended);
+        progress.job(&args.scene, m.name().to_string(), e);
     });
     progress.finish();
     let mut report = result?;
