@@ -267,6 +267,13 @@ impl Model {
         self.kinds
     }
 
+    /// True when no two springs of a colour share a particle: the colouring did not run out of
+    /// colours (a particle with more springs than that would fill the last one).
+    #[must_use]
+    pub fn colours_disjoint(&self) -> bool {
+        self.colour_starts.len() - 1 < COLOURS
+    }
+
     /// The springs grouped by colour (see [`Model::new`]): an iterator of slices of spring indices.
     pub fn spring_colours(&self) -> impl Iterator<Item = &[u32]> {
         self.colour_starts
@@ -365,10 +372,15 @@ fn incidence(particles: usize, springs: &[Spring]) -> (Vec<u32>, Vec<u32>, Vec<u
     (indices, starts, twins)
 }
 
+/// Colours of [`colour_springs`] (a bit set per particle): the last takes every spring that
+/// finds all the others taken at its ends, so only that one may hold springs sharing a
+/// particle.
+const COLOURS: usize = 64;
+
 /// Greedy edge colouring in spring order: each spring takes the smallest colour not yet used at
 /// either end. A chain `(0,1), (1,2), ...` gets colours 0, 1, 0, 1, ... (red-black).
 fn colour_springs(particles: usize, springs: &[Spring]) -> (Vec<u32>, Vec<usize>) {
-    // used[p] = bit set of the colours already taken at particle p (first 64 colours);
+    // used[p] = bit set of the colours already taken at particle p (the first `COLOURS`);
     // a lattice needs at most twice its neighbour count, far below 64.
     let mut used = vec![0u64; particles];
     let mut colour_of = Vec::with_capacity(springs.len());
@@ -376,7 +388,7 @@ fn colour_springs(particles: usize, springs: &[Spring]) -> (Vec<u32>, Vec<usize>
     for s in springs {
         let (a, b) = (s.a as usize, s.b as usize);
         let taken = used[a] | used[b];
-        let colour = (!taken).trailing_zeros().min(63) as usize;
+        let colour = ((!taken).trailing_zeros() as usize).min(COLOURS - 1);
         used[a] |= 1 << colour;
         used[b] |= 1 << colour;
         colours = colours.max(colour + 1);

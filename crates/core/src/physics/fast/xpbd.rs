@@ -58,7 +58,7 @@ impl XpbdRows {
     /// `SPRINGLAB_KERNEL`, or a colouring whose last colour holds springs that share
     /// particles): the caller takes the textbook pass.
     pub(crate) fn prepare(&mut self, model: &Model, h: f64) -> bool {
-        if !wide() || model.spring_colours().count() > MAX_DISJOINT_COLOURS {
+        if !wide() || !model.colours_disjoint() {
             return false;
         }
         let revision = model.springs_revision();
@@ -300,10 +300,6 @@ fn wide() -> bool {
     false
 }
 
-/// Colours up to which the greedy colouring keeps a colour's springs apart (`forces.rs`:
-/// 64 colours in a bit set, the 64th taking every spring that finds the others taken).
-const MAX_DISJOINT_COLOURS: usize = 63;
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -452,7 +448,7 @@ mod tests {
             })
             .collect();
         let model = Model::new(vec![1.0; 71], &[false; 71], springs, DVec3::ZERO, 0.0);
-        assert!(model.spring_colours().count() > MAX_DISJOINT_COLOURS);
+        assert!(!model.colours_disjoint());
         assert!(!XpbdRows::default().prepare(&model, 1e-3));
     }
 }
