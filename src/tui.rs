@@ -164,6 +164,8 @@ pub struct App {
     /// The highlighted menu entry.
     selected: usize,
     help: bool,
+    /// The help overlay's scroll, and what its last drawing showed.
+    help_scroll: Cell<help::Scroll>,
     quit: bool,
     /// A one-line message for the menu (for example why a lesson cannot open).
     menu_message: Option<String>,
@@ -221,6 +223,7 @@ impl App {
             screen: Screen::Menu,
             selected: 0,
             help: false,
+            help_scroll: Cell::new(help::Scroll::default()),
             quit: false,
             menu_message: None,
             theme,
@@ -622,7 +625,12 @@ impl App {
             return;
         }
         if self.help {
-            // Any key closes the overlay; `q` and Esc only close it.
+            // The arrows and pages scroll an overlay taller than the terminal; any other key
+            // closes it (`q` and Esc only close it).
+            if let Some(scroll) = self.help_scroll.get().after(key.code) {
+                self.help_scroll.set(scroll);
+                return;
+            }
             self.help = false;
             self.clear = true;
             self.submitted = None;
@@ -631,6 +639,7 @@ impl App {
         }
         if key.code == KeyCode::Char('?') && self.lesson().is_none_or(|r| r.chooser().is_none()) {
             self.help = true;
+            self.help_scroll.set(help::Scroll::default());
             return;
         }
         let raster = self.graphics.protocol.is_some();

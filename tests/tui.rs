@@ -534,6 +534,106 @@ fn help_overlay_opens_with_question_mark_and_closes_with_any_key() {
     assert!(matches!(app.screen(), Screen::Menu));
 }
 
+/// The text inside the help overlay's border, row by row, and its closing line.
+fn help_rows(app: &App, width: u16, height: u16) -> (Vec<String>, String) {
+    let terminal = draw(app, width, height);
+    let buffer = terminal.backend().buffer();
+    let cell = |x: u16, y: u16| buffer[(x, y)].symbol().to_owned();
+    let row = |y: u16| (0..width).map(|x| cell(x, y)).collect::<String>();
+    let top = (0..height)
+        .find(|&y| row(y).contains("┌ springlab keys "))
+        .expect("the overlay is drawn");
+    let left = (0..width).find(|&x| cell(x, top) == "┌").expect("a corner");
+    let right = (left..width)
+        .find(|&x| cell(x, top) == "┐")
+        .expect("a corner");
+    let inner: Vec<String> = (top + 1..height)
+        .take_while(|&y| cell(left, y) == "│")
+        .map(|y| (left + 1..right).map(|x| cell(x, y)).collect())
+        .collect();
+    let (closing, body) = inner.split_last().expect("a closing line");
+    (body.to_vec(), closing.trim().to_owned())
+}
+
+/// On an 80 × 24 terminal the help overlay is taller than the screen: it scrolls with the
+/// arrows and pages, and every key can be read with its whole description (wrapped beside
+/// the key column, never cut at the border); any other key still closes it.
+#[test]
+fn help_overlay_scrolls_on_80x24_and_shows_every_key_whole() {
+    let mut app = open("rope");
+    key(&mut app, KeyCode::Char('?'));
+    let mut rows: Vec<Option<String>> = Vec::new();
+    let mut last_page = (0, 0);
+    for page in 0.. {
+        assert!(page < 10, "PgDn never reached the last row");
+        let (body, closing) = help_rows(&app, 80, 24);
+        // "rows a–b of n · ↑/↓ PgUp/PgDn scroll · any other key closes"
+        let numbers: Vec<usize> = closing
+            .split(|c: char| !c.is_ascii_digit())
+            .filter_map(|n| n.parse().ok())
+            .take(3)
+            .collect();
+        assert!(closing.ends_with("any other key closes"), "{closing}");
+        let [a, b, n] = numbers[..] else {
+            panic!("no row numbers in {closing:?}")
+        };
+        assert_eq!(body.len(), b + 1 - a, "{closing}");
+        rows.resize(n, None);
+        for (i, row) in body.into_iter().enumerate() {
+            rows[a - 1 + i] = Some(row);
+        }
+        if b == n {
+            last_page = (a, b);
+            break;
+        }
+        key(&mut app, KeyCode::PageDown);
+        assert!(
+            app.help_shown(),
+            "PgDn scrolls the overlay, it does not close it"
+        );
+    }
+    // Each entry: its key row and the rows indented past the key column below it.
+    let mut entries: Vec<String> = Vec::new();
+    for row in rows.into_iter().map(|r| r.expect("every row was shown")) {
+        let row = row.trim_end();
+        match entries.last_mut() {
+            Some(last) if row.starts_with(&" ".repeat(12)) => {
+                last.push(' ');
+                last.push_str(row.trim_start());
+            }
+            _ => entries.push(row.to_owned()),
+        }
+    }
+    for (k, what) in springlab::tui::help::LESSON_KEYS {
+        if !k.is_empty() {
+            let entry = format!("  {k:<10}{what}");
+            assert!(entries.contains(&entry), "{entry:?} not in {entries:#?}");
+        }
+    }
+    // Back up and home; then a key that does not scroll closes the overlay, and goes no
+    // further (the lesson does not start).
+    key(&mut app, KeyCode::Up);
+    let (_, closing) = help_rows(&app, 80, 24);
+    let (a, b) = last_page;
+    assert!(
+        closing.starts_with(&format!("rows {}–{} of", a - 1, b - 1)),
+        "{closing}"
+    );
+    key(&mut app, KeyCode::Home);
+    let (body, closing) = help_rows(&app, 80, 24);
+    assert!(closing.starts_with("rows 1–"), "{closing}");
+    assert!(body[0].starts_with("  space     run / pause"), "{body:?}");
+    key(&mut app, KeyCode::Char(' '));
+    assert!(!app.help_shown());
+    assert!(!run(&app).is_running());
+    // Where everything fits, every key closes it, the arrows too.
+    key(&mut app, KeyCode::Char('?'));
+    let (_, closing) = help_rows(&app, 100, 32);
+    assert_eq!(closing, "any key closes this help");
+    key(&mut app, KeyCode::Down);
+    assert!(!app.help_shown());
+}
+
 #[test]
 fn menu_keys_choose_and_open_lessons() {
     let mut app = app();

@@ -40,7 +40,9 @@ impl Widget for &App {
             }
         }
         if self.help {
-            help::render(matches!(self.screen, Screen::Menu), theme, area, buf);
+            let menu = matches!(self.screen, Screen::Menu);
+            let shown = help::render(menu, theme, area, buf, self.help_scroll.get());
+            self.help_scroll.set(shown);
         }
     }
 }

@@ -1,6 +1,7 @@
 //! The help overlay (`?`): every key, on top of the screen.
 
 use ratatui::buffer::Buffer;
+use ratatui::crossterm::event::KeyCode;
 use ratatui::layout::Rect;
 use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
@@ -91,40 +92,160 @@ pub const MENU_KEYS: &[(&str, &str)] = &[
     ("q / Esc", "quit"),
 ];
 
-/// Draws the overlay for the menu or for a lesson in the middle of `area`.
-pub fn render(menu: bool, theme: Theme, area: Rect, buf: &mut Buffer) {
+/// Where the overlay is scrolled to, and what its last drawing showed: `top` is the first of
+/// its `total` rows on screen, `shown` how many fit. On a terminal too short for every key
+/// (80 × 24) the rows scroll; on a tall one everything shows and any key closes the overlay.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Scroll {
+    /// The first row shown.
+    pub top: u16,
+    /// Rows shown (the last drawing's; 0 before the first).
+    pub shown: u16,
+    /// Rows in all.
+    pub total: u16,
+}
+
+impl Scroll {
+    /// True when the rows do not all fit.
+    #[must_use]
+    pub fn overflows(self) -> bool {
+        self.total > self.shown
+    }
+
+    /// The scroll after `key` when it scrolls the overlay (↑/↓, PgUp/PgDn, Home/End,
+    /// only while the rows do not all fit); `None` when the key closes it.
+    #[must_use]
+    pub fn after(self, key: KeyCode) -> Option<Scroll> {
+        if !self.overflows() {
+            return None;
+        }
+        let last = self.total - self.shown;
+        let page = self.shown.saturating_sub(1).max(1);
+        let top = match key {
+            KeyCode::Down => self.top.saturating_add(1),
+            KeyCode::Up => self.top.saturating_sub(1),
+            KeyCode::PageDown => self.top.saturating_add(page),
+            KeyCode::PageUp => self.top.saturating_sub(page),
+            KeyCode::Home => 0,
+            KeyCode::End => last,
+            _ => return None,
+        };
+        Some(Scroll {
+            top: top.min(last),
+            ..self
+        })
+    }
+}
+
+/// The key column's width: two spaces and the key, padded to ten.
+const KEY_COLUMN: usize = 12;
+
+/// `text` cut into lines of at most `width` columns at spaces (a word longer than that keeps
+/// a line of its own). A one-column word stays with the word before it, so that `t = 0` or
+/// `× 2 / ÷ 2` is never cut.
+fn wrap(text: &str, width: usize) -> Vec<String> {
+    let mut words: Vec<String> = Vec::new();
+    for word in text.split(' ').filter(|w| !w.is_empty()) {
+        match words.last_mut() {
+            Some(last) if Span::raw(word).width() == 1 => {
+                last.push(' ');
+                last.push_str(word);
+            }
+            _ => words.push(word.to_owned()),
+        }
+    }
+    let mut lines = Vec::new();
+    let mut line = String::new();
+    for word in &words {
+        let fits = Span::raw(line.as_str()).width() + 1 + Span::raw(word).width() <= width;
+        if !line.is_empty() && !fits {
+            lines.push(std::mem::take(&mut line));
+        }
+        if !line.is_empty() {
+            line.push(' ');
+        }
+        line.push_str(word);
+    }
+    lines.push(line);
+    lines
+}
+
+/// Draws the overlay for the menu or for a lesson in the middle of `area`, scrolled to
+/// `scroll.top` (clamped); returns what it showed.
+pub fn render(menu: bool, theme: Theme, area: Rect, buf: &mut Buffer, scroll: Scroll) -> Scroll {
     let keys = if menu { MENU_KEYS } else { LESSON_KEYS };
     let key_style = theme.fg(Color::Cyan).add_modifier(Modifier::BOLD);
     let head_style = Style::new()
         .add_modifier(Modifier::BOLD)
         .patch(theme.fg(Color::Yellow));
-    // Section headings and the note only when the terminal is tall enough for them.
-    let roomy = keys.len() as u16 + 5 <= area.height;
-    let mut lines: Vec<Line> = Vec::new();
-    for (key, what) in keys {
-        if key.is_empty() {
-            if !roomy {
-                continue;
+    // Inside the border, with a column to spare on each side; the descriptions wrap beside
+    // the key column.
+    let room = usize::from(area.width.saturating_sub(4)).max(KEY_COLUMN + 8);
+    let note = "limit: the method's largest stable dt here, dampers and drag included.";
+    let entries: Vec<(Option<&str>, Vec<String>)> = keys
+        .iter()
+        .map(|&(key, what)| {
+            if key.is_empty() {
+                (None, vec![what.to_owned()])
+            } else {
+                (Some(key), wrap(what, room - KEY_COLUMN))
             }
-            lines.push(Line::from(Span::styled(*what, head_style)));
-        } else {
-            lines.push(Line::from(vec![
-                Span::styled(format!("  {key:<10}"), key_style),
-                Span::raw(*what),
-            ]));
+        })
+        .collect();
+    let rows = |headings: bool| -> usize {
+        entries
+            .iter()
+            .filter(|(key, _)| headings || key.is_some())
+            .map(|(_, lines)| lines.len())
+            .sum()
+    };
+    // Section headings and the note only when everything fits with them (and the closing
+    // line, and the border).
+    let note_rows = if menu { 0 } else { 1 + wrap(note, room).len() };
+    let roomy = rows(true) + note_rows + 3 <= usize::from(area.height);
+    let mut lines: Vec<Line> = Vec::new();
+    for (key, what) in &entries {
+        match key {
+            None if roomy => lines.push(Line::from(Span::styled(what[0].clone(), head_style))),
+            None => {}
+            Some(key) => {
+                for (i, part) in what.iter().enumerate() {
+                    let column = if i == 0 {
+                        Span::styled(format!("  {key:<10}"), key_style)
+                    } else {
+                        Span::raw(" ".repeat(KEY_COLUMN))
+                    };
+                    lines.push(Line::from(vec![column, Span::raw(part.clone())]));
+                }
+            }
         }
     }
     if !menu && roomy {
         lines.push(Line::from(""));
-        lines.push(Line::from(Span::styled(
-            "limit: the method's largest stable dt here, dampers and drag included.",
-            theme.dim(),
-        )));
+        for part in wrap(note, room) {
+            lines.push(Line::from(Span::styled(part, theme.dim())));
+        }
     }
-    lines.push(Line::from(Span::styled(
-        "any key closes this help",
-        theme.dim(),
-    )));
+    // Rows for the text between the border and the closing line.
+    let total = lines.len() as u16;
+    let fit = area.height.saturating_sub(3);
+    let shown = total.min(fit);
+    let top = scroll.top.min(total - shown);
+    let closing = if total > shown {
+        format!(
+            "rows {}–{} of {total} · ↑/↓ PgUp/PgDn scroll · any other key closes",
+            top + 1,
+            top + shown
+        )
+    } else {
+        "any key closes this help".to_owned()
+    };
+    let mut lines: Vec<Line> = lines
+        .into_iter()
+        .skip(usize::from(top))
+        .take(usize::from(shown))
+        .collect();
+    lines.push(Line::from(Span::styled(closing, theme.dim())));
     let width = lines
         .iter()
         .map(Line::width)
@@ -147,4 +268,5 @@ pub fn render(menu: bool, theme: Theme, area: Rect, buf: &mut Buffer) {
                 .border_style(theme.fg(Color::Cyan)),
         )
         .render(rect, buf);
+    Scroll { top, shown, total }
 }
