@@ -190,3 +190,36 @@ fn time_steps_print_four_significant_digits() {
     assert_eq!(precise(1e-4), "1e-4");
     assert_eq!(precise(0.01), "0.01");
 }
+
+/// The menu at 80 × 24: a lesson's line shows the command that opens it whole or not at all
+/// (cut at the edge it would be a command that does not work); at 120 columns every lesson
+/// shows it. Scrolled down, every lesson's line is checked.
+#[test]
+fn menu_commands_are_whole_or_left_out() {
+    let mut app = app();
+    let count = app.lessons().len();
+    let mut seen = std::collections::BTreeSet::new();
+    for i in 0..count {
+        for row in draw(&app, 80, 24) {
+            let ticks = row.matches('`').count();
+            assert!(ticks % 2 == 0, "a command cut at the edge: {row:?}");
+            if let Some(at) = row.find("`springlab lesson ") {
+                let command = row[at + 1..]
+                    .split('`')
+                    .next()
+                    .unwrap_or_default()
+                    .to_owned();
+                seen.insert(command);
+            }
+        }
+        if i + 1 < count {
+            app.handle_key(KeyEvent::new(KeyCode::Down, KeyModifiers::NONE));
+        }
+    }
+    assert!(!seen.is_empty(), "no command shown at 80 columns");
+    let wide = draw(&app, 120, 60).join("\n");
+    for l in lessons() {
+        let command = format!("`springlab lesson {}`", l.slug);
+        assert!(wide.contains(&command), "{command} missing at 120 columns");
+    }
+}

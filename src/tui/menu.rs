@@ -76,7 +76,7 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
                         }
                         None => format!("springlab lesson {}", l.slug),
                     };
-                    lines.push(Line::from(
+                    let mut head = Line::from(
                         vec![
                             Span::styled(pointer, theme.fg(Color::Yellow)),
                             Span::styled(format!("{:>2}. {}", l.number, l.title), head),
@@ -84,12 +84,16 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
                         ]
                         .into_iter()
                         .chain(strip)
-                        .chain([Span::styled(
-                            format!(" {done}/{steps} steps · `{command}`"),
-                            theme.dim(),
-                        )])
+                        .chain([Span::styled(format!(" {done}/{steps} steps"), theme.dim())])
                         .collect::<Vec<_>>(),
-                    ));
+                    );
+                    // The command to open it, when it fits whole: a command cut short at the
+                    // edge would be one that does not work.
+                    let open = Span::styled(format!(" · `{command}`"), theme.dim());
+                    if head.width() + open.width() <= usize::from(list.width) {
+                        head.push_span(open);
+                    }
+                    lines.push(head);
                     for line in markdown::wrap_text(&l.summary, width, theme) {
                         let mut spans = vec![Span::raw("       ")];
                         spans.extend(line.spans);
