@@ -7,7 +7,7 @@ use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Clear, Paragraph, Widget};
 
-use super::Theme;
+use super::{Theme, markdown};
 
 /// The controls: `(keys, what they do)`; an empty key starts a section.
 pub const LESSON_KEYS: &[(&str, &str)] = &[
@@ -137,39 +137,6 @@ impl Scroll {
     }
 }
 
-/// The key column's width: two spaces and the key, padded to ten.
-const KEY_COLUMN: usize = 12;
-
-/// `text` cut into lines of at most `width` columns at spaces (a word longer than that keeps
-/// a line of its own). A one-column word stays with the word before it, so that `t = 0` or
-/// `× 2 / ÷ 2` is never cut.
-fn wrap(text: &str, width: usize) -> Vec<String> {
-    let mut words: Vec<String> = Vec::new();
-    for word in text.split(' ').filter(|w| !w.is_empty()) {
-        match words.last_mut() {
-            Some(last) if Span::raw(word).width() == 1 => {
-                last.push(' ');
-                last.push_str(word);
-            }
-            _ => words.push(word.to_owned()),
-        }
-    }
-    let mut lines = Vec::new();
-    let mut line = String::new();
-    for word in &words {
-        let fits = Span::raw(line.as_str()).width() + 1 + Span::raw(word).width() <= width;
-        if !line.is_empty() && !fits {
-            lines.push(std::mem::take(&mut line));
-        }
-        if !line.is_empty() {
-            line.push(' ');
-        }
-        line.push_str(word);
-    }
-    lines.push(line);
-    lines
-}
-
 /// Draws the overlay for the menu or for a lesson in the middle of `area`, scrolled to
 /// `scroll.top` (clamped); returns what it showed.
 pub fn render(menu: bool, theme: Theme, area: Rect, buf: &mut Buffer, scroll: Scroll) -> Scroll {
@@ -180,51 +147,48 @@ pub fn render(menu: bool, theme: Theme, area: Rect, buf: &mut Buffer, scroll: Sc
         .patch(theme.fg(Color::Yellow));
     // Inside the border, with a column to spare on each side; the descriptions wrap beside
     // the key column.
-    let room = usize::from(area.width.saturating_sub(4)).max(KEY_COLUMN + 8);
-    let note = "limit: the method's largest stable dt here, dampers and drag included.";
-    let entries: Vec<(Option<&str>, Vec<String>)> = keys
+    let width = area.width.saturating_sub(4).max(20);
+    let indent = " ".repeat(12);
+    // Each key's rows: the key (two spaces, padded to ten), then its description wrapped
+    // beside that column.
+    let entries: Vec<(bool, Vec<Line>)> = keys
         .iter()
         .map(|&(key, what)| {
             if key.is_empty() {
-                (None, vec![what.to_owned()])
-            } else {
-                (Some(key), wrap(what, room - KEY_COLUMN))
+                return (false, vec![Line::from(Span::styled(what, head_style))]);
             }
+            let mut rows =
+                markdown::wrap_hanging(what, width, &format!("  {key:<10}"), &indent, theme);
+            if let Some(first) = rows.first_mut().and_then(|row| row.spans.first_mut()) {
+                first.style = key_style;
+            }
+            (true, rows)
         })
         .collect();
     let rows = |headings: bool| -> usize {
         entries
             .iter()
-            .filter(|(key, _)| headings || key.is_some())
-            .map(|(_, lines)| lines.len())
+            .filter(|(key, _)| headings || *key)
+            .map(|(_, rows)| rows.len())
             .sum()
     };
+    let note = markdown::wrap_text(
+        "limit: the method's largest stable dt here, dampers and drag included.",
+        width,
+        theme,
+    );
     // Section headings and the note only when everything fits with them (and the closing
     // line, and the border).
-    let note_rows = if menu { 0 } else { 1 + wrap(note, room).len() };
+    let note_rows = if menu { 0 } else { 1 + note.len() };
     let roomy = rows(true) + note_rows + 3 <= usize::from(area.height);
-    let mut lines: Vec<Line> = Vec::new();
-    for (key, what) in &entries {
-        match key {
-            None if roomy => lines.push(Line::from(Span::styled(what[0].clone(), head_style))),
-            None => {}
-            Some(key) => {
-                for (i, part) in what.iter().enumerate() {
-                    let column = if i == 0 {
-                        Span::styled(format!("  {key:<10}"), key_style)
-                    } else {
-                        Span::raw(" ".repeat(KEY_COLUMN))
-                    };
-                    lines.push(Line::from(vec![column, Span::raw(part.clone())]));
-                }
-            }
-        }
-    }
+    let mut lines: Vec<Line> = entries
+        .into_iter()
+        .filter(|(key, _)| roomy || *key)
+        .flat_map(|(_, rows)| rows)
+        .collect();
     if !menu && roomy {
         lines.push(Line::from(""));
-        for part in wrap(note, room) {
-            lines.push(Line::from(Span::styled(part, theme.dim())));
-        }
+        lines.extend(note.into_iter().map(|line| line.style(theme.dim())));
     }
     // Rows for the text between the border and the closing line.
     let total = lines.len() as u16;

@@ -195,6 +195,24 @@ pub fn bullet(text: &str, width: u16, theme: Theme) -> Vec<Line<'static>> {
     )
 }
 
+/// Plain text (with inline Markdown) wrapped to `width`, the first line after `first` and the
+/// others after `rest` (a hanging indent).
+#[must_use]
+pub fn wrap_hanging(
+    text: &str,
+    width: u16,
+    first: &str,
+    rest: &str,
+    theme: Theme,
+) -> Vec<Line<'static>> {
+    wrap(
+        &inline(text, Style::new(), theme),
+        usize::from(width.max(8)),
+        first,
+        rest,
+    )
+}
+
 /// Plain text (with inline Markdown) wrapped to `width`.
 #[must_use]
 pub fn wrap_text(text: &str, width: u16, theme: Theme) -> Vec<Line<'static>> {
@@ -294,6 +312,22 @@ fn wrap(pieces: &[Piece], width: usize, first: &str, rest: &str) -> Vec<Line<'st
             .map(|(t, _)| Span::raw(t.as_str()).width())
             .sum::<usize>()
     };
+    // A one-column word (`=`, `×`, a digit, a letter) stays with the word before it: no line
+    // starts with `= 0` or `× 2`, and `t = 0` is never cut (unless the two would not fit on
+    // a line together).
+    let room = width.saturating_sub(Span::raw(first).width().max(Span::raw(rest).width()));
+    let mut glued: Vec<Vec<Piece>> = Vec::with_capacity(words.len());
+    for w in words {
+        match glued.last_mut() {
+            Some(last) if len(&w) == 1 && len(last) + 2 <= room => {
+                let style = last.last().map_or(Style::new(), |p| p.1);
+                last.push((" ".to_owned(), style));
+                last.extend(w);
+            }
+            _ => glued.push(w),
+        }
+    }
+    let words = glued;
     let mut lines: Vec<Line<'static>> = Vec::new();
     let mut spans: Vec<Span<'static>> = vec![Span::raw(first.to_string())];
     let mut used = Span::raw(first).width();
@@ -336,4 +370,64 @@ fn wrap(pieces: &[Piece], width: usize, first: &str, rest: &str) -> Vec<Line<'st
         lines.push(Line::from(spans));
     }
     lines
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn text(lines: &[Line]) -> Vec<String> {
+        lines
+            .iter()
+            .map(|l| l.spans.iter().map(|s| s.content.as_ref()).collect())
+            .collect()
+    }
+
+    /// At every width the words come out in order, no line is wider than the width, and no
+    /// line but the first starts with a one-column word: `t = 0`, `× 2` and `(x - L0)` stay
+    /// together.
+    #[test]
+    fn one_column_words_stay_with_the_word_before() {
+        let sentence = "the step as it opened: its method, dt, k, pins and view, at t = 0, \
+                        then dt × 2 / ÷ 2 and m x'' = -k (x - L0) on a spring";
+        let words: Vec<&str> = sentence.split(' ').collect();
+        for width in 12..60u16 {
+            let lines = text(&wrap_hanging(sentence, width, "", "", Theme::PLAIN));
+            let again: Vec<String> = lines.join(" ").split(' ').map(str::to_owned).collect();
+            assert_eq!(again, words, "width {width}");
+            for line in &lines {
+                assert!(
+                    Span::raw(line.as_str()).width() <= usize::from(width),
+                    "{line:?}"
+                );
+            }
+            for line in &lines[1..] {
+                let first = line.split(' ').next().unwrap_or_default();
+                assert!(
+                    Span::raw(first).width() > 1,
+                    "width {width}: {line:?} in {lines:#?}"
+                );
+            }
+        }
+    }
+
+    /// A hanging indent: the first line after `first`, the others after `rest`.
+    #[test]
+    fn hanging_indent() {
+        let lines = text(&wrap_hanging(
+            "choose a method: its letter or number (listed), or Enter; Tab: one body",
+            40,
+            "  m         ",
+            "            ",
+            Theme::PLAIN,
+        ));
+        assert_eq!(
+            lines,
+            [
+                "  m         choose a method: its letter",
+                "            or number (listed), or",
+                "            Enter; Tab: one body",
+            ]
+        );
+    }
 }
