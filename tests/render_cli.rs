@@ -80,7 +80,10 @@ fn frames_gif_and_apng_have_the_asked_frame_count() {
             "--gif", "r.gif", "--apng", "r.apng",
         ],
     );
-    assert!(stdout.contains("wrote 7 frames of 160x120"), "{stdout}");
+    assert!(
+        stdout.contains("wrote 7 frames of 160x120 to f/frame_00000.png … frame_00006.png"),
+        "{stdout}"
+    );
     let mut files: Vec<String> = std::fs::read_dir(dir.join("f"))
         .expect("frames dir")
         .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
@@ -407,5 +410,21 @@ fn start_skips_simulated_time_before_the_first_frame() {
     assert!(
         failure(&["render", "rope", "--frames", "1", "--start", "-1"])
             .contains("--start -1: expected a time in seconds >= 0")
+    );
+}
+
+/// One frame is "1 frame", named alone; several name the first and the last file.
+#[test]
+fn the_summary_names_the_frames_written() {
+    let dir = scratch("one-frame");
+    let stdout = success(
+        &dir,
+        &[
+            "render", "rope", "--frames", "1", "--size", "64x48", "--out", "f",
+        ],
+    );
+    assert_eq!(
+        stdout.trim_end(),
+        "wrote 1 frame of 64x48 to f/frame_00000.png"
     );
 }

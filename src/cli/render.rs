@@ -631,11 +631,19 @@ fn report(
         Box::new(std::io::stdout().lock())
     };
     if let Some(dir) = &plan.outputs.frames_dir {
-        writeln!(
-            out,
-            "wrote {written} frames of {width}x{height} to {}/frame_00000.png …",
-            dir.display()
-        )?;
+        let dir = dir.display();
+        if written == 1 {
+            writeln!(
+                out,
+                "wrote 1 frame of {width}x{height} to {dir}/frame_00000.png"
+            )?;
+        } else {
+            let last = written.saturating_sub(1);
+            writeln!(
+                out,
+                "wrote {written} frames of {width}x{height} to {dir}/frame_00000.png … frame_{last:05}.png"
+            )?;
+        }
     }
     if let Some(f) = &plan.outputs.gif {
         writeln!(
