@@ -147,7 +147,7 @@ pub fn render(menu: bool, theme: Theme, area: Rect, buf: &mut Buffer, scroll: Sc
         .patch(theme.fg(Color::Yellow));
     // Inside the border, with a column to spare on each side; the descriptions wrap beside
     // the key column.
-    let width = area.width.saturating_sub(4).max(20);
+    let wrap_width = area.width.saturating_sub(4).max(20);
     let indent = " ".repeat(12);
     // Each key's rows: the key (two spaces, padded to ten), then its description wrapped
     // beside that column.
@@ -158,7 +158,7 @@ pub fn render(menu: bool, theme: Theme, area: Rect, buf: &mut Buffer, scroll: Sc
                 return (false, vec![Line::from(Span::styled(what, head_style))]);
             }
             let mut rows =
-                markdown::wrap_hanging(what, width, &format!("  {key:<10}"), &indent, theme);
+                markdown::wrap_hanging(what, wrap_width, &format!("  {key:<10}"), &indent, theme);
             if let Some(first) = rows.first_mut().and_then(|row| row.spans.first_mut()) {
                 first.style = key_style;
             }
@@ -174,7 +174,7 @@ pub fn render(menu: bool, theme: Theme, area: Rect, buf: &mut Buffer, scroll: Sc
     };
     let note = markdown::wrap_text(
         "limit: the method's largest stable dt here, dampers and drag included.",
-        width,
+        wrap_width,
         theme,
     );
     // Section headings and the note only when everything fits with them (and the closing
