@@ -15,6 +15,7 @@ use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 mod results;
+mod untrusted;
 
 const ROPE: &str = include_str!("homework/rope.rs");
 const INTEGRATORS: &str = include_str!("homework/integrators.rs");

@@ -13,6 +13,7 @@ use crate::grade::external::{ExternalOptions, GradeError, expand, grade_all};
 use crate::grade::homework::{new_homework, this_springlab};
 use crate::grade::remote::Limits;
 use crate::grade::sandbox::{self, Sandbox};
+use crate::grade::untrusted::shown_path;
 use crate::grade::{Assignment, Options, Report, autograder, points, write_result};
 
 /// Options of `springlab homework`.
@@ -42,6 +43,11 @@ pub enum HomeworkCommand {
         /// The zip file to write.
         #[arg(long, value_name = "FILE", default_value = "autograder.zip")]
         out: PathBuf,
+        /// The secret seed of the graded cases [default: a fresh random one]. Each submission's
+        /// cases come from it and the submission's code (`grade --seed-per-submission`), never
+        /// from the public default seed a student's own `cargo test` uses.
+        #[arg(long)]
+        seed: Option<u64>,
     },
 }
 
@@ -102,6 +108,10 @@ pub struct GradeArgs {
     /// Seed of the random cases.
     #[arg(long, default_value_t = crate::grade::DEFAULT_SEED)]
     pub seed: u64,
+    /// Give each submission cases of its own, from --seed and its code: the same code gets the
+    /// same cases, changed code other ones (the autograder's run_autograder sets it).
+    #[arg(long)]
+    pub seed_per_submission: bool,
 }
 
 /// `springlab homework new DIR --assignment A` and `springlab homework autograder`.
@@ -130,9 +140,11 @@ pub fn homework(args: &HomeworkArgs) -> anyhow::Result<()> {
         HomeworkCommand::Autograder {
             assignment,
             out: zip,
+            seed,
         } => {
             let exe = this_springlab();
-            let bytes = autograder::write(*assignment, &exe, zip)
+            let seed = seed.unwrap_or_else(autograder::secret_seed);
+            let bytes = autograder::write(*assignment, &exe, zip, seed)
                 .with_context(|| format!("cannot write {}", zip.display()))?;
             writeln!(
                 out,
@@ -140,6 +152,11 @@ pub fn homework(args: &HomeworkArgs) -> anyhow::Result<()> {
                  as the autograder of a Gradescope programming assignment",
                 zip.display(),
                 bytes >> 20
+            )?;
+            writeln!(
+                out,
+                "the graded cases come from the secret seed {seed} and each submission's code; \
+                 keep the zip from students (`--seed {seed}` makes the same zip again)"
             )?;
         }
     }
@@ -203,6 +220,7 @@ pub fn grade(args: &GradeArgs) -> anyhow::Result<()> {
         target_dir: args.target_dir.clone().unwrap_or_else(default_target_dir),
         assignment: args.assignment,
         sandbox: sandbox_config,
+        seed_per_submission: args.seed_per_submission,
     };
     let show_progress = std::io::stderr().is_terminal();
     let progress = move |line: &str| {
@@ -249,14 +267,14 @@ pub fn grade(args: &GradeArgs) -> anyhow::Result<()> {
     } else {
         let width = graded
             .iter()
-            .map(|(d, _)| d.display().to_string().chars().count())
+            .map(|(d, _)| shown_path(d).chars().count())
             .max()
             .unwrap_or(10);
         for (dir, report) in &graded {
             writeln!(
                 out,
                 "{:<width$}  {:>7} / {:<4}  {}",
-                dir.display(),
+                shown_path(dir),
                 points(report.score),
                 points(report.max_score),
                 summary(report)

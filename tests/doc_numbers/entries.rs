@@ -333,6 +333,21 @@ pub const ENTRIES: &[Entry] = &[
         &["200"],
         "test tests/grade_sandbox.rs two_hundred_forks_leave_nothing_behind",
     ),
+    (
+        "docs/grading.md",
+        &["1023", "4"],
+        "test tests/grade_sandbox/untrusted.rs inherited_descriptors_and_a_huge_escaped_panic_reach_nothing: the attack writes descriptors 3 to 1023 and panics with 4 MiB",
+    ),
+    (
+        "docs/grading.md",
+        &["2"],
+        "code crates/grade/src/grade/untrusted.rs `MAX_STUDENT_TEXT: usize = 2048`: the student text kept",
+    ),
+    (
+        "docs/grading.md",
+        &["52"],
+        "label: OSC 52, the terminal escape sequence that writes the clipboard",
+    ),
     // docs/homework-live.md
     (
         "docs/homework-live.md",

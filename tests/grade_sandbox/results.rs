@@ -96,7 +96,8 @@ fn run_autograder_writes_a_failure_result_when_the_grader_fails() {
     let root = scratch("autograder-fails");
     let source = root.join("source");
     std::fs::create_dir_all(&source).expect("source");
-    let files = springlab::grade::autograder::files(springlab::grade::Assignment::Rope, Vec::new());
+    let files =
+        springlab::grade::autograder::files(springlab::grade::Assignment::Rope, Vec::new(), 7);
     let (_, script, _) = files
         .iter()
         .find(|(name, _, _)| name == "run_autograder")
@@ -132,7 +133,8 @@ fn setup_fails_loudly_when_the_toolchain_cannot_build_the_api() {
     let root = scratch("setup-old-rustc");
     let source = root.join("source");
     std::fs::create_dir_all(&source).expect("source");
-    let files = springlab::grade::autograder::files(springlab::grade::Assignment::Rope, Vec::new());
+    let files =
+        springlab::grade::autograder::files(springlab::grade::Assignment::Rope, Vec::new(), 7);
     let (_, script, _) = files
         .iter()
         .find(|(name, _, _)| name == "setup.sh")

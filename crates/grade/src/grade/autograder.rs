@@ -11,7 +11,9 @@
 //!                    before the first submission, and a toolchain that cannot build it stops
 //!                    the set-up with a message
 //!   run_autograder   run for every submission: `springlab grade /autograder/submission
-//!                    --assignment A --gradescope /autograder/results/results.json`; when the
+//!                    --assignment A --seed S --seed-per-submission
+//!                    --gradescope /autograder/results/results.json` (S: the zip's secret
+//!                    seed, [`secret_seed`] or `--seed`); when the
 //!                    grader fails (non-zero exit) it writes a failure result instead
 //!                    (SPRINGLAB_AUTOGRADER_ROOT replaces /autograder, for a local test run)
 //!   springlab        this binary (Linux, x86-64, glibc 2.35: Ubuntu 22.04)
@@ -87,6 +89,7 @@ RESULTS="$ROOT/results/results.json"
 rm -f "$RESULTS"
 "$ROOT/source/springlab" grade "$ROOT/submission" \
   --assignment {{ASSIGNMENT}} \
+  --seed {{SEED}} --seed-per-submission \
   --target-dir "$ROOT/source/target" \
   --gradescope "$RESULTS" 2>"$ROOT/results/grader-stderr.txt"
 STATUS=$?
@@ -108,16 +111,31 @@ message otherwise. run_autograder grades /autograder/submission (the student's c
 folder, or just its src/ files) in springlab's sandbox and writes
 /autograder/results/results.json (a failure result when the grader itself fails). Students
 upload their homework crate made with `springlab homework new DIR --assignment {{ASSIGNMENT}}`.
+
+The graded cases come from the seed in run_autograder, a secret of this zip, and each
+submission's code: a student's own `cargo test` grades with the public default seed, so the
+cases seen at home are not the graded ones, and a resubmission with changed code gets new ones.
+Keep this zip from students.
 ";
 
-/// The files of the autograder for `assignment`: `(name, contents, Unix mode)`; `springlab` is
-/// the binary to include.
+/// A fresh random seed for an autograder (the system's random source).
 #[must_use]
-pub fn files(assignment: Assignment, springlab: Vec<u8>) -> Vec<(String, Vec<u8>, u32)> {
+pub fn secret_seed() -> u64 {
+    let token = super::token::random_token();
+    let mut bytes = [0u8; 8];
+    bytes.copy_from_slice(&token[..8]);
+    u64::from_le_bytes(bytes)
+}
+
+/// The files of the autograder for `assignment`: `(name, contents, Unix mode)`; `springlab` is
+/// the binary to include, `seed` the secret seed of the graded cases.
+#[must_use]
+pub fn files(assignment: Assignment, springlab: Vec<u8>, seed: u64) -> Vec<(String, Vec<u8>, u32)> {
     let fill = |t: &str| {
         t.replace("{{ASSIGNMENT}}", assignment.name())
             .replace("{{ROOT_ENV}}", ROOT_ENV)
             .replace("{{TITLE}}", assignment.title())
+            .replace("{{SEED}}", &seed.to_string())
     };
     vec![
         ("setup.sh".to_string(), fill(SETUP).into_bytes(), 0o755),
@@ -193,11 +211,35 @@ pub fn zip(files: &[(String, Vec<u8>, u32)]) -> Vec<u8> {
 ///
 /// # Errors
 /// When the binary cannot be read or the zip cannot be written.
-pub fn write(assignment: Assignment, springlab: &Path, out: &Path) -> std::io::Result<usize> {
+pub fn write(
+    assignment: Assignment,
+    springlab: &Path,
+    out: &Path,
+    seed: u64,
+) -> std::io::Result<usize> {
     let binary = std::fs::read(springlab)?;
-    let files = files(assignment, binary);
+    let files = files(assignment, binary, seed);
     let bytes = zip(&files);
     // A temporary file renamed into place: a half-written zip is never left behind.
     super::write_result(out, &bytes).map_err(std::io::Error::other)?;
     Ok(bytes.len())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn run_autograder_grades_with_the_secret_seed_per_submission() {
+        let files = files(Assignment::Rope, Vec::new(), 42);
+        let run = files
+            .iter()
+            .find(|(name, _, _)| name == "run_autograder")
+            .map(|(_, text, _)| String::from_utf8_lossy(text).into_owned())
+            .expect("run_autograder");
+        assert!(run.contains("--assignment rope \\\n  --seed 42 --seed-per-submission \\\n"));
+        assert!(!run.contains("{{"), "{run}");
+        // Two autograders made without --seed get different seeds.
+        assert_ne!(secret_seed(), secret_seed());
+    }
 }

@@ -37,7 +37,7 @@ use super::Assignment;
 use super::homework::API_FILES;
 use super::sandbox::{Sandbox, reachable_by};
 use rustc::common_args;
-pub use source::{Submission, locate};
+pub use source::{Submission, locate, read_regular};
 use source::{digest, read_tree};
 pub use toolchain::Toolchain;
 use toolchain::{chown, set_mode};
@@ -121,6 +121,17 @@ pub struct Staged {
     pub dir: PathBuf,
     /// The digest of what goes into its build.
     id: String,
+}
+
+impl Staged {
+    /// The seed of this submission's cases under `seed_per_submission`
+    /// ([`super::external::ExternalOptions`]): a digest of `seed` and everything that goes
+    /// into the build, so the same code gets the same cases under the same `seed`.
+    #[must_use]
+    pub fn seed(&self, seed: u64) -> u64 {
+        let d = digest(&[&seed.to_le_bytes(), self.id.as_bytes()]);
+        u64::from_str_radix(&d[..16], 16).unwrap_or(seed)
+    }
 }
 
 /// A built submission: the program and its folder in the scratch space.

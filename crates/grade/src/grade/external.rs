@@ -20,6 +20,7 @@ use std::sync::{Arc, Mutex};
 use super::build::{self, BuildFailure, BuildLimits, Builder, Staged};
 use super::remote::{Limits, Place, Remote, Session};
 use super::sandbox::{self, Sandbox};
+use super::untrusted::shown_path;
 use super::{Assignment, Options, Report, grade_cloth, grade_jelly, grade_rope};
 
 /// Settings of an external grading run.
@@ -37,6 +38,10 @@ pub struct ExternalOptions {
     pub assignment: Option<Assignment>,
     /// The sandbox's user and the layers left out.
     pub sandbox: sandbox::Config,
+    /// Each submission's cases from a seed of its own, made of `grading.seed` and the
+    /// submission's code ([`Staged::seed`]): the same code always gets the same cases, changed
+    /// code other ones, so answers collected from one submission's feedback do not fit the next.
+    pub seed_per_submission: bool,
 }
 
 impl Default for ExternalOptions {
@@ -50,6 +55,7 @@ impl Default for ExternalOptions {
             target_dir: build::default_target_dir(),
             assignment: None,
             sandbox: sandbox::Config::default(),
+            seed_per_submission: false,
         }
     }
 }
@@ -59,7 +65,7 @@ impl Default for ExternalOptions {
 #[derive(Clone, Debug, thiserror::Error)]
 pub enum GradeError {
     /// DIR is not a homework crate and no assignment was given.
-    #[error("{} is not a homework crate: {reason}", .dir.display())]
+    #[error("{} is not a homework crate: {reason}", shown_path(.dir))]
     NotACrate {
         /// The directory.
         dir: PathBuf,
@@ -67,7 +73,7 @@ pub enum GradeError {
         reason: String,
     },
     /// The crate names another assignment than the class's.
-    #[error("{} names the {named} assignment in its Cargo.toml, but the class is graded as {class}; give --assignment to grade every crate as one assignment", .dir.display())]
+    #[error("{} names the {named} assignment in its Cargo.toml, but the class is graded as {class}; give --assignment to grade every crate as one assignment", shown_path(.dir))]
     OtherAssignment {
         /// The directory.
         dir: PathBuf,
@@ -94,19 +100,23 @@ pub fn assignment_of(dir: &Path) -> Result<Assignment, GradeError> {
         return Err(not_a_crate("no such directory".to_string()));
     }
     let mut manifest = dir.join("Cargo.toml");
-    if !manifest.is_file()
+    let present = |p: &Path| std::fs::symlink_metadata(p).is_ok();
+    if !present(&manifest)
         && let Ok(found) = build::locate(dir)
         && let Some(krate) = found.src.parent()
-        && krate.join("Cargo.toml").is_file()
+        && present(&krate.join("Cargo.toml"))
     {
         // A crate uploaded a folder or more down.
         manifest = krate.join("Cargo.toml");
     }
-    let text = std::fs::read_to_string(&manifest).map_err(|e| {
-        not_a_crate(format!(
-            "cannot read Cargo.toml ({e}); give the assignment with --assignment"
-        ))
-    })?;
+    // Read as the submission's own file: no link followed, no FIFO waited on, bounded.
+    let text = build::read_regular(&manifest, MAX_MANIFEST_BYTES)
+        .and_then(|b| String::from_utf8(b).map_err(|_| "not UTF-8".to_string()))
+        .map_err(|e| {
+            not_a_crate(format!(
+                "cannot read Cargo.toml ({e}); give the assignment with --assignment"
+            ))
+        })?;
     let value: toml::Value = toml::from_str(&text)
         .map_err(|e| not_a_crate(format!("Cargo.toml is not valid TOML ({e})")))?;
     let name = value
@@ -129,6 +139,9 @@ pub fn assignment_of(dir: &Path) -> Result<Assignment, GradeError> {
     })
 }
 
+/// A Cargo.toml larger than this is not read.
+const MAX_MANIFEST_BYTES: u64 = 1 << 20;
+
 /// True when `dir` looks like one submission: a Cargo.toml, `src/lib.rs` or `lib.rs` in it.
 #[must_use]
 pub fn is_submission(dir: &Path) -> bool {
@@ -138,8 +151,9 @@ pub fn is_submission(dir: &Path) -> bool {
 }
 
 /// The submissions named by `paths`: each path that is a submission; for each other directory
-/// (a class folder), every folder in it, sorted by name (hidden folders and `target` left out),
-/// each one submission wherever its crate sits inside ([`build::locate`]); each once.
+/// (a class folder), every folder in it, sorted by name (hidden folders, `target` and symbolic
+/// links left out: a class folder's content may come from students), each one submission
+/// wherever its crate sits inside ([`build::locate`]); each once.
 #[must_use]
 pub fn expand(paths: &[PathBuf]) -> Vec<PathBuf> {
     let mut out: Vec<PathBuf> = Vec::new();
@@ -158,7 +172,7 @@ pub fn expand(paths: &[PathBuf]) -> Vec<PathBuf> {
                         !name.starts_with('.') && name != "target"
                     })
                     .map(|e| e.path())
-                    .filter(|p| p.is_dir())
+                    .filter(|p| std::fs::symlink_metadata(p).is_ok_and(|m| m.is_dir()))
                     .collect()
             })
             .unwrap_or_default();
@@ -228,7 +242,7 @@ pub fn grade_as(
             None => return not_run(&why),
         },
     };
-    progress(&format!("building {}", dir.display()));
+    progress(&format!("building {}", shown_path(dir)));
     let built = match builder.build(&staged, slot) {
         Ok(built) => built,
         Err(BuildFailure::Compile(errors)) => {
@@ -245,7 +259,15 @@ pub fn grade_as(
         }
         Err(BuildFailure::Grader(why)) => return Err(GradeError::Grader(why)),
     };
-    progress(&format!("grading {}", dir.display()));
+    progress(&format!("grading {}", shown_path(dir)));
+    let grading = Options {
+        seed: if options.seed_per_submission {
+            staged.seed(options.grading.seed)
+        } else {
+            options.grading.seed
+        },
+        ..options.grading
+    };
     let place = Place {
         builder: Arc::clone(builder),
         slot,
@@ -253,12 +275,12 @@ pub fn grade_as(
     };
     let remote = Remote::new(
         Session::new(built.exe, assignment, options.limits, place),
-        options.grading.time_limit,
+        grading.time_limit,
     );
     let mut report = match assignment {
-        Assignment::Rope => grade_rope(remote.clone(), &options.grading),
-        Assignment::Jelly => grade_jelly(remote.clone(), &options.grading),
-        Assignment::Cloth => grade_cloth(remote.clone(), &options.grading),
+        Assignment::Rope => grade_rope(remote.clone(), &grading),
+        Assignment::Jelly => grade_jelly(remote.clone(), &grading),
+        Assignment::Cloth => grade_cloth(remote.clone(), &grading),
     };
     remote.shut_down();
     builder.sandbox.sweep(slot);

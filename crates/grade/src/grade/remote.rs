@@ -48,6 +48,7 @@ use springlab_homework::wire::{
 
 use super::Assignment;
 use super::system::Physics;
+use super::untrusted::student_text;
 
 mod convert;
 mod frames;
@@ -500,8 +501,10 @@ impl Session {
                 Some((&to_grader::RESULT, answer)) => return Ok(answer.to_vec()),
                 Some((&to_grader::PANIC, message)) => {
                     return Err(CallFailure::Panicked(
-                        decode::<String>(message)
-                            .unwrap_or_else(|_| "a panic (unreadable message)".to_string()),
+                        decode::<String>(message).map_or_else(
+                            |_| "a panic (unreadable message)".to_string(),
+                            |m| student_text(&m),
+                        ),
                     ));
                 }
                 Some((&to_grader::PHYSICS, request)) => {
@@ -520,7 +523,7 @@ impl Session {
                     self.stop();
                     return Err(CallFailure::Malformed(format!(
                         "the program could not serve the call: {}",
-                        decode::<String>(message).unwrap_or_default()
+                        student_text(&decode::<String>(message).unwrap_or_default())
                     )));
                 }
                 _ => {

@@ -116,9 +116,12 @@ impl Builder {
             return Ok(());
         }
         use std::os::unix::process::ExitStatusExt;
-        if let Some(memory) = stderr
-            .lines()
-            .find(|l| l.contains("memory allocation of") || l.contains("out of memory"))
+        // A compiler out of memory aborts (a signal, or 101 for an internal error); an ordinary
+        // failed build exits with 1, and its messages may say anything (`compile_error!`).
+        if status.code() != Some(1)
+            && let Some(memory) = stderr
+                .lines()
+                .find(|l| l.contains("memory allocation of") || l.contains("out of memory"))
         {
             return Err(BuildFailure::Limit(format!(
                 "the compiler ran out of memory (\"{}\"; a build may use {} MiB)",

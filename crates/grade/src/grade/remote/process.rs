@@ -8,6 +8,7 @@ use std::sync::Mutex;
 
 use super::Limits;
 pub(super) use crate::grade::sandbox::reap;
+use crate::grade::untrusted::student_text;
 
 /// Keeps the last 16 KiB of the program's stderr.
 pub(super) fn keep_stderr(mut err: ChildStderr, tail: &Mutex<Vec<u8>>) {
@@ -35,12 +36,12 @@ pub(super) fn describe_end(status: Option<ExitStatus>, stderr: &str, limits: Lim
         .lines()
         .rev()
         .find(|l| !l.trim().is_empty())
-        .map(|l| format!(" (stderr: \"{}\")", l.trim()))
+        .map(|l| format!(" (stderr: \"{}\")", student_text(l.trim())))
         .unwrap_or_default();
     if let Some(line) = stderr.lines().find(|l| l.contains("memory allocation of")) {
         return format!(
             "it ran out of memory: \"{}\"; a homework program may use {} MiB of address space",
-            line.trim(),
+            student_text(line.trim()),
             mib(limits.memory_bytes)
         );
     }

@@ -239,7 +239,34 @@ unsafe fn end_as(status: libc::c_int) -> ! {
     }
 }
 
-/// In C: limits, the other user, no_new_privs, Landlock, seccomp.
+/// Marks every descriptor from 3 up close-on-exec, so the program starts with its three
+/// standard streams only. The grader's own descriptors are close-on-exec already; this is for
+/// those it inherited (a shell's redirection `7>>log`, a harness's pipe, cargo's jobserver),
+/// which the student's code could otherwise write whatever the sandbox's user and Landlock say.
+/// `close_range(…, CLOSE_RANGE_CLOEXEC)` (Linux 5.11), else `fcntl` on each possible number.
+unsafe fn cloexec_from_3() {
+    const CLOSE_RANGE_CLOEXEC: libc::c_uint = 1 << 2;
+    // SAFETY: close_range and fcntl on this process's descriptors; no memory.
+    unsafe {
+        if libc::syscall(libc::SYS_close_range, 3u32, u32::MAX, CLOSE_RANGE_CLOEXEC) == 0 {
+            return;
+        }
+        let mut limit = libc::rlimit {
+            rlim_cur: 0,
+            rlim_max: 0,
+        };
+        let top = if libc::getrlimit(libc::RLIMIT_NOFILE, &raw mut limit) == 0 {
+            limit.rlim_cur.min(1 << 20) as libc::c_int
+        } else {
+            1 << 16
+        };
+        for fd in 3..top {
+            libc::fcntl(fd, libc::F_SETFD, libc::FD_CLOEXEC);
+        }
+    }
+}
+
+/// In C: no inherited descriptors, limits, the other user, no_new_privs, Landlock, seccomp.
 pub(super) unsafe fn confine(
     uid: Option<u32>,
     gid: u32,
@@ -250,6 +277,7 @@ pub(super) unsafe fn confine(
     let fail = || Err(io::Error::last_os_error());
     // SAFETY: (the whole function) system calls only, on data prepared before the fork.
     unsafe {
+        cloexec_from_3();
         let set = |resource, value: u64| {
             let l = libc::rlimit {
                 rlim_cur: value,
