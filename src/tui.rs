@@ -703,7 +703,12 @@ impl App {
 
     fn menu_key(&mut self, code: KeyCode) {
         let count = self.lessons.len();
-        self.menu_message = None;
+        // Moving through the list keeps a message (a progress file kept aside is worth reading
+        // to its end); any other key clears it.
+        let moves = matches!(code, KeyCode::Up | KeyCode::Down | KeyCode::Char('j' | 'k'));
+        if !moves {
+            self.menu_message = None;
+        }
         match code {
             KeyCode::Char('q') | KeyCode::Esc => self.quit = true,
             KeyCode::Up | KeyCode::Char('k') => self.selected = self.selected.saturating_sub(1),

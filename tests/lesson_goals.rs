@@ -371,7 +371,54 @@ fn predictions_confirmed(slug: &str) {
                 },
                 p.answer + 1
             );
+            if oi == 0 {
+                answer_and_explanation_show_at_80x24(&mut app, p, &at);
+            }
         }
     }
     assert!(predictions > 0, "lesson {slug} has no prediction");
+}
+
+/// Once the run of the student's answer has decided, the answer and the start of the
+/// explanation are on the 80 × 24 screen.
+fn answer_and_explanation_show_at_80x24(app: &mut App, p: &lesson::Prediction, at: &str) {
+    for _ in 0..200 {
+        if app.lesson().expect("open").revealed().is_some() {
+            break;
+        }
+        app.tick(FRAME);
+    }
+    assert!(
+        app.lesson().expect("open").revealed().is_some(),
+        "{at}: not revealed"
+    );
+    let mut terminal =
+        ratatui::Terminal::new(ratatui::backend::TestBackend::new(80, 24)).expect("test backend");
+    terminal
+        .draw(|frame| frame.render_widget(&*app, frame.area()))
+        .expect("draw");
+    let screen = terminal.backend().to_string();
+    let left: String = screen
+        .lines()
+        .map(|l| l.trim_matches('"').chars().take(40).collect::<String>())
+        .collect::<Vec<_>>()
+        .join(" ");
+    let squeeze = |s: &str| {
+        s.replace(['`', '*', '"'], "")
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let text = squeeze(&left);
+    let answer = format!("Answer: {})", p.answer + 1);
+    assert!(
+        text.contains(&answer),
+        "{at}: no \"{answer}\" at 80x24\n{screen}"
+    );
+    let opening: Vec<&str> = p.explain.split_whitespace().take(4).collect();
+    let opening = squeeze(&opening.join(" "));
+    assert!(
+        text.contains(&opening),
+        "{at}: the explanation (\"{opening} …\") is not at 80x24\n{screen}"
+    );
 }

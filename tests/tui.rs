@@ -889,3 +889,103 @@ fn a_per_body_prediction_reveals_each_body() {
     );
     assert!(revealed.contains("✓ you predicted it"), "{revealed}");
 }
+
+/// A progress file kept aside: the menu's notice, wrapped, shows where the old file went on an
+/// 80×24 screen, and stays while the student moves through the list.
+#[test]
+fn the_notice_of_a_progress_file_kept_aside_is_read_whole_at_80x24() {
+    use springlab::tui::Progress;
+    let dir = temp_dir("notice");
+    let path = dir.join("progress.json");
+    std::fs::write(&path, "garbage{{{ not json").expect("write");
+    let progress = Progress::load(&path);
+    let notice = progress.notice().expect("told").to_string();
+    let aside = notice
+        .split_whitespace()
+        .find(|w| w.contains("progress.json.unreadable-"))
+        .expect("the notice names the file kept aside")
+        .to_string();
+    let mut app = App::new(lesson::builtin(), Theme::PLAIN).with_progress(progress);
+    for _ in 0..2 {
+        let text: String = screen_text(&app, 80, 24)
+            .split_whitespace()
+            .collect::<String>()
+            .replace('"', "");
+        let words: String = notice.split_whitespace().collect();
+        assert!(
+            text.contains(&words),
+            "the whole notice:\n{}",
+            screen_text(&app, 80, 24)
+        );
+        assert!(text.contains(&aside));
+        key(&mut app, KeyCode::Down);
+    }
+    key(&mut app, KeyCode::Char('9'));
+    assert_eq!(app.menu_message(), Some("there is no lesson 9"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The message of `+` gives dt to four significant digits, as the status line does (1.359e-3 s,
+/// not 0.001 s).
+#[test]
+fn the_dt_message_has_the_status_lines_digits() {
+    let mut app = open("model");
+    keys(&mut app, "nnn");
+    if run(&app).awaiting_prediction() {
+        key(&mut app, KeyCode::Char('1'));
+    }
+    keys(&mut app, "++++");
+    let dt = run(&app).sim().dt();
+    let message = run(&app).message().expect("a message").to_string();
+    assert_eq!(
+        message,
+        format!("dt = {} s", springlab::tui::status::precise(dt))
+    );
+    assert!(message.contains("e-3") || dt >= 1e-2, "{message}");
+}
+
+/// PgDn moves the step's text by what the screen shows less one row: at 80 × 24 with a
+/// prediction below it (three rows of text), the last row of one page is the first of the next,
+/// so no line is skipped.
+#[test]
+fn page_down_moves_by_the_rows_shown_and_skips_no_line() {
+    let mut app = open("jelly");
+    keys(&mut app, "nnnnn");
+    assert!(
+        run(&app).awaiting_prediction(),
+        "lesson 5 step 6 asks first"
+    );
+    key(&mut app, KeyCode::Char('2'));
+    // The text rows: below the header, above the row holding the scroll hint.
+    let text_rows = |app: &App| -> Vec<String> {
+        let screen = screen_text(app, 80, 24);
+        let left: Vec<String> = screen
+            .lines()
+            .map(|l| l.trim_matches('"').chars().take(40).collect())
+            .collect();
+        let hint = left
+            .iter()
+            .position(|l| l.contains("PgDn") || l.contains("PgUp"))
+            .expect("the text scrolls at 80x24");
+        left[1..hint]
+            .iter()
+            .map(|l| l.trim_end().to_string())
+            .collect()
+    };
+    let mut page = text_rows(&app);
+    assert!(page.len() >= 2, "{page:?}");
+    for _ in 0..40 {
+        let before = run(&app).text_scroll();
+        key(&mut app, KeyCode::PageDown);
+        let next = text_rows(&app);
+        if run(&app).text_scroll() == before || next == page {
+            break;
+        }
+        assert_eq!(
+            next.first(),
+            page.last(),
+            "a line was skipped:\n{page:?}\n{next:?}"
+        );
+        page = next;
+    }
+}

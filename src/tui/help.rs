@@ -55,7 +55,7 @@ pub const LESSON_KEYS: &[(&str, &str)] = &[
     ("", "Predictions and charts"),
     ("1 – 6", "answer a prediction (before the run)"),
     (
-        "1 – 8 / x",
+        "1 – 9 / x",
         "show / hide a method in lesson 7's charts / x(t) vs exact: whole run",
     ),
     (

@@ -181,6 +181,8 @@ pub struct LessonRun {
     message: Option<String>,
     drag: Option<Drag>,
     text_scroll: u16,
+    /// Rows of the step's text the last frame showed: PgUp / PgDn move by that page.
+    text_rows: std::cell::Cell<u16>,
     /// Columns the code blocks and tables of the text are scrolled to the left.
     hscroll: u16,
     /// The step's text with its numbers filled in (computed when the step opens).
@@ -276,6 +278,7 @@ impl LessonRun {
             message: None,
             drag: None,
             text_scroll: 0,
+            text_rows: std::cell::Cell::new(5),
             hscroll: 0,
             text: String::new(),
             chooser: None,
@@ -739,6 +742,17 @@ impl LessonRun {
 
     fn springs(&self) -> impl Iterator<Item = &crate::physics::Spring> {
         self.sim.scene.bodies.iter().flat_map(|b| b.model.springs())
+    }
+
+    /// Records how many rows of the step's text the screen shows (the drawing calls it), so a
+    /// page of PgUp / PgDn is what the student sees, less one row kept for context.
+    pub fn set_text_rows(&self, rows: u16) {
+        self.text_rows.set(rows);
+    }
+
+    /// Rows one PgUp / PgDn moves the text: the rows shown less one, at least one.
+    pub(crate) fn text_page(&self) -> u16 {
+        self.text_rows.get().saturating_sub(1).max(1)
     }
 
     /// Lines the step's text is scrolled down.

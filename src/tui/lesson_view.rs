@@ -157,21 +157,19 @@ pub fn plots_area(run: &LessonRun, area: Rect) -> Option<(Vec<Plot>, Rect)> {
 fn render_header(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
     let lesson = run.lesson();
     let bold = Style::new().add_modifier(Modifier::BOLD);
+    let name = format!(" Lesson {}: {}", lesson.number, lesson.title);
+    let step = format!("step {}/{}: ", run.step_index() + 1, lesson.steps.len());
+    // The step's title ends in "…" where it is cut (the lesson's name gives way first).
+    let room = usize::from(area.width).saturating_sub(step.chars().count() + 2);
+    let title = ellipsis(run.shown_title(), room);
+    let name = ellipsis(
+        &name,
+        usize::from(area.width).saturating_sub(step.chars().count() + title.chars().count() + 3),
+    ) + " ";
     let line = Line::from(vec![
-        Span::styled(
-            format!(" Lesson {}: {} ", lesson.number, lesson.title),
-            bold.patch(theme.fg(Color::Cyan)),
-        ),
+        Span::styled(name, bold.patch(theme.fg(Color::Cyan))),
         Span::styled("· ", theme.dim()),
-        Span::styled(
-            format!(
-                "step {}/{}: {}",
-                run.step_index() + 1,
-                lesson.steps.len(),
-                run.shown_title()
-            ),
-            bold,
-        ),
+        Span::styled(format!("{step}{title}"), bold),
     ]);
     buf.set_line(area.x, area.y, &line, area.width);
     let right = "? help · q menu ";
@@ -194,13 +192,17 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
         .add_modifier(Modifier::BOLD)
         .patch(theme.fg(Color::Green));
     let key_style = theme.fg(Color::Cyan).add_modifier(Modifier::BOLD);
-    // The prediction, the try list and the goal, each a section; when they do not fit with a
-    // few rows of text, the explanation and then the reveal make room (the goal always shows).
+    // The prediction (its heading, then the question and options), the try list and the goal,
+    // each a section below the text. When they do not fit with a few rows of text: once the
+    // answer is out, the question and options give way (the reveal names the answer), then
+    // the explanation and the reveal move to the top of the scrolling text (never dropped);
+    // the try list and the goal always show.
+    let mut head: Vec<Line<'static>> = Vec::new();
     let mut tail: Vec<Line<'static>> = Vec::new();
     let mut reveal: Vec<Line<'static>> = Vec::new();
     let mut explain: Vec<Line<'static>> = Vec::new();
     if let Some(p) = &step.predict {
-        tail.push(Line::from(vec![
+        head.push(Line::from(vec![
             Span::styled("Predict ", bold_green),
             Span::styled(
                 match run.answer() {
@@ -310,15 +312,24 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
     }
     // At least four rows of text (three and its scroll hint) above the rule.
     let room = usize::from(area.height.saturating_sub(5));
-    let mut parts = [tail, reveal, explain, rest];
-    for drop in [2, 1] {
-        if parts.iter().map(Vec::len).sum::<usize>() > room {
-            parts[drop].clear();
+    let over = |parts: &[&Vec<Line<'static>>]| parts.iter().map(|p| p.len()).sum::<usize>() > room;
+    if !reveal.is_empty() && over(&[&head, &tail, &reveal, &explain, &rest]) {
+        tail.clear();
+    }
+    // Lines that open the scrolling text instead of the section below it.
+    let mut opening: Vec<Line<'static>> = Vec::new();
+    if over(&[&head, &tail, &reveal, &explain, &rest]) {
+        opening = std::mem::take(&mut explain);
+        if over(&[&head, &tail, &reveal, &rest]) {
+            opening.splice(0..0, std::mem::take(&mut reveal));
+        }
+        if !opening.is_empty() {
+            opening.push(Line::default());
         }
     }
-    let [predict, reveal, explain, rest] = parts;
-    let tail: Vec<Line<'static>> = predict
+    let tail: Vec<Line<'static>> = head
         .into_iter()
+        .chain(tail)
         .chain(reveal)
         .chain(explain)
         .chain(rest)
@@ -340,7 +351,15 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
         (true, true) => "(The rest of this step's text follows your prediction.)",
         (true, false) => "\n\n(The rest of this step's text follows your prediction.)",
     };
-    let marked = markdown::render_marked(&format!("{shown}{held}"), width, theme);
+    let marked: Vec<(Line<'static>, bool)> = opening
+        .into_iter()
+        .map(|l| (l, false))
+        .chain(markdown::render_marked(
+            &format!("{shown}{held}"),
+            width,
+            theme,
+        ))
+        .collect();
     let total = marked.len() as u16;
     // When the text does not fit, its last row holds the scroll hint (never over the text).
     let overflow = total > text_area.height;
@@ -350,6 +369,7 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
         text_area.height
     };
     let max_scroll = total.saturating_sub(rows);
+    run.set_text_rows(rows);
     let scroll = run.text_scroll().min(max_scroll);
     let marker = theme.fg(Color::Yellow).add_modifier(Modifier::BOLD);
     let offset = usize::from(run.hscroll());
@@ -453,9 +473,23 @@ fn render_chooser(run: &LessonRun, c: &Chooser, theme: Theme, area: Rect, buf: &
         .render(rect, buf);
 }
 
+/// `text` cut to `room` characters, its last one "…" where it is cut.
+fn ellipsis(text: &str, room: usize) -> String {
+    if text.chars().count() <= room {
+        return text.to_string();
+    }
+    let mut cut: String = text.chars().take(room.saturating_sub(1)).collect();
+    cut.truncate(cut.trim_end().len());
+    cut.push('…');
+    cut
+}
+
 fn render_hints(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
     let line = match run.message() {
-        Some(m) => Line::from(Span::styled(format!(" {m}"), theme.fg(Color::Yellow))),
+        Some(m) => Line::from(Span::styled(
+            ellipsis(&format!(" {m}"), usize::from(area.width)),
+            theme.fg(Color::Yellow),
+        )),
         None => {
             // The longest hint that fits, so that "? help · q menu" is never cut off.
             let hints = [

@@ -12,10 +12,18 @@ use super::{App, markdown};
 /// Draws the menu of `app` into `area`.
 pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
     let theme = app.theme;
+    // A message wraps to at most five rows (the path of a progress file kept aside is long).
+    let message_lines: Vec<Line> = app.menu_message().map_or_else(Vec::new, |m| {
+        markdown::wrap_hanging(m, area.width.saturating_sub(1), " ", " ", theme)
+            .into_iter()
+            .map(|l| l.patch_style(theme.fg(Color::Yellow)))
+            .take(5)
+            .collect()
+    });
     let [title, list, message, hints] = Layout::vertical([
         Constraint::Length(3),
         Constraint::Fill(1),
-        Constraint::Length(1),
+        Constraint::Length(message_lines.len().max(1) as u16),
         Constraint::Length(1),
     ])
     .areas(area);
@@ -145,14 +153,7 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
         let lines: Vec<Line> = entries.into_iter().skip(first).flatten().collect();
         Paragraph::new(lines).render(list, buf);
     }
-    if let Some(m) = app.menu_message() {
-        buf.set_line(
-            message.x,
-            message.y,
-            &Line::from(Span::styled(format!(" {m}"), theme.fg(Color::Yellow))),
-            message.width,
-        );
-    }
+    Paragraph::new(message_lines).render(message, buf);
     buf.set_line(
         hints.x,
         hints.y,

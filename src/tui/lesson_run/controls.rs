@@ -5,6 +5,7 @@ use ratatui::crossterm::event::{KeyCode, KeyModifiers, MouseButton, MouseEvent, 
 use ratatui::layout::Rect;
 
 use crate::tui::plots::{self, Oscillator};
+use crate::tui::status::precise;
 
 use crate::physics::Method;
 use crate::physics::particles::pin_particle;
@@ -111,8 +112,10 @@ impl LessonRun {
                 Some(s) => self.go_to_step(s),
                 None => self.message = Some("this is the first step".into()),
             },
-            KeyCode::PageDown => self.text_scroll = self.text_scroll.saturating_add(5).min(999),
-            KeyCode::PageUp => self.text_scroll = self.text_scroll.saturating_sub(5),
+            KeyCode::PageDown => {
+                self.text_scroll = self.text_scroll.saturating_add(self.text_page()).min(999);
+            }
+            KeyCode::PageUp => self.text_scroll = self.text_scroll.saturating_sub(self.text_page()),
             _ => {}
         }
     }
@@ -331,7 +334,7 @@ impl LessonRun {
             Some(0.0) => "no air drag".into(),
             Some(c) => format!(
                 "air drag c = {} N·s/m on every particle (f = -c v)",
-                plots::number(c)
+                precise(c)
             ),
             None => "air drag changed on every body".into(),
         });
@@ -400,8 +403,8 @@ impl LessonRun {
             .any(|b| b.method.reads("verlet_damping"));
         self.message = Some(format!(
             "Verlet damping γ = {} per step: a decay rate γ/dt = {} 1/s at this dt{}",
-            plots::number(g),
-            plots::number(g / dt),
+            precise(g),
+            precise(g / dt),
             if verlet {
                 ""
             } else {
@@ -454,7 +457,7 @@ impl LessonRun {
         self.sim.set_dt(dt);
         self.sim.rebase_energy();
         self.accumulator = 0.0;
-        self.message = Some(format!("dt = {} s", plots::number(dt)));
+        self.message = Some(format!("dt = {} s", precise(dt)));
     }
 
     fn scale_steps_per_frame(&mut self, up: bool) {
@@ -483,8 +486,8 @@ impl LessonRun {
         }
         self.coefficients_changed();
         self.message = Some(match self.uniform_stiffness() {
-            Some(k) => format!("stiffness k = {} N/m", plots::number(k)),
-            None => format!("stiffness ×{} of every spring", plots::number(factor)),
+            Some(k) => format!("stiffness k = {} N/m", precise(k)),
+            None => format!("stiffness ×{} of every spring", precise(factor)),
         });
     }
 
@@ -514,7 +517,7 @@ impl LessonRun {
         }
         self.coefficients_changed();
         self.message = Some(match self.uniform_damping() {
-            Some(c) => format!("damping k_d = {} N·s/m", plots::number(c)),
+            Some(c) => format!("damping k_d = {} N·s/m", precise(c)),
             None => "damping changed on every spring".into(),
         });
     }

@@ -130,6 +130,9 @@ impl LessonRun {
             p.answer + 1,
             right.text
         ));
+        // On a small screen the answer and its explanation open the text (lesson_view): show
+        // them from their first line.
+        self.text_scroll = 0;
     }
 }
 
