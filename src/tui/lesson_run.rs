@@ -743,23 +743,6 @@ impl LessonRun {
     fn springs(&self) -> impl Iterator<Item = &crate::physics::Spring> {
         self.sim.scene.bodies.iter().flat_map(|b| b.model.springs())
     }
-
-    /// Records how many rows of the step's text the screen shows (the drawing calls it), so a
-    /// page of PgUp / PgDn is what the student sees, less one row kept for context.
-    pub fn set_text_rows(&self, rows: u16) {
-        self.text_rows.set(rows);
-    }
-
-    /// Rows one PgUp / PgDn moves the text: the rows shown less one, at least one.
-    pub(crate) fn text_page(&self) -> u16 {
-        self.text_rows.get().saturating_sub(1).max(1)
-    }
-
-    /// Lines the step's text is scrolled down.
-    #[must_use]
-    pub fn text_scroll(&self) -> u16 {
-        self.text_scroll
-    }
 }
 
 fn build(lesson: &Lesson, step: usize) -> Result<Simulation, String> {

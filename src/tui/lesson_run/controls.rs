@@ -729,3 +729,23 @@ fn ladder(c: f64, up: bool, first: f64, factor: f64, max: f64) -> f64 {
         c / factor
     }
 }
+
+/// The step text's scrolling (PgUp / PgDn above).
+impl LessonRun {
+    /// Records how many rows of the step's text the screen shows (the drawing calls it), so a
+    /// page of PgUp / PgDn is what the student sees, less one row kept for context.
+    pub fn set_text_rows(&self, rows: u16) {
+        self.text_rows.set(rows);
+    }
+
+    /// Rows one PgUp / PgDn moves the text: the rows shown less one, at least one.
+    pub(crate) fn text_page(&self) -> u16 {
+        self.text_rows.get().saturating_sub(1).max(1)
+    }
+
+    /// Lines the step's text is scrolled down.
+    #[must_use]
+    pub fn text_scroll(&self) -> u16 {
+        self.text_scroll
+    }
+}
