@@ -150,11 +150,25 @@ pub fn main() -> ExitCode {
             eprintln!("springlab: {e}");
             ExitCode::from(interrupt::exit_status())
         }
+        // A failure caused by the stop itself (an output that gave up waiting for a FIFO's
+        // reader): the stop's message and status.
+        Err(e) if interrupt::requested() && is_interrupted_io(&e) => {
+            eprintln!("springlab: {Interrupted}");
+            ExitCode::from(interrupt::exit_status())
+        }
         Err(e) => {
             eprintln!("springlab: {}", message(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// True when an I/O error in `e`'s chain is [`std::io::ErrorKind::Interrupted`].
+fn is_interrupted_io(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::Interrupted)
+    })
 }
 
 /// The error and its causes joined by `: `, each said once: a cause whose text the message

@@ -130,11 +130,16 @@ fn homework_new_names_the_assignments_when_given_another() {
 fn grade_refuses_what_is_not_a_homework_crate() {
     let dir = scratch("notacrate");
     let missing = dir.join("missing");
-    let err = failure(&["grade", missing.to_str().expect("utf-8")]);
-    assert!(
-        err.contains("is not a homework crate: no such directory"),
-        "{err}"
-    );
+    // A path that is not there is the caller's error (exit 1), never a student's 0.
+    for extra in [&[][..], &["--assignment", "rope"][..]] {
+        let mut args = vec!["grade", missing.to_str().expect("utf-8")];
+        args.extend_from_slice(extra);
+        let err = failure(&args);
+        assert!(
+            err.contains(&format!("{}: no such file or directory", missing.display())),
+            "{err}"
+        );
+    }
     let err = failure(&["grade", dir.to_str().expect("utf-8")]);
     assert!(err.contains("cannot read Cargo.toml"), "{err}");
     std::fs::write(dir.join("Cargo.toml"), "[package]\nname = \"x\"\n").expect("write");
@@ -218,5 +223,46 @@ fn a_crate_that_does_not_build_scores_zero_with_the_errors_and_exit_code_0() {
     }
     let r: serde_json::Value = serde_json::from_str(&text(&report)).expect("report.json");
     assert_eq!(r["assignment"], "jelly");
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+/// A lone `lib.rs` is graded as the folder holding it is (the untouched starter: 5 / 35, "builds
+/// and runs"); without `--assignment` the message says to give it.
+#[test]
+fn a_lone_lib_rs_is_graded_with_its_assignment() {
+    let root = scratch("lone");
+    let dir = root.join("hw");
+    let out = springlab(&[
+        "homework",
+        "new",
+        dir.to_str().expect("utf-8"),
+        "--assignment",
+        "rope",
+    ]);
+    assert!(out.status.success());
+    let lone = root.join("solo").join("lib.rs");
+    std::fs::create_dir_all(lone.parent().expect("parent")).expect("mkdir");
+    std::fs::copy(dir.join("src/lib.rs"), &lone).expect("copy");
+    let err = failure(&["grade", lone.to_str().expect("utf-8")]);
+    assert!(
+        err.contains("a lone file names no assignment; give it with --assignment"),
+        "{err}"
+    );
+    let target = root.join("target");
+    let out = springlab(&[
+        "grade",
+        lone.to_str().expect("utf-8"),
+        "--assignment",
+        "rope",
+        "--target-dir",
+        target.to_str().expect("utf-8"),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("score 5 / 35"), "{stdout}");
     let _ = std::fs::remove_dir_all(&root);
 }

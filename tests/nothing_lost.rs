@@ -569,3 +569,75 @@ fn lessons_over_the_budget_or_with_unknown_parameters_are_refused() {
         "springlab: 3 lesson file(s) failed to load (marked with ! above)\n"
     );
 }
+
+/// An output to a FIFO that nobody reads: the first SIGTERM stops the waiting process, with the
+/// stop's status and message (opening a FIFO for writing waits for a reader; that wait checks
+/// the stop flag).
+#[test]
+fn a_signal_ends_the_wait_for_a_fifos_reader() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let fifo = dir.path().join("energy.png");
+    let made = Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .is_ok_and(|s| s.success());
+    if !made {
+        println!("skipped: mkfifo is not available");
+        return;
+    }
+    let mut child = springlab()
+        .args([
+            "render",
+            "rope",
+            "--time",
+            "1",
+            "--energy-chart",
+            "energy.png",
+        ])
+        .current_dir(dir.path())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let pid = child.id();
+    // Waiting: asleep at two looks 100 ms apart (the rope's second of simulation takes
+    // milliseconds; then only the wait for a reader is left).
+    let asleep = || {
+        fs::read_to_string(format!("/proc/{pid}/stat"))
+            .ok()
+            .and_then(|s| {
+                s.rsplit(')')
+                    .next()
+                    .map(|r| r.trim_start().starts_with('S'))
+            })
+            .unwrap_or(false)
+    };
+    wait_for("the render waiting for a reader", || {
+        asleep() && {
+            std::thread::sleep(std::time::Duration::from_millis(100));
+            asleep()
+        }
+    });
+    kill(Pid::from_raw(pid as i32), Signal::SIGTERM).expect("kill");
+    // A guard against a process that ignores the signal, never a timing assertion.
+    let start = std::time::Instant::now();
+    while child.try_wait().expect("wait").is_none() {
+        if start.elapsed() > std::time::Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("the first SIGTERM did not end the wait for the FIFO's reader");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let out = child.wait_with_output().expect("output");
+    assert_eq!(out.status.code(), Some(143), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("stopped by SIGTERM"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(is_fifo(&fifo), "the FIFO stays a FIFO");
+}
+
+fn is_fifo(path: &Path) -> bool {
+    fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_fifo())
+}

@@ -193,6 +193,10 @@ pub fn grade(args: &GradeArgs) -> anyhow::Result<()> {
         out.write_all(sandbox.report().as_bytes())?;
         return Ok(());
     }
+    // A path that is not there is the caller's mistake, never a student's 0.
+    if let Some(missing) = args.dirs.iter().find(|d| std::fs::metadata(d).is_err()) {
+        bail!("{}: no such file or directory", missing.display());
+    }
     // With --gradescope the one path is one submission, wherever its code sits inside it.
     let dirs = if args.gradescope.is_some() {
         if args.dirs.len() != 1 {

@@ -4,8 +4,9 @@
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, LazyLock};
 
-/// Set by Ctrl-C or a terminating signal (shared with `signal_hook::flag`'s handlers).
-static INTERRUPTED: LazyLock<Arc<AtomicBool>> = LazyLock::new(Arc::default);
+/// Set by Ctrl-C or a terminating signal (shared with `signal_hook::flag`'s handlers): the
+/// outputs' own flag, so that one waiting for a FIFO's reader gives up too.
+static INTERRUPTED: &LazyLock<Arc<AtomicBool>> = &crate::output::STOP;
 /// The terminating signal that set [`INTERRUPTED`], 0 for Ctrl-C.
 static SIGNAL: LazyLock<Arc<AtomicUsize>> = LazyLock::new(Arc::default);
 
@@ -92,14 +93,14 @@ pub fn install(mode: Mode) {
                 let _ = signal_hook::flag::register_conditional_shutdown(
                     sig,
                     128 + sig,
-                    Arc::clone(&INTERRUPTED),
+                    Arc::clone(INTERRUPTED),
                 );
                 let _ = signal_hook::flag::register_usize(
                     sig,
                     Arc::clone(&SIGNAL),
                     usize::try_from(sig).unwrap_or(0),
                 );
-                let _ = signal_hook::flag::register(sig, Arc::clone(&INTERRUPTED));
+                let _ = signal_hook::flag::register(sig, Arc::clone(INTERRUPTED));
             }
         }
     });

@@ -215,7 +215,7 @@ impl AtomicFile {
                     out.flush()
                 } else {
                     // No create, no truncate: the device or FIFO stays what it is.
-                    let mut out = fs::OpenOptions::new().write(true).open(&self.path)?;
+                    let mut out = open_in_place(&self.path)?;
                     io::copy(&mut file, &mut out)?;
                     out.flush()
                 }
@@ -237,6 +237,48 @@ impl io::Seek for AtomicFile {
     fn seek(&mut self, pos: io::SeekFrom) -> io::Result<u64> {
         self.file().seek(pos)
     }
+}
+
+/// Set when the process is asked to stop (the command line's Ctrl-C and signal handlers set
+/// it): an output waiting for a FIFO's reader gives up instead of holding the process.
+pub static STOP: std::sync::LazyLock<std::sync::Arc<std::sync::atomic::AtomicBool>> =
+    std::sync::LazyLock::new(std::sync::Arc::default);
+
+/// Opens the device or FIFO at `path` for writing. Opening a FIFO waits for a reader; that
+/// wait is made in steps of 20 ms (a non-blocking open until one is there), so [`STOP`] ends it
+/// with [`io::ErrorKind::Interrupted`].
+fn open_in_place(path: &Path) -> io::Result<File> {
+    #[cfg(unix)]
+    {
+        use rustix::fs::{Mode, OFlags};
+        use std::os::unix::fs::FileTypeExt;
+        if fs::metadata(path).is_ok_and(|m| m.file_type().is_fifo()) {
+            loop {
+                match rustix::fs::open(
+                    path,
+                    OFlags::WRONLY | OFlags::NONBLOCK | OFlags::CLOEXEC,
+                    Mode::empty(),
+                ) {
+                    Ok(fd) => {
+                        // Writes block again from here on, as on any file.
+                        rustix::fs::fcntl_setfl(&fd, OFlags::WRONLY)?;
+                        return Ok(File::from(fd));
+                    }
+                    Err(rustix::io::Errno::NXIO) => {
+                        if STOP.load(std::sync::atomic::Ordering::Relaxed) {
+                            return Err(io::Error::new(
+                                io::ErrorKind::Interrupted,
+                                "stopped while waiting for a reader of the FIFO",
+                            ));
+                        }
+                        std::thread::sleep(std::time::Duration::from_millis(20));
+                    }
+                    Err(e) => return Err(e.into()),
+                }
+            }
+        }
+    }
+    fs::OpenOptions::new().write(true).open(path)
 }
 
 /// Writes `bytes` to `path` through an [`AtomicFile`].

@@ -96,6 +96,11 @@ pub fn assignment_of(dir: &Path) -> Result<Assignment, GradeError> {
         dir: dir.to_path_buf(),
         reason,
     };
+    if std::fs::symlink_metadata(dir).is_ok_and(|m| m.is_file()) {
+        return Err(not_a_crate(
+            "a lone file names no assignment; give it with --assignment".to_string(),
+        ));
+    }
     if !dir.is_dir() {
         return Err(not_a_crate("no such directory".to_string()));
     }

@@ -17,11 +17,12 @@ const MAX_SOURCE_FILES: usize = 2000;
 pub struct Submission {
     /// The directory given.
     pub dir: PathBuf,
-    /// The directory holding `lib.rs`.
+    /// The directory holding `lib.rs`, or the lone `lib.rs` given.
     pub src: PathBuf,
 }
 
-/// Finds the code of the submission in `dir`: `dir/src/lib.rs`, `dir/lib.rs`, or the one
+/// Finds the code of the submission in `dir`: `dir` itself when it is a file named `lib.rs`,
+/// `dir/src/lib.rs`, `dir/lib.rs`, or the one
 /// `src/lib.rs` in the folders below (an upload of a whole crate folder, up to three levels
 /// down; hidden folders and `target` are not searched). Nothing inside `dir` is reached through
 /// a symbolic link: the grader reads the submission with its own rights (root on Gradescope),
@@ -36,6 +37,12 @@ pub fn locate(dir: &Path) -> Result<Submission, String> {
         dir: dir.to_path_buf(),
         src,
     };
+    // A lone `lib.rs` (the path given is the file itself).
+    if dir.file_name().is_some_and(|n| n == "lib.rs")
+        && std::fs::symlink_metadata(dir).is_ok_and(|m| m.is_file())
+    {
+        return Ok(found(dir.to_path_buf()));
+    }
     if has_lib(&dir.join("src"))? {
         return Ok(found(dir.join("src")));
     }
@@ -157,6 +164,13 @@ pub fn read_regular(path: &Path, limit: u64) -> Result<Vec<u8>, String> {
 /// files only: a symbolic link, a FIFO, a socket or a device is an error, unless its name is
 /// hidden (an editor's lock file `.#lib.rs` is a link), when it is left out.
 pub(super) fn read_tree(src: &Path) -> Result<Vec<(String, Vec<u8>)>, String> {
+    if std::fs::symlink_metadata(src).is_ok_and(|m| m.is_file()) {
+        // A lone lib.rs.
+        return Ok(vec![(
+            "lib.rs".to_string(),
+            read_regular(src, MAX_SOURCE_BYTES)?,
+        )]);
+    }
     let mut files = Vec::new();
     let mut total = 0u64;
     if std::fs::symlink_metadata(src).is_ok_and(|m| m.file_type().is_symlink()) {
