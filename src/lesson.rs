@@ -61,7 +61,8 @@
 //!
 //! `hide` keeps back what would give a prediction's answer away until the student has answered:
 //! a neutral `title` shown instead of the step's, try items (1-based), the text from the line
-//! that starts with the words `from` on, the goal's text and plots. A "try" item whose keys
+//! that starts with the words `from` on, the goal's text and plots, and (`limit = true`) the
+//! status line's dt·ω, limit and "stable below". A "try" item whose keys
 //! start with `R` starts from the step as it opened (the app's `R` restores it); the others
 //! continue from what is on the screen.
 //!
@@ -428,7 +429,8 @@ impl fmt::Display for Lesson {
 }
 
 /// What a step with a prediction keeps back until the student has answered it (front matter
-/// `hide = { title = "…", try = [1, 2], from = "…", goal = true, plots = ["stability"] }`):
+/// `hide = { title = "…", try = [1, 2], from = "…", goal = true, plots = ["stability"],
+/// limit = true }`):
 /// whatever would give the answer away.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Hidden {
@@ -442,6 +444,9 @@ pub struct Hidden {
     pub goal: bool,
     /// These plots are hidden until then.
     pub plots: Vec<Plot>,
+    /// The status line's stability fields (dt·ω, the limit, "stable below") are hidden until
+    /// then: compared with the dt the question names, they answer it.
+    pub limit: bool,
 }
 
 impl Hidden {

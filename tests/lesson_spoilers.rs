@@ -1,8 +1,9 @@
 //! No prediction is spoiled: before the student answers, the screen of a step with a prediction
 //! (drawn at 120 × 40 and at 80 × 24) shows none of what its front matter keeps back (the step's
 //! own title, the hidden try items, the text from `from` on, the goal's text, the hidden plots'
-//! titles) nor the words that give each built-in prediction's answer away; after the answer the
-//! step's title and every try item are there.
+//! titles, the status line's limit) nor the words that give each built-in prediction's answer
+//! away, and the step before shows none of its hidden plots; after the answer the step's title
+//! and every try item are there.
 
 use ratatui::Terminal;
 use ratatui::backend::TestBackend;
@@ -122,8 +123,54 @@ fn no_prediction_step_shows_its_answer_before_it_is_given() {
                 secrets.extend(words.iter().map(|w| (*w).to_string()));
                 checked.push((l.number, si + 1));
             }
+            // A prediction about blowing up or surviving keeps the limit back: dt against the
+            // limit on the status line answers it.
+            let stability = p.options.iter().any(|o| {
+                matches!(
+                    o.claim.kind,
+                    lesson::GoalKind::Survive | lesson::GoalKind::Diverge
+                )
+            });
+            assert!(
+                !stability || hide.limit,
+                "lesson {} step {}: a stability prediction that shows the limit (hide.limit)",
+                l.number,
+                si + 1
+            );
+            // A plot kept back here is not on the step before either (the student has just
+            // seen it there).
+            if si > 0 {
+                for plot in &hide.plots {
+                    assert!(
+                        !l.steps[si - 1].plots.contains(plot),
+                        "lesson {} step {} shows the {plot:?} plot that step {} keeps back",
+                        l.number,
+                        si,
+                        si + 1
+                    );
+                }
+            }
             for (w, h) in [(120, 40), (80, 24)] {
                 let screen = squeeze(&draw(&app, w, h));
+                if hide.limit {
+                    let numbered = |field: &str| {
+                        screen.match_indices(field).any(|(i, _)| {
+                            screen[i + field.len()..]
+                                .chars()
+                                .next()
+                                .is_some_and(|c| c.is_ascii_digit())
+                        })
+                    };
+                    for field in ["limit ", "stable below ", "dt·ω "] {
+                        assert!(
+                            !numbered(field),
+                            "lesson {} step {} at {w}×{h} shows \"{field}…\" before the answer:\n{screen}",
+                            l.number,
+                            si + 1
+                        );
+                    }
+                    assert!(screen.contains("limit: after your prediction"), "{screen}");
+                }
                 for secret in &secrets {
                     assert!(
                         !screen.contains(&squeeze(secret)),

@@ -22,6 +22,13 @@ fn open(slug: &str, step: usize) -> App {
     for _ in 1..step {
         app.handle_key(KeyEvent::new(KeyCode::Char('n'), KeyModifiers::NONE));
     }
+    // A prediction step shows its limit once answered.
+    if app
+        .lesson()
+        .is_some_and(springlab::tui::lesson_run::LessonRun::awaiting_prediction)
+    {
+        app.handle_key(KeyEvent::new(KeyCode::Char('1'), KeyModifiers::NONE));
+    }
     app
 }
 

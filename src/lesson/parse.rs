@@ -69,6 +69,8 @@ struct HideToml {
     goal: bool,
     #[serde(default)]
     plots: Vec<Plot>,
+    #[serde(default)]
+    limit: bool,
 }
 
 #[derive(Deserialize)]
@@ -257,6 +259,7 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
                     from: h.from,
                     goal: h.goal,
                     plots: h.plots,
+                    limit: h.limit,
                 };
                 check_hidden(&hidden, st.predict.is_some(), try_list.len(), body)
                     .map_err(|m| err(l, Some(c), m))?;

@@ -115,7 +115,12 @@ pub fn render(
     ];
     // dt against the method's limit on this scene: the damped theory (dampers and drag
     // included) of the bodies at their initial state.
-    if let Some((limit, omega)) = run.limit() {
+    if !run.limit_shown() {
+        first.push((
+            1,
+            vec![Span::styled("limit: after your prediction", theme.dim())],
+        ));
+    } else if let Some((limit, omega)) = run.limit() {
         use super::lesson_run::{Limit, UsableDt};
         use crate::study::stability::usable::USABLE_TOLERANCE;
         first.push(raw(4, format!("dt·ω {}", number(dt * omega))));

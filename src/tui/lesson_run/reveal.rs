@@ -53,6 +53,13 @@ impl LessonRun {
         self.answered() || !self.step().hide.goal
     }
 
+    /// True when the status line shows the method's limit now (dt·ω, the limit, "stable
+    /// below"): not before the answer on a step that hides it.
+    #[must_use]
+    pub fn limit_shown(&self) -> bool {
+        self.answered() || !self.step().hide.limit
+    }
+
     /// The step's plots shown now.
     #[must_use]
     pub fn shown_plots(&self) -> Vec<Plot> {
