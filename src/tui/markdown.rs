@@ -143,12 +143,16 @@ pub fn render_marked(text: &str, width: u16, theme: Theme) -> Vec<Marked> {
 /// right ends in `›`, one scrolled past its start begins with `‹` (both in `marker` style).
 #[must_use]
 pub fn clip(line: &Line<'static>, offset: usize, width: usize, marker: Style) -> Line<'static> {
-    // Cells: (symbol, style), one per column (wide characters take their width).
+    // Cells: (symbol, style), one per column (wide characters take their width; a combining
+    // mark, of no width, joins the cell before it: `d̂` is one cell).
     let mut cells: Vec<(String, Style, usize)> = Vec::new();
     for span in &line.spans {
         for c in span.content.chars() {
             let w = Span::raw(c.to_string()).width();
-            cells.push((c.to_string(), line.style.patch(span.style), w));
+            match cells.last_mut() {
+                Some(last) if w == 0 => last.0.push(c),
+                _ => cells.push((c.to_string(), line.style.patch(span.style), w)),
+            }
         }
     }
     let total: usize = cells.iter().map(|c| c.2).sum();
@@ -375,6 +379,19 @@ fn wrap(pieces: &[Piece], width: usize, first: &str, rest: &str) -> Vec<Line<'st
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_clipped_line_keeps_combining_marks_with_their_letter() {
+        let line = Line::from("  J = -(1 + e)(v_rel · d\u{302}) / (1/m_s + 1/m_p)");
+        let marker = Style::new();
+        let clipped = clip(&line, 0, 30, marker);
+        let text: String = clipped.spans.iter().map(|s| s.content.as_ref()).collect();
+        assert_eq!(text, "  J = -(1 + e)(v_rel · d\u{302}) / (›");
+        assert_eq!(clipped.width(), 30);
+        let scrolled = clip(&line, 23, 30, marker);
+        let text: String = scrolled.spans.iter().map(|s| s.content.as_ref()).collect();
+        assert!(text.starts_with("‹d\u{302}) /"), "{text}");
+    }
 
     fn text(lines: &[Line]) -> Vec<String> {
         lines
