@@ -413,6 +413,27 @@ fn start_skips_simulated_time_before_the_first_frame() {
     );
 }
 
+/// `--every 0` and `--frames 0` are named as what is wrong, with or without the other option
+/// (not priced as an endless render first).
+#[test]
+fn zero_every_or_frames_is_named() {
+    for args in [
+        &["render", "rope", "--every", "0"][..],
+        &["render", "rope", "--every", "0", "--frames", "2"][..],
+    ] {
+        let err = failure(args);
+        assert!(
+            err.contains("--every 0: expected a number of steps >= 1"),
+            "{err}"
+        );
+    }
+    let err = failure(&["render", "rope", "--frames", "0", "--every", "0"]);
+    assert!(
+        err.contains("--frames 0: expected at least 1 frame"),
+        "{err}"
+    );
+}
+
 /// One frame is "1 frame", named alone; several name the first and the last file.
 #[test]
 fn the_summary_names_the_frames_written() {

@@ -145,6 +145,42 @@ fn fewer_than_two_nodes_in_params() {
     );
 }
 
+/// `nodes = 16.0` is a number where a whole number is expected, and says so as written.
+#[test]
+fn a_number_with_a_point_for_a_whole_number() {
+    let m = file_error(
+        "point.toml",
+        "scene = \"rope\"\n[params]\nnodes = 16.0\n",
+        3,
+        9,
+    );
+    assert_eq!(m, "`nodes` = 16.0: expected a whole number 2 ..= 1000000");
+}
+
+/// An unknown key lists every known parameter whole; only what the file wrote is cut.
+#[test]
+fn an_unknown_key_lists_every_known_parameter() {
+    let m = file_error(
+        "colour.toml",
+        "scene = \"rope\"\n[params]\ncolour = 1\n",
+        3,
+        1,
+    );
+    assert!(m.ends_with("substeps, cg_tolerance"), "{m}");
+    let long = "k".repeat(500);
+    let m = file_error(
+        "long.toml",
+        &format!("scene = \"rope\"\n[params]\n{long} = 1\n"),
+        3,
+        1,
+    );
+    assert!(
+        m.starts_with(&format!("unknown parameter `{}…`", "k".repeat(60))),
+        "{m}"
+    );
+    assert!(m.ends_with("cg_tolerance"), "{m}");
+}
+
 #[test]
 fn fewer_than_two_nodes_in_rope_block() {
     let m = file_error("nodes.toml", "[[ropes]]\nnodes = 1\n", 2, 9);

@@ -199,6 +199,13 @@ struct Plan {
 /// Bad scene, parameters or options; an unwritable output.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let limits = Limits::forced(args.force);
+    // Before anything is estimated from them (a zero would price the render as endless).
+    if args.frames == Some(0) {
+        bail!("--frames 0: expected at least 1 frame");
+    }
+    if args.every == Some(0) {
+        bail!("--every 0: expected a number of steps >= 1");
+    }
     if !(args.start >= 0.0 && args.start.is_finite()) {
         bail!(
             "--start {}: expected a time in seconds >= 0",
@@ -409,12 +416,6 @@ pub fn prepare(
 
 /// Validates the frame counts and outputs.
 fn plan(args: &RenderArgs, dt: f64, duration: f64) -> anyhow::Result<Plan> {
-    if args.frames == Some(0) {
-        bail!("--frames 0: expected at least 1 frame");
-    }
-    if args.every == Some(0) {
-        bail!("--every 0: expected a number of steps >= 1");
-    }
     let every = every(args, dt);
     let (frames, steps) = match (args.frames, args.time) {
         (Some(n), _) => (

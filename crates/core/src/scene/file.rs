@@ -428,8 +428,41 @@ impl Source<'_> {
     }
 
     /// A parameter error at `span`.
+    /// A parameter error at `span`: what the file wrote (the key, the value) is cut to an
+    /// excerpt; what springlab says (the known parameters, the range) is kept whole.
     fn param_error(&self, span: Span<usize>, e: &ParamError) -> SceneError {
-        self.error(span, e.to_string())
+        let cut = |t: &String| excerpt(t, MAX_QUOTE);
+        let e = match e.clone() {
+            ParamError::UnknownKey { key, scene, known } => ParamError::UnknownKey {
+                key: cut(&key),
+                scene,
+                known,
+            },
+            ParamError::BadValue { key, got, expected } => ParamError::BadValue {
+                key: cut(&key),
+                got: cut(&got),
+                expected,
+            },
+            ParamError::OutOfRange {
+                key,
+                got,
+                range,
+                unit,
+            } => ParamError::OutOfRange {
+                key: cut(&key),
+                got: cut(&got),
+                range,
+                unit,
+            },
+            other => other,
+        };
+        let (line, column) = line_column(self.text, span.start);
+        SceneError::File {
+            path: self.path.clone(),
+            line,
+            column,
+            message: e.to_string(),
+        }
     }
 
     /// A syntax, unknown-field, missing-field or type error from the TOML reader.
@@ -478,6 +511,8 @@ impl Source<'_> {
 
 /// The most characters of a message about a file (a value it quotes is cut short).
 pub const MAX_MESSAGE: usize = 200;
+/// The most characters of a key or value a parameter error quotes from the file.
+pub const MAX_QUOTE: usize = 60;
 
 /// `text`, or its first `max` characters and `…` when it is longer.
 #[must_use]

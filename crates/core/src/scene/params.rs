@@ -228,7 +228,13 @@ impl ParamSpec {
     pub fn check(&self, value: Value) -> Result<Value, ParamError> {
         let bad = |got: &Value| ParamError::BadValue {
             key: self.name.to_string(),
-            got: got.to_string(),
+            // A number as a number, `16.0`, where a whole number `16` was expected.
+            got: match (got, got.to_string()) {
+                (Value::Number(_), s) if s.chars().all(|c| c.is_ascii_digit() || c == '-') => {
+                    format!("{s}.0")
+                }
+                (_, s) => s,
+            },
             expected: self.expected(),
         };
         let out_of_range = |got: String| ParamError::OutOfRange {
