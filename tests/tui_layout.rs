@@ -58,13 +58,29 @@ fn check(app: &App, at: &str) {
     // The text column: the left half of an 80-column screen.
     let left: Vec<String> = small.iter().map(|r| r.chars().take(40).collect()).collect();
     let text = squeeze(&left.join(" "));
+    // At least three rows of the step's text above the rule of the sections below it.
+    if let Some(rule) = left.iter().position(|r| r.starts_with("────")) {
+        assert!(
+            rule >= 4,
+            "{at}: {} rows of text\n{}",
+            rule - 1,
+            small.join("\n")
+        );
+    }
+    // Before a prediction's answer nothing runs, and a try list that would leave no room for
+    // the text waits as one line.
+    let waiting = run.awaiting_prediction()
+        && text.contains(&format!(
+            "Try ({} items, after your prediction)",
+            step.try_list.len()
+        ));
     if !step.try_list.is_empty() {
         assert!(
             text.contains("Try"),
             "{at}: no try list\n{}",
             small.join("\n")
         );
-        for (i, item) in step.try_list.iter().enumerate() {
+        for (i, item) in step.try_list.iter().enumerate().filter(|_| !waiting) {
             if let (Some(keys), true) = (&item.keys, run.try_shown(i)) {
                 assert!(
                     text.contains(&format!("keys: {keys}")),

@@ -291,6 +291,7 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
             rest.extend(lines);
         }
     }
+    let try_rows = rest.len();
     if let Some(goal) = &step.goal {
         let (mark, style) = match run.goal_state() {
             Some(true) => ("✓ met", theme.fg(Color::LightGreen)),
@@ -315,6 +316,31 @@ fn render_text(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {
     let over = |parts: &[&Vec<Line<'static>>]| parts.iter().map(|p| p.len()).sum::<usize>() > room;
     if !reveal.is_empty() && over(&[&head, &tail, &reveal, &explain, &rest]) {
         tail.clear();
+    } else if let (Some(p), Some(a)) = (&step.predict, run.answer())
+        && over(&[&head, &tail, &rest])
+    {
+        // Answered, the run to come: the chosen option stands for the question and the others.
+        tail = markdown::wrap_hanging(
+            &format!("{}) {}", a + 1, p.options[a].text),
+            width,
+            "▸ ",
+            "  ",
+            theme,
+        );
+    }
+    // Before the answer nothing runs: a try list that leaves no room for the text waits for
+    // the answer as one line.
+    if run.awaiting_prediction() && try_rows > 1 && over(&[&head, &tail, &rest]) {
+        rest.splice(
+            0..try_rows,
+            [Line::from(vec![
+                Span::styled("Try", bold_green),
+                Span::styled(
+                    format!("  ({} items, after your prediction)", step.try_list.len()),
+                    theme.dim(),
+                ),
+            ])],
+        );
     }
     // Lines that open the scrolling text instead of the section below it.
     let mut opening: Vec<Line<'static>> = Vec::new();
