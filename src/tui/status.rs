@@ -7,8 +7,10 @@
 //! The first line ends with the scene pane's view (`view: raster (sixel, 30 images/s) (v)`,
 //! `view: halfblocks (v)`, `view: braille (v)`). A line too long for the terminal drops whole
 //! fields, least needed first (k_d, k and passes, drag and γ, dt·ω, the view; the method, dt
-//! and its limit last), so no number is ever cut; dt and the limit have four significant
-//! digits.
+//! and its limit last), so no number is ever cut; a field the step points at (`dt·ω`,
+//! `stable below`, `` `c` ``, `γ`, `` `k` ``, `k_d` in a try item, or in a line of its text
+//! that says "status line") is kept as long as the limit.
+//! dt and the limit have four significant digits.
 //! `ω` is the stiffest mode ω_max (power iteration, as the stability study); beside it the
 //! present method's largest stable dt on this scene by the damped theory
 //! ([`crate::study::theory`]: dampers and drag included, the bodies' initial state), yellow
@@ -39,6 +41,11 @@ type Field = (u8, Vec<Span<'static>>);
 /// The fields that fit `width` columns, whole, in their order: the lowest-priority fields are
 /// dropped first (never a field cut in the middle of a number), ` · ` between them.
 fn fit(fields: Vec<Field>, width: usize, sep: Style) -> Line<'static> {
+    line(kept(fields, width), sep)
+}
+
+/// The fields of [`fit`] that fit `width` columns.
+fn kept(fields: Vec<Field>, width: usize) -> Vec<Field> {
     let len = |f: &Field| f.1.iter().map(Span::width).sum::<usize>();
     let total =
         |fs: &[Field]| fs.iter().map(len).sum::<usize>() + 3 * fs.len().saturating_sub(1) + 1;
@@ -54,6 +61,11 @@ fn fit(fields: Vec<Field>, width: usize, sep: Style) -> Line<'static> {
         };
         fields.remove(worst);
     }
+    fields
+}
+
+/// Fields joined by `sep`, after one column of margin.
+fn line(fields: Vec<Field>, sep: Style) -> Line<'static> {
     let mut spans = vec![Span::raw(" ")];
     for (i, (_, f)) in fields.into_iter().enumerate() {
         if i > 0 {
@@ -103,6 +115,16 @@ pub fn render(
     let sim = run.sim();
     let dt = sim.dt();
     let raw = |p: u8, s: String| (p, vec![Span::raw(s)]);
+    // A field the step points at (a line of its text that says "status line", or a try item,
+    // names it: "the status line shows `c`") is kept as long as the limit.
+    let step = run.step();
+    let named = |tag: &str| {
+        run.shown_text()
+            .lines()
+            .any(|l| l.contains("status line") && l.contains(tag))
+            || step.try_list.iter().any(|t| t.text.contains(tag))
+    };
+    let priority = |tag: &str, p: u8| if named(tag) { 1 } else { p };
     let mut first: Vec<Field> = vec![
         (
             0,
@@ -123,7 +145,10 @@ pub fn render(
     } else if let Some((limit, omega)) = run.limit() {
         use super::lesson_run::{Limit, UsableDt};
         use crate::study::stability::usable::USABLE_TOLERANCE;
-        first.push(raw(4, format!("dt·ω {}", number(dt * omega))));
+        first.push(raw(
+            priority("dt·ω", 4),
+            format!("dt·ω {}", number(dt * omega)),
+        ));
         let usable = match (limit, run.usable_dt()) {
             (Limit::Below(max), Some(UsableDt::Below(u))) if u < *max => Some(u),
             _ => None,
@@ -145,7 +170,10 @@ pub fn render(
                 } else {
                     ("", Style::default())
                 };
-                stable = Some(raw(2, format!("stable below {} s", precise(*max))));
+                stable = Some(raw(
+                    priority("stable below", 2),
+                    format!("stable below {} s", precise(*max)),
+                ));
                 (format!("{mark}limit {} s (usable)", precise(u)), style)
             }
             (Limit::Below(max), None) => {
@@ -176,10 +204,10 @@ pub fn render(
         first.extend(stable);
     }
     if let Some(c) = run.uniform_drag().filter(|c| *c > 0.0) {
-        first.push(raw(4, format!("c {} N·s/m", number(c))));
+        first.push(raw(priority("`c`", 4), format!("c {} N·s/m", number(c))));
     }
     if let Some(g) = run.verlet_gamma().filter(|g| *g > 0.0) {
-        first.push(raw(4, format!("γ {}", number(g))));
+        first.push(raw(priority("γ", 4), format!("γ {}", number(g))));
     }
     if let Some(p) = run.verlet_passes() {
         first.push(raw(
@@ -188,10 +216,10 @@ pub fn render(
         ));
     }
     if let Some(k) = run.uniform_stiffness() {
-        first.push(raw(5, format!("k {} N/m", number(k))));
+        first.push(raw(priority("`k`", 5), format!("k {} N/m", number(k))));
     }
     if let Some(c) = run.uniform_damping() {
-        first.push(raw(6, format!("k_d {} N·s/m", number(c))));
+        first.push(raw(priority("k_d", 6), format!("k_d {} N·s/m", number(c))));
     }
     if run.speed() != 1.0 {
         first.push((
@@ -270,7 +298,29 @@ pub fn render(
         ]
     };
     let width = usize::from(area.width);
-    buf.set_line(area.x, area.y, &fit(first, width, theme.dim()), area.width);
+    // Where a field kept as long as the limit would go, the method gives its short label
+    // ("SIE" for semi-implicit-euler) instead.
+    let needed = |fs: &[Field]| fs.iter().filter(|f| f.0 <= 1).count();
+    let mut shown = kept(first.clone(), width);
+    if needed(&shown) < needed(&first) {
+        let labels: Vec<&str> = sim
+            .scene
+            .bodies
+            .iter()
+            .map(|b| b.method.declaration().label)
+            .collect();
+        let label = if labels.windows(2).all(|w| w[0] == w[1]) {
+            labels.first().copied().unwrap_or_default().to_string()
+        } else {
+            labels.join(",")
+        };
+        first[0].1 = vec![Span::styled(
+            label,
+            theme.fg(Color::Cyan).add_modifier(Modifier::BOLD),
+        )];
+        shown = kept(first, width);
+    }
+    buf.set_line(area.x, area.y, &line(shown, theme.dim()), area.width);
     if area.height > 1 {
         buf.set_line(
             area.x,
