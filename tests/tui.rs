@@ -999,3 +999,25 @@ fn page_down_moves_by_the_rows_shown_and_skips_no_line() {
         page = next;
     }
 }
+
+/// Lesson 8's charts carry their legend in the title and the time unit on the last label: no
+/// axis title or legend box is drawn over the data (the observable chart's `t (s)` sat on its
+/// last data row), and the resolution chart names every curve of the recorded study.
+#[test]
+fn lesson_8_charts_name_their_curves_in_the_title_and_keep_the_data_clear() {
+    let mut app = open("model");
+    keys(&mut app, "nn");
+    let text = screen_text(&app, 160, 48);
+    assert!(!text.contains("t (s)"), "{text}");
+    assert!(
+        text.contains("3.00 s│"),
+        "the unit on the last time label:\n{text}"
+    );
+    let title = text
+        .lines()
+        .find(|l| l.contains("┌sag:"))
+        .unwrap_or_else(|| panic!("the resolution chart's title:\n{text}"));
+    for kinds in ["all", "no-bend", "no-shear"] {
+        assert!(title.contains(&format!(" {kinds}")), "{kinds} in {title}");
+    }
+}

@@ -166,9 +166,14 @@ fn bounds(values: impl Iterator<Item = f64>) -> [f64; 2] {
 }
 
 fn axis_labels(b: [f64; 2], theme: Theme) -> Vec<Span<'static>> {
+    axis_labels_unit(b, "", theme)
+}
+
+/// The two ends of an axis, the unit after the last.
+fn axis_labels_unit(b: [f64; 2], unit: &str, theme: Theme) -> Vec<Span<'static>> {
     vec![
         Span::styled(number(b[0]), theme.dim()),
-        Span::styled(number(b[1]), theme.dim()),
+        Span::styled(format!("{}{unit}", number(b[1])), theme.dim()),
     ]
 }
 
@@ -191,11 +196,22 @@ fn render_observable(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer
         .collect();
     let mut title = vec![Span::styled("observable", theme.fg(Color::Cyan))];
     if let Some((t, values)) = observed.latest() {
+        // The names in their curves' colours: the title is the legend (a legend box inside
+        // the chart would cover the curves).
         for (i, (name, v)) in observed.names.iter().zip(values).enumerate() {
             let sep = if i == 0 { " " } else { " · " };
-            title.push(Span::raw(format!("{sep}{name} {}", number(*v))));
+            title.push(Span::styled(
+                format!("{sep}{name} {}", number(*v)),
+                theme.fg(COLOURS[i % COLOURS.len()]),
+            ));
         }
         title.push(Span::styled(format!(" · t {} s", number(*t)), theme.dim()));
+    }
+    if let Some(r) = &reference {
+        title.push(Span::styled(
+            format!(" · ■ {}", r.source),
+            theme.fg(RECORDED),
+        ));
     }
     let title = fit_title(title, area.width);
     let mut datasets = Vec::new();
@@ -229,14 +245,14 @@ fn render_observable(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer
     );
     let chart = Chart::new(datasets)
         .block(Block::bordered().title(title))
+        // The unit on the last label ("3 s"): an axis title would sit on the data's last row.
         .x_axis(
             Axis::default()
-                .title(Span::styled("t (s)", theme.dim()))
                 .bounds(x)
-                .labels(axis_labels(x, theme)),
+                .labels(axis_labels_unit(x, " s", theme)),
         )
         .y_axis(Axis::default().bounds(y).labels(axis_labels(y, theme)))
-        .legend_position(Some(ratatui::widgets::LegendPosition::BottomRight));
+        .legend_position(None);
     chart.render(area, buf);
 }
 
@@ -258,30 +274,32 @@ fn render_resolution(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer
     }
     let x = bounds(levels.iter().flat_map(|l| l.1.iter().map(|p| p.0)));
     let y = bounds(levels.iter().flat_map(|l| l.1.iter().map(|p| p.1)));
-    let title = fit_title(
-        vec![
-            Span::styled("resolution", theme.fg(Color::Cyan)),
-            Span::raw(format!(
-                " sag (m) at {} s against n",
-                number(resolution_time())
-            )),
-            Span::raw(" · recorded study"),
-            Span::styled(
-                here.map_or(String::new(), |n| format!(" · this step n = {n}")),
-                theme.dim(),
-            ),
-        ],
-        area.width,
-    );
+    // The title is the legend: each curve's springs in its colour.
+    let mut title = vec![Span::styled("sag:", theme.fg(Color::Cyan))];
+    for (i, (kinds, _)) in levels.iter().enumerate() {
+        title.push(Span::styled(
+            format!(" {kinds}"),
+            theme.fg(colours[i % colours.len()]),
+        ));
+    }
+    title.push(Span::raw(format!(
+        " · resolution: sag (m) at {} s against n",
+        number(resolution_time())
+    )));
+    title.push(Span::raw(" · recorded study"));
+    title.push(Span::styled(
+        here.map_or(String::new(), |n| format!(" · this step n = {n}")),
+        theme.dim(),
+    ));
+    let title = fit_title(title, area.width);
     let chart = Chart::new(datasets)
         .block(Block::bordered().title(title))
         .x_axis(
             Axis::default()
-                .title(Span::styled("n", theme.dim()))
                 .bounds(x)
-                .labels(axis_labels(x, theme)),
+                .labels(axis_labels_unit(x, "", theme)),
         )
         .y_axis(Axis::default().bounds(y).labels(axis_labels(y, theme)))
-        .legend_position(Some(ratatui::widgets::LegendPosition::TopRight));
+        .legend_position(None);
     chart.render(area, buf);
 }
