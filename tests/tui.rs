@@ -1021,3 +1021,29 @@ fn lesson_8_charts_name_their_curves_in_the_title_and_keep_the_data_clear() {
         assert!(title.contains(&format!(" {kinds}")), "{kinds} in {title}");
     }
 }
+
+/// Lesson 7's log-log charts keep their legend box clear: no curve shows through beside a
+/// method's name (every name is padded to the box's width).
+#[test]
+fn the_study_charts_legend_box_is_clear_of_curves() {
+    let app = open("speed-accuracy");
+    let text = screen_text(&app, 120, 40);
+    let mut rows = 0;
+    for line in text.lines() {
+        // A legend row: "│1EE 1.06  │" inside the chart's frame.
+        for (i, _) in line.match_indices("││") {
+            let rest: String = line[i + "││".len()..]
+                .chars()
+                .take_while(|c| *c != '│')
+                .collect();
+            if rest.chars().next().is_some_and(|c| c.is_ascii_digit()) {
+                rows += 1;
+                assert!(
+                    !rest.chars().any(|c| ('\u{2800}'..='\u{28ff}').contains(&c)),
+                    "a curve inside the legend: {rest:?}\n{text}"
+                );
+            }
+        }
+    }
+    assert!(rows >= 9, "the nine methods' legend rows:\n{text}");
+}

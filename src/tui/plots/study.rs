@@ -237,6 +237,14 @@ pub(super) fn render_study(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
         .step_by(ky as usize)
         .map(|p| Span::raw(decade(p)))
         .collect();
+    // Every legend name padded to the longest: each row of the legend box then covers its
+    // whole width (the chart does not clear the box, and a curve behind it would show through).
+    let name_width = series
+        .iter()
+        .filter(|s| !s.guide)
+        .map(|s| s.short.chars().count())
+        .max()
+        .unwrap_or(0);
     let datasets: Vec<Dataset> = series
         .iter()
         .map(|s| {
@@ -251,7 +259,11 @@ pub(super) fn render_study(plot: Plot, v: &View, area: Rect, buf: &mut Buffer) {
                 .data(&s.points);
             // The legend (in the corner the curves leave empty) names the methods with their
             // fitted orders; guides have no name.
-            if s.guide { d } else { d.name(s.short.clone()) }
+            if s.guide {
+                d
+            } else {
+                d.name(format!("{:<name_width$}", s.short))
+            }
         })
         .collect();
     let title = if work {
