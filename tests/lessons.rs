@@ -143,19 +143,31 @@ fn malformed_lessons_name_the_file_and_line() {
         ),
         (
             format!("{HEADER}+++ step\ntitle = \"a\"\nscene = \"nosuch\"\n+++\ntext\n"),
-            "bad.md:7: step \"a\": unknown scene `nosuch`",
+            // At the `scene` line, with every built-in scene named to the end.
+            "bad.md:9:9: step \"a\": unknown scene `nosuch`",
+        ),
+        (
+            format!("{HEADER}+++ step\ntitle = \"a\"\nscene = \"nosuch\"\n+++\ntext\n"),
+            "(or give a path to a .toml scene file)",
         ),
         (
             format!(
                 "{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\nparams = {{ nodes = 1 }}\n+++\ntext\n"
             ),
-            "`nodes` = 1 is out of range",
+            "bad.md:10:12: step \"a\": `nodes` = 1 is out of range",
+        ),
+        (
+            // A parameter on a line of its own: that line and column.
+            format!(
+                "{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\nparams = {{ mass = 1.0,\n    nodes = \"two\" }}\n+++\ntext\n"
+            ),
+            "bad.md:11:5: step \"a\": `nodes` = two: expected a whole number",
         ),
         (
             format!(
                 "{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\nparams = {{ colour = 1 }}\n+++\n"
             ),
-            "unknown parameter `colour` for scene `rope`",
+            "bad.md:10:12: step \"a\": unknown parameter `colour` for scene `rope`",
         ),
         (
             format!("{HEADER}+++ step\ntitle = \"a\"\nscene = \"rope\"\nmethod = \"euler\"\n+++\n"),

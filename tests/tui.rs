@@ -678,7 +678,10 @@ fn a_malformed_lesson_shows_its_error_in_the_menu() {
     let text = screen_text(&app, 100, 32);
     assert!(text.contains("Building a rope"), "{text}");
     assert!(text.contains("this lesson has an error"), "{text}");
-    assert!(text.contains("02-broken.md:8"), "file and line: {text}");
+    assert!(
+        text.contains("02-broken.md:10:9"),
+        "file, line and column: {text}"
+    );
     assert!(text.contains("unknown scene"), "{text}");
     // Choosing it does not crash: the menu says why it cannot open.
     key(&mut app, KeyCode::Down);

@@ -25,9 +25,8 @@ struct HeaderToml {
 #[serde(deny_unknown_fields)]
 struct StepToml {
     title: String,
-    scene: String,
-    #[serde(default)]
-    params: toml::Table,
+    scene: toml::Spanned<String>,
+    params: Option<toml::Spanned<toml::Table>>,
     method: Option<toml::Spanned<String>>,
     dt: Option<toml::Spanned<f64>>,
     #[serde(default)]
@@ -117,7 +116,9 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
         file: file.to_string(),
         line,
         column,
-        message: scene::file::excerpt(&message, scene::file::MAX_MESSAGE),
+        // What the file wrote is cut where it is quoted (a scene's name, a key, a value); this
+        // bounds the rest, which lists what is known (the scenes, the parameters).
+        message: scene::file::excerpt(&message, 4 * scene::file::MAX_MESSAGE),
     };
     // A byte order mark is no content (scene files accept it too).
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
@@ -231,9 +232,31 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
         }
         let params: Vec<String> = st
             .params
-            .iter()
-            .map(|(k, v)| format!("{k}={}", value_text(v)))
-            .collect();
+            .as_ref()
+            .map(|p| {
+                p.get_ref()
+                    .iter()
+                    .map(|(k, v)| format!("{k}={}", value_text(v)))
+                    .collect()
+            })
+            .unwrap_or_default();
+        // Where a scene's error points: the `scene` line for its name, the parameter's own
+        // key for a parameter, else the step's first line.
+        let scene_at = at(st.scene.span().start);
+        let param_at = |key: &str| -> (usize, Option<usize>) {
+            let Some(p) = &st.params else {
+                return (*start, None);
+            };
+            let span = p.span();
+            let inside = &toml_text[span.start..span.end.min(toml_text.len())];
+            let found = inside.match_indices(key).find(|(i, _)| {
+                let after = inside[i + key.len()..].trim_start();
+                let before = inside[..*i].chars().next_back();
+                after.starts_with('=') && before.is_none_or(|c| !(c.is_alphanumeric() || c == '_'))
+            });
+            let (l, c) = at(span.start + found.map_or(0, |(i, _)| i));
+            (l, Some(c))
+        };
         let mut try_list = Vec::new();
         for item in st.try_list {
             let (l, c) = at(item.span().start);
@@ -332,7 +355,7 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
             speed,
             camera_body: camera.map(|c| c.1),
             title: st.title,
-            scene: st.scene,
+            scene: st.scene.get_ref().clone(),
             params,
             method,
             dt: st.dt.map(|d| *d.get_ref()),
@@ -345,9 +368,18 @@ pub fn parse(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Lesson, 
             base_dir: base_dir.map(Path::to_path_buf),
         };
         // Validate now, so a broken lesson shows its error in the menu, not mid-lesson.
-        let scene = step
-            .build_scene()
-            .map_err(|e| err(*start, None, format!("step \"{}\": {e}", step.title)))?;
+        let scene = step.build_scene().map_err(|e| {
+            let (line, column) = match &e {
+                scene::SceneError::UnknownScene { .. } => (scene_at.0, Some(scene_at.1)),
+                scene::SceneError::Param(
+                    scene::params::ParamError::UnknownKey { key, .. }
+                    | scene::params::ParamError::BadValue { key, .. }
+                    | scene::params::ParamError::OutOfRange { key, .. },
+                ) => param_at(key),
+                _ => (*start, None),
+            };
+            err(line, column, format!("step \"{}\": {e}", step.title))
+        })?;
         if let Some(((l, c), body)) = camera
             && !(1..=scene.bodies.len()).contains(&body)
         {

@@ -298,7 +298,7 @@ pub fn build_builtin_with(
     limits: &Limits,
 ) -> Result<Scene, SceneError> {
     let def = builtin(name).ok_or_else(|| SceneError::UnknownScene {
-        name: name.to_string(),
+        name: file::excerpt(name, file::MAX_QUOTE),
         known: BUILTIN
             .iter()
             .map(|d| d.name)
