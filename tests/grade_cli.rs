@@ -20,6 +20,20 @@ fn text(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
+/// `springlab homework new ROOT/hw --assignment ASSIGNMENT`: the crate's folder.
+fn homework(root: &Path, assignment: &str) -> PathBuf {
+    let dir = root.join("hw");
+    let out = springlab(&[
+        "homework",
+        "new",
+        dir.to_str().expect("utf-8"),
+        "--assignment",
+        assignment,
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    dir
+}
+
 fn failure(args: &[&str]) -> String {
     let out = springlab(args);
     assert!(!out.status.success(), "expected failure for {args:?}");
@@ -168,15 +182,7 @@ fn grade_refuses_what_is_not_a_homework_crate() {
 #[test]
 fn a_crate_that_does_not_build_scores_zero_with_the_errors_and_exit_code_0() {
     let root = scratch("broken");
-    let dir = root.join("hw");
-    let out = springlab(&[
-        "homework",
-        "new",
-        dir.to_str().expect("utf-8"),
-        "--assignment",
-        "jelly",
-    ]);
-    assert!(out.status.success());
+    let dir = homework(&root, "jelly");
     // A syntax error: rustc stops at the parser, before the rest of the crate.
     let lib = text(&dir.join("src/lib.rs")).replace("pub struct Student;", "pub struct Student");
     std::fs::write(dir.join("src/lib.rs"), lib).expect("write");
@@ -231,15 +237,7 @@ fn a_crate_that_does_not_build_scores_zero_with_the_errors_and_exit_code_0() {
 #[test]
 fn a_lone_lib_rs_is_graded_with_its_assignment() {
     let root = scratch("lone");
-    let dir = root.join("hw");
-    let out = springlab(&[
-        "homework",
-        "new",
-        dir.to_str().expect("utf-8"),
-        "--assignment",
-        "rope",
-    ]);
-    assert!(out.status.success());
+    let dir = homework(&root, "rope");
     let lone = root.join("solo").join("lib.rs");
     std::fs::create_dir_all(lone.parent().expect("parent")).expect("mkdir");
     std::fs::copy(dir.join("src/lib.rs"), &lone).expect("copy");

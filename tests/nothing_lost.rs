@@ -133,11 +133,7 @@ fn a_csv_on_standard_output_through_a_pipe() {
 fn a_csv_to_a_fifo_is_written_into_it() {
     let dir = tempfile::tempdir().expect("temp dir");
     let fifo = dir.path().join("pipe");
-    let made = Command::new("mkfifo")
-        .arg(&fifo)
-        .status()
-        .is_ok_and(|s| s.success());
-    if !made {
+    if !mkfifo(&fifo) {
         println!("skipped: mkfifo is not available");
         return;
     }
@@ -447,12 +443,9 @@ fn vectors_of_other_lengths_are_refused() {
 #[test]
 fn a_fifo_as_scene_or_lesson_file_is_refused_without_waiting() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let made = ["s.toml", "01-l.md"].iter().all(|n| {
-        Command::new("mkfifo")
-            .arg(dir.path().join(n))
-            .status()
-            .is_ok_and(|s| s.success())
-    });
+    let made = ["s.toml", "01-l.md"]
+        .iter()
+        .all(|n| mkfifo(&dir.path().join(n)));
     if !made {
         println!("skipped: mkfifo is not available");
         return;
@@ -577,11 +570,7 @@ fn lessons_over_the_budget_or_with_unknown_parameters_are_refused() {
 fn a_signal_ends_the_wait_for_a_fifos_reader() {
     let dir = tempfile::tempdir().expect("temp dir");
     let fifo = dir.path().join("energy.png");
-    let made = Command::new("mkfifo")
-        .arg(&fifo)
-        .status()
-        .is_ok_and(|s| s.success());
-    if !made {
+    if !mkfifo(&fifo) {
         println!("skipped: mkfifo is not available");
         return;
     }
@@ -636,6 +625,14 @@ fn a_signal_ends_the_wait_for_a_fifos_reader() {
         stderr(&out)
     );
     assert!(is_fifo(&fifo), "the FIFO stays a FIFO");
+}
+
+/// Makes a FIFO at `path` (false where `mkfifo` is not available).
+fn mkfifo(path: &Path) -> bool {
+    Command::new("mkfifo")
+        .arg(path)
+        .status()
+        .is_ok_and(|s| s.success())
 }
 
 fn is_fifo(path: &Path) -> bool {
