@@ -50,22 +50,44 @@ pub struct Cli {
     /// What to do; without one, opens the lesson menu.
     #[command(subcommand)]
     pub command: Option<Command>,
+    /// The lesson app's options (also after `lesson N`).
+    #[command(flatten)]
+    pub app: AppArgs,
+}
+
+/// The lesson app's options: given before a subcommand or after `lesson N`, and listed in the
+/// help of those two only.
+#[derive(Clone, Debug, Default, clap::Args)]
+pub struct AppArgs {
     /// Load the lessons (*.md) from this directory instead of the built-in ones.
-    #[arg(long, global = true, value_name = "DIR")]
+    #[arg(long, value_name = "DIR")]
     pub lessons: Option<PathBuf>,
     /// How the lesson app draws the scene: raster (the terminal's graphics protocol: kitty,
     /// sixel or iTerm2), halfblocks (colour text cells) or braille. Default: raster when the
     /// terminal answers a graphics protocol, else halfblocks.
-    #[arg(long, global = true, value_name = "VIEW", value_parser = parse_view)]
+    #[arg(long, value_name = "VIEW", value_parser = parse_view)]
     pub view: Option<crate::tui::ViewMode>,
     /// Keep the lesson progress (goals met, predictions) in memory only: nothing is written to
     /// the user's data directory (a classroom machine).
-    #[arg(long, global = true)]
+    #[arg(long)]
     pub no_save: bool,
     /// The lesson app's colours: for a light or a dark terminal background. Default: the
     /// background the terminal reports (dark when it does not answer).
-    #[arg(long, global = true, value_name = "light|dark", value_parser = parse_theme)]
+    #[arg(long, value_name = "light|dark", value_parser = parse_theme)]
     pub theme: Option<crate::tui::Background>,
+}
+
+impl AppArgs {
+    /// These options, each given here or else in `outer` (the ones before the subcommand).
+    #[must_use]
+    pub fn or(self, outer: AppArgs) -> AppArgs {
+        AppArgs {
+            lessons: self.lessons.or(outer.lessons),
+            view: self.view.or(outer.view),
+            no_save: self.no_save || outer.no_save,
+            theme: self.theme.or(outer.theme),
+        }
+    }
 }
 
 fn parse_theme(s: &str) -> Result<crate::tui::Background, String> {
@@ -88,9 +110,16 @@ pub enum Command {
         /// rebuilt on every save (`H` in the app detaches and attaches it).
         #[arg(long, value_name = "DIR")]
         homework: Option<std::path::PathBuf>,
+        /// The lesson app's options.
+        #[command(flatten)]
+        app: AppArgs,
     },
     /// List the lessons (and the errors of lesson files that do not load).
-    Lessons,
+    Lessons {
+        /// List the lessons (*.md) of this directory instead of the built-in ones.
+        #[arg(long, value_name = "DIR")]
+        lessons: Option<PathBuf>,
+    },
     /// Run a scene headless and print a summary (or JSON).
     Run(run::RunArgs),
     /// List the built-in scenes with their own parameters (`--method M`: that method's too).
@@ -122,16 +151,25 @@ pub fn main() -> ExitCode {
         eprintln!("springlab: {e}");
         return ExitCode::FAILURE;
     }
-    let dir = cli.lessons.as_deref();
+    let outer = cli.app;
     let result = match cli.command {
-        Some(Command::Lesson { which, homework }) => lessons::open(
-            dir,
-            &which,
-            cli.view,
-            (cli.no_save, cli.theme),
-            homework.as_deref(),
-        ),
-        Some(Command::Lessons) => lessons::list(dir),
+        Some(Command::Lesson {
+            which,
+            homework,
+            app,
+        }) => {
+            let app = app.or(outer);
+            lessons::open(
+                app.lessons.as_deref(),
+                &which,
+                app.view,
+                (app.no_save, app.theme),
+                homework.as_deref(),
+            )
+        }
+        Some(Command::Lessons { lessons }) => {
+            lessons::list(lessons.as_deref().or(outer.lessons.as_deref()))
+        }
         Some(Command::Run(args)) => run::run(&args),
         Some(Command::Scenes(args)) => scenes::list(&args),
         Some(Command::Bench(args)) => bench::run(&args),
@@ -140,7 +178,11 @@ pub fn main() -> ExitCode {
         Some(Command::Advise(args)) => advise::run(&args),
         Some(Command::Homework(args)) => grade::homework(&args),
         Some(Command::Grade(args)) => grade::grade(&args),
-        None => lessons::menu(dir, cli.view, (cli.no_save, cli.theme)),
+        None => lessons::menu(
+            outer.lessons.as_deref(),
+            outer.view,
+            (outer.no_save, outer.theme),
+        ),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -80,3 +80,30 @@ fn the_app_without_a_terminal_says_what_to_do_instead() {
         assert!(err.contains("springlab lessons"), "{err}");
     }
 }
+
+/// The lesson app's options are the app's: `lesson N --help` and `springlab --help` list them,
+/// the other commands' help does not, and `run … --view` is refused as unknown there.
+#[test]
+fn the_apps_options_belong_to_the_app() {
+    let help = |args: &[&str]| String::from_utf8_lossy(&springlab(args).stdout).into_owned();
+    for args in [&["--help"][..], &["lesson", "--help"][..]] {
+        let text = help(args);
+        for option in ["--lessons", "--view", "--no-save", "--theme"] {
+            assert!(text.contains(option), "{args:?}: {option}\n{text}");
+        }
+    }
+    for command in [
+        "run", "render", "bench", "study", "advise", "grade", "scenes",
+    ] {
+        let text = help(&[command, "--help"]);
+        for option in ["--view", "--no-save", "--theme"] {
+            assert!(
+                !text.contains(option),
+                "{command} --help lists {option}\n{text}"
+            );
+        }
+    }
+    let out = springlab(&["run", "rope", "--view", "braille"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unexpected argument '--view'"));
+}
