@@ -628,7 +628,7 @@ fn help_overlay_scrolls_on_80x24_and_shows_every_key_whole() {
     assert!(!run(&app).is_running());
     // Where everything fits, every key closes it, the arrows too.
     key(&mut app, KeyCode::Char('?'));
-    let (_, closing) = help_rows(&app, 100, 32);
+    let (_, closing) = help_rows(&app, 100, 40);
     assert_eq!(closing, "any key closes this help");
     key(&mut app, KeyCode::Down);
     assert!(!app.help_shown());
@@ -1049,4 +1049,23 @@ fn the_study_charts_legend_box_is_clear_of_curves() {
         }
     }
     assert!(rows >= 9, "the nine methods' legend rows:\n{text}");
+}
+
+/// At 80 columns a step's two plots do not fit side by side: one shows, its border says
+/// "Tab: plot 1 of 2", and Tab turns to the other (lesson 4 step 1's stretch plot).
+#[test]
+fn tab_turns_to_the_plot_that_does_not_fit() {
+    let mut app = open("verlet");
+    let first = screen_text(&app, 80, 24);
+    assert!(first.contains("Tab: plot 1 of 2"), "{first}");
+    assert!(!first.contains("max |L/L0 - 1|"), "{first}");
+    key(&mut app, KeyCode::Tab);
+    let second = screen_text(&app, 80, 24);
+    assert!(
+        second.contains("max |L/L0 - 1|"),
+        "the stretch plot:\n{second}"
+    );
+    assert!(second.contains("Tab: plot 2 of 2"), "{second}");
+    // Wide enough for both: no hint.
+    assert!(!screen_text(&app, 160, 48).contains("Tab: plot"));
 }

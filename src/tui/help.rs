@@ -59,6 +59,10 @@ pub const LESSON_KEYS: &[(&str, &str)] = &[
         "show / hide a method in lesson 7's charts / x(t) vs exact: whole run",
     ),
     (
+        "Tab",
+        "the step's next plot, where only one fits (80 columns)",
+    ),
+    (
         "+D",
         "energy plot: total + dissipated, flat for an exact method",
     ),

@@ -183,6 +183,8 @@ pub struct LessonRun {
     text_scroll: u16,
     /// Rows of the step's text the last frame showed: PgUp / PgDn move by that page.
     text_rows: std::cell::Cell<u16>,
+    /// Which of the step's plots shows where only one fits (Tab turns to the next).
+    plot_turn: usize,
     /// Columns the code blocks and tables of the text are scrolled to the left.
     hscroll: u16,
     /// The step's text with its numbers filled in (computed when the step opens).
@@ -279,6 +281,7 @@ impl LessonRun {
             drag: None,
             text_scroll: 0,
             text_rows: std::cell::Cell::new(5),
+            plot_turn: 0,
             hscroll: 0,
             text: String::new(),
             chooser: None,
@@ -346,6 +349,7 @@ impl LessonRun {
         }
         self.text_scroll = 0;
         self.hscroll = 0;
+        self.plot_turn = 0;
         self.revealed = None;
         if let Some(v) = self.visited.get_mut(self.step)
             && !*v

@@ -41,6 +41,20 @@ pub fn render(
     let canvas = sim_view::render(run, theme, painter, scene, buf);
     if let Some(plot_area) = plot_area {
         render_plots(run, &shown, theme, plot_area, buf);
+        // Where only one of the step's plots fits, its bottom border says how to see the others.
+        let all = run.shown_plots().len();
+        if shown.len() < all {
+            let hint = format!(" Tab: plot {} of {all} ", run.plot_turn() % all + 1);
+            let w = hint.chars().count() as u16;
+            if plot_area.width > w + 2 && plot_area.height > 0 {
+                buf.set_string(
+                    plot_area.x + plot_area.width - w - 1,
+                    plot_area.y + plot_area.height - 1,
+                    hint,
+                    theme.fg(Color::Yellow),
+                );
+            }
+        }
     }
     status::render(run, fps, view, theme, status_area, buf);
     render_hints(run, theme, hints, buf);
@@ -93,12 +107,12 @@ fn columns(body: Rect) -> [Rect; 2] {
     Layout::horizontal([Constraint::Percentage(text), Constraint::Fill(1)]).areas(body)
 }
 
-/// The plots shown now (see [`LessonRun::shown_plots`]), only the first when the right column
-/// is too narrow for them side by side.
+/// The plots shown now (see [`LessonRun::shown_plots`]), only one when the right column is too
+/// narrow for them side by side: the one Tab turned to ([`LessonRun::plot_turn`]).
 fn shown_plots(run: &LessonRun, right: Rect) -> Vec<Plot> {
-    let mut plots = run.shown_plots();
+    let plots = run.shown_plots();
     if plots.len() > 1 && right.width / (plots.len() as u16) < MIN_PLOT_WIDTH {
-        plots.truncate(1);
+        return vec![plots[run.plot_turn() % plots.len()]];
     }
     plots
 }

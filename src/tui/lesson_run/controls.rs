@@ -112,6 +112,17 @@ impl LessonRun {
                 Some(s) => self.go_to_step(s),
                 None => self.message = Some("this is the first step".into()),
             },
+            KeyCode::Tab => {
+                let plots = self.shown_plots();
+                if plots.len() > 1 {
+                    self.plot_turn = (self.plot_turn + 1) % plots.len();
+                    self.message = Some(format!(
+                        "plot {} of {} where one fits at a time (Tab: the next)",
+                        self.plot_turn + 1,
+                        plots.len()
+                    ));
+                }
+            }
             KeyCode::PageDown => {
                 self.text_scroll = self.text_scroll.saturating_add(self.text_page()).min(999);
             }
@@ -730,8 +741,14 @@ fn ladder(c: f64, up: bool, first: f64, factor: f64, max: f64) -> f64 {
     }
 }
 
-/// The step text's scrolling (PgUp / PgDn above).
+/// The step text's scrolling (PgUp / PgDn above) and the plot shown where one fits (Tab).
 impl LessonRun {
+    /// Which of the shown plots the screen shows where only one fits at a time.
+    #[must_use]
+    pub fn plot_turn(&self) -> usize {
+        self.plot_turn
+    }
+
     /// Records how many rows of the step's text the screen shows (the drawing calls it), so a
     /// page of PgUp / PgDn is what the student sees, less one row kept for context.
     pub fn set_text_rows(&self, rows: u16) {
