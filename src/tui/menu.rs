@@ -157,8 +157,13 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
     buf.set_line(
         hints.x,
         hints.y,
+        // The digits that open a lesson: as many as there are lessons, 9 at most.
         &Line::from(Span::styled(
-            " ↑/↓ choose · Enter open · 1–9 lesson N · ? help · q quit",
+            match app.lessons().len().min(9) {
+                0 => " ? help · q quit".to_string(),
+                1 => " ↑/↓ choose · Enter open · 1 lesson 1 · ? help · q quit".to_string(),
+                n => format!(" ↑/↓ choose · Enter open · 1–{n} lesson N · ? help · q quit"),
+            },
             theme.dim(),
         )),
         hints.width,
