@@ -139,12 +139,7 @@ fn check(app: &App, at: &str) {
     }
     // A status field the step points at (a try item, or a line of its text that says "status
     // line", names it) is on the 80-column line wherever the wide one has it.
-    let named = |tag: &str| {
-        run.shown_text()
-            .lines()
-            .any(|l| l.contains("status line") && l.contains(tag))
-            || step.try_list.iter().any(|t| t.text.contains(tag))
-    };
+    let named = |tag: &str| springlab::tui::status::points_at(run, tag);
     for (tag, field) in [
         ("dt·ω", "dt·ω "),
         ("stable below", "stable below "),

@@ -518,10 +518,9 @@ fn ellipsis(text: &str, room: usize) -> String {
     if text.chars().count() <= room {
         return text.to_string();
     }
-    let mut cut: String = text.chars().take(room.saturating_sub(1)).collect();
-    cut.truncate(cut.trim_end().len());
-    cut.push('…');
-    cut
+    // The file format's excerpt, without a space before its "…".
+    let cut = crate::scene::file::excerpt(text, room.saturating_sub(1));
+    format!("{}…", cut.trim_end_matches('…').trim_end())
 }
 
 fn render_hints(run: &LessonRun, theme: Theme, area: Rect, buf: &mut Buffer) {

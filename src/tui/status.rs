@@ -35,6 +35,17 @@ use super::lesson_run::LessonRun;
 use super::plots::number;
 use super::sim_view::time_text;
 
+/// True when the step points at the status field `tag` (`dt·ω`, `stable below`, `` `c` ``,
+/// `γ`, `` `k` ``, `k_d`): a try item names it, or a line of its text that says "status line"
+/// ("the status line shows `c`").
+#[must_use]
+pub fn points_at(run: &LessonRun, tag: &str) -> bool {
+    run.shown_text()
+        .lines()
+        .any(|l| l.contains("status line") && l.contains(tag))
+        || run.step().try_list.iter().any(|t| t.text.contains(tag))
+}
+
 /// One field of a status line: its spans and its priority (0 is kept longest).
 type Field = (u8, Vec<Span<'static>>);
 
@@ -115,16 +126,8 @@ pub fn render(
     let sim = run.sim();
     let dt = sim.dt();
     let raw = |p: u8, s: String| (p, vec![Span::raw(s)]);
-    // A field the step points at (a line of its text that says "status line", or a try item,
-    // names it: "the status line shows `c`") is kept as long as the limit.
-    let step = run.step();
-    let named = |tag: &str| {
-        run.shown_text()
-            .lines()
-            .any(|l| l.contains("status line") && l.contains(tag))
-            || step.try_list.iter().any(|t| t.text.contains(tag))
-    };
-    let priority = |tag: &str, p: u8| if named(tag) { 1 } else { p };
+    // A field the step points at is kept as long as the limit.
+    let priority = |tag: &str, p: u8| if points_at(run, tag) { 1 } else { p };
     let mut first: Vec<Field> = vec![
         (
             0,

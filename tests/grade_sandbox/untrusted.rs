@@ -87,12 +87,10 @@ fn a_compile_error_that_mentions_memory_is_a_compile_error() {
     let uid = 64014;
     let root = scratch("compile-error-oom");
     let dir = homework(&root, "hw", None);
-    let lib = std::fs::read_to_string(dir.join("src/lib.rs")).expect("lib.rs");
-    std::fs::write(
-        dir.join("src/lib.rs"),
-        format!("{lib}\ncompile_error!(\"my own message:\\nout of memory\");\n"),
-    )
-    .expect("write");
+    append_to_lib(
+        &dir,
+        "\ncompile_error!(\"my own message:\\nout of memory\");\n",
+    );
     let (stdout, results, _) = grade(&dir, uid, &[], &[]);
     assert!(stdout.contains("the crate did not build"), "{stdout}");
     assert!(stdout.contains("my own message"), "{stdout}");
@@ -118,9 +116,14 @@ fn each_submission_gets_cases_of_its_own() {
     let first = seed_of(&dir);
     assert_eq!(seed_of(&dir), first);
     assert_ne!(first, 7);
-    let lib = std::fs::read_to_string(dir.join("src/lib.rs")).expect("lib.rs");
-    std::fs::write(dir.join("src/lib.rs"), format!("{lib}// changed\n")).expect("write");
+    append_to_lib(&dir, "// changed\n");
     let changed = seed_of(&dir);
     assert_ne!(changed, first);
     assert_ne!(changed, 7);
+}
+
+/// Appends `text` to the crate's `src/lib.rs`.
+fn append_to_lib(dir: &Path, text: &str) {
+    let lib = std::fs::read_to_string(dir.join("src/lib.rs")).expect("lib.rs");
+    std::fs::write(dir.join("src/lib.rs"), format!("{lib}{text}")).expect("write");
 }

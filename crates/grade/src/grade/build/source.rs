@@ -106,14 +106,15 @@ pub fn locate(dir: &Path) -> Result<Submission, String> {
 /// When either is a symbolic link (a link is never followed).
 fn has_lib(folder: &Path) -> Result<bool, String> {
     let lib = folder.join("lib.rs");
+    let mut is_file = false;
     for path in [folder, lib.as_path()] {
         match std::fs::symlink_metadata(path) {
             Ok(m) if m.file_type().is_symlink() => return Err(link_refused(path)),
-            Ok(_) => {}
+            Ok(m) => is_file = m.is_file(),
             Err(_) => return Ok(false),
         }
     }
-    Ok(std::fs::symlink_metadata(&lib).is_ok_and(|m| m.is_file()))
+    Ok(is_file)
 }
 
 fn link_refused(path: &Path) -> String {
